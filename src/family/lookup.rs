@@ -1,0 +1,253 @@
+//! Decoding ring readings into family members.
+//!
+//! Convention shared with the renderer and the detector: a marker rotated
+//! counter-clockwise by `m` bit steps (m·360°/n) is read, starting at image
+//! angle 0, as `rotr(code, m)`. The decoder returns the left rotation `m`
+//! with `rotl(word, m) == code`, so the marker's yaw is m·360°/n plus the
+//! measured edge phase.
+
+use super::necklace::{ball_size, for_each_mask_with_ones, min_rotation, rotl, rotr};
+use super::Family;
+
+/// Largest bit count that gets a dense table (2^20 entries, 4 MiB).
+pub const DENSE_MAX_BITS: u32 = 20;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MatchStatus {
+    /// The word is a rotation of a member.
+    Exact,
+    /// The word is within the correction radius of exactly one member rotation.
+    Corrected,
+    /// Two or more member rotations are equally close: no answer.
+    Ambiguous,
+    /// No member rotation within the correction radius.
+    Rejected,
+}
+
+/// The result of decoding one ring reading.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Decoded {
+    pub status: MatchStatus,
+    /// The member's ID, or 0 unless the status is `Exact` or `Corrected`.
+    pub id: u32,
+    /// The member's code, or 0 when `id` is 0.
+    pub code: u32,
+    /// Left rotation that maps the word onto the member's code.
+    pub rotation: u32,
+    /// Hamming distance between the rotated word and the code (for
+    /// `Ambiguous`, the distance of the tied matches; for `Rejected`, 0).
+    pub distance: u32,
+}
+
+impl Decoded {
+    fn rejected() -> Decoded {
+        Decoded {
+            status: MatchStatus::Rejected,
+            id: 0,
+            code: 0,
+            rotation: 0,
+            distance: 0,
+        }
+    }
+
+    fn ambiguous(distance: u32) -> Decoded {
+        Decoded {
+            status: MatchStatus::Ambiguous,
+            distance,
+            ..Decoded::rejected()
+        }
+    }
+
+    /// True when the word names a member (exactly or after correction).
+    pub fn is_member(&self) -> bool {
+        matches!(self.status, MatchStatus::Exact | MatchStatus::Corrected)
+    }
+}
+
+/// Decodes n-bit words into (ID, rotation). Dense table up to
+/// [`DENSE_MAX_BITS`]; above that, a search that picks the cheaper of
+/// enumerating the Hamming ball or scanning every member rotation.
+#[derive(Debug, Clone)]
+pub struct Decoder {
+    family: Family,
+    radius: u32,
+    table: Option<Vec<u32>>,
+}
+
+// Dense entry layout: 0 means rejected; otherwise bits 0..21 hold the ID,
+// 21..26 the rotation, 26..31 the distance and bit 31 marks a tie.
+const ID_BITS: u32 = 21;
+const ROT_SHIFT: u32 = 21;
+const DIST_SHIFT: u32 = 26;
+const TIE_BIT: u32 = 1 << 31;
+
+impl Decoder {
+    /// A decoder correcting up to the family's guaranteed radius floor((d-1)/2).
+    pub fn new(family: &Family) -> Decoder {
+        Decoder::with_radius(family, family.default_correction_radius())
+    }
+
+    /// A decoder with an explicit correction radius. Radii above the
+    /// guaranteed one can return `Ambiguous` where members' balls overlap.
+    pub fn with_radius(family: &Family, radius: u32) -> Decoder {
+        let radius = radius.min(family.bits());
+        let table = (family.bits() <= DENSE_MAX_BITS).then(|| dense_table(family, radius));
+        Decoder {
+            family: family.clone(),
+            radius,
+            table,
+        }
+    }
+
+    pub fn family(&self) -> &Family {
+        &self.family
+    }
+
+    pub fn radius(&self) -> u32 {
+        self.radius
+    }
+
+    pub fn decode(&self, word: u32) -> Decoded {
+        let bits = self.family.bits();
+        let word = word & super::necklace::mask(bits);
+        match &self.table {
+            Some(table) => {
+                let e = table[word as usize];
+                if e == 0 {
+                    return Decoded::rejected();
+                }
+                let distance = (e >> DIST_SHIFT) & 31;
+                if e & TIE_BIT != 0 {
+                    return Decoded::ambiguous(distance);
+                }
+                let id = e & ((1 << ID_BITS) - 1);
+                self.member(id, (e >> ROT_SHIFT) & 31, distance)
+            }
+            None => self.search(word),
+        }
+    }
+
+    fn member(&self, id: u32, rotation: u32, distance: u32) -> Decoded {
+        Decoded {
+            status: if distance == 0 {
+                MatchStatus::Exact
+            } else {
+                MatchStatus::Corrected
+            },
+            id,
+            code: self.family.code(id).unwrap_or(0),
+            rotation,
+            distance,
+        }
+    }
+
+    fn search(&self, word: u32) -> Decoded {
+        let bits = self.family.bits();
+        let (min, r) = min_rotation(word, bits);
+        if let Some(id) = self.family.id_of(min) {
+            return self.member(id, r, 0);
+        }
+        let ball_cost = ball_size(bits, self.radius).saturating_mul(u64::from(bits));
+        let scan_cost = self.family.len() as u64 * u64::from(bits);
+        if ball_cost <= scan_cost {
+            for k in 1..=self.radius {
+                let mut found: Option<(u32, u32)> = None;
+                let mut tie = false;
+                for_each_mask_with_ones(bits, k, |m| {
+                    let (min, r) = min_rotation(word ^ m, bits);
+                    if let Some(id) = self.family.id_of(min) {
+                        match found {
+                            None => found = Some((id, r)),
+                            Some(prev) if prev != (id, r) => tie = true,
+                            _ => {}
+                        }
+                    }
+                });
+                match (found, tie) {
+                    (Some(_), true) => return Decoded::ambiguous(k),
+                    (Some((id, r)), false) => return self.member(id, r, k),
+                    _ => {}
+                }
+            }
+            Decoded::rejected()
+        } else {
+            let mut best = u32::MAX;
+            let mut best_match = (0, 0);
+            let mut tie = false;
+            for (k, &code) in self.family.codes().iter().enumerate() {
+                for r in 0..bits {
+                    let d = (rotl(word, bits, r) ^ code).count_ones();
+                    if d < best {
+                        best = d;
+                        best_match = (k as u32 + 1, r);
+                        tie = false;
+                    } else if d == best {
+                        tie = true;
+                    }
+                }
+            }
+            if best > self.radius {
+                Decoded::rejected()
+            } else if tie {
+                Decoded::ambiguous(best)
+            } else {
+                self.member(best_match.0, best_match.1, best)
+            }
+        }
+    }
+}
+
+fn dense_table(family: &Family, radius: u32) -> Vec<u32> {
+    let bits = family.bits();
+    let mut table = vec![0u32; 1usize << bits];
+    // Fill layer by layer so that every word keeps its nearest member; a
+    // second, different member rotation at the same distance marks a tie.
+    for k in 0..=radius {
+        for (index, &code) in family.codes().iter().enumerate() {
+            let id = index as u32 + 1;
+            for r in 0..bits {
+                let base = rotr(code, bits, r);
+                let entry = id | (r << ROT_SHIFT) | (k << DIST_SHIFT);
+                for_each_mask_with_ones(bits, k, |m| {
+                    let slot = &mut table[(base ^ m) as usize];
+                    if *slot == 0 {
+                        *slot = entry;
+                    } else if (*slot >> DIST_SHIFT) & 31 == k && (*slot & !TIE_BIT) != entry {
+                        *slot |= TIE_BIT;
+                    }
+                });
+            }
+        }
+    }
+    table
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_rotation_decodes_exactly() {
+        for (bits, d) in [(8, 2), (12, 3), (22, 5)] {
+            let f = Family::generate(bits, d).unwrap();
+            let dec = Decoder::new(&f);
+            for (k, &code) in f.codes().iter().enumerate().step_by(7) {
+                for r in 0..bits {
+                    let got = dec.decode(rotr(code, bits, r));
+                    assert_eq!(got.status, MatchStatus::Exact);
+                    assert_eq!((got.id, got.rotation, got.distance), (k as u32 + 1, r, 0));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn periodic_words_are_rejected() {
+        let f = Family::generate(8, 1).unwrap();
+        let dec = Decoder::new(&f);
+        for w in [0u32, 0xff, 0x55, 0x33, 0x11] {
+            assert_eq!(dec.decode(w).id, 0, "word {w:#x}");
+        }
+    }
+}

@@ -1,0 +1,3 @@
+//! Rendering markers and print sheets (in progress).
+
+pub mod manifest;

@@ -1,0 +1,174 @@
+//! Physical quantities as users type them: lengths with units, angles.
+
+use std::fmt;
+use std::str::FromStr;
+
+/// A length, stored in millimetres. Parses "50mm", "5cm", "0.05m", "2in",
+/// "2\"" and "12.5 mm"; a bare number is refused, since guessing the unit is
+/// how markers get printed at the wrong size.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct Length {
+    mm: f64,
+}
+
+impl Length {
+    pub fn from_mm(mm: f64) -> Length {
+        Length { mm }
+    }
+
+    pub fn from_m(m: f64) -> Length {
+        Length { mm: m * 1000.0 }
+    }
+
+    pub fn mm(self) -> f64 {
+        self.mm
+    }
+
+    pub fn m(self) -> f64 {
+        self.mm / 1000.0
+    }
+
+    pub fn inches(self) -> f64 {
+        self.mm / 25.4
+    }
+
+    /// Parses a length whose bare numbers mean `default_unit` (e.g. "m" for a
+    /// detector's marker diameter, where the reference tools take metres).
+    pub fn parse_with_default_unit(text: &str, default_unit: &str) -> Result<Length, String> {
+        let t = text.trim();
+        if !t.is_empty() && t.parse::<f64>().is_ok() {
+            return format!("{t}{default_unit}").parse();
+        }
+        t.parse()
+    }
+}
+
+impl FromStr for Length {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Length, String> {
+        let t = text.trim();
+        let split = t
+            .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == '+'))
+            .unwrap_or(t.len());
+        let (number, unit) = t.split_at(split);
+        let value: f64 = number.parse().map_err(|_| {
+            format!("'{text}' is not a length (write e.g. 50mm, 5cm, 0.05m or 2in)")
+        })?;
+        let factor = match unit.trim() {
+            "mm" => 1.0,
+            "cm" => 10.0,
+            "m" => 1000.0,
+            "in" | "\"" | "inch" | "inches" => 25.4,
+            "pt" => 25.4 / 72.0,
+            "" => {
+                return Err(format!(
+                    "'{text}' has no unit (write e.g. {value}mm, {value}cm, {value}m or {value}in)"
+                ))
+            }
+            other => {
+                return Err(format!(
+                    "'{text}': unknown unit '{other}' (use mm, cm, m or in)"
+                ))
+            }
+        };
+        let mm = value * factor;
+        if !mm.is_finite() || mm <= 0.0 {
+            return Err(format!("'{text}' must be a positive length"));
+        }
+        Ok(Length { mm })
+    }
+}
+
+impl fmt::Display for Length {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}mm", trim_float(self.mm))
+    }
+}
+
+/// An angle, stored in radians. Parses "30deg", "30°", "0.5rad"; a bare
+/// number means degrees.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+pub struct Angle {
+    rad: f64,
+}
+
+impl Angle {
+    pub fn from_degrees(deg: f64) -> Angle {
+        Angle {
+            rad: deg.to_radians(),
+        }
+    }
+
+    pub fn radians(self) -> f64 {
+        self.rad
+    }
+
+    pub fn degrees(self) -> f64 {
+        self.rad.to_degrees()
+    }
+}
+
+impl FromStr for Angle {
+    type Err = String;
+
+    fn from_str(text: &str) -> Result<Angle, String> {
+        let t = text.trim();
+        let (number, to_rad) = if let Some(n) = t.strip_suffix("deg").or(t.strip_suffix('°')) {
+            (n, std::f64::consts::PI / 180.0)
+        } else if let Some(n) = t.strip_suffix("rad") {
+            (n, 1.0)
+        } else {
+            (t, std::f64::consts::PI / 180.0)
+        };
+        let value: f64 = number
+            .trim()
+            .parse()
+            .map_err(|_| format!("'{text}' is not an angle (write e.g. 30deg or 0.5rad)"))?;
+        if !value.is_finite() {
+            return Err(format!("'{text}' is not a finite angle"));
+        }
+        Ok(Angle {
+            rad: value * to_rad,
+        })
+    }
+}
+
+/// Formats a float without trailing zeros ("40", "12.5").
+pub fn trim_float(v: f64) -> String {
+    let s = format!("{v:.4}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s.is_empty() || s == "-0" {
+        "0".to_string()
+    } else {
+        s.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lengths_parse_with_units() {
+        assert_eq!("50mm".parse::<Length>().unwrap().mm(), 50.0);
+        assert_eq!("5cm".parse::<Length>().unwrap().mm(), 50.0);
+        assert_eq!("0.122m".parse::<Length>().unwrap().mm(), 122.0);
+        assert_eq!("2in".parse::<Length>().unwrap().mm(), 50.8);
+        assert_eq!("12.5 mm".parse::<Length>().unwrap().mm(), 12.5);
+        assert!("50".parse::<Length>().is_err());
+        assert!("-5mm".parse::<Length>().is_err());
+        assert!("5furlongs".parse::<Length>().is_err());
+        assert_eq!(
+            Length::parse_with_default_unit("0.122", "m").unwrap().mm(),
+            122.0
+        );
+    }
+
+    #[test]
+    fn angles_parse() {
+        assert!((("30deg".parse::<Angle>().unwrap().degrees()) - 30.0).abs() < 1e-12);
+        assert!((("0.5rad".parse::<Angle>().unwrap().radians()) - 0.5).abs() < 1e-12);
+        assert!((("45".parse::<Angle>().unwrap().degrees()) - 45.0).abs() < 1e-12);
+    }
+}
