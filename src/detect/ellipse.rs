@@ -146,7 +146,8 @@ pub fn sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
 /// from the centre through the coarse ellipse: the 50 % crossing between
 /// the darkest value inside and the brightest outside, nearest to the
 /// coarse edge.
-pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>) {
+/// Returns the number of rays cast.
+pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>) -> usize {
     out.clear();
     let perimeter = std::f64::consts::PI * (coarse.a + coarse.b);
     let rays = ((perimeter / 4.0) as usize).clamp(24, 64);
@@ -208,6 +209,7 @@ pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>)
             out.push((coarse.u + ux * s, coarse.v + uy * s));
         }
     }
+    rays
 }
 
 /// Least-squares conic through the points, normalised by A + C = 1 (never
@@ -253,11 +255,21 @@ pub fn radial_distance(e: &Ellipse, x: f64, y: f64) -> f64 {
     (r - r / k).abs()
 }
 
+/// A refined outline and how well the edge fits it.
+#[derive(Debug, Clone, Copy)]
+pub struct Refined {
+    pub ellipse: Ellipse,
+    /// RMS distance of the kept edge points from the ellipse, pixels.
+    pub rms: f64,
+    /// Share of rays that gave an edge point kept in the fit.
+    pub support: f64,
+}
+
 /// The outer ellipse refined from edge points, with points farther than
 /// max(0.5 px, 3 × median) from a first fit dropped before a second fit.
 /// None when the edge does not support a consistent ellipse near `coarse`.
-pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) -> Option<Ellipse> {
-    edge_points(image, coarse, scratch);
+pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) -> Option<Refined> {
+    let rays = edge_points(image, coarse, scratch);
     let scale = coarse.a.max(1.0);
     let first = fit_conic(scratch, (coarse.u, coarse.v), scale)?;
     let mut residuals: Vec<f64> = scratch
@@ -278,7 +290,18 @@ pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) 
     let consistent = (fitted.u - coarse.u).hypot(fitted.v - coarse.v) < 0.25 * coarse.b + 1.0
         && (fitted.a / coarse.a - 1.0).abs() < 0.25
         && (fitted.b / coarse.b - 1.0).abs() < 0.25;
-    consistent.then_some(fitted)
+    if !consistent {
+        return None;
+    }
+    let sum_sq: f64 = scratch
+        .iter()
+        .map(|&(x, y)| radial_distance(&fitted, x, y).powi(2))
+        .sum();
+    Some(Refined {
+        ellipse: fitted,
+        rms: (sum_sq / scratch.len() as f64).sqrt(),
+        support: scratch.len() as f64 / rays as f64,
+    })
 }
 
 #[cfg(test)]

@@ -392,7 +392,17 @@ impl Detector {
         }
         let black = dark.mean_intensity();
         let white_level = white.mean_intensity();
-        let outer = ellipse::refine(gray, &coarse, &mut self.edge_scratch).unwrap_or(coarse);
+        if white_level - black < map.min_contrast() {
+            return None;
+        }
+        // The outline must be an ellipse along the whole edge: squares and
+        // blobs pass the moment tests (a square's area is within 5 % of its
+        // moment ellipse's) but not this.
+        let refined = ellipse::refine(gray, &coarse, &mut self.edge_scratch)?;
+        if refined.support < 0.75 || refined.rms > 0.35 + 0.015 * coarse.a {
+            return None;
+        }
+        let outer = refined.ellipse;
         Some(Candidate {
             outer,
             black,
