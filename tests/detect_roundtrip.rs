@@ -245,7 +245,7 @@ fn clutter_without_markers_gives_no_detection() {
     let (w, h) = (900u32, 600u32);
     let mut rng = Rng(99);
     let mut img = image::GrayImage::from_pixel(w, h, image::Luma([200]));
-    let mut paint = |img: &mut image::GrayImage, f: &dyn Fn(f64, f64) -> bool, value: u8| {
+    let paint = |img: &mut image::GrayImage, f: &dyn Fn(f64, f64) -> bool, value: u8| {
         for y in 0..h {
             for x in 0..w {
                 if f(f64::from(x), f64::from(y)) {

@@ -70,7 +70,7 @@ impl Placement {
         }
     }
 
-    fn to_camera(&self, x: f64, y: f64) -> Vector3<f64> {
+    fn in_camera(&self, x: f64, y: f64) -> Vector3<f64> {
         self.rotation * Vector3::new(x, y, 0.0) + self.position
     }
 
@@ -82,7 +82,7 @@ impl Placement {
     /// Image direction of the marker's +x axis at its centre, atan2(dv, du).
     pub fn yaw(&self, camera: &Pinhole) -> f64 {
         let (u0, v0) = self.centre(camera);
-        let (u1, v1) = camera.project(self.to_camera(self.marker.diameter_mm * 1e-3, 0.0));
+        let (u1, v1) = camera.project(self.in_camera(self.marker.diameter_mm * 1e-3, 0.0));
         (v1 - v0).atan2(u1 - u0)
     }
 
@@ -102,7 +102,7 @@ impl Placement {
         let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
         for k in 0..64 {
             let t = k as f64 * std::f64::consts::TAU / 64.0;
-            let (u, v) = camera.project(self.to_camera(r * 1.05 * t.cos(), r * 1.05 * t.sin()));
+            let (u, v) = camera.project(self.in_camera(r * 1.05 * t.cos(), r * 1.05 * t.sin()));
             x0 = x0.min(u);
             y0 = y0.min(v);
             x1 = x1.max(u);
