@@ -200,6 +200,22 @@ impl Decoder {
 
 fn dense_table(family: &Family, radius: u32) -> Vec<u32> {
     let bits = family.bits();
+    // Stamping every ball costs count·n·ball(radius), which overlapping
+    // balls (a large radius, or close rotations of one code) can push far
+    // beyond the 2^n·n of a breadth-first sweep that visits each word once.
+    let ball_cost = (family.len() as u64)
+        .saturating_mul(u64::from(bits))
+        .saturating_mul(ball_size(bits, radius));
+    let sweep_cost = (1u64 << bits) * u64::from(bits);
+    if ball_cost <= sweep_cost {
+        dense_table_by_balls(family, radius)
+    } else {
+        dense_table_by_sweep(family, radius)
+    }
+}
+
+fn dense_table_by_balls(family: &Family, radius: u32) -> Vec<u32> {
+    let bits = family.bits();
     let mut table = vec![0u32; 1usize << bits];
     // Fill layer by layer so that every word keeps its nearest member; a
     // second, different member rotation at the same distance marks a tie.
@@ -223,6 +239,49 @@ fn dense_table(family: &Family, radius: u32) -> Vec<u32> {
     table
 }
 
+/// Breadth-first from all member rotations at once: the words at distance k
+/// are the unvisited neighbours of the words at distance k - 1, and their
+/// nearest matches are the union of those neighbours' matches.
+fn dense_table_by_sweep(family: &Family, radius: u32) -> Vec<u32> {
+    const MATCH_MASK: u32 = (1 << DIST_SHIFT) - 1;
+    let bits = family.bits();
+    let mut table = vec![0u32; 1usize << bits];
+    let mut frontier = Vec::with_capacity(family.len() * bits as usize);
+    for (index, &code) in family.codes().iter().enumerate() {
+        let id = index as u32 + 1;
+        for r in 0..bits {
+            let word = rotr(code, bits, r);
+            table[word as usize] = id | (r << ROT_SHIFT);
+            frontier.push(word);
+        }
+    }
+    let mut next = Vec::new();
+    for k in 1..=radius {
+        for &word in &frontier {
+            let from = table[word as usize];
+            let spread = (from & (MATCH_MASK | TIE_BIT)) | (k << DIST_SHIFT);
+            for b in 0..bits {
+                let neighbour = word ^ (1 << b);
+                let slot = &mut table[neighbour as usize];
+                if *slot == 0 {
+                    *slot = spread;
+                    next.push(neighbour);
+                } else if (*slot >> DIST_SHIFT) & 31 == k
+                    && (from & TIE_BIT != 0 || (*slot & MATCH_MASK) != (from & MATCH_MASK))
+                {
+                    *slot |= TIE_BIT;
+                }
+            }
+        }
+        std::mem::swap(&mut frontier, &mut next);
+        next.clear();
+        if frontier.is_empty() {
+            break;
+        }
+    }
+    table
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -238,6 +297,101 @@ mod tests {
                     assert_eq!(got.status, MatchStatus::Exact);
                     assert_eq!((got.id, got.rotation, got.distance), (k as u32 + 1, r, 0));
                 }
+            }
+        }
+    }
+
+    /// The nearest member rotations by exhaustive comparison.
+    fn oracle(family: &Family, radius: u32, word: u32) -> Decoded {
+        let bits = family.bits();
+        let mut best = u32::MAX;
+        let mut matches = Vec::new();
+        for (k, &code) in family.codes().iter().enumerate() {
+            for r in 0..bits {
+                let d = (rotl(word, bits, r) ^ code).count_ones();
+                if d < best {
+                    best = d;
+                    matches.clear();
+                }
+                if d == best {
+                    matches.push((k as u32 + 1, r));
+                }
+            }
+        }
+        if best > radius {
+            Decoded::rejected()
+        } else if matches.len() > 1 {
+            Decoded::ambiguous(best)
+        } else {
+            Decoded {
+                status: if best == 0 {
+                    MatchStatus::Exact
+                } else {
+                    MatchStatus::Corrected
+                },
+                id: matches[0].0,
+                code: family.code(matches[0].0).unwrap(),
+                rotation: matches[0].1,
+                distance: best,
+            }
+        }
+    }
+
+    #[test]
+    fn every_method_agrees_with_exhaustive_comparison() {
+        for bits in 2..=10 {
+            for d in 1..=bits {
+                let f = Family::generate(bits, d).unwrap();
+                let guaranteed = f.default_correction_radius();
+                for radius in [guaranteed, guaranteed + 1, bits] {
+                    let balls = dense_table_by_balls(&f, radius);
+                    let sweep = dense_table_by_sweep(&f, radius);
+                    assert_eq!(balls, sweep, "n={bits} d={d} radius={radius}");
+                    let dense = Decoder::with_radius(&f, radius);
+                    let sparse = Decoder {
+                        family: f.clone(),
+                        radius,
+                        table: None,
+                    };
+                    for word in 0..(1u32 << bits) {
+                        let expected = oracle(&f, radius, word);
+                        let context = format!("n={bits} d={d} radius={radius} word={word:b}");
+                        assert_eq!(dense.decode(word), expected, "dense {context}");
+                        assert_eq!(sparse.decode(word), expected, "sparse {context}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn large_words_decode_like_exhaustive_comparison() {
+        // Above the dense limit: both the ball walk (small radius) and the
+        // member scan (large radius) against the oracle on sampled words.
+        for (bits, d, radius) in [(22, 3, 1), (22, 7, 3), (24, 5, 2), (24, 11, 11), (21, 2, 1)] {
+            let f = Family::generate(bits, d).unwrap();
+            let dec = Decoder::with_radius(&f, radius);
+            assert!(dec.table.is_none());
+            let mut state = 0x2545_f491_4f6c_dd1du64;
+            for i in 0..300u32 {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                let code = f.codes()[(state % f.len() as u64) as usize];
+                // Mostly words near members, where the answers are interesting.
+                let flips = (state >> 32) as u32 % (radius + 2);
+                let mut word = rotr(code, bits, i % bits);
+                for j in 0..flips {
+                    word ^= 1 << ((state >> (8 + 5 * j)) as u32 % bits);
+                }
+                if i % 10 == 0 {
+                    word = (state >> 20) as u32 & crate::family::necklace::mask(bits);
+                }
+                assert_eq!(
+                    dec.decode(word),
+                    oracle(&f, radius, word),
+                    "n={bits} d={d} radius={radius} word={word:b}"
+                );
             }
         }
     }
