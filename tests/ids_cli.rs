@@ -177,10 +177,7 @@ fn counts_take_every_value_of_a_range_and_mark_impossible_cells() {
     let v: serde_json::Value = serde_json::from_str(&json).unwrap();
     assert_eq!(v["format"], "whycode-counts");
     assert_eq!(v["bits"], serde_json::json!([4, 6]));
-    assert_eq!(
-        v["counts"],
-        serde_json::json!([[1, 2], [1, 2], [null, 1]])
-    );
+    assert_eq!(v["counts"], serde_json::json!([[1, 2], [1, 2], [null, 1]]));
 }
 
 #[test]
