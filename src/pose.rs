@@ -381,17 +381,32 @@ fn plane_basis(normal: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
 }
 
 /// Image ellipse of a circle of radius `radius_m` lying in the candidate's
-/// plane around its centre (64 projected points, refitted; with distortion
-/// this is the best-fitting ellipse to the distorted curve).
+/// plane around its centre. Exact without lens distortion; with distortion
+/// it is the ellipse best fitting 32 projected points of the (then not
+/// exactly elliptical) image curve. `None` if part of the circle is behind
+/// the camera.
 pub fn project_circle(camera: &Camera, circle: &CirclePose, radius_m: f64) -> Option<ImageEllipse> {
-    let (e1, e2) = plane_basis(&circle.normal);
-    let points = (0..64)
-        .map(|i| {
-            let t = std::f64::consts::TAU * i as f64 / 64.0;
-            camera.project(&(circle.center + radius_m * (t.cos() * e1 + t.sin() * e2)))
-        })
-        .collect::<Option<Vec<_>>>()?;
-    ImageEllipse::fit(&points)
+    let normal = circle.normal.normalize();
+    let (e1, e2) = plane_basis(&normal);
+    let nearest_z = circle.center.z - radius_m * normal.xy().norm();
+    if nearest_z.is_nan() || nearest_z <= 0.0 {
+        return None;
+    }
+    if camera.has_distortion() {
+        let points = (0..32)
+            .map(|i| {
+                let t = std::f64::consts::TAU * i as f64 / 32.0;
+                camera.project(&(circle.center + radius_m * (t.cos() * e1 + t.sin() * e2)))
+            })
+            .collect::<Option<Vec<_>>>()?;
+        return ImageEllipse::fit(&points);
+    }
+    // The plane-to-image homography H = K [e1 e2 c] maps the plane conic
+    // diag(1, 1, -r²) to H⁻ᵀ diag(1, 1, -r²) H⁻¹.
+    let homography = intrinsic_matrix(camera) * Matrix3::from_columns(&[e1, e2, circle.center]);
+    let inverse = homography.try_inverse()?;
+    let plane_conic = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -radius_m * radius_m));
+    ImageEllipse::from_conic(&(inverse.transpose() * plane_conic * inverse))
 }
 
 /// Resolve the two-fold ambiguity with a concentric inner circle (radius
@@ -499,7 +514,13 @@ pub struct Pose {
 impl Pose {
     /// Pose from a position and a rotation matrix (re-orthonormalised).
     pub fn new(position: Vector3<f64>, rotation: Matrix3<f64>) -> Pose {
-        let q = UnitQuaternion::from_matrix(&rotation);
+        let orthonormal = (rotation.transpose() * rotation - Matrix3::identity()).norm() < 1e-9
+            && rotation.determinant() > 0.0;
+        let q = if orthonormal {
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rotation))
+        } else {
+            UnitQuaternion::from_matrix(&rotation)
+        };
         let q = if q.w < 0.0 {
             UnitQuaternion::new_unchecked(-q.into_inner())
         } else {
@@ -543,6 +564,19 @@ impl Pose {
         Rotation3::from_matrix_unchecked(self.rotation).euler_angles()
     }
 
+    /// The same pose spun by `angle` (radians) about the marker's own +z
+    /// axis: the new +x axis is the old marker direction at angle `angle`
+    /// (counter-clockwise as seen looking at the printed face).
+    ///
+    /// Useful for ring reading under perspective: build a provisional pose
+    /// with [`full_pose_from_yaw`]`(.., 0.0)`, sample the ring at marker
+    /// angles through [`project_marker_point`], and spin the pose by the
+    /// decoded rotation.
+    pub fn spun(&self, angle: f64) -> Pose {
+        let spin = Rotation3::from_axis_angle(&Vector3::z_axis(), angle);
+        Pose::new(self.position, self.rotation * spin.matrix())
+    }
+
     /// Image direction of the marker's +x axis at its centre, atan2(dv, du)
     /// (the detector's `yaw`). `None` if the centre does not project.
     pub fn image_yaw(&self, camera: &Camera) -> Option<f64> {
@@ -582,6 +616,20 @@ pub fn full_pose(camera: &Camera, circle: &CirclePose, x_axis_pixel: (f64, f64))
     let x = direction.normalize();
     let y = normal.cross(&x);
     Pose::new(circle.center, Matrix3::from_columns(&[x, y, normal]))
+}
+
+/// Complete a circle pose from the image direction of the marker's +x axis
+/// at its centre (atan2(dv, du), the detector's `yaw`); the inverse of
+/// [`Pose::image_yaw`]. Without lens distortion the image of the marker's
+/// x axis is a straight line through the *projected true centre* (see
+/// [`projected_center`]), not through the ellipse centre, so the direction
+/// is taken from there.
+pub fn full_pose_from_yaw(camera: &Camera, circle: &CirclePose, image_yaw: f64) -> Pose {
+    // A short step keeps the lens distortion between the two pixels small.
+    const STEP_PX: f64 = 2.0;
+    let (u, v) = projected_center(camera, circle).unwrap_or((camera.cx, camera.cy));
+    let (s, c) = image_yaw.sin_cos();
+    full_pose(camera, circle, (u + STEP_PX * c, v + STEP_PX * s))
 }
 
 /// Pixel position of a point (x_m, y_m) in metres on the marker plane.

@@ -7,7 +7,8 @@ use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use whycode::camera::Camera;
 use whycode::pose::{
     choose_by_circle_points, choose_by_inner_circle, circle_poses, circle_poses_from_points,
-    full_pose, project_marker_point, projected_center, CirclePose, ImageEllipse, Pose,
+    full_pose, full_pose_from_yaw, project_circle, project_marker_point, projected_center,
+    reprojection_rms, CirclePose, ImageEllipse, Pose,
 };
 
 /// Default marker of the reference ROS tools: 122 mm outer diameter.
@@ -306,4 +307,126 @@ fn ambiguity_resolved_from_points_on_the_inner_circle() {
         assert_eq!(chosen, right, "tilt {tilt}");
         assert!(margin > 0.0);
     }
+}
+
+#[test]
+fn yaw_round_trip_and_spin() {
+    for camera in [Camera::ideal(1280, 720, 60.0), distorted_640()] {
+        for (tilt, yaw) in [(0.0, 0.0), (30.0, 100.0), (65.0, -140.0)] {
+            let truth = marker_pose(0.9, (0.15, -0.1), tilt, 200.0, yaw);
+            let image_yaw = truth.image_yaw(&camera).unwrap();
+            let pose = full_pose_from_yaw(&camera, &truth.circle(), image_yaw);
+            let error = pose.rotation_angle_to(&truth).to_degrees();
+            assert!(error < 0.05, "tilt {tilt} yaw {yaw}: {error}°");
+
+            // Spinning a provisional pose by the marker angle of the true +x
+            // axis recovers the truth.
+            let provisional = full_pose_from_yaw(&camera, &truth.circle(), 0.3);
+            let x_true = provisional.rotation.transpose() * truth.rotation.column(0);
+            let spun = provisional.spun(x_true.y.atan2(x_true.x));
+            assert!(spun.rotation_angle_to(&truth) < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn pose_helpers_are_consistent() {
+    let camera = distorted_640();
+    let truth = marker_pose(1.3, (-0.2, 0.25), 35.0, 10.0, 77.0);
+    let q = truth.quaternion;
+    assert!(q[3] >= 0.0 && (q.iter().map(|x| x * x).sum::<f64>() - 1.0).abs() < 1e-12);
+    let from_quaternion = nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(
+        q[3], q[0], q[1], q[2],
+    ));
+    assert!((from_quaternion.to_rotation_matrix().matrix() - truth.rotation).norm() < 1e-12);
+    let (roll, pitch, yaw) = truth.roll_pitch_yaw();
+    let rebuilt = Rotation3::from_euler_angles(roll, pitch, yaw);
+    assert!((rebuilt.matrix() - truth.rotation).norm() < 1e-12);
+
+    let marker_points = [(0.0, 0.0), (0.03, 0.01), (-0.05, 0.02), (0.01, -0.06)];
+    let matches: Vec<_> = marker_points
+        .iter()
+        .map(|&(x, y)| ((x, y), project_marker_point(&camera, &truth, x, y).unwrap()))
+        .collect();
+    assert!(reprojection_rms(&camera, &truth, &matches).unwrap() < 1e-9);
+    let off = truth.spun(0.05);
+    assert!(reprojection_rms(&camera, &off, &matches).unwrap() > 0.5);
+    assert!(reprojection_rms(&camera, &truth, &[]).is_none());
+}
+
+/// Deterministic normal noise (Box-Muller over a 64-bit LCG).
+struct Noise(u64);
+
+impl Noise {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    fn gauss(&mut self) -> f64 {
+        let (a, b) = (self.uniform(), self.uniform());
+        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+    }
+}
+
+#[test]
+fn noisy_ellipses_still_give_accurate_pose_and_the_right_candidate() {
+    // 0.1 px boundary noise on 64 points per ellipse, 640x480 at 60° fov,
+    // 122 mm marker at 1 m (outer semi-major ~35 px).
+    let camera = Camera::ideal(640, 480, 60.0);
+    let mut noise = Noise(42);
+    for tilt in [25.0, 45.0, 65.0] {
+        let truth = marker_pose(1.0, (0.2, 0.1), tilt, 60.0, 0.0);
+        let trials = 40;
+        let (mut wrong, mut error_sum) = (0, 0.0);
+        for _ in 0..trials {
+            let mut jitter = |points: Vec<(f64, f64)>| -> Vec<(f64, f64)> {
+                points
+                    .into_iter()
+                    .map(|(u, v)| (u + 0.1 * noise.gauss(), v + 0.1 * noise.gauss()))
+                    .collect()
+            };
+            let outer = ImageEllipse::fit(&jitter(circle_pixels(&camera, &truth, RADIUS, 64)));
+            let inner = ImageEllipse::fit(&jitter(circle_pixels(
+                &camera,
+                &truth,
+                INNER_RATIO * RADIUS,
+                64,
+            )));
+            let candidates = circle_poses(&camera, &outer.unwrap(), RADIUS);
+            let (chosen, _) =
+                choose_by_inner_circle(&camera, &candidates, &inner.unwrap(), INNER_RATIO, RADIUS);
+            let errors = candidates.map(|c| c.normal.angle(&truth.normal()));
+            if errors[chosen] > errors[1 - chosen] {
+                wrong += 1;
+            }
+            error_sum += errors[chosen].to_degrees();
+        }
+        let mean = error_sum / trials as f64;
+        assert_eq!(wrong, 0, "tilt {tilt}");
+        assert!(mean < 0.5, "tilt {tilt}: mean normal error {mean}°");
+    }
+}
+
+#[test]
+fn projected_circle_matches_projected_points() {
+    for camera in [Camera::ideal(1280, 720, 60.0), distorted_640()] {
+        let truth = marker_pose(0.6, (0.3, -0.2), 55.0, 80.0, 0.0);
+        let direct = project_circle(&camera, &truth.circle(), RADIUS).unwrap();
+        let fitted = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+        assert!((direct.u - fitted.u).hypot(direct.v - fitted.v) < 1e-3);
+        assert!((direct.semi_major - fitted.semi_major).abs() < 1e-3);
+        assert!((direct.semi_minor - fitted.semi_minor).abs() < 1e-3);
+        assert!((direct.angle - fitted.angle).abs() < 1e-4);
+    }
+    // A circle reaching behind the camera has no image ellipse.
+    let camera = Camera::ideal(640, 480, 60.0);
+    let grazing = CirclePose {
+        center: Vector3::new(0.0, 0.0, 0.05),
+        normal: Vector3::new(0.0, -1.0, 0.0),
+    };
+    assert!(project_circle(&camera, &grazing, 0.1).is_none());
 }
