@@ -1,1 +1,4 @@
 //! (in progress)
+
+pub mod idfilter;
+pub mod ring;
