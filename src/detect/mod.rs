@@ -10,6 +10,8 @@
 //! again only touches the markers' own pixels.
 
 pub mod ellipse;
+pub mod idfilter;
+pub mod ring;
 pub mod segment;
 pub mod threshold;
 pub mod track;
