@@ -10,7 +10,8 @@ fn scratch() {
         let reader = RingReader::new(Some(Decoder::new(&fam)));
         for diameter in [12.0, 16.0, 24.0, 40.0, 100.0] {
             let mut errs = vec![];
-            let mut wrong = 0; let mut unknown = 0;
+            let mut wrong = 0;
+            let mut unknown = 0;
             let mut confs = vec![];
             for k in 0..20u32 {
                 let id = 1 + (k * 7) % fam.len() as u32;
@@ -21,7 +22,11 @@ fn scratch() {
                 view.gaussian_blur = 0.5;
                 let r = render(&view);
                 let rd = reader.read(&r.image, &r.ellipse, BLACK, WHITE);
-                if rd.id == 0 { unknown += 1; } else if rd.id != id { wrong += 1; } else {
+                if rd.id == 0 {
+                    unknown += 1;
+                } else if rd.id != id {
+                    wrong += 1;
+                } else {
                     errs.push(angle_error(rd.yaw.unwrap(), r.yaw).to_degrees());
                 }
                 confs.push(rd.confidence);

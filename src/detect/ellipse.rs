@@ -212,6 +212,45 @@ pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>)
     rays
 }
 
+/// Points where the grey level falls through `mid` going outwards within
+/// ±0.07 of `ratio` times the outer ellipse's radius: the edge of a white
+/// disc of that relative radius inside the black one. Under perspective the
+/// inner circle's image is not concentric with the outer ellipse, which is
+/// what tells the two candidate poses apart.
+pub fn inner_edge_points(
+    image: Gray<'_>,
+    outer: &Ellipse,
+    ratio: f64,
+    mid: f64,
+    out: &mut Vec<(f64, f64)>,
+) {
+    out.clear();
+    let rays = 48;
+    for k in 0..rays {
+        let t = std::f64::consts::TAU * (k as f64 + 0.5) / f64::from(rays);
+        let (px, py) = outer.point(t);
+        let (dx, dy) = (px - outer.u, py - outer.v);
+        let r = dx.hypot(dy);
+        let (s0, s1) = ((ratio - 0.07) * r, (ratio + 0.07) * r);
+        let steps = (((s1 - s0) * 2.0) as usize).max(4);
+        let at = |s: f64| sample(image, outer.u + dx / r * s, outer.v + dy / r * s);
+        let mut previous = at(s0);
+        for j in 1..=steps {
+            let s = s0 + (s1 - s0) * j as f64 / steps as f64;
+            let current = at(s);
+            if let (Some(p), Some(q)) = (previous, current) {
+                if p >= mid && q < mid {
+                    let step = (s1 - s0) / steps as f64;
+                    let hit = s - step + step * (p - mid) / (p - q);
+                    out.push((outer.u + dx / r * hit, outer.v + dy / r * hit));
+                    break;
+                }
+            }
+            previous = current;
+        }
+    }
+}
+
 /// Least-squares conic through the points, normalised by A + C = 1 (never
 /// zero for an ellipse), in coordinates centred on `origin` and scaled to
 /// unit size for conditioning.

@@ -164,9 +164,15 @@ impl RingReader {
         let mid_ratio = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
         let pixels_per_sector = outer.semi_minor * mid_ratio * sector;
         let contrast = white_level - black_level;
-        let valid = [outer.u, outer.v, outer.semi_major, outer.semi_minor, outer.angle]
-            .iter()
-            .all(|x| x.is_finite())
+        let valid = [
+            outer.u,
+            outer.v,
+            outer.semi_major,
+            outer.semi_minor,
+            outer.angle,
+        ]
+        .iter()
+        .all(|x| x.is_finite())
             && outer.semi_minor > 0.0
             && outer.semi_major >= outer.semi_minor
             && contrast.is_finite()
