@@ -287,8 +287,7 @@ impl Detector {
             d.confidence = reading.confidence;
             axis_point = reading.axis_point;
         }
-        if let (Some(camera), Some(diameter)) = (self.config.camera.clone(), self.config.diameter_m)
-        {
+        if let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) {
             d.pose = self.pose(&camera, diameter / 2.0, gray, c, &outer, d.yaw, axis_point);
         }
         d
