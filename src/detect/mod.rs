@@ -128,6 +128,8 @@ struct Candidate {
     ratio: f64,
     roundness: f64,
     area_error: f64,
+    /// The values above were measured (not a marker followed by its edge).
+    tested: bool,
     track: Option<usize>,
 }
 
@@ -220,8 +222,23 @@ impl Detector {
         }
         let all_followed = found.len() == self.tracks.len();
         if !(tracking && all_followed && found.len() >= limit) {
+            let followed = found.len();
             let map = ThresholdMap::adaptive(gray.pixels, width, height);
-            self.scan(gray, &map, &mut found, limit);
+            self.scan(gray, &map, &mut found, limit + followed);
+            // Markers followed by their edges left no labels, so the scan
+            // meets them again.
+            let (old, new) = found.split_at(followed);
+            let fresh: Vec<Candidate> = new
+                .iter()
+                .filter(|c| {
+                    !old.iter()
+                        .any(|o| (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.b)
+                })
+                .cloned()
+                .collect();
+            found.truncate(followed);
+            found.extend(fresh);
+            found.truncate(limit);
             if found.is_empty() {
                 // The local map found nothing; the reference's global
                 // threshold walk gets one try per frame.
@@ -234,7 +251,7 @@ impl Detector {
         }
         if tracking {
             self.update_tracks(&found);
-            for c in &found {
+            for c in found.iter().filter(|c| c.tested) {
                 self.ratio.learn(c.ratio);
                 self.roundness.learn(c.roundness);
                 self.area.learn(c.area_error);
@@ -378,12 +395,18 @@ impl Detector {
         }
     }
 
-    /// Looks for a tracked marker where it should be now: from the
-    /// predicted centre (inside the white centre) along the row to the
-    /// first dark pixel, which starts the marker's dark segment.
+    /// Looks for a tracked marker where it should be now. First the cheap
+    /// way: edge points around the predicted outline, a conic fit, and a
+    /// check that the centre is white and the annulus black (a few hundred
+    /// pixels). If that fails, the paper's way: from the predicted centre
+    /// (inside the white centre) along the row to the first dark pixel,
+    /// which starts the marker's dark segment and the full tests.
     fn follow(&mut self, gray: Gray<'_>, index: usize) -> Option<Candidate> {
         let track = self.tracks[index];
         let (pu, pv) = track.predicted();
+        if let Some(c) = self.follow_edges(gray, &track) {
+            return Some(c);
+        }
         let (x, y) = (pu.round(), pv.round());
         if !(x >= 0.0 && y >= 0.0 && (x as usize) < gray.width && (y as usize) < gray.height) {
             return None;
@@ -401,6 +424,70 @@ impl Detector {
         let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
         let same_size = (c.outer.a / track.a - 1.0).abs() < 0.3;
         (moved < track.a.max(4.0) && same_size).then_some(c)
+    }
+
+    fn follow_edges(&mut self, gray: Gray<'_>, track: &Track) -> Option<Candidate> {
+        let (pu, pv) = track.predicted();
+        let guess = Ellipse {
+            u: pu,
+            v: pv,
+            a: track.a,
+            b: track.b,
+            angle: track.angle,
+        };
+        let mid = (track.black + track.white) / 2.0;
+        let window = 3.0 + 0.08 * track.a;
+        let rays = ellipse::tracked_edge_points(gray, &guess, mid, window, &mut self.edge_scratch);
+        if self.edge_scratch.len() * 5 < rays * 4 {
+            return None;
+        }
+        let fitted = ellipse::fit_conic(&self.edge_scratch, (pu, pv), track.a)?;
+        let rms = (self
+            .edge_scratch
+            .iter()
+            .map(|&(x, y)| ellipse::radial_distance(&fitted, x, y).powi(2))
+            .sum::<f64>()
+            / self.edge_scratch.len() as f64)
+            .sqrt();
+        let consistent = rms < 0.3 + 0.01 * track.a
+            && (fitted.a / track.a - 1.0).abs() < 0.1
+            && (fitted.b / track.b - 1.0).abs() < 0.1
+            && (fitted.u - pu).hypot(fitted.v - pv) < window;
+        if !consistent {
+            return None;
+        }
+        // Inside: white at the centre, black across the annulus.
+        let white_ratio = if self.config.family.is_some() {
+            RING_INNER_RATIO
+        } else {
+            WHYCON_WHITE_RATIO
+        };
+        let (mut white_sum, mut black_sum) = (0.0, 0.0);
+        const PROBES: usize = 8;
+        for k in 0..PROBES {
+            let t = std::f64::consts::TAU * k as f64 / PROBES as f64;
+            let inner = fitted.scaled(0.6 * white_ratio).point(t);
+            let annulus = fitted.scaled(0.8).point(t);
+            let w = ellipse::sample(gray, inner.0, inner.1)?;
+            let b = ellipse::sample(gray, annulus.0, annulus.1)?;
+            if w < mid || b >= mid {
+                return None;
+            }
+            white_sum += w;
+            black_sum += b;
+        }
+        let (white, black) = (white_sum / PROBES as f64, black_sum / PROBES as f64);
+        Some(Candidate {
+            outer: fitted,
+            edge: self.edge_scratch.clone(),
+            black,
+            white,
+            ratio: self.ratio.expected,
+            roundness: 0.0,
+            area_error: 0.0,
+            tested: false,
+            track: None,
+        })
     }
 
     fn update_tracks(&mut self, found: &[Candidate]) {
@@ -424,9 +511,14 @@ impl Detector {
                 Some(i) => {
                     let mut t = self.tracks[i];
                     t.update(u, v, a, b, threshold);
+                    t.observe_appearance(c.outer.angle, c.black, c.white);
                     next.push(t);
                 }
-                None => next.push(Track::new(u, v, a, b, threshold)),
+                None => {
+                    let mut t = Track::new(u, v, a, b, threshold);
+                    t.observe_appearance(c.outer.angle, c.black, c.white);
+                    next.push(t);
+                }
             }
         }
         self.tracks = next;
@@ -509,6 +601,7 @@ impl Detector {
             ratio,
             roundness,
             area_error: area_error.abs(),
+            tested: true,
             track: None,
         })
     }
