@@ -81,7 +81,7 @@ fn random_images_never_panic() {
                 3 => ((x / 3 + y / 5) % 2 * 255) as u8,
                 _ => {
                     let d = (xf - cx).hypot(yf - cy) / r;
-                    if d < 0.41 || d > 1.0 {
+                    if !(0.41..=1.0).contains(&d) {
                         (200.0 + 20.0 * rng.gaussian()).clamp(0.0, 255.0) as u8
                     } else {
                         (30.0 + 20.0 * rng.gaussian()).clamp(0.0, 255.0) as u8
