@@ -19,6 +19,13 @@ extension: .png, .jpg, .pgm, .bmp) and the ground truth as JSON next to it (view
 view.json): every marker's ID, code, pixel centre, yaw, size and pose."
 )]
 pub struct SimulateArgs {
+    // Boxed: the options are many, and the CLI's subcommand enum stays small.
+    #[command(flatten)]
+    options: Box<SimulateOptions>,
+}
+
+#[derive(Debug, clap::Args)]
+struct SimulateOptions {
     /// Sheet manifest: show one page of the printed sheet
     #[arg(long, value_name = "FILE", conflicts_with_all = ["bits", "ids"])]
     manifest: Option<PathBuf>,
@@ -191,6 +198,7 @@ pub fn parse_id_list(text: &str) -> Result<Vec<u32>> {
 }
 
 pub fn run(args: SimulateArgs) -> Result<ExitCode> {
+    let args = *args.options;
     let camera = match &args.camera {
         Some(path) => Camera::load(path)?,
         None => {
