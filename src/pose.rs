@@ -440,9 +440,9 @@ pub fn choose_by_inner_circle(
 
 /// Resolve the ambiguity from image points known to lie on a circle of
 /// radius `radius_on_marker_m` around the marker centre (e.g. edge points of
-/// the white inner disc, or of the code ring's inner or outer border). Each
-/// point's viewing ray is intersected with the candidate's plane; the
-/// candidate whose intersections lie closer to that radius wins.
+/// the white inner disc). Each point's viewing ray is intersected with the
+/// candidate's plane; the candidate whose intersections lie closer to that
+/// radius wins.
 ///
 /// Returns the chosen index and the margin: the difference of the two RMS
 /// radial residuals, in metres.
@@ -452,8 +452,30 @@ pub fn choose_by_circle_points(
     points_px: &[(f64, f64)],
     radius_on_marker_m: f64,
 ) -> (usize, f64) {
-    let error =
-        |candidate: &CirclePose| circle_point_rms(camera, candidate, points_px, radius_on_marker_m);
+    let error = |candidate: &CirclePose| {
+        radial_rms(
+            camera,
+            candidate,
+            points_px.iter().map(|&p| (p, radius_on_marker_m)),
+        )
+    };
+    pick_smaller(error(&candidates[0]), error(&candidates[1]))
+}
+
+/// An image point (u, v) and the radius (metres) of the marker circle it
+/// lies on.
+pub type RadialPoint = ((f64, f64), f64);
+
+/// [`choose_by_circle_points`] for points on several concentric circles at
+/// once. On a WhyCode marker the code ring's borders are only visible in
+/// part: the 0.6 R border where a sector is white, the 0.343 R border where
+/// it is black; together they go all the way round.
+pub fn choose_by_radial_points(
+    camera: &Camera,
+    candidates: &[CirclePose; 2],
+    points: &[RadialPoint],
+) -> (usize, f64) {
+    let error = |candidate: &CirclePose| radial_rms(camera, candidate, points.iter().copied());
     pick_smaller(error(&candidates[0]), error(&candidates[1]))
 }
 
@@ -467,11 +489,23 @@ pub fn circle_point_rms(
     points_px: &[(f64, f64)],
     radius_on_marker_m: f64,
 ) -> Option<f64> {
+    radial_rms(
+        camera,
+        circle,
+        points_px.iter().map(|&p| (p, radius_on_marker_m)),
+    )
+}
+
+fn radial_rms(
+    camera: &Camera,
+    circle: &CirclePose,
+    points: impl Iterator<Item = RadialPoint>,
+) -> Option<f64> {
     let mut sum = 0.0;
     let mut count = 0usize;
-    for &(u, v) in points_px {
+    for ((u, v), radius) in points {
         if let Some(hit) = intersect_plane(camera, circle, u, v) {
-            sum += ((hit - circle.center).norm() - radius_on_marker_m).powi(2);
+            sum += ((hit - circle.center).norm() - radius).powi(2);
             count += 1;
         }
     }

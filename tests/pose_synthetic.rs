@@ -6,9 +6,9 @@
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use whycode::camera::Camera;
 use whycode::pose::{
-    choose_by_circle_points, choose_by_inner_circle, circle_poses, circle_poses_from_points,
-    full_pose, full_pose_from_yaw, project_circle, project_marker_point, projected_center,
-    reprojection_rms, CirclePose, ImageEllipse, Pose,
+    choose_by_circle_points, choose_by_inner_circle, choose_by_radial_points, circle_poses,
+    circle_poses_from_points, full_pose, full_pose_from_yaw, project_circle, project_marker_point,
+    projected_center, reprojection_rms, CirclePose, ImageEllipse, Pose,
 };
 
 /// Default marker of the reference ROS tools: 122 mm outer diameter.
@@ -429,4 +429,36 @@ fn projected_circle_matches_projected_points() {
         normal: Vector3::new(0.0, -1.0, 0.0),
     };
     assert!(project_circle(&camera, &grazing, 0.1).is_none());
+}
+
+#[test]
+fn ambiguity_resolved_from_partial_ring_borders() {
+    // A WhyCode ring shows its outer border (0.6 R) only beside white
+    // sectors and its inner border (0.343 R) only beside black ones.
+    let camera = distorted_640();
+    let truth = marker_pose(0.9, (-0.1, 0.15), 40.0, 300.0, 0.0);
+    let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+    let candidates = circle_poses(&camera, &outer, RADIUS);
+    let right = if candidates[0].normal.angle(&truth.normal())
+        < candidates[1].normal.angle(&truth.normal())
+    {
+        0
+    } else {
+        1
+    };
+    let sectors = 16;
+    let points: Vec<_> = (0..sectors * 4)
+        .map(|i| {
+            let theta = std::f64::consts::TAU * i as f64 / (sectors * 4) as f64;
+            let white = (i / 4) % 2 == 0;
+            let radius = if white { 0.6 } else { 0.343 } * RADIUS;
+            let pixel =
+                project_marker_point(&camera, &truth, radius * theta.cos(), radius * theta.sin())
+                    .unwrap();
+            (pixel, radius)
+        })
+        .collect();
+    let (chosen, margin) = choose_by_radial_points(&camera, &candidates, &points);
+    assert_eq!(chosen, right);
+    assert!(margin > 1e-4, "margin {margin} m");
 }
