@@ -614,7 +614,8 @@ impl Pose {
     /// Image direction of the marker's +x axis at its centre, atan2(dv, du)
     /// (the detector's `yaw`). `None` if the centre does not project.
     pub fn image_yaw(&self, camera: &Camera) -> Option<f64> {
-        let step = 1e-4 * self.position.norm().max(1e-9);
+        // Small enough that lens distortion does not bend the step.
+        let step = 1e-6 * self.position.norm().max(1e-9);
         let (u0, v0) = camera.project(&self.position)?;
         let (u1, v1) = camera.project(&(self.position + step * self.rotation.column(0)))?;
         Some((v1 - v0).atan2(u1 - u0))
@@ -659,11 +660,63 @@ pub fn full_pose(camera: &Camera, circle: &CirclePose, x_axis_pixel: (f64, f64))
 /// [`projected_center`]), not through the ellipse centre, so the direction
 /// is taken from there.
 pub fn full_pose_from_yaw(camera: &Camera, circle: &CirclePose, image_yaw: f64) -> Pose {
-    // A short step keeps the lens distortion between the two pixels small.
-    const STEP_PX: f64 = 2.0;
+    // The image of the axis is curved by lens distortion; a tiny step takes
+    // its tangent at the centre, which is what `image_yaw` measures. The
+    // ray intersection stays accurate to ~1e-11 at this step.
+    const STEP_PX: f64 = 0.01;
     let (u, v) = projected_center(camera, circle).unwrap_or((camera.cx, camera.cy));
     let (s, c) = image_yaw.sin_cos();
     full_pose(camera, circle, (u + STEP_PX * c, v + STEP_PX * s))
+}
+
+/// The pose stage in one call, as the detector uses it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseEstimate {
+    /// The chosen pose (marker → camera).
+    pub pose: Pose,
+    /// The other solution of the two-fold ambiguity, completed the same way.
+    pub alternative: Pose,
+    /// How much better the chosen candidate explains the inner ellipse
+    /// (pixels, see [`choose_by_inner_circle`]); 0 without an inner ellipse.
+    pub ambiguity_margin_px: f64,
+    /// Image position of the true marker centre (differs from the ellipse
+    /// centre under perspective).
+    pub center_px: (f64, f64),
+}
+
+/// Pose of a marker from its outer ellipse (outer radius `radius_m`),
+/// optionally disambiguated by a concentric inner ellipse (`inner` with its
+/// radius relative to the outer one, e.g. the legacy WhyCon white disc at
+/// 50/122), and completed with the image direction of the marker's +x axis
+/// (`image_yaw`, atan2(dv, du), e.g. from the code ring).
+///
+/// Without an inner ellipse the first candidate is returned (a coin toss
+/// unless the marker is seen nearly face-on). Without a yaw (legacy
+/// markers) the +x axis is placed towards image +u: roll and pitch are then
+/// meaningful, the rotation about the normal is not. `None` for an invalid
+/// ellipse.
+pub fn estimate_pose(
+    camera: &Camera,
+    outer: &ImageEllipse,
+    radius_m: f64,
+    inner: Option<(&ImageEllipse, f64)>,
+    image_yaw: Option<f64>,
+) -> Option<PoseEstimate> {
+    let candidates = try_circle_poses(camera, outer, radius_m)?;
+    let (chosen, margin) = match inner {
+        Some((ellipse, ratio)) if ellipse.is_valid() => {
+            choose_by_inner_circle(camera, &candidates, ellipse, ratio, radius_m)
+        }
+        _ => (0, 0.0),
+    };
+    let yaw = image_yaw.unwrap_or(0.0);
+    let pose = full_pose_from_yaw(camera, &candidates[chosen], yaw);
+    Some(PoseEstimate {
+        pose,
+        alternative: full_pose_from_yaw(camera, &candidates[1 - chosen], yaw),
+        ambiguity_margin_px: margin,
+        center_px: projected_center(camera, &candidates[chosen])?,
+    })
 }
 
 /// Pixel position of a point (x_m, y_m) in metres on the marker plane.
