@@ -13,7 +13,7 @@ use nalgebra::{Matrix2, Vector2, Vector3};
 use serde_yaml::Value;
 
 /// Intrinsic calibration of one camera.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Camera {
     pub fx: f64,
     pub fy: f64,

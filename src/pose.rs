@@ -417,12 +417,17 @@ pub fn project_circle(camera: &Camera, circle: &CirclePose, radius_m: f64) -> Op
 /// Returns the chosen index and the margin: how much farther (pixels) the
 /// rejected candidate's prediction is from the measurement. Compare the
 /// margin with the measurement noise of the inner ellipse centre; a margin
-/// below it means the choice is a guess. The cue is a perspective effect:
-/// it grows with the marker's apparent size and tilt, and vanishes for small
-/// tilts (where both candidates coincide, so the choice does not matter) and
-/// for markers far away (where the image is nearly affine and the two
-/// normals are mirror images about the viewing ray that no image of
-/// concentric circles can tell apart).
+/// below it means the choice is a guess. The cue is a perspective effect;
+/// measured on exact projections it is about
+/// `(1 - inner_ratio²) · a² / f · sin(2·tilt)` pixels (a = outer semi-major
+/// axis in pixels, f = focal length in pixels, tilt = angle between the
+/// normal and the line of sight): for a 122 mm marker with a 640×480, 60°
+/// camera, 1.7 px at 1 m, 0.44 px at 2 m, 0.19 px at 3 m for a 40° tilt.
+/// The wrong candidate's normal is off by twice the tilt. The cue vanishes
+/// for small tilts (where the candidates converge to one) and for
+/// markers far away (where the image is nearly affine and the two normals
+/// are mirror images about the viewing ray that no image of concentric
+/// circles can tell apart).
 pub fn choose_by_inner_circle(
     camera: &Camera,
     candidates: &[CirclePose; 2],

@@ -507,3 +507,27 @@ fn estimate_pose_in_one_call() {
     };
     assert!(estimate_pose(&camera, &broken, RADIUS, None, None).is_none());
 }
+
+#[test]
+fn ambiguity_margin_follows_the_documented_rule_of_thumb() {
+    let camera = Camera::ideal(640, 480, 60.0);
+    for distance in [1.0, 2.0, 3.0] {
+        for tilt in [10.0f64, 25.0, 40.0, 55.0, 70.0] {
+            let truth = marker_pose(distance, (0.2, 0.1), tilt, 60.0, 0.0);
+            let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+            let inner =
+                ImageEllipse::fit(&circle_pixels(&camera, &truth, INNER_RATIO * RADIUS, 64))
+                    .unwrap();
+            let candidates = circle_poses(&camera, &outer, RADIUS);
+            let (_, margin) =
+                choose_by_inner_circle(&camera, &candidates, &inner, INNER_RATIO, RADIUS);
+            let rule = (1.0 - INNER_RATIO * INNER_RATIO) * outer.semi_major.powi(2) / camera.fx
+                * (2.0 * tilt.to_radians()).sin();
+            let ratio = margin / rule;
+            assert!(
+                (0.75..1.33).contains(&ratio),
+                "d={distance} tilt={tilt}: {margin} vs {rule}"
+            );
+        }
+    }
+}
