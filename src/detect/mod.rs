@@ -11,6 +11,7 @@
 
 pub mod ellipse;
 pub mod idfilter;
+pub mod rectify;
 pub mod ring;
 pub mod segment;
 pub mod threshold;
@@ -79,7 +80,10 @@ pub struct Detection {
     pub id: u32,
     /// The member's code when the ring decoded to one.
     pub code: Option<u32>,
-    /// Centre in pixels, origin at the centre of the top-left pixel.
+    /// Centre in pixels, origin at the centre of the top-left pixel: the
+    /// projected marker centre when a camera and diameter are configured,
+    /// otherwise the centre of the outer ellipse (which perspective moves
+    /// off the true centre by up to a pixel or two on large tilted markers).
     pub u: f64,
     pub v: f64,
     /// Direction of the marker's +x axis in the image, atan2(dv, du).
@@ -306,6 +310,26 @@ impl Detector {
         }
         if let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) {
             d.pose = self.pose(&camera, diameter / 2.0, gray, c, &outer, d.yaw, axis_point);
+            if let (Some(pose), Some(code), Some(family)) = (&d.pose, d.code, &self.config.family) {
+                let bits = family.bits();
+                if let Some(better) =
+                    rectify::refine_rotation(gray, &camera, pose, diameter / 2.0, bits, code)
+                {
+                    d.pose = Some(better);
+                }
+            }
+            // Under perspective the centre of the outer ellipse is not the
+            // image of the marker's centre, nor is the ellipse-based yaw
+            // the direction of +x at that centre: the pose knows both.
+            if let Some(pose) = &d.pose {
+                if let Some((u, v)) = camera.project(&pose.position) {
+                    d.u = u;
+                    d.v = v;
+                }
+                if d.yaw.is_some() {
+                    d.yaw = pose.image_yaw(&camera).or(d.yaw);
+                }
+            }
         }
         d
     }
