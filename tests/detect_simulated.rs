@@ -161,7 +161,8 @@ fn tilted_markers_of_8_to_16_bits_give_ids_yaw_and_pose() {
 fn blur_noise_gradient_and_dark_frames_keep_every_marker() {
     let camera = Camera::ideal(1280, 960, 60.0);
     let family = Family::generate(8, 2).unwrap();
-    let cases: [(&str, fn(&mut Scene)); 5] = [
+    type Effect = fn(&mut Scene);
+    let cases: [(&str, Effect); 5] = [
         ("focus blur 1.5 px + noise 4", |s| {
             s.focus_blur_px = 1.5;
             s.noise = 4.0;
