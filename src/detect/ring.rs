@@ -57,7 +57,7 @@ const MIN_RING_CONTRAST: f64 = 0.10;
 
 /// A bit whose two halves differ by less than this fraction of the ring's
 /// typical bit contrast is an erasure (broken Manchester structure).
-const ERASURE_RATIO: f64 = 0.4;
+const ERASURE_RATIO: f64 = 0.45;
 
 /// Most erasures the reader tries to fill from the family's distance.
 const MAX_ERASURES: u32 = 4;
@@ -164,9 +164,15 @@ impl RingReader {
         let mid_ratio = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
         let pixels_per_sector = outer.semi_minor * mid_ratio * sector;
         let contrast = white_level - black_level;
-        let valid = [outer.u, outer.v, outer.semi_major, outer.semi_minor, outer.angle]
-            .iter()
-            .all(|x| x.is_finite())
+        let valid = [
+            outer.u,
+            outer.v,
+            outer.semi_major,
+            outer.semi_minor,
+            outer.angle,
+        ]
+        .iter()
+        .all(|x| x.is_finite())
             && outer.semi_minor > 0.0
             && outer.semi_major >= outer.semi_minor
             && contrast.is_finite()
@@ -197,18 +203,10 @@ impl RingReader {
         };
         let best_score = score(&diffs);
 
-        let mut magnitudes: Vec<f64> = diffs.iter().map(|d| d.abs()).collect();
-        magnitudes.sort_by(f64::total_cmp);
-        let typical = magnitudes[magnitudes.len() / 2];
+        let typical = median(diffs.iter().map(|d| d.abs()).collect());
         let edge_strength = typical / contrast;
-        let weakest_bit = if typical > 0.0 {
-            magnitudes[0] / typical
-        } else {
-            0.0
-        };
         let mut reading = RingReading {
             edge_strength,
-            weakest_bit,
             pixels_per_sector,
             ..RingReading::unreadable(pixels_per_sector)
         };
@@ -220,16 +218,23 @@ impl RingReader {
         }
 
         let mut word = 0u32;
-        let mut erasures = Vec::new();
         for (j, d) in diffs.iter().enumerate() {
             // First half brighter than the second: white then black, a 1.
             if *d > 0.0 {
                 word |= 1 << (bits as usize - 1 - j);
             }
-            if d.abs() < ERASURE_RATIO * typical {
+        }
+        let references = bit_references(&diffs, typical);
+        let mut erasures = Vec::new();
+        let mut weakest_bit = f64::INFINITY;
+        for (j, (d, reference)) in diffs.iter().zip(&references).enumerate() {
+            let relative = d.abs() / reference;
+            weakest_bit = weakest_bit.min(relative);
+            if relative < ERASURE_RATIO {
                 erasures.push(j as u32);
             }
         }
+        reading.weakest_bit = weakest_bit.min(1.0);
         reading.word = Some(word);
         reading.erasures = erasures.len() as u32;
 
@@ -243,8 +248,8 @@ impl RingReader {
         };
         reading.decoded = Some(decoded);
 
-        let quality = logistic((edge_strength - 0.2) / 0.04)
-            * logistic((pixels_per_sector - 1.6) / 0.2)
+        let quality = logistic((edge_strength - 0.15) / 0.03)
+            * logistic((pixels_per_sector - 1.1) / 0.1)
             * (weakest_bit / 0.7).min(1.0);
         match decoded.status {
             MatchStatus::Exact | MatchStatus::Corrected => {
@@ -303,6 +308,42 @@ fn fill_erasures(decoder: &Decoder, word: u32, erasures: &[u32]) -> Option<Decod
         }
     }
     found
+}
+
+/// The contrast each bit should show if the ring were read cleanly. Blur
+/// attenuates a half-sector flanked by the opposite colour (a bit next to
+/// an equal bit) more than one that joins a run of two, so bits are
+/// compared within their class (how many of their halves are isolated);
+/// within a class the clearer bits set the reference, since motion blur
+/// fades (or even inverts) a whole arc of the ring and the median can fall
+/// inside it.
+fn bit_references(diffs: &[f64], typical: f64) -> Vec<f64> {
+    let n = diffs.len();
+    let bit = |j: usize| diffs[j % n] > 0.0;
+    let class =
+        |j: usize| usize::from(bit(j + n - 1) == bit(j)) + usize::from(bit(j + 1) == bit(j));
+    let mut per_class: [Vec<f64>; 3] = Default::default();
+    for (j, d) in diffs.iter().enumerate() {
+        per_class[class(j)].push(d.abs());
+    }
+    let class_reference: Vec<f64> = per_class
+        .into_iter()
+        .map(|mut m| {
+            if m.len() < 3 {
+                return typical;
+            }
+            m.sort_by(f64::total_cmp);
+            m[m.len() * 3 / 4]
+        })
+        .collect();
+    (0..n)
+        .map(|j| class_reference[class(j)].max(f64::MIN_POSITIVE))
+        .collect()
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
 }
 
 fn logistic(x: f64) -> f64 {

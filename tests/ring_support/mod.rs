@@ -118,12 +118,10 @@ pub fn render_marker(view: &View, marker: &Marker) -> Rendered {
                 };
                 for sy in 0..SS {
                     for sx in 0..SS {
-                        let x = f64::from(px) - 0.5 + (sx as f64 + 0.5) / SS as f64
-                            - cu
-                            - shift * mc;
-                        let y = f64::from(py) - 0.5 + (sy as f64 + 0.5) / SS as f64
-                            - cv
-                            - shift * ms;
+                        let x =
+                            f64::from(px) - 0.5 + (sx as f64 + 0.5) / SS as f64 - cu - shift * mc;
+                        let y =
+                            f64::from(py) - 0.5 + (sy as f64 + 0.5) / SS as f64 - cv - shift * ms;
                         let mx = inv[0][0] * x + inv[0][1] * y;
                         let my = inv[1][0] * x + inv[1][1] * y;
                         if !marker.is_black_at(mx, my) {
@@ -133,8 +131,7 @@ pub fn render_marker(view: &View, marker: &Marker) -> Rendered {
                     }
                 }
             }
-            data[(py * side + px) as usize] =
-                BLACK + (WHITE - BLACK) * white as f64 / total as f64;
+            data[(py * side + px) as usize] = BLACK + (WHITE - BLACK) * white as f64 / total as f64;
         }
     }
     let mut image = GrayImage::new(side, side);
