@@ -32,19 +32,10 @@
 use crate::family::{Decoded, Decoder, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
 use image::GrayImage;
+
+pub use crate::pose::ImageEllipse;
 use std::f64::consts::PI;
 
-/// An ellipse in the image, in pixels (centre origin at the top-left pixel's
-/// centre; `angle` is the direction of the major axis, atan2(dv, du)).
-/// Kept here until the pose module's identical type is available.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImageEllipse {
-    pub u: f64,
-    pub v: f64,
-    pub semi_major: f64,
-    pub semi_minor: f64,
-    pub angle: f64,
-}
 
 /// Rings whose sectors are narrower than this many pixels (at the sample
 /// radius, along the ellipse's minor axis) are not read: below it the
