@@ -9,6 +9,7 @@
 //! marker is predicted to be, so a frame in which every marker is found
 //! again only touches the markers' own pixels.
 
+pub mod annotate;
 pub mod ellipse;
 pub mod idfilter;
 pub mod ring;

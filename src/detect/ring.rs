@@ -36,7 +36,6 @@ use image::GrayImage;
 pub use crate::pose::ImageEllipse;
 use std::f64::consts::PI;
 
-
 /// Rings whose sectors are narrower than this many pixels (at the sample
 /// radius, along the ellipse's minor axis) are not read: below it the
 /// sectors blur together and a read would be a guess.
@@ -187,12 +186,12 @@ impl RingReader {
         let diffs_a = bit_differences(&halves_a);
         let diffs_b = bit_differences(&halves_b);
         let score = |d: &[f64]| d.iter().map(|x| x.abs()).sum::<f64>();
-        let (start, diffs, other_score) = if score(&diffs_a) >= score(&diffs_b) {
-            (phase, diffs_a, score(&diffs_b))
+        let (start, diffs, other_diffs) = if score(&diffs_a) >= score(&diffs_b) {
+            (phase, diffs_a, diffs_b)
         } else {
-            (phase + sector, diffs_b, score(&diffs_a))
+            (phase + sector, diffs_b, diffs_a)
         };
-        let best_score = score(&diffs);
+        let (best_score, other_score) = (score(&diffs), score(&other_diffs));
 
         let typical = median(diffs.iter().map(|d| d.abs()).collect());
         let edge_strength = typical / contrast;
@@ -204,7 +203,23 @@ impl RingReader {
         // Only a word with all bits equal reads alike under both pairings,
         // and those are periodic; anything close to a tie is noise.
         let parity_clear = best_score - other_score > 0.5 * typical;
-        if edge_strength < MIN_RING_CONTRAST || !parity_clear {
+        if edge_strength < MIN_RING_CONTRAST {
+            return reading;
+        }
+        if !parity_clear {
+            // Clean Manchester bits under both pairings: a ring alternating
+            // every sector, i.e. all bits equal. Either reading is periodic,
+            // so it is no member whichever way it is paired.
+            let all_clear = diffs
+                .iter()
+                .chain(&other_diffs)
+                .all(|d| d.abs() > (1.0 - ERASURE_RATIO) * typical);
+            if all_clear {
+                let decoded = decoder.decode(0);
+                reading.word = Some(0);
+                reading.decoded = Some(decoded);
+                reading.confidence = logistic((edge_strength - 0.15) / 0.03);
+            }
             return reading;
         }
 
