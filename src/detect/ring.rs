@@ -49,6 +49,14 @@ const MIN_RING_CONTRAST: f64 = 0.10;
 /// typical bit contrast is an erasure (broken Manchester structure).
 const ERASURE_RATIO: f64 = 0.45;
 
+/// Below this confidence a decoded member is not reported as the ID.
+pub const MIN_ID_CONFIDENCE: f64 = 0.1;
+
+/// Least edge strength and sector width (pixels) at which erased bits are
+/// filled from the family's distance.
+const MIN_FILL_STRENGTH: f64 = 0.3;
+const MIN_FILL_PIXELS: f64 = 2.0;
+
 /// Most erasures the reader tries to fill from the family's distance.
 const MAX_ERASURES: u32 = 4;
 
@@ -63,7 +71,9 @@ pub struct RingReading {
     /// reliably (too small, no contrast, broken Manchester structure):
     /// no evidence either way.
     pub decoded: Option<Decoded>,
-    /// The member ID, 0 when unknown or not a member.
+    /// The member ID, 0 when unknown, not a member, or decoded with a
+    /// confidence under [`MIN_ID_CONFIDENCE`] (then only `decoded` names
+    /// the candidate, for the ID filter to weigh).
     pub id: u32,
     /// Image direction of the marker's +x axis, atan2(dv, du), radians;
     /// `None` unless the ID is known.
@@ -233,19 +243,28 @@ impl RingReader {
         let references = bit_references(&diffs, typical);
         let mut erasures = Vec::new();
         let mut weakest_bit = f64::INFINITY;
+        // Erased bits are paid for by the decoded distance instead.
+        let mut weakest_kept = 1.0f64;
         for (j, (d, reference)) in diffs.iter().zip(&references).enumerate() {
             let relative = d.abs() / reference;
             weakest_bit = weakest_bit.min(relative);
             if relative < ERASURE_RATIO {
                 erasures.push(j as u32);
+            } else {
+                weakest_kept = weakest_kept.min(relative);
             }
         }
         reading.weakest_bit = weakest_bit.min(1.0);
         reading.word = Some(word);
         reading.erasures = erasures.len() as u32;
 
+        // Filling erasures assumes every other bit is right, which only a
+        // sharp, well-resolved ring (a local smudge or glare) warrants.
+        let fillable = edge_strength >= MIN_FILL_STRENGTH && pixels_per_sector >= MIN_FILL_PIXELS;
         let decoded = if erasures.is_empty() {
             decoder.decode(word)
+        } else if !fillable {
+            return reading;
         } else {
             match fill_erasures(decoder, word, &erasures) {
                 Some(d) => d,
@@ -256,12 +275,17 @@ impl RingReader {
 
         let quality = logistic((edge_strength - 0.15) / 0.03)
             * logistic((pixels_per_sector - 1.1) / 0.1)
-            * (weakest_bit / 0.7).min(1.0);
+            * (weakest_kept / 0.7).min(1.0);
         match decoded.status {
             MatchStatus::Exact | MatchStatus::Corrected => {
                 let status_factor = 0.5f64.powi(decoded.distance as i32);
-                reading.id = decoded.id;
                 reading.confidence = quality * status_factor;
+                if reading.confidence < MIN_ID_CONFIDENCE {
+                    // Kept in `decoded` as (weak) evidence for the ID
+                    // filter, but not named: a guess is not an answer.
+                    return reading;
+                }
+                reading.id = decoded.id;
                 let x_axis_t = start + 2.0 * sector * f64::from(decoded.rotation);
                 let (du, dv) = frame.offset(x_axis_t, 1.0);
                 reading.yaw = Some(dv.atan2(du));
