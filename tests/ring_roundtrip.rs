@@ -321,3 +321,63 @@ fn id_filter_settles_on_the_truth_from_noisy_small_views() {
     assert_eq!(estimate.id, id);
     assert!(estimate.probability > 0.95);
 }
+
+#[test]
+/// Threshold: 150 random views per family (12-82 px, tilt up to 60°, motion
+/// blur up to D/6, blur, noise up to σ 10, detector-like ellipse and level
+/// errors): families with distance >= 2 never give a wrong ID; the d = 1
+/// family (no error detection at all) at most one in 150.
+fn random_harsh_views_give_no_wrong_ids_with_error_detection() {
+    let mut rng = Lcg(12345);
+    for (bits, dist) in [(8u32, 1u32), (8, 2), (12, 2), (16, 2), (16, 3)] {
+        let family = Family::generate(bits, dist).unwrap();
+        let reader = RingReader::new(Some(Decoder::new(&family)));
+        let (mut ok, mut wrong, mut unk) = (0, 0usize, 0);
+        for _ in 0..150 {
+            let id = 1 + (rng.uniform() * family.len() as f64) as u32 % family.len() as u32;
+            let d = 12.0 + rng.uniform() * 70.0;
+            let mut v = View::new(bits, family.code(id).unwrap(), d, rng.uniform() * 7.0);
+            v.offset = (rng.uniform(), rng.uniform());
+            v.seed = rng.next_u64();
+            if rng.uniform() < 0.4 {
+                v.motion_blur = rng.uniform() * d / 6.0;
+                v.motion_direction = rng.uniform() * 7.0;
+            }
+            v.noise = rng.uniform() * 10.0;
+            v.gaussian_blur = rng.uniform() * 1.5;
+            if rng.uniform() < 0.4 {
+                v.tilt = rng.uniform() * 1.05;
+                v.tilt_direction = rng.uniform() * 7.0;
+            }
+            let r = render(&v);
+            // detector-like ellipse error
+            let mut e = r.ellipse;
+            e.u += (rng.uniform() - 0.5) * 0.4;
+            e.v += (rng.uniform() - 0.5) * 0.4;
+            e.semi_major *= 1.0 + (rng.uniform() - 0.5) * 0.04;
+            e.semi_minor *= 1.0 + (rng.uniform() - 0.5) * 0.04;
+            let rd = reader.read(
+                &r.image,
+                &e,
+                BLACK + (rng.uniform() - 0.5) * 20.0,
+                WHITE + (rng.uniform() - 0.5) * 20.0,
+            );
+            if rd.id == 0 {
+                unk += 1
+            } else if rd.id == id {
+                ok += 1
+            } else {
+                wrong += 1;
+                println!(
+                    "wrong: {v:?} conf {:.2} es {:.2} pps {:.2} er {}",
+                    rd.confidence, rd.edge_strength, rd.pixels_per_sector, rd.erasures
+                );
+            }
+        }
+        println!("bits {bits} d{dist}: ok {ok} unknown {unk} wrong {wrong}");
+        assert!(
+            wrong <= usize::from(dist == 1),
+            "bits {bits} d{dist}: {wrong} wrong"
+        );
+    }
+}
