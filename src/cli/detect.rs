@@ -192,7 +192,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
             },
             Err(err) => {
                 out.flush()?;
-                eprintln!("whycode: error: {err:#}");
+                eprintln!("whycode: error: {}", super::one_line(&err));
                 failures += 1;
             }
         }
