@@ -9,6 +9,7 @@
 //! marker is predicted to be, so a frame in which every marker is found
 //! again only touches the markers' own pixels.
 
+pub mod annotate;
 pub mod ellipse;
 pub mod idfilter;
 pub mod rectify;
@@ -293,14 +294,7 @@ impl Detector {
         };
         let mut axis_point = None;
         if let Some(reader) = &self.reader {
-            let ring_outer = ring::ImageEllipse {
-                u: outer.u,
-                v: outer.v,
-                semi_major: outer.semi_major,
-                semi_minor: outer.semi_minor,
-                angle: outer.angle,
-            };
-            let reading = reader.read(image, &ring_outer, c.black, c.white);
+            let reading = reader.read(image, &outer, c.black, c.white);
             d.id = reading.id;
             d.code = reading.decoded.filter(|x| x.is_member()).map(|x| x.code);
             d.status = reading.decoded.map(|x| x.status);
