@@ -324,3 +324,72 @@ fn tracking_follows_moving_markers_frame_after_frame() {
         all_found(&camera, &placements, &found);
     }
 }
+
+#[test]
+fn tracking_finds_newcomers_and_agrees_with_fresh_detection() {
+    let camera = Pinhole {
+        f: 2000.0,
+        cx: 400.0,
+        cy: 300.0,
+    };
+    let mut tracked = Detector::new(DetectorConfig {
+        tracking: true,
+        ..DetectorConfig::default()
+    });
+    for frame in 0..14 {
+        let mut placements: Vec<Placement> = (0..4)
+            .map(|k| {
+                let (u, v) = (
+                    120.0 + 150.0 * k as f64 + 2.0 * frame as f64,
+                    150.0 + 1.5 * frame as f64,
+                );
+                Placement::at(&camera, Marker::whycon(100.0), (u, v), 70.0, 0.0, 0.0, 0.0)
+            })
+            .collect();
+        if frame >= 4 {
+            placements.push(Placement::at(
+                &camera,
+                Marker::whycon(100.0),
+                (400.0, 450.0),
+                60.0,
+                0.0,
+                0.0,
+                0.0,
+            ));
+        }
+        let image = render(
+            800,
+            600,
+            &camera,
+            &placements,
+            Look {
+                noise: 2.0,
+                ..Look::default()
+            },
+        );
+        let found = tracked.detect(&image);
+        let fresh = legacy().detect(&image);
+        // The newcomer must be found within the 8 discovery bands.
+        if frame < 4 || frame >= 12 {
+            assert_eq!(found.len(), placements.len(), "frame {frame}");
+        }
+        for d in &found {
+            let f = fresh
+                .iter()
+                .find(|f| (f.u - d.u).hypot(f.v - d.v) < 2.0)
+                .expect("tracked marker also found afresh");
+            // Following a marker by its edges is about as precise as
+            // finding it afresh (both are within 0.05 px of the truth).
+            assert!(
+                (f.u - d.u).hypot(f.v - d.v) < 0.1,
+                "frame {frame}: {d:?} vs {f:?}"
+            );
+            assert!(
+                (f.axes[0] - d.axes[0]).abs() < 0.1,
+                "frame {frame}: {:?} vs {:?}",
+                d.axes,
+                f.axes
+            );
+        }
+    }
+}

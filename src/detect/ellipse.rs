@@ -263,8 +263,13 @@ pub fn tracked_edge_points(
     out: &mut Vec<(f64, f64)>,
 ) -> usize {
     out.clear();
-    let rays = 40;
-    let steps = (2.0 * window).ceil() as usize + 1;
+    let perimeter = std::f64::consts::PI * (guess.a + guess.b);
+    let rays = ((perimeter / 4.0) as usize).clamp(24, 64);
+    // Half-pixel steps: a crossing interpolated between samples a whole
+    // pixel apart moves with the samples' phase against the edge, and the
+    // phase changes with the guess from frame to frame.
+    const STEP: f64 = 0.5;
+    let steps = (2.0 * window / STEP).ceil() as usize + 1;
     let (sin_a, cos_a) = guess.angle.sin_cos();
     for k in 0..rays {
         let t = std::f64::consts::TAU * (k as f64 + 0.5) / rays as f64;
@@ -274,20 +279,42 @@ pub fn tracked_edge_points(
         let r = dx.hypot(dy);
         let (ux, uy) = (dx / r, dy / r);
         let s0 = r - window;
-        let mut previous = sample(image, guess.u + ux * s0, guess.v + uy * s0);
-        let mut best: Option<f64> = None;
-        for j in 1..steps {
-            let s = s0 + j as f64;
-            let current = sample(image, guess.u + ux * s, guess.v + uy * s);
-            if let (Some(p), Some(q)) = (previous, current) {
-                if p < mid && q >= mid {
-                    let hit = s - 1.0 + (mid - p) / (q - p);
-                    if best.map_or(true, |b| (hit - r).abs() < (b - r).abs()) {
-                        best = Some(hit);
-                    }
+        let mut profile = [0.0f64; 96];
+        let n = steps.min(profile.len());
+        let mut ok = true;
+        for (j, slot) in profile[..n].iter_mut().enumerate() {
+            let s = s0 + STEP * j as f64;
+            match sample(image, guess.u + ux * s, guess.v + uy * s) {
+                Some(value) => *slot = value,
+                None => {
+                    ok = false;
+                    break;
                 }
             }
-            previous = current;
+        }
+        if !ok {
+            continue;
+        }
+        // This ray's own black and white: the known levels only decide
+        // whether the ray sees the edge at all.
+        // Means of the outer thirds of the window, which noise does not bias
+        // the way a minimum and a maximum would.
+        let third = (n / 3).max(1);
+        let lo = profile[..third].iter().sum::<f64>() / third as f64;
+        let hi = profile[n - third..n].iter().sum::<f64>() / third as f64;
+        if lo >= mid || hi < mid || hi - lo < 8.0 {
+            continue;
+        }
+        let level = (lo + hi) / 2.0;
+        let mut best: Option<f64> = None;
+        for j in 0..n - 1 {
+            let (p, q) = (profile[j], profile[j + 1]);
+            if p < level && q >= level {
+                let hit = s0 + STEP * (j as f64 + (level - p) / (q - p));
+                if best.map_or(true, |b| (hit - r).abs() < (b - r).abs()) {
+                    best = Some(hit);
+                }
+            }
         }
         if let Some(s) = best {
             out.push((guess.u + ux * s, guess.v + uy * s));

@@ -113,6 +113,8 @@ pub struct Detector {
     filler: Filler,
     edge_scratch: Vec<(f64, f64)>,
     inner_scratch: Vec<(f64, f64)>,
+    /// Scan tiles covered by markers followed this frame.
+    occupied: Vec<bool>,
     tracks: Vec<Track>,
     search: ThresholdSearch,
     ratio: Adaptive,
@@ -137,6 +139,11 @@ struct Candidate {
     tested: bool,
     track: Option<usize>,
 }
+
+/// Width of the scan's chunks (and of the tiles of the followed-marker mask).
+const SCAN_CHUNK: usize = 16;
+/// A tracked frame looks for new markers in one of this many row bands.
+const DISCOVERY_BANDS: u64 = 8;
 
 /// Fraction of the full disc that is white inside the black annulus.
 fn expected_white_fraction(whycode: bool) -> f64 {
@@ -178,6 +185,7 @@ impl Detector {
             filler: Filler::default(),
             edge_scratch: Vec::new(),
             inner_scratch: Vec::new(),
+            occupied: Vec::new(),
             tracks: Vec::new(),
             search: ThresholdSearch::default(),
             frame: 0,
@@ -226,34 +234,52 @@ impl Detector {
             }
         }
         let all_followed = found.len() == self.tracks.len();
-        if !(tracking && all_followed && found.len() >= limit) {
-            let followed = found.len();
+        let followed = found.len();
+        self.mark_followed(&found, width, height);
+        if tracking && all_followed && followed > 0 {
+            if found.len() < limit {
+                // Every known marker is back: look for new ones in one band
+                // of rows per frame, so a tracked frame stays cheap and a
+                // newcomer is found within DISCOVERY_BANDS frames.
+                let band = (self.frame % DISCOVERY_BANDS) as usize;
+                let rows = height * band / DISCOVERY_BANDS as usize
+                    ..height * (band + 1) / DISCOVERY_BANDS as usize;
+                let map = ThresholdMap::adaptive_rows(gray.pixels, width, height, rows.clone());
+                self.scan(gray, &map, rows, &mut found, limit);
+            }
+        } else {
             let map = ThresholdMap::adaptive(gray.pixels, width, height);
-            self.scan(gray, &map, &mut found, limit + followed);
-            // Markers followed by their edges left no labels, so the scan
-            // meets them again.
-            let (old, new) = found.split_at(followed);
-            let fresh: Vec<Candidate> = new
-                .iter()
-                .filter(|c| {
-                    !old.iter()
-                        .any(|o| (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.b)
-                })
-                .cloned()
-                .collect();
-            found.truncate(followed);
-            found.extend(fresh);
-            found.truncate(limit);
+            self.scan(gray, &map, 0..height, &mut found, limit);
             if found.is_empty() {
                 // The local map found nothing; the reference's global
                 // threshold walk gets one try per frame.
                 let t = self.search.next_after_miss();
                 self.labels.begin(width, height);
-                self.scan(gray, &ThresholdMap::constant(t), &mut found, limit);
+                self.scan(
+                    gray,
+                    &ThresholdMap::constant(t),
+                    0..height,
+                    &mut found,
+                    limit,
+                );
             } else {
                 self.search.reset();
             }
         }
+        // A marker followed by its edges left no labels; should the scan
+        // have met it again, keep the followed one.
+        let (old, new) = found.split_at(followed);
+        let fresh: Vec<Candidate> = new
+            .iter()
+            .filter(|c| {
+                !old.iter()
+                    .any(|o| (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.b)
+            })
+            .cloned()
+            .collect();
+        found.truncate(followed);
+        found.extend(fresh);
+        found.truncate(limit);
         if tracking {
             self.update_tracks(&found);
             for c in found.iter().filter(|c| c.tested) {
@@ -375,18 +401,42 @@ impl Detector {
         })
     }
 
-    /// Scans every row for dark pixels not yet visited and tests the
+    /// Marks the tiles that markers followed this frame cover, so that the
+    /// scan does not flood-fill them again.
+    fn mark_followed(&mut self, found: &[Candidate], width: usize, height: usize) {
+        let cols = width.div_ceil(SCAN_CHUNK);
+        let rows = height.div_ceil(SCAN_CHUNK);
+        self.occupied.clear();
+        if found.is_empty() {
+            return;
+        }
+        self.occupied.resize(cols * rows, false);
+        for c in found {
+            let reach = c.outer.a + 2.0;
+            let x0 = ((c.outer.u - reach).max(0.0) as usize) / SCAN_CHUNK;
+            let x1 = ((c.outer.u + reach).max(0.0) as usize / SCAN_CHUNK).min(cols - 1);
+            let y0 = ((c.outer.v - reach).max(0.0) as usize) / SCAN_CHUNK;
+            let y1 = ((c.outer.v + reach).max(0.0) as usize / SCAN_CHUNK).min(rows - 1);
+            for ty in y0..=y1 {
+                self.occupied[ty * cols + x0.min(x1)..=ty * cols + x1].fill(true);
+            }
+        }
+    }
+
+    /// Scans the rows for dark pixels not yet visited and tests the
     /// segment each one starts.
     fn scan(
         &mut self,
         gray: Gray<'_>,
         map: &ThresholdMap,
+        rows: std::ops::Range<usize>,
         found: &mut Vec<Candidate>,
         limit: usize,
     ) {
-        const CHUNK: usize = 16;
+        const CHUNK: usize = SCAN_CHUNK;
         let shift = map.shift();
-        for y in 0..gray.height {
+        let cols = gray.width.div_ceil(CHUNK);
+        for y in rows {
             if found.len() >= limit {
                 return;
             }
@@ -395,6 +445,9 @@ impl Detector {
             let thresholds = map.row(y);
             for (k, chunk) in row.chunks(CHUNK).enumerate() {
                 let x0 = k * CHUNK;
+                if !self.occupied.is_empty() && self.occupied[(y / CHUNK) * cols + k] {
+                    continue;
+                }
                 let t = thresholds[x0 >> shift];
                 if chunk.iter().copied().min().unwrap_or(255) >= t {
                     continue;
@@ -454,7 +507,7 @@ impl Detector {
             angle: track.angle,
         };
         let mid = (track.black + track.white) / 2.0;
-        let window = 3.0 + 0.08 * track.a;
+        let window = (3.0 + 0.08 * track.a).min(23.0);
         let rays = ellipse::tracked_edge_points(gray, &guess, mid, window, &mut self.edge_scratch);
         if self.edge_scratch.len() * 5 < rays * 4 {
             return None;

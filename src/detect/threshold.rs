@@ -19,6 +19,10 @@ use std::collections::VecDeque;
 pub struct ThresholdMap {
     shift: u32,
     cols: usize,
+    /// First tile row held, and how many: a map may cover only a band of
+    /// the image; rows outside it use the nearest row held.
+    row0: usize,
+    rows: usize,
     values: Vec<u8>,
     /// Least black-to-white difference that noise cannot fake.
     min_contrast: u8,
@@ -41,6 +45,8 @@ impl ThresholdMap {
         ThresholdMap {
             shift: 31,
             cols: 1,
+            row0: 0,
+            rows: 1,
             values: vec![threshold],
             min_contrast: MIN_CONTRAST,
         }
@@ -49,7 +55,9 @@ impl ThresholdMap {
     /// The thresholds of one image row, indexed by `x >> shift()`.
     #[inline]
     pub fn row(&self, y: usize) -> &[u8] {
-        let r = y >> self.shift;
+        let r = (y >> self.shift)
+            .saturating_sub(self.row0)
+            .min(self.rows - 1);
         &self.values[r * self.cols..(r + 1) * self.cols]
     }
 
@@ -70,12 +78,29 @@ impl ThresholdMap {
 
     /// The local map of an 8-bit image stored row-major without padding.
     pub fn adaptive(pixels: &[u8], width: usize, height: usize) -> ThresholdMap {
+        ThresholdMap::adaptive_rows(pixels, width, height, 0..height)
+    }
+
+    /// The local map of the pixel rows `band` only (plus the tiles their
+    /// neighbourhoods reach); other rows get the band's nearest thresholds.
+    pub fn adaptive_rows(
+        pixels: &[u8],
+        width: usize,
+        height: usize,
+        band: std::ops::Range<usize>,
+    ) -> ThresholdMap {
         let tile = 1usize << TILE_SHIFT;
         let cols = width.div_ceil(tile).max(1);
-        let rows = height.div_ceil(tile).max(1);
+        let first = (band.start >> TILE_SHIFT).saturating_sub(NEIGHBOURHOOD_TILES);
+        let last = (band.end.min(height).max(1) - 1) >> TILE_SHIFT;
+        let last = (last + NEIGHBOURHOOD_TILES).min(height.max(1).div_ceil(tile) - 1);
+        let rows = (last + 1 - first).max(1);
+        let (y_start, y_end) = (first << TILE_SHIFT, ((last + 1) << TILE_SHIFT).min(height));
+        let band_pixels =
+            &pixels[(y_start * width).min(pixels.len())..(y_end * width).min(pixels.len())];
         let mut lo = vec![255u8; cols * rows];
         let mut hi = vec![0u8; cols * rows];
-        for (y, row) in pixels.chunks_exact(width.max(1)).take(height).enumerate() {
+        for (y, row) in band_pixels.chunks_exact(width.max(1)).enumerate() {
             let t = (y >> TILE_SHIFT) * cols;
             let (lo_row, hi_row) = (&mut lo[t..t + cols], &mut hi[t..t + cols]);
             for ((chunk, l), h) in row.chunks(tile).zip(lo_row).zip(hi_row) {
@@ -84,7 +109,7 @@ impl ThresholdMap {
                 *h = (*h).max(ch);
             }
         }
-        let noise_floor = MIN_CONTRAST.max(noise_contrast(pixels, width, height));
+        let noise_floor = MIN_CONTRAST.max(noise_contrast(band_pixels, width, y_end - y_start));
 
         let lo = box_filter(&lo, cols, rows, NEIGHBOURHOOD_TILES, u8::min);
         let hi = box_filter(&hi, cols, rows, NEIGHBOURHOOD_TILES, u8::max);
@@ -109,6 +134,8 @@ impl ThresholdMap {
             return ThresholdMap {
                 shift: TILE_SHIFT,
                 cols,
+                row0: first,
+                rows,
                 values: vec![0; cols * rows],
                 min_contrast: noise_floor,
             };
@@ -138,6 +165,8 @@ impl ThresholdMap {
         ThresholdMap {
             shift: TILE_SHIFT,
             cols,
+            row0: first,
+            rows,
             values: thresholds.into_iter().map(|t| t.min(255) as u8).collect(),
             min_contrast: noise_floor,
         }
@@ -261,6 +290,21 @@ mod tests {
                 assert_eq!(px[y * w + x] < map.at(x, y), ink, "pixel {x},{y}");
             }
         }
+    }
+
+    #[test]
+    fn a_band_map_equals_the_full_map_inside_the_band() {
+        let (w, h) = (200usize, 300usize);
+        let px: Vec<u8> = (0..w * h)
+            .map(|i| ((i % w) * 7 + (i / w) * 13 % 97) as u8)
+            .collect();
+        let full = ThresholdMap::adaptive(&px, w, h);
+        let band = ThresholdMap::adaptive_rows(&px, w, h, 100..180);
+        for y in 100..180 {
+            assert_eq!(full.row(y), band.row(y), "row {y}");
+        }
+        let _ = band.row(0);
+        let _ = band.row(h - 1);
     }
 
     #[test]
