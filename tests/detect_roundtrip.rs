@@ -370,7 +370,7 @@ fn tracking_finds_newcomers_and_agrees_with_fresh_detection() {
         let found = tracked.detect(&image);
         let fresh = legacy().detect(&image);
         // The newcomer must be found within the 8 discovery bands.
-        if frame < 4 || frame >= 12 {
+        if !(4..12).contains(&frame) {
             assert_eq!(found.len(), placements.len(), "frame {frame}");
         }
         for d in &found {
