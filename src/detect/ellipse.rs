@@ -253,18 +253,19 @@ pub fn inner_edge_points(
 
 /// Edge points of a tracked marker near where its outer edge is expected:
 /// along `rays` rays through `guess`, the rising crossing of `mid` (the
-/// marker's known mid-grey) nearest the guessed edge within ±`window`
-/// pixels. Returns the number of rays cast. Touches a few hundred pixels.
+/// marker's known mid-grey, `contrast` its known white minus black)
+/// nearest the guessed edge within ±`window` pixels. Returns the number of rays cast. Touches a few hundred pixels.
 pub fn tracked_edge_points(
     image: Gray<'_>,
     guess: &Ellipse,
     mid: f64,
+    contrast: f64,
     window: f64,
     out: &mut Vec<(f64, f64)>,
 ) -> usize {
     out.clear();
     let perimeter = std::f64::consts::PI * (guess.a + guess.b);
-    let rays = ((perimeter / 4.0) as usize).clamp(24, 64);
+    let rays = ((perimeter / 6.0) as usize).clamp(24, 48);
     // Half-pixel steps: a crossing interpolated between samples a whole
     // pixel apart moves with the samples' phase against the edge, and the
     // phase changes with the guess from frame to frame.
@@ -302,7 +303,8 @@ pub fn tracked_edge_points(
         let third = (n / 3).max(1);
         let lo = profile[..third].iter().sum::<f64>() / third as f64;
         let hi = profile[n - third..n].iter().sum::<f64>() / third as f64;
-        if lo >= mid || hi < mid || hi - lo < 8.0 {
+        // Both ends must sit on the plateaus, or the level is off.
+        if lo >= mid || hi < mid || hi - lo < (0.6 * contrast).max(8.0) {
             continue;
         }
         let level = (lo + hi) / 2.0;
@@ -317,7 +319,10 @@ pub fn tracked_edge_points(
             }
         }
         if let Some(s) = best {
-            out.push((guess.u + ux * s, guess.v + uy * s));
+            // An edge near the end of the window is partly outside it.
+            if (s - r).abs() <= window - 1.5 {
+                out.push((guess.u + ux * s, guess.v + uy * s));
+            }
         }
     }
     rays

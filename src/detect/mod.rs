@@ -280,18 +280,18 @@ impl Detector {
         found.truncate(followed);
         found.extend(fresh);
         found.truncate(limit);
+        let mut detections: Vec<Detection> = Vec::with_capacity(found.len());
+        for c in &found {
+            let d = self.describe(image, gray, c);
+            detections.push(d);
+        }
         if tracking {
-            self.update_tracks(&found);
+            self.update_tracks(&found, &detections);
             for c in found.iter().filter(|c| c.tested) {
                 self.ratio.learn(c.ratio);
                 self.roundness.learn(c.roundness);
                 self.area.learn(c.area_error);
             }
-        }
-        let mut detections: Vec<Detection> = Vec::with_capacity(found.len());
-        for c in &found {
-            let d = self.describe(image, gray, c);
-            detections.push(d);
         }
         detections.sort_by(|a, b| a.v.total_cmp(&b.v).then(a.u.total_cmp(&b.u)));
         detections
@@ -319,7 +319,26 @@ impl Detector {
             pose: None,
         };
         let mut axis_point = None;
-        if let Some(reader) = &self.reader {
+        // A marker followed from the last frames whose ID has been read
+        // the same several times: its known code's edges give the yaw at a
+        // fraction of a full read, and confirm the code on the way.
+        let known = c.track.map(|i| self.tracks[i]).filter(|t| t.id_streak >= 3);
+        let followed_yaw = match (known, &self.config.family) {
+            (Some(t), Some(family)) => match (t.code, t.yaw) {
+                (Some(code), Some(yaw)) => {
+                    rectify::follow_ring(gray, &c.outer, family.bits(), code, yaw).map(|y| (t, y))
+                }
+                _ => None,
+            },
+            _ => None,
+        };
+        if let Some((t, yaw)) = followed_yaw {
+            d.id = t.id;
+            d.code = t.code;
+            d.status = t.status;
+            d.yaw = Some(yaw);
+            d.confidence = t.confidence;
+        } else if let Some(reader) = &self.reader {
             let reading = reader.read(image, &outer, c.black, c.white);
             d.id = reading.id;
             d.code = reading.decoded.filter(|x| x.is_member()).map(|x| x.code);
@@ -507,8 +526,15 @@ impl Detector {
             angle: track.angle,
         };
         let mid = (track.black + track.white) / 2.0;
-        let window = (3.0 + 0.08 * track.a).min(23.0);
-        let rays = ellipse::tracked_edge_points(gray, &guess, mid, window, &mut self.edge_scratch);
+        let window = (3.5 + 0.03 * track.a).min(23.0);
+        let rays = ellipse::tracked_edge_points(
+            gray,
+            &guess,
+            mid,
+            track.white - track.black,
+            window,
+            &mut self.edge_scratch,
+        );
         if self.edge_scratch.len() * 5 < rays * 4 {
             return None;
         }
@@ -561,7 +587,7 @@ impl Detector {
         })
     }
 
-    fn update_tracks(&mut self, found: &[Candidate]) {
+    fn update_tracks(&mut self, found: &[Candidate], detections: &[Detection]) {
         let mut next: Vec<Track> = Vec::with_capacity(found.len());
         let mut taken = vec![false; self.tracks.len()];
         for c in found {
@@ -569,7 +595,7 @@ impl Detector {
                 taken[i] = true;
             }
         }
-        for c in found {
+        for (c, d) in found.iter().zip(detections) {
             let threshold = ((c.black + c.white) / 2.0).round().clamp(1.0, 255.0) as u8;
             let (u, v, a, b) = (c.outer.u, c.outer.v, c.outer.a, c.outer.b);
             let index = c.track.or_else(|| {
@@ -583,11 +609,13 @@ impl Detector {
                     let mut t = self.tracks[i];
                     t.update(u, v, a, b, threshold);
                     t.observe_appearance(c.outer.angle, c.black, c.white);
+                    t.observe_identity(d);
                     next.push(t);
                 }
                 None => {
                     let mut t = Track::new(u, v, a, b, threshold);
                     t.observe_appearance(c.outer.angle, c.black, c.white);
+                    t.observe_identity(d);
                     next.push(t);
                 }
             }

@@ -24,6 +24,14 @@ pub struct Track {
     /// Grey levels of the black disc and the white inside.
     pub black: f64,
     pub white: f64,
+    /// What the ring said last: ID (0 unknown), member code, yaw, and for
+    /// how many frames in a row the same ID was read.
+    pub id: u32,
+    pub code: Option<u32>,
+    pub yaw: Option<f64>,
+    pub confidence: f64,
+    pub status: Option<crate::family::MatchStatus>,
+    pub id_streak: u32,
 }
 
 impl Track {
@@ -40,6 +48,12 @@ impl Track {
             angle: 0.0,
             black: f64::from(threshold) / 2.0,
             white: f64::from(threshold) * 1.5,
+            id: 0,
+            code: None,
+            yaw: None,
+            confidence: 0.0,
+            status: None,
+            id_streak: 0,
         }
     }
 
@@ -68,6 +82,20 @@ impl Track {
         self.angle = angle;
         self.black = black;
         self.white = white;
+    }
+
+    /// Remembers what the ring said this frame.
+    pub fn observe_identity(&mut self, d: &super::Detection) {
+        if d.id != 0 && d.id == self.id {
+            self.id_streak += 1;
+        } else {
+            self.id_streak = u32::from(d.id != 0);
+        }
+        self.id = d.id;
+        self.code = d.code;
+        self.yaw = d.yaw;
+        self.confidence = d.confidence;
+        self.status = d.status;
     }
 
     /// True when an observation at (u, v) is this marker moved on.
