@@ -266,10 +266,11 @@ pub fn tracked_edge_points(
     out.clear();
     let perimeter = std::f64::consts::PI * (guess.a + guess.b);
     let rays = ((perimeter / 6.0) as usize).clamp(24, 48);
-    // Half-pixel steps: a crossing interpolated between samples a whole
-    // pixel apart moves with the samples' phase against the edge, and the
-    // phase changes with the guess from frame to frame.
-    const STEP: f64 = 0.5;
+    // Whole-pixel steps; the edge is the centroid of the rising
+    // differences around the crossing, which (unlike a crossing
+    // interpolated between samples) does not move with the samples' phase
+    // against the edge, a phase that changes from frame to frame.
+    const STEP: f64 = 1.0;
     let steps = (2.0 * window / STEP).ceil() as usize + 1;
     let (sin_a, cos_a) = guess.angle.sin_cos();
     for k in 0..rays {
@@ -308,16 +309,24 @@ pub fn tracked_edge_points(
             continue;
         }
         let level = (lo + hi) / 2.0;
-        let mut best: Option<f64> = None;
+        let mut crossing: Option<usize> = None;
         for j in 0..n - 1 {
-            let (p, q) = (profile[j], profile[j + 1]);
-            if p < level && q >= level {
-                let hit = s0 + STEP * (j as f64 + (level - p) / (q - p));
-                if best.map_or(true, |b| (hit - r).abs() < (b - r).abs()) {
-                    best = Some(hit);
+            if profile[j] < level && profile[j + 1] >= level {
+                let at = s0 + STEP * j as f64;
+                if crossing.map_or(true, |c| (at - r).abs() < (s0 + STEP * c as f64 - r).abs()) {
+                    crossing = Some(j);
                 }
             }
         }
+        let best = crossing.and_then(|c| {
+            let (mut weight, mut moment) = (0.0, 0.0);
+            for j in c.saturating_sub(2)..(c + 3).min(n - 1) {
+                let rise = (profile[j + 1] - profile[j]).max(0.0);
+                weight += rise;
+                moment += rise * (j as f64 + 0.5);
+            }
+            (weight > 0.0).then(|| s0 + STEP * moment / weight)
+        });
         if let Some(s) = best {
             // An edge near the end of the window is partly outside it.
             if (s - r).abs() <= window - 1.5 {

@@ -141,16 +141,19 @@ pub fn follow_ring(image: Gray<'_>, outer: &Ellipse, bits: u32, code: u32, previ
     let (dy, dx) = previous_yaw.sin_cos();
     let (ex, ey) = (dx * ca + dy * sa, -dx * sa + dy * ca);
     let t0 = (ey / outer.b).atan2(ex / outer.a);
-    let rings = [0.42, 0.52].map(|k| outer.scaled(k));
+    let scales = [0.42, 0.52];
+    // Walk t by a fixed rotation instead of evaluating sines per sample.
+    let (step_sin, step_cos) = (-std::f64::consts::TAU / n as f64).sin_cos();
+    let (mut st, mut ct) = t0.sin_cos();
     let mut profile = Vec::with_capacity(n);
-    for j in 0..n {
-        let t = t0 - std::f64::consts::TAU * j as f64 / n as f64;
+    for _ in 0..n {
         let mut sum = 0.0;
-        for ring in &rings {
-            let (u, v) = ring.point(t);
-            sum += sample(image, u, v)?;
+        for k in scales {
+            let (x, y) = (k * outer.a * ct, k * outer.b * st);
+            sum += sample(image, outer.u + x * ca - y * sa, outer.v + x * sa + y * ca)?;
         }
-        profile.push(sum / rings.len() as f64);
+        profile.push(sum / scales.len() as f64);
+        (st, ct) = (st * step_cos + ct * step_sin, ct * step_cos - st * step_sin);
     }
     let phi = edge_phase(&profile, bits, code, FOLLOW_SAMPLES_PER_SECTOR, 0.8)?;
     if phi.abs() > w / 2.0 {
