@@ -397,26 +397,60 @@ fn tracking_finds_newcomers_and_agrees_with_fresh_detection() {
 #[test]
 fn tracked_whycode_markers_keep_ids_and_yaw_while_turning() {
     let family = Family::generate(8, 2).unwrap();
-    let camera = Pinhole { f: 2000.0, cx: 400.0, cy: 300.0 };
-    let config = DetectorConfig { family: Some(family.clone()), ..DetectorConfig::default() };
-    let mut tracked = Detector::new(DetectorConfig { tracking: true, ..config.clone() });
+    let camera = Pinhole {
+        f: 2000.0,
+        cx: 400.0,
+        cy: 300.0,
+    };
+    let config = DetectorConfig {
+        family: Some(family.clone()),
+        ..DetectorConfig::default()
+    };
+    let mut tracked = Detector::new(DetectorConfig {
+        tracking: true,
+        ..config.clone()
+    });
     for frame in 0..10 {
         let placements: Vec<Placement> = (0..6)
             .map(|k| {
-                let (u, v) = (100.0 + 120.0 * k as f64 + 1.5 * frame as f64, 200.0 + 60.0 * (k % 2) as f64);
+                let (u, v) = (
+                    100.0 + 120.0 * k as f64 + 1.5 * frame as f64,
+                    200.0 + 60.0 * (k % 2) as f64,
+                );
                 let psi = (k as f64 * 40.0 + 4.0 * frame as f64) * DEG;
                 let code = family.code(k as u32 + 3).unwrap();
-                Placement::at(&camera, Marker::whycode(8, code, 100.0), (u, v), 80.0, psi, 0.0, 0.0)
+                Placement::at(
+                    &camera,
+                    Marker::whycode(8, code, 100.0),
+                    (u, v),
+                    80.0,
+                    psi,
+                    0.0,
+                    0.0,
+                )
             })
             .collect();
-        let image = render(800, 400, &camera, &placements, Look { noise: 2.0, ..Look::default() });
+        let image = render(
+            800,
+            400,
+            &camera,
+            &placements,
+            Look {
+                noise: 2.0,
+                ..Look::default()
+            },
+        );
         let found = tracked.detect(&image);
         let matched = all_found(&camera, &placements, &found);
         for (k, (p, d)) in placements.iter().zip(matched).enumerate() {
             assert_eq!(d.id, k as u32 + 3, "frame {frame}");
             let yaw_error = angle_diff(d.yaw.unwrap(), p.yaw(&camera));
             // Followed or read afresh, the yaw stays within 0.5°.
-            assert!(yaw_error < 0.5 * DEG, "frame {frame}: yaw off by {}°", yaw_error / DEG);
+            assert!(
+                yaw_error < 0.5 * DEG,
+                "frame {frame}: yaw off by {}°",
+                yaw_error / DEG
+            );
         }
     }
 }

@@ -251,11 +251,15 @@ pub fn inner_edge_points(
     }
 }
 
-/// Edge points of a tracked marker near where its outer edge is expected:
-/// along `rays` rays through `guess`, the rising crossing of `mid` (the
-/// marker's known mid-grey, `contrast` its known white minus black)
-/// nearest the guessed edge within ±`window` pixels. Returns the number of rays cast. Touches a few hundred pixels.
-pub fn tracked_edge_points(
+/// Edge points of a tracked marker along image rows (and, for the top
+/// and bottom caps, columns) through its predicted outline: rows are
+/// contiguous in memory, so each point costs one or two cache lines where a
+/// slanted ray would touch a new line at every step; and no interpolation
+/// is needed. Each edge is the centroid of the grey-level steps across it
+/// (levels from the ends of the ±`window` segment, checked against `mid`
+/// and `contrast`, the marker's known mid-grey and white-minus-black).
+/// Returns the number of segments tried.
+pub fn scanline_edge_points(
     image: Gray<'_>,
     guess: &Ellipse,
     mid: f64,
@@ -264,77 +268,135 @@ pub fn tracked_edge_points(
     out: &mut Vec<(f64, f64)>,
 ) -> usize {
     out.clear();
+    let (s, c) = guess.angle.sin_cos();
+    let (ia, ib) = (1.0 / (guess.a * guess.a), 1.0 / (guess.b * guess.b));
+    // Q(dx, dy) = A dx² + 2 H dx dy + D dy² = 1 on the outline.
+    let (qa, qh, qd) = (
+        c * c * ia + s * s * ib,
+        c * s * (ia - ib),
+        s * s * ia + c * c * ib,
+    );
+    let half_height = (guess.a * guess.a * s * s + guess.b * guess.b * c * c).sqrt();
+    let half_width = (guess.a * guess.a * c * c + guess.b * guess.b * s * s).sqrt();
     let perimeter = std::f64::consts::PI * (guess.a + guess.b);
-    let rays = ((perimeter / 6.0) as usize).clamp(24, 48);
-    // Whole-pixel steps; the edge is the centroid of the rising
-    // differences around the crossing, which (unlike a crossing
-    // interpolated between samples) does not move with the samples' phase
-    // against the edge, a phase that changes from frame to frame.
-    const STEP: f64 = 1.0;
-    let steps = (2.0 * window / STEP).ceil() as usize + 1;
-    let (sin_a, cos_a) = guess.angle.sin_cos();
-    for k in 0..rays {
-        let t = std::f64::consts::TAU * (k as f64 + 0.5) / rays as f64;
-        let (st, ct) = t.sin_cos();
-        let (x, y) = (guess.a * ct, guess.b * st);
-        let (dx, dy) = (x * cos_a - y * sin_a, x * sin_a + y * cos_a);
-        let r = dx.hypot(dy);
-        let (ux, uy) = (dx / r, dy / r);
-        let s0 = r - window;
-        let mut profile = [0.0f64; 96];
-        let n = steps.min(profile.len());
-        let mut ok = true;
-        for (j, slot) in profile[..n].iter_mut().enumerate() {
-            let s = s0 + STEP * j as f64;
-            match sample(image, guess.u + ux * s, guess.v + uy * s) {
-                Some(value) => *slot = value,
-                None => {
-                    ok = false;
-                    break;
+    let lines = ((perimeter / 12.0) as usize).clamp(6, 16);
+    let half = window.ceil() as isize;
+    let mut tried = 0;
+    let mut profile = [0.0f64; 64];
+    for vertical in [false, true] {
+        let (extent, count) = if vertical {
+            (0.55 * half_width, lines / 2 + 1)
+        } else {
+            (0.75 * half_height, lines)
+        };
+        for k in 0..count {
+            let offset = extent * (2.0 * (k as f64 + 0.5) / count as f64 - 1.0);
+            // The scan line: a row (fixed y) or a column (fixed x).
+            let (line, centre, a2, h, d) = if vertical {
+                let x = (guess.u + offset).round();
+                (
+                    x,
+                    guess.v,
+                    qd,
+                    qh * (x - guess.u),
+                    qa * (x - guess.u).powi(2),
+                )
+            } else {
+                let y = (guess.v + offset).round();
+                (
+                    y,
+                    guess.u,
+                    qa,
+                    qh * (y - guess.v),
+                    qd * (y - guess.v).powi(2),
+                )
+            };
+            // a2 t² + 2 h t + d = 1 → t = (-h ± √(h² - a2 (d - 1))) / a2.
+            let disc = h * h - a2 * (d - 1.0);
+            if disc <= 0.0 || line < 0.0 {
+                continue;
+            }
+            let root = disc.sqrt();
+            for (sign, rising) in [(-1.0, false), (1.0, true)] {
+                tried += 1;
+                let hit = centre + (-h + sign * root) / a2;
+                let first = hit.round() as isize - half;
+                let n = (2 * half + 1) as usize;
+                if first < 0 || n > profile.len() {
+                    continue;
                 }
-            }
-        }
-        if !ok {
-            continue;
-        }
-        // This ray's own black and white: the known levels only decide
-        // whether the ray sees the edge at all.
-        // Means of the outer thirds of the window, which noise does not bias
-        // the way a minimum and a maximum would.
-        let third = (n / 3).max(1);
-        let lo = profile[..third].iter().sum::<f64>() / third as f64;
-        let hi = profile[n - third..n].iter().sum::<f64>() / third as f64;
-        // Both ends must sit on the plateaus, or the level is off.
-        if lo >= mid || hi < mid || hi - lo < (0.6 * contrast).max(8.0) {
-            continue;
-        }
-        let level = (lo + hi) / 2.0;
-        let mut crossing: Option<usize> = None;
-        for j in 0..n - 1 {
-            if profile[j] < level && profile[j + 1] >= level {
-                let at = s0 + STEP * j as f64;
-                if crossing.map_or(true, |c| (at - r).abs() < (s0 + STEP * c as f64 - r).abs()) {
-                    crossing = Some(j);
+                let (first, line_index) = (first as usize, line as usize);
+                let ok = if vertical {
+                    if line_index >= image.width || first + n > image.height {
+                        false
+                    } else {
+                        for (j, slot) in profile[..n].iter_mut().enumerate() {
+                            *slot = f64::from(image.pixels[(first + j) * image.width + line_index]);
+                        }
+                        true
+                    }
+                } else if line_index >= image.height || first + n > image.width {
+                    false
+                } else {
+                    let row = &image.pixels[line_index * image.width + first..][..n];
+                    for (slot, &p) in profile[..n].iter_mut().zip(row) {
+                        *slot = f64::from(p);
+                    }
+                    true
+                };
+                if !ok {
+                    continue;
                 }
-            }
-        }
-        let best = crossing.and_then(|c| {
-            let (mut weight, mut moment) = (0.0, 0.0);
-            for j in c.saturating_sub(2)..(c + 3).min(n - 1) {
-                let rise = (profile[j + 1] - profile[j]).max(0.0);
-                weight += rise;
-                moment += rise * (j as f64 + 0.5);
-            }
-            (weight > 0.0).then(|| s0 + STEP * moment / weight)
-        });
-        if let Some(s) = best {
-            // An edge near the end of the window is partly outside it.
-            if (s - r).abs() <= window - 1.5 {
-                out.push((guess.u + ux * s, guess.v + uy * s));
+                // Leaving the disc the grey rises; entering it, it falls.
+                if !rising {
+                    profile[..n].reverse();
+                }
+                let third = (n / 3).max(1);
+                let lo = profile[..third].iter().sum::<f64>() / third as f64;
+                let hi = profile[n - third..n].iter().sum::<f64>() / third as f64;
+                if lo >= mid || hi < mid || hi - lo < (0.6 * contrast).max(8.0) {
+                    continue;
+                }
+                let level = (lo + hi) / 2.0;
+                let expected = half as f64;
+                let mut crossing: Option<usize> = None;
+                for j in 0..n - 1 {
+                    if profile[j] < level && profile[j + 1] >= level {
+                        let better = crossing.map_or(true, |b| {
+                            (j as f64 - expected).abs() < (b as f64 - expected).abs()
+                        });
+                        if better {
+                            crossing = Some(j);
+                        }
+                    }
+                }
+                let Some(cross) = crossing else { continue };
+                let (mut weight, mut moment) = (0.0, 0.0);
+                for j in cross.saturating_sub(2)..(cross + 3).min(n - 1) {
+                    let rise = (profile[j + 1] - profile[j]).max(0.0);
+                    weight += rise;
+                    moment += rise * (j as f64 + 0.5);
+                }
+                if weight <= 0.0 {
+                    continue;
+                }
+                let mut position = moment / weight;
+                if (position - expected).abs() > window - 1.5 {
+                    continue;
+                }
+                if !rising {
+                    position = (n - 1) as f64 - position;
+                }
+                let along = first as f64 + position;
+                out.push(if vertical {
+                    (line, along)
+                } else {
+                    (along, line)
+                });
             }
         }
     }
-    rays
+    tried
 }
 
 /// Least-squares conic through the points, normalised by A + C = 1 (never

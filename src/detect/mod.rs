@@ -527,7 +527,7 @@ impl Detector {
         };
         let mid = (track.black + track.white) / 2.0;
         let window = (3.5 + 0.03 * track.a).min(23.0);
-        let rays = ellipse::tracked_edge_points(
+        let rays = ellipse::scanline_edge_points(
             gray,
             &guess,
             mid,

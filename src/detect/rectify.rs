@@ -62,7 +62,13 @@ pub fn refine_rotation(
 /// marker angles from the current +x axis, relative to where the code puts
 /// them: the median offset (radians), or None when fewer than
 /// `min_found` of the edges are found or the sectors show no contrast.
-fn edge_phase(profile: &[f64], bits: u32, code: u32, per_sector: usize, min_found: f64) -> Option<f64> {
+fn edge_phase(
+    profile: &[f64],
+    bits: u32,
+    code: u32,
+    per_sector: usize,
+    min_found: f64,
+) -> Option<f64> {
     let sectors = 2 * bits as usize;
     let n = profile.len();
     let w = sector_width(bits);
@@ -105,7 +111,11 @@ fn edge_phase(profile: &[f64], bits: u32, code: u32, per_sector: usize, min_foun
         let mut best: Option<f64> = None;
         for j in centre - half..centre + half {
             let (p, q) = (at(j), at(j + 1));
-            let crosses = if rising { p < mid && q >= mid } else { p >= mid && q < mid };
+            let crosses = if rising {
+                p < mid && q >= mid
+            } else {
+                p >= mid && q < mid
+            };
             if crosses {
                 let position = j as f64 + (mid - p) / (q - p) - centre as f64;
                 if best.map_or(true, |b: f64| position.abs() < b.abs()) {
@@ -131,7 +141,13 @@ fn edge_phase(profile: &[f64], bits: u32, code: u32, per_sector: usize, min_foun
 /// None when fewer than four in five of the edges show up with the right
 /// polarity, i.e. when this may not be the same marker or it cannot be
 /// seen well (then read the ring in full).
-pub fn follow_ring(image: Gray<'_>, outer: &Ellipse, bits: u32, code: u32, previous_yaw: f64) -> Option<f64> {
+pub fn follow_ring(
+    image: Gray<'_>,
+    outer: &Ellipse,
+    bits: u32,
+    code: u32,
+    previous_yaw: f64,
+) -> Option<f64> {
     let sectors = 2 * bits as usize;
     let w = sector_width(bits);
     let n = sectors * FOLLOW_SAMPLES_PER_SECTOR;
@@ -163,4 +179,4 @@ pub fn follow_ring(image: Gray<'_>, outer: &Ellipse, bits: u32, code: u32, previ
     Some((y - outer.v).atan2(x - outer.u))
 }
 
-const FOLLOW_SAMPLES_PER_SECTOR: usize = 16;
+const FOLLOW_SAMPLES_PER_SECTOR: usize = 8;
