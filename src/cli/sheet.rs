@@ -40,6 +40,9 @@ pub struct SheetArgs {
     /// Resolution of PNG output, in dots per inch
     #[arg(long, default_value_t = 300.0)]
     dpi: f64,
+    /// Skip the self-check that renders each page and reads every marker back
+    #[arg(long)]
+    no_check: bool,
     /// List the built-in templates and exit
     #[arg(long)]
     list_templates: bool,

@@ -130,7 +130,8 @@ fn page_ops(page: &Page) -> Vec<Op> {
                 dash,
             } => {
                 let mut segs = Vec::new();
-                circle_segments(*cx, *cy, *radius, true, &mut segs);
+                // Clockwise on the page from angle 0, as SVG strokes circles, so dashes agree.
+                circle_segments(*cx, *cy, *radius, false, &mut segs);
                 stroke_ops(&mut ops, &frame, &segs, true, *width, *level, *dash);
             }
             Item::Text {

@@ -160,7 +160,8 @@ fn draw_item(pixmap: &mut Pixmap, item: &Item, transform: Transform) {
             dash,
         } => {
             let mut segs = Vec::new();
-            super::page::circle_segments(*cx, *cy, *radius, true, &mut segs);
+            // Clockwise on the page from angle 0, as SVG strokes circles, so dashes agree.
+            super::page::circle_segments(*cx, *cy, *radius, false, &mut segs);
             if let Some(path) = build_path(&segs) {
                 let stroke = stroke(*width, *dash, LineCap::Butt);
                 pixmap.stroke_path(&path, &paint(*grey), &stroke, transform, None);

@@ -180,12 +180,13 @@ fn grid_packing(cell: &Cell, width: f64, height: f64, gap: f64) -> Packing {
     let rows = ((height + gap) / pitch_y + 1e-9).floor() as usize;
     let block = cols as f64 * cell.pitch_x - gap;
     let x0 = (width - block) / 2.0 + (cell.pitch_x - gap) / 2.0;
+    let y0 = (height - (rows as f64 * pitch_y - gap)) / 2.0;
     let mut centres = Vec::new();
     for r in 0..rows {
         for c in 0..cols {
             centres.push((
                 x0 + c as f64 * cell.pitch_x,
-                cell.footprint + r as f64 * pitch_y,
+                y0 + cell.footprint + r as f64 * pitch_y,
             ));
         }
     }
@@ -237,6 +238,7 @@ fn hex_packing(cell: &Cell, width: f64, height: f64, gap: f64) -> Packing {
     let block =
         (full as f64 * cell.pitch_x).max(shifted as f64 * cell.pitch_x + cell.pitch_x / 2.0) - gap;
     let x0 = (width - block) / 2.0 + (cell.pitch_x - gap) / 2.0;
+    let y0 = (height - ((rows - 1) as f64 * pitch_y + cell.height)) / 2.0;
     let mut centres = Vec::new();
     for r in 0..rows {
         let (cols, offset) = if r % 2 == 0 {
@@ -247,7 +249,7 @@ fn hex_packing(cell: &Cell, width: f64, height: f64, gap: f64) -> Packing {
         for c in 0..cols {
             centres.push((
                 x0 + offset + c as f64 * cell.pitch_x,
-                cell.footprint + r as f64 * pitch_y,
+                y0 + cell.footprint + r as f64 * pitch_y,
             ));
         }
     }
@@ -324,7 +326,7 @@ pub fn layout(spec: &SheetSpec) -> Result<Sheet> {
     if packing.centres.is_empty() {
         let largest = largest_fitting_diameter(&spec.markers, template);
         bail!(
-            "a {} mm marker does not fit on a {} page ({} x {} mm, {} mm margins); the largest that fits is {} mm",
+            "a {} mm marker does not fit on the {} page ({} x {} mm, {} mm margins); the largest that fits is {} mm",
             trim_float(diameter),
             template.name,
             trim_float(template.page_width_mm),
