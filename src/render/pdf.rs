@@ -245,3 +245,23 @@ pub fn pages_pdf(pages: &[Page], title: &str) -> Result<Vec<u8>> {
     lo.save_to(&mut bytes).context("cannot encode PDF")?;
     Ok(bytes)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Marker;
+
+    #[test]
+    fn documents_are_byte_identical_within_one_process() {
+        let mut page = Page::new(60.0, 60.0);
+        page.push(Item::Marker {
+            marker: Marker::whycode(8, 19, 40.0),
+            cx: 30.0,
+            cy: 30.0,
+        });
+        let first = pages_pdf(std::slice::from_ref(&page), "t").unwrap();
+        let second = pages_pdf(std::slice::from_ref(&page), "t").unwrap();
+        assert!(first == second);
+        assert!(first.starts_with(b"%PDF-"));
+    }
+}
