@@ -1,1 +1,590 @@
-//! (in progress)
+//! Pinhole camera with OpenCV "plumb bob" lens distortion, and loading of
+//! calibration files (ROS `camera_info` YAML and OpenCV FileStorage YAML).
+//!
+//! Conventions: camera frame is the OpenCV optical frame (x right, y down,
+//! z forward); pixel coordinates have their origin at the *centre* of the
+//! top-left pixel (u right, v down), which is also OpenCV's convention for
+//! the principal point.
+
+use std::path::Path;
+
+use anyhow::{anyhow, bail, Context, Result};
+use nalgebra::{Matrix2, Vector2, Vector3};
+use serde_yaml::Value;
+
+/// Intrinsic calibration of one camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+    /// k1, k2, p1, p2, k3 (OpenCV order, "plumb_bob" in ROS).
+    pub distortion: [f64; 5],
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Points closer to the camera plane than this (in z, metres or any unit)
+/// are treated as not projectable.
+const MIN_DEPTH: f64 = 1e-9;
+
+impl Camera {
+    /// Distortion-free camera with square pixels, the principal point at the
+    /// image centre and the given horizontal field of view (degrees, edge of
+    /// the first pixel to edge of the last).
+    pub fn ideal(width: u32, height: u32, horizontal_fov_deg: f64) -> Camera {
+        let f = 0.5 * width as f64 / (0.5 * horizontal_fov_deg.to_radians()).tan();
+        Camera {
+            fx: f,
+            fy: f,
+            cx: (width as f64 - 1.0) / 2.0,
+            cy: (height as f64 - 1.0) / 2.0,
+            distortion: [0.0; 5],
+            width,
+            height,
+        }
+    }
+
+    /// Horizontal field of view in degrees (ignoring distortion).
+    pub fn horizontal_fov_deg(&self) -> f64 {
+        2.0 * (0.5 * self.width as f64 / self.fx).atan().to_degrees()
+    }
+
+    /// True if any distortion coefficient is non-zero.
+    pub fn has_distortion(&self) -> bool {
+        self.distortion.iter().any(|&k| k != 0.0)
+    }
+
+    /// The same camera at another image resolution (e.g. a calibration made
+    /// at full resolution used on binned or resized images). Assumes the
+    /// whole sensor area is rescaled, not cropped.
+    pub fn with_resolution(&self, width: u32, height: u32) -> Camera {
+        let sx = width as f64 / self.width as f64;
+        let sy = height as f64 / self.height as f64;
+        // Scaling acts on pixel *edges*; pixel centres sit half a pixel in.
+        Camera {
+            fx: self.fx * sx,
+            fy: self.fy * sy,
+            cx: (self.cx + 0.5) * sx - 0.5,
+            cy: (self.cy + 0.5) * sy - 0.5,
+            distortion: self.distortion,
+            width,
+            height,
+        }
+    }
+
+    /// Pixel position of a point in the camera frame, with distortion.
+    /// `None` for points on or behind the camera plane.
+    pub fn project(&self, p: &Vector3<f64>) -> Option<(f64, f64)> {
+        if p.z.is_nan() || p.z <= MIN_DEPTH || !p.x.is_finite() || !p.y.is_finite() {
+            return None;
+        }
+        Some(self.distort_normalized(p.x / p.z, p.y / p.z))
+    }
+
+    /// Pixel position of an ideal normalised image point (x/z, y/z).
+    pub fn distort_normalized(&self, x: f64, y: f64) -> (f64, f64) {
+        let (xd, yd) = self.distort_point(x, y);
+        (self.fx * xd + self.cx, self.fy * yd + self.cy)
+    }
+
+    /// Pixel position of an ideal normalised point without applying the lens
+    /// distortion (for rectified images).
+    pub fn pinhole(&self, x: f64, y: f64) -> (f64, f64) {
+        (self.fx * x + self.cx, self.fy * y + self.cy)
+    }
+
+    /// Ideal normalised image coordinates (x/z, y/z) of a pixel: the inverse
+    /// of [`Camera::distort_normalized`]. Exact (to ~1e-12) wherever the
+    /// distortion polynomial is invertible, which holds inside the image for
+    /// real calibrations; beyond the radius where the polynomial folds back
+    /// it returns the finite point of least residual.
+    pub fn undistort(&self, u: f64, v: f64) -> (f64, f64) {
+        let target = Vector2::new((u - self.cx) / self.fx, (v - self.cy) / self.fy);
+        if !self.has_distortion() || !target.x.is_finite() || !target.y.is_finite() {
+            return (target.x, target.y);
+        }
+        // Damped Newton on distort(x) = target. The plain fixed-point
+        // iteration OpenCV uses stalls in image corners with strong barrel
+        // distortion; Newton converges in a handful of steps there.
+        let residual = |p: &Vector2<f64>| {
+            let (xd, yd) = self.distort_point(p.x, p.y);
+            Vector2::new(xd, yd) - target
+        };
+        let mut p = target;
+        let mut r = residual(&p);
+        for _ in 0..50 {
+            let err = r.norm();
+            if err < 1e-15 {
+                break;
+            }
+            let step = match self.distortion_jacobian(p.x, p.y).try_inverse() {
+                Some(inv) => inv * r,
+                None => r,
+            };
+            let mut scale = 1.0;
+            let mut accepted = false;
+            for _ in 0..30 {
+                let candidate = p - step * scale;
+                let rc = residual(&candidate);
+                if rc.norm() < err {
+                    p = candidate;
+                    r = rc;
+                    accepted = true;
+                    break;
+                }
+                scale *= 0.5;
+            }
+            if !accepted {
+                break;
+            }
+        }
+        (p.x, p.y)
+    }
+
+    /// Unit-free viewing ray (x, y, 1) through a pixel.
+    pub fn ray(&self, u: f64, v: f64) -> Vector3<f64> {
+        let (x, y) = self.undistort(u, v);
+        Vector3::new(x, y, 1.0)
+    }
+
+    /// Apply the plumb-bob model to ideal normalised coordinates, giving
+    /// distorted normalised coordinates.
+    fn distort_point(&self, x: f64, y: f64) -> (f64, f64) {
+        let [k1, k2, p1, p2, k3] = self.distortion;
+        let r2 = x * x + y * y;
+        let radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+        let xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+        let yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+        (xd, yd)
+    }
+
+    fn distortion_jacobian(&self, x: f64, y: f64) -> Matrix2<f64> {
+        let [k1, k2, p1, p2, k3] = self.distortion;
+        let r2 = x * x + y * y;
+        let radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+        // d(radial)/d(r2)
+        let dradial = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2);
+        let dxd_dx = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x;
+        let dxd_dy = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
+        let dyd_dx = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
+        let dyd_dy = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x;
+        Matrix2::new(dxd_dx, dxd_dy, dyd_dx, dyd_dy)
+    }
+
+    /// Read a calibration file: a ROS `camera_info` YAML (as written by
+    /// `camera_calibration`, or the message form with `K`/`D`), or an OpenCV
+    /// FileStorage YAML (`%YAML:1.0`, `!!opencv-matrix`).
+    pub fn load(path: impl AsRef<Path>) -> Result<Camera> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| anyhow!("cannot read camera calibration: {e}"))
+            .with_context(|| path.display().to_string())?;
+        Camera::parse(&text).with_context(|| path.display().to_string())
+    }
+
+    /// Parse the text of a calibration file (see [`Camera::load`]).
+    pub fn parse(text: &str) -> Result<Camera> {
+        let cleaned = strip_opencv_yaml(text);
+        let doc: Value = serde_yaml::from_str(&cleaned)
+            .map_err(|e| anyhow!("not a readable calibration YAML: {}", one_line(&e)))?;
+        let Value::Mapping(_) = doc else {
+            bail!("not a camera calibration (expected a YAML mapping)");
+        };
+
+        let k = matrix_field(
+            &doc,
+            &["camera_matrix", "cameraMatrix", "K", "k", "intrinsics"],
+        )?
+        .ok_or_else(|| anyhow!("missing camera_matrix (or K)"))?;
+        if k.len() != 9 {
+            bail!("camera_matrix has {} values, expected 9 (3x3)", k.len());
+        }
+        let (fx, skew, cx, fy, cy) = (k[0], k[1], k[2], k[4], k[5]);
+        if !(fx > 0.0 && fy > 0.0 && fx.is_finite() && fy.is_finite()) {
+            bail!("camera_matrix has invalid focal lengths fx={fx}, fy={fy}");
+        }
+        if !cx.is_finite() || !cy.is_finite() {
+            bail!("camera_matrix has an invalid principal point");
+        }
+        if skew.abs() > 1e-6 * fx || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0 {
+            bail!("camera_matrix is not of the form [fx 0 cx; 0 fy cy; 0 0 1]");
+        }
+
+        if let Some(model) = field(&doc, &["distortion_model"]) {
+            let model = model.as_str().unwrap_or_default();
+            let supported = ["plumb_bob", "rational_polynomial", "radtan", "none", ""];
+            if !supported.contains(&model) {
+                bail!("unsupported distortion_model {model:?} (only plumb_bob)");
+            }
+        }
+        let coefficients = matrix_field(
+            &doc,
+            &[
+                "distortion_coefficients",
+                "distortionCoefficients",
+                "dist_coeffs",
+                "distCoeffs",
+                "D",
+                "d",
+            ],
+        )?
+        .unwrap_or_default();
+        let mut distortion = [0.0; 5];
+        for (slot, &value) in distortion.iter_mut().zip(&coefficients) {
+            *slot = value;
+        }
+        if coefficients.len() > 5 && coefficients[5..].iter().any(|&c| c != 0.0) {
+            bail!(
+                "distortion_coefficients has {} non-zero-extended values; only the 5-term \
+                 plumb_bob model (k1 k2 p1 p2 k3) is supported",
+                coefficients.len()
+            );
+        }
+        if distortion.iter().any(|c| !c.is_finite()) {
+            bail!("distortion_coefficients contains a non-finite value");
+        }
+
+        let width = size_field(&doc, &["image_width", "imageWidth", "width"])?
+            .ok_or_else(|| anyhow!("missing image_width"))?;
+        let height = size_field(&doc, &["image_height", "imageHeight", "height"])?
+            .ok_or_else(|| anyhow!("missing image_height"))?;
+
+        Ok(Camera {
+            fx,
+            fy,
+            cx,
+            cy,
+            distortion,
+            width,
+            height,
+        })
+    }
+}
+
+/// OpenCV writes `%YAML:1.0` (not valid YAML 1.1/1.2 syntax) and tags its
+/// matrices `!!opencv-matrix`; neither carries information we need.
+fn strip_opencv_yaml(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for line in text.lines() {
+        if line.trim_start().starts_with("%YAML") {
+            continue;
+        }
+        out.push_str(&line.replace("!!opencv-matrix", ""));
+        out.push('\n');
+    }
+    out
+}
+
+fn one_line(e: &impl std::fmt::Display) -> String {
+    e.to_string().lines().collect::<Vec<_>>().join(" ")
+}
+
+/// Look a key up case-sensitively first (ROS message `K` vs `k` differ only
+/// in case), then case-insensitively (OpenCV samples write `Camera_Matrix`).
+fn field<'a>(doc: &'a Value, names: &[&str]) -> Option<&'a Value> {
+    let map = doc.as_mapping()?;
+    for name in names {
+        if let Some(v) = map.get(*name) {
+            return Some(v);
+        }
+    }
+    for name in names {
+        for (key, value) in map {
+            if key.as_str().is_some_and(|k| k.eq_ignore_ascii_case(name)) {
+                return Some(value);
+            }
+        }
+    }
+    None
+}
+
+/// A matrix either as `{rows, cols, data: [...]}` or as a flat list.
+fn matrix_field(doc: &Value, names: &[&str]) -> Result<Option<Vec<f64>>> {
+    let Some(value) = field(doc, names) else {
+        return Ok(None);
+    };
+    let value = untag(value);
+    let name = names[0];
+    let data = match value {
+        Value::Sequence(_) => value,
+        Value::Mapping(_) => {
+            field(value, &["data"]).ok_or_else(|| anyhow!("{name} has no data list"))?
+        }
+        _ => bail!("{name} is neither a list nor a matrix with data"),
+    };
+    let Value::Sequence(items) = untag(data) else {
+        bail!("{name} data is not a list");
+    };
+    let values = items
+        .iter()
+        .map(number)
+        .collect::<Option<Vec<f64>>>()
+        .ok_or_else(|| anyhow!("{name} contains a non-numeric value"))?;
+    if let Value::Mapping(_) = value {
+        let rows = field(value, &["rows"]).and_then(number);
+        let cols = field(value, &["cols"]).and_then(number);
+        if let (Some(rows), Some(cols)) = (rows, cols) {
+            if (rows * cols) as usize != values.len() {
+                bail!(
+                    "{name} declares {rows}x{cols} but has {} values",
+                    values.len()
+                );
+            }
+        }
+    }
+    Ok(Some(values))
+}
+
+fn size_field(doc: &Value, names: &[&str]) -> Result<Option<u32>> {
+    let Some(value) = field(doc, names) else {
+        return Ok(None);
+    };
+    let n = number(value).ok_or_else(|| anyhow!("{} is not a number", names[0]))?;
+    if !((1.0..=1_000_000.0).contains(&n) && n.fract() == 0.0) {
+        bail!("{} = {n} is not a valid image size", names[0]);
+    }
+    Ok(Some(n as u32))
+}
+
+fn untag(value: &Value) -> &Value {
+    match value {
+        Value::Tagged(tagged) => untag(&tagged.value),
+        other => other,
+    }
+}
+
+/// Numbers may come as YAML floats/ints or, from some writers, as strings
+/// (e.g. OpenCV's `1.` or `.5`).
+fn number(value: &Value) -> Option<f64> {
+    match untag(value) {
+        Value::Number(n) => n.as_f64(),
+        Value::String(s) => s.trim().parse().ok(),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn distorted() -> Camera {
+        Camera {
+            fx: 610.0,
+            fy: 612.0,
+            cx: 318.4,
+            cy: 243.1,
+            distortion: [-0.28, 0.09, 0.0012, -0.0008, -0.012],
+            width: 640,
+            height: 480,
+        }
+    }
+
+    #[test]
+    fn ideal_camera_geometry() {
+        let cam = Camera::ideal(640, 480, 60.0);
+        assert!((cam.cx - 319.5).abs() < 1e-12 && (cam.cy - 239.5).abs() < 1e-12);
+        assert!((cam.horizontal_fov_deg() - 60.0).abs() < 1e-9);
+        // The optical axis lands on the principal point.
+        let (u, v) = cam.project(&Vector3::new(0.0, 0.0, 2.0)).unwrap();
+        assert_eq!((u, v), (319.5, 239.5));
+        // A point at the edge of the field of view lands on the image edge
+        // (half a pixel beyond the last pixel centre).
+        let half = 30f64.to_radians();
+        let (u, _) = cam.project(&Vector3::new(half.tan(), 0.0, 1.0)).unwrap();
+        assert!((u - 639.5).abs() < 1e-9, "{u}");
+    }
+
+    #[test]
+    fn project_rejects_points_behind_camera() {
+        let cam = distorted();
+        assert!(cam.project(&Vector3::new(0.1, 0.1, -1.0)).is_none());
+        assert!(cam.project(&Vector3::new(0.1, 0.1, 0.0)).is_none());
+        assert!(cam.project(&Vector3::new(0.1, 0.1, 0.5)).is_some());
+    }
+
+    #[test]
+    fn undistort_inverts_distortion_over_the_whole_image() {
+        let cam = distorted();
+        let (w, h) = (cam.width as f64 - 1.0, cam.height as f64 - 1.0);
+        let mut worst: f64 = 0.0;
+        for &(u, v) in &[
+            (0.0, 0.0),
+            (w, 0.0),
+            (0.0, h),
+            (w, h),
+            (cam.cx, cam.cy),
+            (17.0, 400.0),
+        ] {
+            let (x, y) = cam.undistort(u, v);
+            let (u2, v2) = cam.distort_normalized(x, y);
+            worst = worst.max((u2 - u).hypot(v2 - v));
+        }
+        assert!(worst < 1e-8, "round trip error {worst} px");
+        for i in 0..=20 {
+            for j in 0..=20 {
+                let (x, y) = (-0.55 + 0.055 * i as f64, -0.42 + 0.042 * j as f64);
+                let (u, v) = cam.distort_normalized(x, y);
+                let (x2, y2) = cam.undistort(u, v);
+                assert!((x2 - x).hypot(y2 - y) < 1e-10, "({x},{y}) -> ({x2},{y2})");
+            }
+        }
+    }
+
+    #[test]
+    fn undistort_handles_strong_barrel_distortion_in_corners() {
+        // A wide-angle lens (~110° diagonal after undistortion): corners are
+        // pulled in strongly.
+        let cam = Camera {
+            fx: 700.0,
+            fy: 700.0,
+            cx: 639.5,
+            cy: 359.5,
+            distortion: [-0.25, 0.07, 0.0, 0.0, -0.008],
+            width: 1280,
+            height: 720,
+        };
+        for &(u, v) in &[(0.0, 0.0), (1279.0, 0.0), (0.0, 719.0), (1279.0, 719.0)] {
+            let (x, y) = cam.undistort(u, v);
+            let (u2, v2) = cam.distort_normalized(x, y);
+            assert!((u2 - u).hypot(v2 - v) < 1e-7, "({u},{v}) -> ({u2},{v2})");
+        }
+        // Far outside the calibrated region the polynomial folds back and
+        // has no inverse; the answer must still be finite.
+        let (x, y) = cam.undistort(-5000.0, -4000.0);
+        assert!(x.is_finite() && y.is_finite());
+    }
+
+    #[test]
+    fn resolution_scaling_keeps_rays() {
+        let cam = distorted();
+        let half = cam.with_resolution(320, 240);
+        // Pixel centre (u, v) at full resolution is at ((u+0.5)/2-0.5, ...) at half.
+        let (x, y) = cam.undistort(100.0, 50.0);
+        let (x2, y2) = half.undistort(49.75, 24.75);
+        assert!((x - x2).abs() < 1e-12 && (y - y2).abs() < 1e-12);
+    }
+
+    const ROS_YAML: &str = "\
+image_width: 640
+image_height: 480
+camera_name: narrow_stereo
+camera_matrix:
+  rows: 3
+  cols: 3
+  data: [610.0, 0.0, 318.4, 0.0, 612.0, 243.1, 0.0, 0.0, 1.0]
+distortion_model: plumb_bob
+distortion_coefficients:
+  rows: 1
+  cols: 5
+  data: [-0.28, 0.09, 0.0012, -0.0008, -0.012]
+rectification_matrix:
+  rows: 3
+  cols: 3
+  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]
+projection_matrix:
+  rows: 3
+  cols: 4
+  data: [500, 0, 320, 0, 0, 500, 240, 0, 0, 0, 1, 0]
+";
+
+    const ROS_MESSAGE: &str = "\
+header:
+  seq: 0
+  stamp: {secs: 0, nsecs: 0}
+  frame_id: camera
+height: 480
+width: 640
+distortion_model: \"plumb_bob\"
+D: [-0.28, 0.09, 0.0012, -0.0008, -0.012]
+K: [610.0, 0.0, 318.4, 0.0, 612.0, 243.1, 0.0, 0.0, 1.0]
+R: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]
+P: [500.0, 0.0, 320.0, 0.0, 0.0, 500.0, 240.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+binning_x: 0
+binning_y: 0
+roi: {x_offset: 0, y_offset: 0, height: 0, width: 0, do_rectify: False}
+";
+
+    const OPENCV_YAML: &str = "%YAML:1.0
+---
+calibration_time: \"Mon 01 Jan 2024 10:00:00 CET\"
+image_width: 640
+image_height: 480
+flags: 0
+camera_matrix: !!opencv-matrix
+   rows: 3
+   cols: 3
+   dt: d
+   data: [ 6.1e+02, 0., 3.184e+02, 0., 6.12e+02, 2.431e+02, 0., 0.,
+       1. ]
+distortion_coefficients: !!opencv-matrix
+   rows: 5
+   cols: 1
+   dt: d
+   data: [ -2.8e-01, 9.0000000000000000e-02, 1.2e-03, -8.0e-04,
+       -1.2e-02 ]
+avg_reprojection_error: 2.1e-01
+";
+
+    #[test]
+    fn parses_all_calibration_formats() {
+        for text in [ROS_YAML, ROS_MESSAGE, OPENCV_YAML] {
+            let cam = Camera::parse(text).unwrap_or_else(|e| panic!("{e:#}\n{text}"));
+            assert_eq!(cam, distorted(), "{text}");
+        }
+    }
+
+    #[test]
+    fn parses_opencv_tutorial_key_spelling_and_four_coefficients() {
+        let text = "%YAML:1.0\nimage_Width: 800\nimage_Height: 600\n\
+            Camera_Matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n   \
+            data: [ 700., 0., 399.5, 0., 700., 299.5, 0., 0., 1. ]\n\
+            Distortion_Coefficients: !!opencv-matrix\n   rows: 4\n   cols: 1\n   dt: d\n   \
+            data: [ -0.1, 0.01, 0., 0. ]\n";
+        let cam = Camera::parse(text).unwrap();
+        assert_eq!((cam.width, cam.height), (800, 600));
+        assert_eq!(cam.distortion, [-0.1, 0.01, 0.0, 0.0, 0.0]);
+        assert_eq!((cam.fx, cam.cx), (700.0, 399.5));
+    }
+
+    #[test]
+    fn load_reports_file_and_problem_on_one_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let good = dir.path().join("cam.yaml");
+        std::fs::write(&good, OPENCV_YAML).unwrap();
+        assert_eq!(Camera::load(&good).unwrap(), distorted());
+
+        let cases = [
+            (
+                "nok.yaml",
+                "image_width: 640\nimage_height: 480\n",
+                "camera_matrix",
+            ),
+            (
+                "nosize.yaml",
+                "K: [1, 0, 1, 0, 1, 1, 0, 0, 1]\n",
+                "image_width",
+            ),
+            ("short.yaml", "width: 4\nheight: 4\nK: [1, 0, 1]\n", "9"),
+            (
+                "fisheye.yaml",
+                "width: 4\nheight: 4\nK: [1,0,1,0,1,1,0,0,1]\ndistortion_model: equidistant\n",
+                "equidistant",
+            ),
+            ("garbage.yaml", "{ this is: [not yaml\n", "YAML"),
+            ("list.yaml", "- 1\n- 2\n", "mapping"),
+        ];
+        for (name, text, expected) in cases {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).unwrap();
+            let message = format!("{:#}", Camera::load(&path).unwrap_err());
+            assert!(message.contains(name), "{message}");
+            assert!(message.contains(expected), "{message}");
+            assert!(!message.contains('\n'), "{message}");
+        }
+        let missing = dir.path().join("absent.yaml");
+        let message = format!("{:#}", Camera::load(&missing).unwrap_err());
+        assert!(message.contains("absent.yaml") && !message.contains('\n'));
+    }
+}

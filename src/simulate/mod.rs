@@ -1,1 +1,308 @@
-//! (in progress)
+//! Scene simulator: renders what a camera would see of markers and printed
+//! sheets posed in 3D, with the ground truth of every marker.
+//!
+//! Geometry comes from [`crate::geometry::Marker`] (the one marker shape) and
+//! the camera model from [`crate::camera::Camera`] (with lens distortion);
+//! each pixel's viewing ray is intersected with the paper planes, so
+//! perspective and distortion are exact, and edge pixels are supersampled.
+//! Then come the imaging effects in the order a camera applies them: uneven
+//! illumination, motion blur, focus blur, sensor noise, 8-bit quantisation
+//! and JPEG compression. Same scene and seed give the same bytes.
+//!
+//! Object frames: a loose marker's frame is the marker frame (origin at the
+//! centre, +x along sector angle 0, +y along sector angle 90°, +z out of the
+//! printed face). A page's frame has its origin at the page centre, +x to the
+//! right, +y towards the top edge, +z out of the printed face, so a marker
+//! printed unrotated on the page shares the page's orientation.
+//! [`Placement`] maps an object frame (metres) into the camera frame
+//! (OpenCV optical: x right, y down, z forward).
+
+mod background;
+mod effects;
+pub mod layout;
+mod raster;
+pub mod rng;
+mod truth;
+
+pub use truth::{GroundTruth, TrueMarker, TruePage};
+
+use crate::camera::Camera;
+use crate::geometry::Marker;
+use crate::render::manifest::Manifest;
+use nalgebra::{Matrix3, Rotation3, Vector3};
+
+/// Where an object sits: object frame (metres) → camera frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Placement {
+    /// Position of the object's origin in the camera frame, metres.
+    pub position: Vector3<f64>,
+    /// Rotation object → camera.
+    pub rotation: Matrix3<f64>,
+}
+
+impl Placement {
+    pub fn new(position: Vector3<f64>, rotation: Matrix3<f64>) -> Placement {
+        Placement { position, rotation }
+    }
+
+    /// Face-on and upright at `distance` metres straight ahead.
+    pub fn facing(distance: f64) -> Placement {
+        Placement::viewed(Vector3::new(0.0, 0.0, distance), 0.0, 0.0, 0.0)
+    }
+
+    /// An object at `position` (metres, camera frame), turned from face-on
+    /// and upright by `roll` (in its own plane, counter-clockwise as seen),
+    /// then `tilt` (about the camera's horizontal axis; positive brings the
+    /// top edge towards the camera), then `pan` (about the camera's vertical
+    /// axis; positive brings the right edge towards the camera). Radians.
+    pub fn viewed(position: Vector3<f64>, tilt: f64, pan: f64, roll: f64) -> Placement {
+        let face_on = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
+        let roll_m = *Rotation3::from_axis_angle(&Vector3::z_axis(), roll).matrix();
+        let tilt_m = *Rotation3::from_axis_angle(&Vector3::x_axis(), tilt).matrix();
+        let pan_m = *Rotation3::from_axis_angle(&Vector3::y_axis(), -pan).matrix();
+        Placement {
+            position,
+            rotation: pan_m * tilt_m * face_on * roll_m,
+        }
+    }
+
+    /// A point of the object frame given in millimetres, in the camera frame
+    /// in metres.
+    pub fn to_camera_mm(&self, x_mm: f64, y_mm: f64) -> Vector3<f64> {
+        self.position + self.rotation * Vector3::new(x_mm / 1000.0, y_mm / 1000.0, 0.0)
+    }
+
+    /// Unit normal of the printed face, camera frame.
+    pub fn normal(&self) -> Vector3<f64> {
+        self.rotation.column(2).into_owned()
+    }
+}
+
+/// A disc of ink (or of white correction paint) over the print, e.g. to
+/// damage a marker's ring.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Blot {
+    /// Centre in the object's print coordinates: for a loose marker the
+    /// marker frame (mm); for a page the manifest's page coordinates (mm
+    /// from the top-left corner, y down, before any print scaling).
+    pub x_mm: f64,
+    pub y_mm: f64,
+    pub radius_mm: f64,
+    /// Ink-black when true, paper-white otherwise.
+    pub black: bool,
+}
+
+/// A marker on its own small card of paper.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LooseMarker {
+    pub marker: Marker,
+    /// Family ID reported in the ground truth (0 if none).
+    pub id: u32,
+    pub placement: Placement,
+    /// Half the side of the square white card around the marker, mm. The
+    /// default leaves half a radius of white, more than the 0.3 R minimum.
+    pub card_half_mm: f64,
+    pub blots: Vec<Blot>,
+}
+
+impl LooseMarker {
+    pub fn new(marker: Marker, id: u32, placement: Placement) -> LooseMarker {
+        LooseMarker {
+            card_half_mm: marker.outer_radius() * 1.5,
+            marker,
+            id,
+            placement,
+            blots: Vec::new(),
+        }
+    }
+}
+
+/// One page of a printed sheet: a white sheet of paper of the manifest's
+/// page size with its markers.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SheetPage {
+    pub manifest: Manifest,
+    /// Page number, from 1.
+    pub page: u32,
+    /// Scale the printer applied to the content about the page centre
+    /// (e.g. 0.97 for "fit to page"); the paper keeps its size.
+    pub print_scale: f64,
+    /// Pose of the page centre.
+    pub placement: Placement,
+    pub blots: Vec<Blot>,
+}
+
+impl SheetPage {
+    pub fn new(manifest: Manifest, page: u32, placement: Placement) -> SheetPage {
+        SheetPage {
+            manifest,
+            page,
+            print_scale: 1.0,
+            placement,
+            blots: Vec::new(),
+        }
+    }
+
+    /// The marker shape of one manifest entry (WhyCode when the manifest
+    /// names a family, WhyCon otherwise), at the intended size.
+    pub fn marker_of(
+        manifest: &Manifest,
+        entry: &crate::render::manifest::PrintedMarker,
+    ) -> Marker {
+        match manifest.family {
+            Some(f) if !manifest.legacy => Marker::whycode(f.bits, entry.code, entry.diameter_mm),
+            _ => Marker::whycon(entry.diameter_mm),
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum SceneObject {
+    Marker(LooseMarker),
+    Page(SheetPage),
+}
+
+/// What is behind the objects.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Background {
+    /// A uniform surface of this reflectance (0 black .. 1 white).
+    Uniform(f64),
+    /// A darker table top with a faint low-frequency texture.
+    Table,
+    /// Random shapes, lines, rings and discs that are not markers, to test
+    /// for false detections. `density`: shapes per 100×100 pixels.
+    Clutter { density: f64 },
+}
+
+/// Motion blur along a straight line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotionBlur {
+    /// Length of the smear, pixels.
+    pub length_px: f64,
+    /// Direction, radians, atan2(dv, du).
+    pub angle: f64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    pub camera: Camera,
+    pub objects: Vec<SceneObject>,
+    pub background: Background,
+    /// Ratio of the brightest to the darkest illumination across the frame
+    /// (1 = even light, 3 = "3:1").
+    pub gradient: f64,
+    /// Direction in which the light falls off, radians, atan2(dv, du).
+    pub gradient_angle: f64,
+    /// Overall exposure: 1 puts white paper near grey 220; 0.2 is a dark frame.
+    pub exposure: f64,
+    pub paper_reflectance: f64,
+    pub ink_reflectance: f64,
+    /// Focus blur: Gaussian sigma, pixels.
+    pub focus_blur_px: f64,
+    pub motion_blur: Option<MotionBlur>,
+    /// Sensor noise: Gaussian sigma in grey levels.
+    pub noise: f64,
+    /// JPEG round trip at this quality (1-100).
+    pub jpeg_quality: Option<u8>,
+    pub seed: u64,
+    /// Samples per pixel side on edges (n×n).
+    pub supersampling: u32,
+}
+
+impl Scene {
+    /// An empty scene with a mid-grey background, even light and no effects.
+    pub fn new(camera: Camera) -> Scene {
+        Scene {
+            camera,
+            objects: Vec::new(),
+            background: Background::Uniform(0.45),
+            gradient: 1.0,
+            gradient_angle: 0.0,
+            exposure: 1.0,
+            paper_reflectance: 0.86,
+            ink_reflectance: 0.05,
+            focus_blur_px: 0.0,
+            motion_blur: None,
+            noise: 0.0,
+            jpeg_quality: None,
+            seed: 1,
+            supersampling: 4,
+        }
+    }
+}
+
+/// Renders the scene: the camera image and the ground truth of every marker.
+pub fn render(scene: &Scene) -> (image::GrayImage, GroundTruth) {
+    let reflectance = raster::render_reflectance(scene);
+    let image = effects::develop(scene, reflectance);
+    (image, truth::ground_truth(scene))
+}
+
+/// Image file formats the simulator writes, chosen by file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageFormat {
+    Png,
+    Jpeg,
+    Pgm,
+    Bmp,
+}
+
+impl ImageFormat {
+    pub fn from_path(path: &std::path::Path) -> anyhow::Result<ImageFormat> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or_default()
+            .to_ascii_lowercase();
+        Ok(match ext.as_str() {
+            "png" => ImageFormat::Png,
+            "jpg" | "jpeg" => ImageFormat::Jpeg,
+            "pgm" | "pnm" => ImageFormat::Pgm,
+            "bmp" => ImageFormat::Bmp,
+            _ => anyhow::bail!(
+                "{}: unknown image type (use .png, .jpg, .pgm or .bmp)",
+                path.display()
+            ),
+        })
+    }
+}
+
+/// Writes a grey image whole or not at all, in the format of the path's
+/// extension (JPEG at `jpeg_quality`).
+pub fn save_image(
+    path: &std::path::Path,
+    image: &image::GrayImage,
+    jpeg_quality: u8,
+) -> anyhow::Result<()> {
+    use image::ImageEncoder;
+    let format = ImageFormat::from_path(path)?;
+    let (w, h) = image.dimensions();
+    let mut bytes = Vec::new();
+    let colour = image::ExtendedColorType::L8;
+    let result = match format {
+        ImageFormat::Png => image::codecs::png::PngEncoder::new(&mut bytes).write_image(
+            image.as_raw(),
+            w,
+            h,
+            colour,
+        ),
+        ImageFormat::Jpeg => image::codecs::jpeg::JpegEncoder::new_with_quality(
+            &mut bytes,
+            jpeg_quality.clamp(1, 100),
+        )
+        .write_image(image.as_raw(), w, h, colour),
+        ImageFormat::Pgm => image::codecs::pnm::PnmEncoder::new(&mut bytes)
+            .with_subtype(image::codecs::pnm::PnmSubtype::Graymap(
+                image::codecs::pnm::SampleEncoding::Binary,
+            ))
+            .write_image(image.as_raw(), w, h, colour),
+        ImageFormat::Bmp => image::codecs::bmp::BmpEncoder::new(&mut bytes).write_image(
+            image.as_raw(),
+            w,
+            h,
+            colour,
+        ),
+    };
+    result.map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", path.display()))?;
+    crate::io::write_atomic(path, &bytes)
+}

@@ -1,0 +1,265 @@
+//! Deciding which pixels are dark.
+//!
+//! A single global threshold (the reference's approach) fails under a strong
+//! light gradient: the white paper in the shade can be darker than the black
+//! ink in the light. The map here is local instead: the image is cut into
+//! square tiles, each tile's threshold is the mid-level between the darkest
+//! and the brightest pixel in its neighbourhood of tiles, and tiles whose
+//! neighbourhood shows no real contrast take the threshold of the nearest
+//! tile that does (so the inside of a large black disc stays dark and a
+//! large blank wall stays white). A constant map is the same type with one
+//! tile covering everything, used when tracking already knows a marker's
+//! black and white levels.
+
+use std::collections::VecDeque;
+
+/// A threshold per tile: pixel (x, y) is dark when its value is below
+/// `values[(y >> shift) * cols + (x >> shift)]`.
+#[derive(Debug, Clone)]
+pub struct ThresholdMap {
+    shift: u32,
+    cols: usize,
+    values: Vec<u8>,
+}
+
+/// Shift of the adaptive map's tiles: 16 x 16 pixels.
+pub const TILE_SHIFT: u32 = 4;
+/// Neighbourhood radius, in tiles, over which a tile's black and white
+/// levels are taken. Two tiles reach 32-48 px, more than half the black
+/// annulus of any marker up to ~250 px across; larger markers get their
+/// threshold from the propagation step.
+pub const NEIGHBOURHOOD_TILES: usize = 2;
+/// Least difference between black and white, in grey levels, that counts as
+/// contrast at all. Low enough for dark frames (white ~25).
+pub const MIN_CONTRAST: u8 = 8;
+
+impl ThresholdMap {
+    /// The same threshold everywhere.
+    pub fn constant(threshold: u8) -> ThresholdMap {
+        ThresholdMap {
+            shift: 31,
+            cols: 1,
+            values: vec![threshold],
+        }
+    }
+
+    /// The thresholds of one image row, indexed by `x >> shift()`.
+    #[inline]
+    pub fn row(&self, y: usize) -> &[u8] {
+        let r = y >> self.shift;
+        &self.values[r * self.cols..(r + 1) * self.cols]
+    }
+
+    #[inline]
+    pub fn shift(&self) -> u32 {
+        self.shift
+    }
+
+    #[inline]
+    pub fn at(&self, x: usize, y: usize) -> u8 {
+        self.row(y)[x >> self.shift]
+    }
+
+    /// The local map of an 8-bit image stored row-major without padding.
+    pub fn adaptive(pixels: &[u8], width: usize, height: usize) -> ThresholdMap {
+        let tile = 1usize << TILE_SHIFT;
+        let cols = width.div_ceil(tile).max(1);
+        let rows = height.div_ceil(tile).max(1);
+        let mut lo = vec![255u8; cols * rows];
+        let mut hi = vec![0u8; cols * rows];
+        for (y, row) in pixels.chunks_exact(width.max(1)).take(height).enumerate() {
+            let t = (y >> TILE_SHIFT) * cols;
+            let (lo_row, hi_row) = (&mut lo[t..t + cols], &mut hi[t..t + cols]);
+            for ((chunk, l), h) in row.chunks(tile).zip(lo_row).zip(hi_row) {
+                let (cl, ch) = chunk_min_max(chunk);
+                *l = (*l).min(cl);
+                *h = (*h).max(ch);
+            }
+        }
+        let noise_floor = MIN_CONTRAST.max(noise_contrast(pixels, width, height));
+
+        let lo = box_filter(&lo, cols, rows, NEIGHBOURHOOD_TILES, u8::min);
+        let hi = box_filter(&hi, cols, rows, NEIGHBOURHOOD_TILES, u8::max);
+        const UNSET: u16 = u16::MAX;
+        let mut thresholds: Vec<u16> = lo
+            .iter()
+            .zip(&hi)
+            .map(|(&l, &h)| {
+                let contrast = h - l;
+                if contrast >= noise_floor && contrast >= h / 6 {
+                    (u16::from(l) + u16::from(h)).div_ceil(2)
+                } else {
+                    UNSET
+                }
+            })
+            .collect();
+        let mut queue: VecDeque<usize> = (0..thresholds.len())
+            .filter(|&i| thresholds[i] != UNSET)
+            .collect();
+        if queue.is_empty() {
+            // No contrast anywhere: nothing is dark.
+            return ThresholdMap {
+                shift: TILE_SHIFT,
+                cols,
+                values: vec![0; cols * rows],
+            };
+        }
+        while let Some(i) = queue.pop_front() {
+            let (c, r) = (i % cols, i / cols);
+            let value = thresholds[i];
+            let mut visit = |j: usize| {
+                if thresholds[j] == UNSET {
+                    thresholds[j] = value;
+                    queue.push_back(j);
+                }
+            };
+            if c > 0 {
+                visit(i - 1);
+            }
+            if c + 1 < cols {
+                visit(i + 1);
+            }
+            if r > 0 {
+                visit(i - cols);
+            }
+            if r + 1 < rows {
+                visit(i + cols);
+            }
+        }
+        ThresholdMap {
+            shift: TILE_SHIFT,
+            cols,
+            values: thresholds.into_iter().map(|t| t.min(255) as u8).collect(),
+        }
+    }
+}
+
+/// The least contrast that sensor noise cannot fake: a flat, noisy area
+/// spans about ±4 σ over a neighbourhood of thousands of pixels, or it
+/// would be cut in half and flood-filled as countless specks. σ comes from
+/// the median difference between horizontal neighbours (≈ 0.95 σ), which
+/// edges, being few pixels, do not move.
+fn noise_contrast(pixels: &[u8], width: usize, height: usize) -> u8 {
+    let mut histogram = [0u64; 256];
+    for row in pixels.chunks_exact(width.max(1)).take(height).step_by(8) {
+        for pair in row.windows(2) {
+            histogram[usize::from(pair[0].abs_diff(pair[1]))] += 1;
+        }
+    }
+    let total: u64 = histogram.iter().sum();
+    let mut seen = 0;
+    for (diff, &count) in histogram.iter().enumerate() {
+        seen += count;
+        if 2 * seen >= total {
+            return (diff * 8).min(255) as u8;
+        }
+    }
+    0
+}
+
+#[inline]
+fn chunk_min_max(chunk: &[u8]) -> (u8, u8) {
+    chunk
+        .iter()
+        .fold((255u8, 0u8), |(l, h), &p| (l.min(p), h.max(p)))
+}
+
+/// Min or max over a (2r+1)² window of a grid, clipped at the borders.
+fn box_filter(grid: &[u8], cols: usize, rows: usize, r: usize, op: fn(u8, u8) -> u8) -> Vec<u8> {
+    let mut horizontal = vec![0u8; grid.len()];
+    for y in 0..rows {
+        let row = &grid[y * cols..(y + 1) * cols];
+        for x in 0..cols {
+            let (a, b) = (x.saturating_sub(r), (x + r).min(cols - 1));
+            horizontal[y * cols + x] = row[a..=b].iter().copied().reduce(op).unwrap_or(0);
+        }
+    }
+    let mut out = vec![0u8; grid.len()];
+    for y in 0..rows {
+        let (a, b) = (y.saturating_sub(r), (y + r).min(rows - 1));
+        for x in 0..cols {
+            out[y * cols + x] = (a..=b)
+                .map(|yy| horizontal[yy * cols + x])
+                .reduce(op)
+                .unwrap_or(0);
+        }
+    }
+    out
+}
+
+/// Global thresholds to try one after another after a miss: the binary
+/// subdivision of the grey range, 128, 64, 192, 32, 96, 160, 224, 16, ...
+/// so that every level is eventually tried and coarse steps come first.
+#[derive(Debug, Clone, Default)]
+pub struct ThresholdSearch {
+    step: u32,
+}
+
+impl ThresholdSearch {
+    /// The k-th threshold of the sequence (k = 0 gives 128).
+    pub fn nth(k: u32) -> u8 {
+        let k = k % 255;
+        let level = 31 - (k + 1).leading_zeros();
+        let j = k + 1 - (1 << level);
+        ((256 * (2 * j + 1)) >> (level + 1)) as u8
+    }
+
+    /// The next threshold to try after a miss.
+    pub fn next_after_miss(&mut self) -> u8 {
+        let t = Self::nth(self.step);
+        self.step = (self.step + 1) % 255;
+        t
+    }
+
+    /// After a hit the walk restarts from the top.
+    pub fn reset(&mut self) {
+        self.step = 0;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn subdivision_sequence_starts_like_the_reference() {
+        let seq: Vec<u8> = (0..8).map(ThresholdSearch::nth).collect();
+        assert_eq!(seq, [128, 64, 192, 32, 96, 160, 224, 16]);
+        let mut all: Vec<u8> = (0..255).map(ThresholdSearch::nth).collect();
+        all.sort_unstable();
+        all.dedup();
+        assert_eq!(all.len(), 255, "every level 1..=255 is visited once");
+    }
+
+    #[test]
+    fn gradient_keeps_black_below_and_white_above_threshold() {
+        // Black squares (ink reflects 10 %) and white paper (90 %) under
+        // illumination falling 3:1 from left to right.
+        let (w, h) = (320usize, 64usize);
+        let mut px = vec![0u8; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let light = 255.0 * (1.0 - 2.0 / 3.0 * x as f64 / w as f64);
+                let ink = (x / 20 + y / 20) % 2 == 0;
+                px[y * w + x] = (light * if ink { 0.1 } else { 0.9 }) as u8;
+            }
+        }
+        let map = ThresholdMap::adaptive(&px, w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let ink = (x / 20 + y / 20) % 2 == 0;
+                assert_eq!(px[y * w + x] < map.at(x, y), ink, "pixel {x},{y}");
+            }
+        }
+    }
+
+    #[test]
+    fn flat_image_has_no_dark_pixels() {
+        let px = vec![90u8; 100 * 50];
+        let map = ThresholdMap::adaptive(&px, 100, 50);
+        assert!(px
+            .iter()
+            .enumerate()
+            .all(|(i, &p)| p >= map.at(i % 100, i / 100)));
+    }
+}

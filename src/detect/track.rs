@@ -1,0 +1,139 @@
+//! Tracking across frames (paper 4.1-4.2): each marker's next position is
+//! predicted from its last position and velocity, so that the search of
+//! the next frame starts inside the marker and touches only its pixels; the
+//! test tolerances follow the values the detector actually measures,
+//! slowly (x ← 0.99 x + 0.01 x_measured).
+
+/// What the detector remembers about one marker between frames.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Track {
+    pub u: f64,
+    pub v: f64,
+    /// Image velocity, pixels per frame, smoothed over past frames.
+    pub du: f64,
+    pub dv: f64,
+    /// Semi-axes of the last outer ellipse.
+    pub a: f64,
+    pub b: f64,
+    /// The threshold that separated this marker's black from its white.
+    pub threshold: u8,
+    /// Frames in a row this marker was seen.
+    pub hits: u32,
+}
+
+impl Track {
+    pub fn new(u: f64, v: f64, a: f64, b: f64, threshold: u8) -> Track {
+        Track {
+            u,
+            v,
+            du: 0.0,
+            dv: 0.0,
+            a,
+            b,
+            threshold,
+            hits: 1,
+        }
+    }
+
+    /// Where the marker should be in the next frame.
+    pub fn predicted(&self) -> (f64, f64) {
+        (self.u + self.du, self.v + self.dv)
+    }
+
+    /// Takes a new observation; the velocity is smoothed because single
+    /// frame differences carry the centre's measurement noise.
+    pub fn update(&mut self, u: f64, v: f64, a: f64, b: f64, threshold: u8) {
+        let (mu, mv) = (u - self.u, v - self.v);
+        let k = if self.hits == 1 { 1.0 } else { 0.6 };
+        self.du += k * (mu - self.du);
+        self.dv += k * (mv - self.dv);
+        self.u = u;
+        self.v = v;
+        self.a = a;
+        self.b = b;
+        self.threshold = threshold;
+        self.hits += 1;
+    }
+
+    /// True when an observation at (u, v) is this marker moved on.
+    pub fn matches(&self, u: f64, v: f64) -> bool {
+        let (pu, pv) = self.predicted();
+        (u - pu).hypot(v - pv) < self.a.max(4.0)
+    }
+}
+
+/// A test value that follows what is measured: `expected` is the mean the
+/// test is centred on (or the typical error, for error-only tests) and the
+/// tolerance shrinks towards a multiple of the typical error but never
+/// below half, nor above, the configured tolerance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Adaptive {
+    pub expected: f64,
+    pub typical_error: f64,
+    pub configured_tolerance: f64,
+}
+
+/// Weight of a new measurement in the running values (paper 4.2).
+pub const ADAPTATION_RATE: f64 = 0.01;
+
+impl Adaptive {
+    pub fn new(expected: f64, tolerance: f64) -> Adaptive {
+        Adaptive {
+            expected,
+            typical_error: tolerance / 4.0,
+            configured_tolerance: tolerance,
+        }
+    }
+
+    pub fn tolerance(&self) -> f64 {
+        (4.0 * self.typical_error).clamp(0.5 * self.configured_tolerance, self.configured_tolerance)
+    }
+
+    /// Relative deviation of a measurement from the expected value.
+    pub fn relative_error(&self, measured: f64) -> f64 {
+        if self.expected == 0.0 {
+            measured.abs()
+        } else {
+            (measured / self.expected - 1.0).abs()
+        }
+    }
+
+    pub fn accepts(&self, measured: f64) -> bool {
+        self.relative_error(measured) < self.tolerance()
+    }
+
+    pub fn learn(&mut self, measured: f64) {
+        let error = self.relative_error(measured);
+        if self.expected != 0.0 {
+            self.expected += ADAPTATION_RATE * (measured - self.expected);
+        }
+        self.typical_error += ADAPTATION_RATE * (error - self.typical_error);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prediction_follows_constant_motion() {
+        let mut t = Track::new(10.0, 20.0, 5.0, 5.0, 100);
+        for k in 1..6 {
+            t.update(10.0 + 3.0 * k as f64, 20.0 - 2.0 * k as f64, 5.0, 5.0, 100);
+        }
+        let (u, v) = t.predicted();
+        assert!((u - 28.0).abs() < 0.1 && (v - 8.0).abs() < 0.1, "{u} {v}");
+    }
+
+    #[test]
+    fn expectation_moves_slowly_towards_measurements() {
+        let mut a = Adaptive::new(0.2, 0.5);
+        a.learn(0.3);
+        assert!((a.expected - 0.201).abs() < 1e-12);
+        for _ in 0..1000 {
+            a.learn(0.25);
+        }
+        assert!((a.expected - 0.25).abs() < 1e-3);
+        assert!(a.tolerance() >= 0.25 && a.tolerance() <= 0.5);
+    }
+}

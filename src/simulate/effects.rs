@@ -1,0 +1,187 @@
+//! From reflectance to an 8-bit camera image: illumination, blur, noise,
+//! quantisation and JPEG, in the order a camera applies them.
+
+use super::rng::Pcg32;
+use super::Scene;
+use image::GrayImage;
+use rayon::prelude::*;
+
+/// Grey level of a perfectly white surface at exposure 1.
+const FULL_SCALE: f64 = 255.0;
+
+pub(super) fn develop(scene: &Scene, mut image: Vec<f32>) -> GrayImage {
+    let width = scene.camera.width as usize;
+    let height = scene.camera.height as usize;
+    illuminate(scene, &mut image, width);
+    if let Some(motion) = scene.motion_blur {
+        if motion.length_px > 0.5 {
+            image = motion_blur(&image, width, height, motion.length_px, motion.angle);
+        }
+    }
+    if scene.focus_blur_px > 0.05 {
+        image = gaussian_blur(&image, width, height, scene.focus_blur_px);
+    }
+    if scene.noise > 0.0 {
+        let mut rng = Pcg32::new(scene.seed, 23);
+        for px in image.iter_mut() {
+            *px += (scene.noise * rng.gaussian()) as f32;
+        }
+    }
+    let bytes: Vec<u8> = image
+        .iter()
+        .map(|&g| g.round().clamp(0.0, 255.0) as u8)
+        .collect();
+    let gray = GrayImage::from_raw(scene.camera.width, scene.camera.height, bytes)
+        .expect("buffer matches the camera size");
+    match scene.jpeg_quality {
+        Some(quality) => jpeg_round_trip(&gray, quality),
+        None => gray,
+    }
+}
+
+/// Light falling off linearly across the frame from 1 to 1/gradient.
+fn illuminate(scene: &Scene, image: &mut [f32], width: usize) {
+    let height = image.len() / width;
+    let (sin, cos) = scene.gradient_angle.sin_cos();
+    let ratio = scene.gradient.max(1.0);
+    let corners = [
+        (0.0, 0.0),
+        (width as f64, 0.0),
+        (0.0, height as f64),
+        (width as f64, height as f64),
+    ];
+    let along = |u: f64, v: f64| u * cos + v * sin;
+    let lo = corners
+        .iter()
+        .map(|&(u, v)| along(u, v))
+        .fold(f64::MAX, f64::min);
+    let hi = corners
+        .iter()
+        .map(|&(u, v)| along(u, v))
+        .fold(f64::MIN, f64::max);
+    let exposure = scene.exposure * FULL_SCALE;
+    image
+        .par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(row, line)| {
+            for (col, px) in line.iter_mut().enumerate() {
+                let t = (along(col as f64 + 0.5, row as f64 + 0.5) - lo) / (hi - lo).max(1e-9);
+                let light = 1.0 - (1.0 - 1.0 / ratio) * t;
+                *px = (f64::from(*px) * exposure * light) as f32;
+            }
+        });
+}
+
+/// Bilinear sample with edge clamping.
+fn sample(image: &[f32], width: usize, height: usize, u: f64, v: f64) -> f32 {
+    let u = u.clamp(0.0, (width - 1) as f64);
+    let v = v.clamp(0.0, (height - 1) as f64);
+    let (x0, y0) = (u.floor() as usize, v.floor() as usize);
+    let (x1, y1) = ((x0 + 1).min(width - 1), (y0 + 1).min(height - 1));
+    let (tx, ty) = ((u - x0 as f64) as f32, (v - y0 as f64) as f32);
+    let at = |x: usize, y: usize| image[y * width + x];
+    (at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx) * (1.0 - ty)
+        + (at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx) * ty
+}
+
+/// Average along a centred line segment of `length` pixels.
+fn motion_blur(image: &[f32], width: usize, height: usize, length: f64, angle: f64) -> Vec<f32> {
+    let taps = (length.ceil() as usize).max(1) * 2 + 1;
+    let (sin, cos) = angle.sin_cos();
+    let offsets: Vec<(f64, f64)> = (0..taps)
+        .map(|k| {
+            let t = (k as f64 / (taps - 1) as f64 - 0.5) * length;
+            (t * cos, t * sin)
+        })
+        .collect();
+    let mut out = vec![0f32; image.len()];
+    out.par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(row, line)| {
+            for (col, px) in line.iter_mut().enumerate() {
+                let sum: f32 = offsets
+                    .iter()
+                    .map(|&(du, dv)| sample(image, width, height, col as f64 + du, row as f64 + dv))
+                    .sum();
+                *px = sum / taps as f32;
+            }
+        });
+    out
+}
+
+/// Separable Gaussian blur with edge clamping.
+pub(crate) fn gaussian_blur(image: &[f32], width: usize, height: usize, sigma: f64) -> Vec<f32> {
+    let radius = (3.0 * sigma).ceil() as isize;
+    let mut kernel: Vec<f32> = (-radius..=radius)
+        .map(|k| (-(k * k) as f64 / (2.0 * sigma * sigma)).exp() as f32)
+        .collect();
+    let total: f32 = kernel.iter().sum();
+    kernel.iter_mut().for_each(|k| *k /= total);
+
+    let mut horizontal = vec![0f32; image.len()];
+    horizontal
+        .par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(row, line)| {
+            let src = &image[row * width..(row + 1) * width];
+            for (col, px) in line.iter_mut().enumerate() {
+                *px = kernel
+                    .iter()
+                    .enumerate()
+                    .map(|(k, w)| {
+                        let x = (col as isize + k as isize - radius).clamp(0, width as isize - 1);
+                        w * src[x as usize]
+                    })
+                    .sum();
+            }
+        });
+    let mut out = vec![0f32; image.len()];
+    out.par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(row, line)| {
+            for (col, px) in line.iter_mut().enumerate() {
+                *px = kernel
+                    .iter()
+                    .enumerate()
+                    .map(|(k, w)| {
+                        let y = (row as isize + k as isize - radius).clamp(0, height as isize - 1);
+                        w * horizontal[y as usize * width + col]
+                    })
+                    .sum();
+            }
+        });
+    out
+}
+
+/// Encodes and decodes the image as JPEG at `quality`, giving its artefacts.
+pub(crate) fn jpeg_round_trip(image: &GrayImage, quality: u8) -> GrayImage {
+    let mut bytes = Vec::new();
+    let encoder =
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, quality.clamp(1, 100));
+    image
+        .write_with_encoder(encoder)
+        .expect("JPEG encoding into memory cannot fail");
+    image::load_from_memory_with_format(&bytes, image::ImageFormat::Jpeg)
+        .expect("a JPEG just encoded decodes")
+        .to_luma8()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gaussian_blur_keeps_mean_and_smooths_a_step() {
+        let (w, h) = (40, 10);
+        let image: Vec<f32> = (0..w * h)
+            .map(|k| if k % w < 20 { 0.0 } else { 100.0 })
+            .collect();
+        let blurred = gaussian_blur(&image, w, h, 2.0);
+        let mean_in: f32 = image.iter().sum::<f32>() / image.len() as f32;
+        let mean_out: f32 = blurred.iter().sum::<f32>() / blurred.len() as f32;
+        assert!((mean_in - mean_out).abs() < 0.5);
+        // The step at x = 19.5 becomes a ramp through the half-way grey.
+        assert!((blurred[5 * w + 19] + blurred[5 * w + 20] - 100.0).abs() < 1.0);
+        assert!(blurred[5 * w + 17] > 5.0 && blurred[5 * w + 22] < 95.0);
+    }
+}
