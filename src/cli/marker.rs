@@ -51,6 +51,7 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
     if format == Format::Png && !(args.dpi.is_finite() && (10.0..=4800.0).contains(&args.dpi)) {
         bail!("--dpi must be between 10 and 4800, got {}", args.dpi);
     }
+    crate::render::check_output_dir(&args.output)?;
     let diameter = args.diameter.mm();
     let (marker, title) = if args.legacy {
         (Marker::whycon(diameter), "WhyCon marker".to_string())

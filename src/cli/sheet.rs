@@ -1,4 +1,5 @@
 use crate::family::Family;
+use crate::render::check::check_sheet;
 use crate::render::manifest::FamilyRef;
 use crate::render::sheet::{family_markers, layout, legacy_markers, SheetSpec};
 use crate::render::template::Template;
@@ -100,7 +101,9 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
     if format == Format::Png && !(args.dpi.is_finite() && (10.0..=1200.0).contains(&args.dpi)) {
         bail!("--dpi must be between 10 and 1200, got {}", args.dpi);
     }
+    crate::render::check_output_dir(&output)?;
     let template = Template::resolve(&args.template)?;
+    let mut check_family = None;
     let (markers, family) = if args.legacy {
         let count = args.count.expect("clap requires --count with --legacy");
         if count == 0 || count > 100_000 {
@@ -115,8 +118,10 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
             (None, true) => (1..=family.len() as u32).collect(),
             (None, false) => bail!("say which markers to print: --ids 1-16 or --all"),
         };
+        let markers = family_markers(&family, &ids, diameter)?;
+        check_family = Some(family);
         (
-            family_markers(&family, &ids, diameter)?,
+            markers,
             Some(FamilyRef {
                 bits,
                 distance: args.distance,
@@ -135,6 +140,21 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         legacy: args.legacy,
     };
     let sheet = layout(&spec)?;
+    if args.no_check {
+        eprintln!("whycode: note: self-check skipped (--no-check): the markers were not read back before writing");
+    } else {
+        let report = check_sheet(&sheet, check_family.as_ref())?;
+        let dpis: Vec<String> = report.resolutions.iter().map(|d| format!("{d}")).collect();
+        let what = if args.legacy {
+            "found in place"
+        } else {
+            "read back as its own ID, upright,"
+        };
+        eprintln!(
+            "whycode: self-check passed: every marker {what} at {} dpi",
+            dpis.join(" and ")
+        );
+    }
     let mut files = encode_pages(&sheet.pages, &output, &name, args.dpi)?;
     files.push((
         output.with_extension("json"),

@@ -4,6 +4,7 @@
 //! markers drawn from [`crate::geometry::Marker::shapes`]); the SVG, PDF and
 //! PNG writers and the rasteriser used for checking all draw those pages.
 
+pub mod check;
 pub mod font;
 pub mod manifest;
 pub mod marker;
@@ -97,6 +98,22 @@ pub fn encode_pages(
             out
         }
     })
+}
+
+/// Fails early, before any rendering, when the output's folder is missing.
+pub fn check_output_dir(path: &Path) -> Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        bail!(
+            "cannot write {}: folder {} does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
+    Ok(())
 }
 
 /// Writes every file atomically; if one fails, the ones already written by
