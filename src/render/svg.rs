@@ -125,6 +125,12 @@ pub fn page_svg(page: &Page, title: &str) -> String {
 
 /// A marker as painted layers: discs as circles, ring runs as arc paths.
 fn marker_group(marker: &Marker, cx: f64, cy: f64) -> Group {
+    let r = marker.outer_radius();
+    // A black run ending on the white disc's rim meets the black disc there;
+    // renderers that paint layers in turn anti-alias both edges and leave a
+    // faint light seam. Running the path a little into the black annulus
+    // (black on black, the same marker) closes it.
+    let seam_overlap = 0.02 * r;
     let mut group = Group::new();
     for shape in marker.shapes() {
         group = match shape {
@@ -143,7 +149,21 @@ fn marker_group(marker: &Marker, cx: f64, cy: f64) -> Group {
                 black,
             } => group.add(
                 Path::new()
-                    .set("d", sector_path(cx, cy, inner, outer, start, end))
+                    .set(
+                        "d",
+                        sector_path(
+                            cx,
+                            cy,
+                            inner,
+                            if black && outer + seam_overlap < r {
+                                outer + seam_overlap
+                            } else {
+                                outer
+                            },
+                            start,
+                            end,
+                        ),
+                    )
                     .set("fill", if black { "#000" } else { "#fff" }),
             ),
         };
