@@ -484,7 +484,7 @@ mod tests {
 
     #[test]
     fn footprints_and_labels_never_overlap() {
-        for d in [8.0, 15.0, 25.0, 40.0, 63.0, 90.0] {
+        for d in [8.0, 12.0, 15.0, 25.0, 30.0, 40.0, 63.0, 90.0] {
             let sheet = layout(&spec(1..=16, d, "a4")).unwrap();
             let f = d / 2.0 * 1.3;
             for page in &sheet.pages {
@@ -495,6 +495,35 @@ mod tests {
                     for b in &centres[i + 1..] {
                         let dist = (a.0 - b.0).hypot(a.1 - b.1);
                         assert!(dist >= 2.0 * f + 3.0 - 1e-6, "d={d} dist={dist}");
+                    }
+                }
+                // Every text box stays on the page inside the margins and
+                // clear of every marker's white margin.
+                for item in &page.items {
+                    let Item::Text {
+                        x,
+                        y,
+                        size_pt,
+                        anchor,
+                        text,
+                        ..
+                    } = item
+                    else {
+                        continue;
+                    };
+                    let w = helvetica_width_mm(text, *size_pt);
+                    let left = match anchor {
+                        Anchor::Start => *x,
+                        Anchor::Middle => x - w / 2.0,
+                        Anchor::End => x - w,
+                    };
+                    let s = size_pt * MM_PER_PT;
+                    let (top, bottom) = (y - CAP_HEIGHT * s, y + DESCENT * s);
+                    assert!(left >= 10.0 - 1e-9 && left + w <= 200.0 + 1e-9, "{text}");
+                    assert!(top >= 10.0 && bottom <= 287.0, "{text}");
+                    for c in &centres {
+                        let clear = point_rect_distance(c.0, c.1, left, left + w, top, bottom);
+                        assert!(clear >= f + 0.5, "d={d}: '{text}' {clear} from a marker");
                     }
                 }
             }
