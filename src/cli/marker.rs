@@ -79,7 +79,8 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
         cross: args.cross,
         cut_guide: args.cut_guide,
         label,
-        label_size_pt: DEFAULT_LABEL_PT,
+        // Larger markers are looked at from further away: grow the label with them.
+        label_size_pt: (diameter / 8.0).clamp(DEFAULT_LABEL_PT, 14.0),
     };
     let page = marker_page(&marker, &options)?;
     let files = encode_pages(std::slice::from_ref(&page), &args.output, &title, args.dpi)?;
