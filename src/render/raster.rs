@@ -18,7 +18,7 @@ use tiny_skia::{
 /// Largest raster side we agree to allocate (a 2 m page at 1200 dpi).
 const MAX_SIDE_PX: u32 = 100_000;
 /// Largest raster area, in pixels (RGBA buffers four bytes each).
-const MAX_AREA_PX: u64 = 600_000_000;
+const MAX_AREA_PX: u64 = 300_000_000;
 
 /// Pixels per millimetre at a resolution in dots per inch.
 pub fn px_per_mm(dpi: f64) -> f64 {
