@@ -171,3 +171,25 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
     );
     Ok(ExitCode::SUCCESS)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::parse_id_list;
+
+    #[test]
+    fn id_lists_take_ranges_and_single_ids() {
+        assert_eq!(
+            parse_id_list("1-5,9, 12-14").unwrap(),
+            [1, 2, 3, 4, 5, 9, 12, 13, 14]
+        );
+        assert!(parse_id_list("5-3")
+            .unwrap_err()
+            .to_string()
+            .contains("backwards"));
+        assert!(parse_id_list("1,x")
+            .unwrap_err()
+            .to_string()
+            .contains("'x'"));
+        assert!(parse_id_list(" , ").is_err());
+    }
+}
