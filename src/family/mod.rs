@@ -2,16 +2,26 @@
 //! distance, numbered exactly as the original WhyCode implementation numbers
 //! them (spec section 3), and the lookup that decodes ring readings into IDs.
 
+mod file;
 pub mod lookup;
 pub mod necklace;
+mod stats;
 
+pub use file::{FAMILY_FILE_FORMAT, FAMILY_FILE_VERSION};
 pub use lookup::{Decoded, Decoder, MatchStatus};
+pub use stats::FamilyStats;
 
-use necklace::{ball_size, for_each_mask_with_ones, is_periodic, mask, rotl};
+use necklace::{ball_size, for_each_mask_with_ones, is_periodic, mask, min_rotation, rotl};
 
 /// Smallest and largest supported code lengths.
 pub const MIN_BITS: u32 = 2;
 pub const MAX_BITS: u32 = 24;
+
+/// The family `whycode ids` shows when asked for none in particular: 8 bits
+/// give 16 IDs at distance 2, which detects every single-bit misreading (the
+/// paper's recommendation together with the Bayesian ID filter).
+pub const DEFAULT_BITS: u32 = 8;
+pub const DEFAULT_DISTANCE: u32 = 2;
 
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
 pub enum FamilyError {
@@ -19,16 +29,40 @@ pub enum FamilyError {
     Bits(u32),
     #[error("distance must be between 1 and the bit count {bits}, got {distance}")]
     Distance { bits: u32, distance: u32 },
+    #[error("a family needs at least one code")]
+    Empty,
+    #[error("ID {id}: code {code} does not fit in {bits} bits")]
+    CodeRange { id: u32, code: u32, bits: u32 },
+    #[error("ID {id}: code {code} is periodic (equal to one of its own rotations)")]
+    Periodic { id: u32, code: u32 },
+    #[error("ID {id}: code {code} is not stored as its smallest rotation {smallest}")]
+    NotSmallestRotation { id: u32, code: u32, smallest: u32 },
+    #[error("IDs {first} and {second} have the same code {code}")]
+    Duplicate { first: u32, second: u32, code: u32 },
+    #[error(
+        "IDs {first} and {second} are at cyclic distance {found}, below the family's distance {distance}"
+    )]
+    TooClose {
+        first: u32,
+        second: u32,
+        found: u32,
+        distance: u32,
+    },
 }
 
 /// A family of marker codes: `codes[k]` is the code of ID k + 1. Every code
-/// is the smallest rotation of an aperiodic necklace. ID 0 is reserved for
-/// "unknown".
+/// is the smallest rotation of an aperiodic necklace, and every two members
+/// are at least `distance` apart under any rotation (checked on
+/// construction, so every `Family` value keeps that promise). ID 0 is
+/// reserved for "unknown".
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Family {
     bits: u32,
     distance: u32,
     codes: Vec<u32>,
+    /// Indices into `codes` in increasing code order, for families whose
+    /// codes are not already sorted (generated families always are).
+    sorted_order: Option<Vec<u32>>,
 }
 
 impl Family {
@@ -36,12 +70,7 @@ impl Family {
     /// order, accepting each aperiodic word whose every rotation keeps at
     /// least `distance` from every accepted code.
     pub fn generate(bits: u32, distance: u32) -> Result<Family, FamilyError> {
-        if !(MIN_BITS..=MAX_BITS).contains(&bits) {
-            return Err(FamilyError::Bits(bits));
-        }
-        if distance == 0 || distance > bits {
-            return Err(FamilyError::Distance { bits, distance });
-        }
+        check_parameters(bits, distance)?;
         let radius = distance - 1;
         let words = 1u64 << bits;
         // Marking the Hamming ball around every rotation of every accepted
@@ -56,22 +85,63 @@ impl Family {
             bits,
             distance,
             codes,
+            sorted_order: None,
         })
     }
 
-    /// A family from an explicit code list (e.g. a loaded family file). The
-    /// codes must be minimal rotations of aperiodic words.
+    /// A family from an explicit code list in ID order (e.g. a loaded family
+    /// file, or a hand-picked subset). Every code must be the smallest
+    /// rotation of an aperiodic `bits`-bit word, and every two codes must be
+    /// at least `distance` apart under any rotation. Costs about as much as
+    /// generating a family of the same size.
     pub fn from_codes(bits: u32, distance: u32, codes: Vec<u32>) -> Result<Family, FamilyError> {
-        if !(MIN_BITS..=MAX_BITS).contains(&bits) {
-            return Err(FamilyError::Bits(bits));
+        check_parameters(bits, distance)?;
+        if codes.is_empty() {
+            return Err(FamilyError::Empty);
         }
-        if distance == 0 || distance > bits {
-            return Err(FamilyError::Distance { bits, distance });
+        for (index, &code) in codes.iter().enumerate() {
+            let id = index as u32 + 1;
+            if code > mask(bits) {
+                return Err(FamilyError::CodeRange { id, code, bits });
+            }
+            if is_periodic(code, bits) {
+                return Err(FamilyError::Periodic { id, code });
+            }
+            let (smallest, _) = min_rotation(code, bits);
+            if smallest != code {
+                return Err(FamilyError::NotSmallestRotation { id, code, smallest });
+            }
+        }
+        let sorted_order = if codes.windows(2).all(|w| w[0] < w[1]) {
+            None
+        } else {
+            let mut order: Vec<u32> = (0..codes.len() as u32).collect();
+            order.sort_by_key(|&k| (codes[k as usize], k));
+            if let Some(w) = order
+                .windows(2)
+                .find(|w| codes[w[0] as usize] == codes[w[1] as usize])
+            {
+                return Err(FamilyError::Duplicate {
+                    first: w[0] + 1,
+                    second: w[1] + 1,
+                    code: codes[w[0] as usize],
+                });
+            }
+            Some(order)
+        };
+        if let Some((i, j, found)) = stats::closest_pair(bits, &codes, 1, distance - 1) {
+            return Err(FamilyError::TooClose {
+                first: i as u32 + 1,
+                second: j as u32 + 1,
+                found,
+                distance,
+            });
         }
         Ok(Family {
             bits,
             distance,
             codes,
+            sorted_order,
         })
     }
 
@@ -107,14 +177,30 @@ impl Family {
 
     /// The ID whose code is exactly `code` (a stored, minimal rotation).
     pub fn id_of(&self, code: u32) -> Option<u32> {
-        // Codes are accepted in increasing order, so the list is sorted.
-        self.codes.binary_search(&code).ok().map(|k| k as u32 + 1)
+        match &self.sorted_order {
+            // Generated codes are accepted in increasing order.
+            None => self.codes.binary_search(&code).ok().map(|k| k as u32 + 1),
+            Some(order) => order
+                .binary_search_by_key(&code, |&k| self.codes[k as usize])
+                .ok()
+                .map(|pos| order[pos] + 1),
+        }
     }
 
     /// The correction radius the family's distance guarantees.
     pub fn default_correction_radius(&self) -> u32 {
         (self.distance - 1) / 2
     }
+}
+
+fn check_parameters(bits: u32, distance: u32) -> Result<(), FamilyError> {
+    if !(MIN_BITS..=MAX_BITS).contains(&bits) {
+        return Err(FamilyError::Bits(bits));
+    }
+    if distance == 0 || distance > bits {
+        return Err(FamilyError::Distance { bits, distance });
+    }
+    Ok(())
 }
 
 fn generate_by_marking(bits: u32, radius: u32) -> Vec<u32> {

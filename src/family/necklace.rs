@@ -112,6 +112,49 @@ pub fn for_each_mask_with_ones(bits: u32, ones: u32, mut f: impl FnMut(u32)) {
     }
 }
 
+/// The n-bit masks with exactly `ones` bits set, in increasing order (an
+/// iterator twin of [`for_each_mask_with_ones`] for searches that stop early).
+pub fn masks_with_ones(bits: u32, ones: u32) -> MasksWithOnes {
+    let limit = 1u64 << bits;
+    let next = if ones > bits {
+        limit
+    } else {
+        (1u64 << ones) - 1
+    };
+    MasksWithOnes {
+        next,
+        limit,
+        done: false,
+    }
+}
+
+/// Iterator returned by [`masks_with_ones`].
+#[derive(Debug, Clone)]
+pub struct MasksWithOnes {
+    next: u64,
+    limit: u64,
+    done: bool,
+}
+
+impl Iterator for MasksWithOnes {
+    type Item = u32;
+
+    fn next(&mut self) -> Option<u32> {
+        if self.done || self.next >= self.limit {
+            return None;
+        }
+        let m = self.next;
+        if m == 0 {
+            self.done = true;
+        } else {
+            let c = m & m.wrapping_neg();
+            let r = m + c;
+            self.next = (((r ^ m) >> 2) / c) | r;
+        }
+        Some(m as u32)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -143,5 +186,13 @@ mod tests {
         assert_eq!(seen.len(), 15);
         assert!(seen.iter().all(|m| m.count_ones() == 2 && *m < 64));
         assert_eq!(ball_size(6, 2), 1 + 6 + 15);
+        for bits in 1..=8 {
+            for ones in 0..=bits + 1 {
+                let mut expected = Vec::new();
+                for_each_mask_with_ones(bits, ones, |m| expected.push(m));
+                let got: Vec<u32> = masks_with_ones(bits, ones).collect();
+                assert_eq!(got, expected, "bits={bits} ones={ones}");
+            }
+        }
     }
 }
