@@ -84,7 +84,7 @@ pub fn photo(manifest: &Manifest, p: &Photo) -> (image::GrayImage, GroundTruth) 
         let entry = manifest.markers.iter().find(|m| m.id == id).unwrap();
         let marker = SheetPage::marker_of(manifest, entry);
         page.blots
-            .push(layout::ring_blot(&marker, entry.x_mm, entry.y_mm, false));
+            .extend(layout::ring_blots(&marker, entry.x_mm, entry.y_mm, false));
     }
     let mut scene = Scene::new(camera);
     scene.objects.push(SceneObject::Page(page));
