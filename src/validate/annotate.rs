@@ -35,9 +35,12 @@ pub fn annotate(image: &GrayImage, report: &PhotoReport) -> RgbImage {
         }
     }
     for m in &report.markers {
-        let Some(e) = m.outline else {
+        let Some(mut e) = m.outline else {
             continue;
         };
+        // Just outside the black disc, so the outline does not hide its edge.
+        e.semi_major += 1.5 * thickness;
+        e.semi_minor += 1.5 * thickness;
         let colour = status_colour(m.status);
         let dashed = matches!(m.status, MarkerStatus::Missing | MarkerStatus::NotInView);
         let steps = ((e.semi_major * 0.8) as usize).clamp(24, 720);
