@@ -11,6 +11,9 @@ use whycode::detect::ring::RingReader;
 use whycode::family::necklace::{is_periodic, mask, rotr};
 use whycode::family::{Decoder, Family, MatchStatus};
 
+/// Sets the viewing conditions of the k-th view.
+type Adjust = dyn Fn(&mut View, u32);
+
 struct Stats {
     read: usize,
     wrong: usize,
@@ -87,7 +90,7 @@ fn yaw_stays_within_a_degree_under_noise_blur_and_tilt() {
     // worst yaw error under 1°.
     for bits in [8u32, 12, 16] {
         let family = Family::generate(bits, 2).unwrap();
-        let cases: [(&str, f64, &dyn Fn(&mut View, u32)); 3] = [
+        let cases: [(&str, f64, &Adjust); 3] = [
             ("noise 8", 50.0, &|v, _| {
                 v.noise = 8.0;
                 v.gaussian_blur = 0.7;

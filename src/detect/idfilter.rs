@@ -89,7 +89,7 @@ impl IdFilter {
 
     /// A reading that named member `id` with confidence `confidence`.
     pub fn observe_member(&mut self, id: u32, confidence: f64) {
-        if id == 0 || id as usize > self.members || !(confidence > 0.0) {
+        if id == 0 || id as usize > self.members || confidence.is_nan() || confidence <= 0.0 {
             return;
         }
         let c = confidence.min(MAX_CONFIDENCE);
@@ -109,7 +109,7 @@ impl IdFilter {
     /// A clear reading of a ring that is no family member, with the
     /// reading's confidence that it is indeed none.
     pub fn observe_non_member(&mut self, confidence: f64) {
-        if !(confidence > 0.0) {
+        if confidence.is_nan() || confidence <= 0.0 {
             return;
         }
         let ratio = 1.0 + (MAX_NON_MEMBER_RATIO - 1.0) * confidence.min(1.0);
