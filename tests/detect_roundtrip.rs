@@ -459,3 +459,52 @@ fn angle_diff(a: f64, b: f64) -> f64 {
     let d = (a - b).rem_euclid(std::f64::consts::TAU);
     d.min(std::f64::consts::TAU - d)
 }
+
+/// Paper 5.1: a per-track Bayesian filter over IDs. One frame in which a
+/// marker reads as another member (here: drawn with another code, the
+/// worst case of a misread) does not change its reported ID.
+#[test]
+fn the_id_filter_outvotes_a_single_misread() {
+    let family = Family::generate(8, 2).unwrap();
+    let camera = Pinhole {
+        f: 2000.0,
+        cx: 300.0,
+        cy: 200.0,
+    };
+    let config = DetectorConfig {
+        family: Some(family.clone()),
+        ..DetectorConfig::default()
+    };
+    let mut tracked = Detector::new(DetectorConfig {
+        tracking: true,
+        ..config.clone()
+    });
+    for frame in 0..9 {
+        let id = if frame == 6 { 9 } else { 4 };
+        let marker = Marker::whycode(8, family.code(id).unwrap(), 100.0);
+        let placement = Placement::at(
+            &camera,
+            marker,
+            (300.0 + frame as f64, 200.0),
+            90.0,
+            0.2,
+            0.0,
+            0.0,
+        );
+        let image = render(
+            600,
+            400,
+            &camera,
+            &[placement],
+            Look {
+                noise: 2.0,
+                ..Look::default()
+            },
+        );
+        let fresh = Detector::new(config.clone()).detect(&image);
+        assert_eq!(fresh[0].id, id, "a fresh detector reads what is drawn");
+        let found = tracked.detect(&image);
+        assert_eq!(found.len(), 1);
+        assert_eq!(found[0].id, 4, "frame {frame}: the track keeps its ID");
+    }
+}

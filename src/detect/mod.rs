@@ -322,7 +322,10 @@ impl Detector {
         // A marker followed from the last frames whose ID has been read
         // the same several times: its known code's edges give the yaw at a
         // fraction of a full read, and confirm the code on the way.
-        let known = c.track.map(|i| self.tracks[i]).filter(|t| t.id_streak >= 3);
+        let known = c
+            .track
+            .map(|i| self.tracks[i].clone())
+            .filter(|t| t.id_streak >= 3);
         let followed_yaw = match (known, &self.config.family) {
             (Some(t), Some(family)) => match (t.code, t.yaw) {
                 (Some(code), Some(yaw)) => {
@@ -332,7 +335,8 @@ impl Detector {
             },
             _ => None,
         };
-        if let Some((t, yaw)) = followed_yaw {
+        if let Some((t, yaw)) = &followed_yaw {
+            let (t, yaw) = (t, *yaw);
             d.id = t.id;
             d.code = t.code;
             d.status = t.status;
@@ -346,6 +350,9 @@ impl Detector {
             d.yaw = reading.yaw;
             d.confidence = reading.confidence;
             axis_point = reading.axis_point;
+        }
+        if let Some(i) = c.track {
+            self.filter_identity(gray, c, i, &mut d, followed_yaw.is_some());
         }
         if let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) {
             d.pose = self.pose(&camera, diameter / 2.0, gray, c, &outer, d.yaw, axis_point);
@@ -371,6 +378,43 @@ impl Detector {
             }
         }
         d
+    }
+
+    /// Tracked markers report what the ID filter believes after this
+    /// frame's reading, not the single reading: one misread (motion blur,
+    /// a glint) does not change a marker's ID, and a marker whose readings
+    /// disagree is "unknown" until they settle.
+    fn filter_identity(
+        &mut self,
+        gray: Gray<'_>,
+        c: &Candidate,
+        index: usize,
+        d: &mut Detection,
+        followed: bool,
+    ) {
+        let Some(family) = &self.config.family else {
+            return;
+        };
+        let track = &mut self.tracks[index];
+        let previous_yaw = track.yaw;
+        let estimate = track.observe_reading(family.len(), d);
+        if followed || estimate.id == d.id {
+            if estimate.id != 0 {
+                d.confidence = estimate.probability;
+            }
+            return;
+        }
+        d.id = estimate.id;
+        d.code = family.code(estimate.id);
+        d.confidence = estimate.probability;
+        // The reading's yaw belongs to the code it read; the believed code's
+        // edges give the yaw instead.
+        d.yaw = match (d.code, previous_yaw) {
+            (Some(code), Some(yaw)) => {
+                rectify::follow_ring(gray, &c.outer, family.bits(), code, yaw)
+            }
+            _ => None,
+        };
     }
 
     /// Position and normal from the outer edge, the two-fold ambiguity
@@ -492,7 +536,7 @@ impl Detector {
     /// (inside the white centre) along the row to the first dark pixel,
     /// which starts the marker's dark segment and the full tests.
     fn follow(&mut self, gray: Gray<'_>, index: usize) -> Option<Candidate> {
-        let track = self.tracks[index];
+        let track = self.tracks[index].clone();
         let (pu, pv) = track.predicted();
         if let Some(c) = self.follow_edges(gray, &track) {
             return Some(c);
@@ -606,7 +650,14 @@ impl Detector {
             });
             match index {
                 Some(i) => {
-                    let mut t = self.tracks[i];
+                    let mut t = self.tracks[i].clone();
+                    if c.track.is_none() {
+                        // Found again by the scan rather than followed: its
+                        // reading has not been filtered yet.
+                        if let Some(family) = &self.config.family {
+                            t.observe_reading(family.len(), d);
+                        }
+                    }
                     t.update(u, v, a, b, threshold);
                     t.observe_appearance(c.outer.angle, c.black, c.white);
                     t.observe_identity(d);
@@ -615,6 +666,9 @@ impl Detector {
                 None => {
                     let mut t = Track::new(u, v, a, b, threshold);
                     t.observe_appearance(c.outer.angle, c.black, c.white);
+                    if let Some(family) = &self.config.family {
+                        t.observe_reading(family.len(), d);
+                    }
                     t.observe_identity(d);
                     next.push(t);
                 }

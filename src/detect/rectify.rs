@@ -137,10 +137,10 @@ fn edge_phase(
 /// Yaw of a tracked marker whose code is known, from its ring sampled along
 /// the image ellipse (exact for an affine view, as the ring reader
 /// assumes): the sector edges the code predicts are looked for near where
-/// last frame's yaw puts them. About 2n·32 samples instead of a full read;
-/// None when fewer than four in five of the edges show up with the right
-/// polarity, i.e. when this may not be the same marker or it cannot be
-/// seen well (then read the ring in full).
+/// last frame's yaw puts them. About 2n·16 samples instead of a full read.
+/// Every edge must show up with the polarity the code gives it (two codes
+/// of a family differ in at least one bit, whose mid-bit edge flips), so
+/// this also confirms the code; None otherwise (then read the ring in full).
 pub fn follow_ring(
     image: Gray<'_>,
     outer: &Ellipse,
@@ -171,7 +171,7 @@ pub fn follow_ring(
         profile.push(sum / scales.len() as f64);
         (st, ct) = (st * step_cos + ct * step_sin, ct * step_cos - st * step_sin);
     }
-    let phi = edge_phase(&profile, bits, code, FOLLOW_SAMPLES_PER_SECTOR, 0.8)?;
+    let phi = edge_phase(&profile, bits, code, FOLLOW_SAMPLES_PER_SECTOR, 1.0)?;
     if phi.abs() > w / 2.0 {
         return None;
     }

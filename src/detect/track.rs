@@ -5,7 +5,7 @@
 //! slowly (x ← 0.99 x + 0.01 x_measured).
 
 /// What the detector remembers about one marker between frames.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Track {
     pub u: f64,
     pub v: f64,
@@ -32,6 +32,9 @@ pub struct Track {
     pub confidence: f64,
     pub status: Option<crate::family::MatchStatus>,
     pub id_streak: u32,
+    /// Belief over the marker's ID from all its ring readings so far
+    /// (paper 5.1), with a family.
+    pub ids: Option<super::idfilter::IdFilter>,
 }
 
 impl Track {
@@ -54,6 +57,7 @@ impl Track {
             confidence: 0.0,
             status: None,
             id_streak: 0,
+            ids: None,
         }
     }
 
@@ -82,6 +86,24 @@ impl Track {
         self.angle = angle;
         self.black = black;
         self.white = white;
+    }
+
+    /// Folds this frame's ring reading into the ID belief; returns the
+    /// belief afterwards.
+    pub fn observe_reading(
+        &mut self,
+        members: usize,
+        d: &super::Detection,
+    ) -> super::idfilter::IdEstimate {
+        let filter = self
+            .ids
+            .get_or_insert_with(|| super::idfilter::IdFilter::new(members));
+        match d.status {
+            Some(crate::family::MatchStatus::Rejected) => filter.observe_non_member(d.confidence),
+            Some(_) if d.id != 0 => filter.observe_member(d.id, d.confidence),
+            _ => {}
+        }
+        filter.estimate()
     }
 
     /// Remembers what the ring said this frame.
