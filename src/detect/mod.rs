@@ -5,9 +5,20 @@
 //! roundness test (eq. 1), flood fill of the white inside from the dark
 //! segment's centre, the area-ratio and concentricity tests, the ellipse
 //! area test (eq. 4) on the whole disc, then a sub-pixel outer ellipse from
-//! edge points. With tracking on, the search of a frame starts where each
-//! marker is predicted to be, so a frame in which every marker is found
-//! again only touches the markers' own pixels.
+//! edge points whose fit must be tight (squares and blobs pass the moment
+//! tests, not this). With a family, the ring is read ([`ring`]); with a
+//! camera and a diameter, the pose comes from the edge points, the normal
+//! ambiguity is settled by the inner white edges and the yaw is measured on
+//! the rectified ring ([`rectify`]).
+//!
+//! With tracking on, each known marker is first followed where it should
+//! be (last position plus velocity) by its edges along a few dozen scan
+//! lines, and, once its ID is settled, its yaw from the known code's
+//! edges; only if that fails does the flood fill run, and only if a marker
+//! is lost is the whole frame scanned (else one band of rows per frame
+//! looks for newcomers). IDs of tracked markers go through a Bayesian
+//! filter ([`idfilter`], paper 5.1); the test tolerances adapt slowly to
+//! what is measured (paper 4.2).
 
 pub mod annotate;
 pub mod ellipse;
