@@ -90,15 +90,14 @@ fn face_on_legacy_markers_from_10_px_up_are_found_with_sub_pixel_centres() {
             "d={:5.1}: centre error {centre_error:.3} px, axis error {size_error:.3} px",
             2.0 * truth.a
         );
-        // Sub-pixel: a tenth of a pixel from 20 px up, a quarter below.
-        let limit = if truth.a >= 10.0 { 0.1 } else { 0.25 };
+        // Sub-pixel at every size: centres within 0.06 px, axes 0.15 px.
         assert!(
-            centre_error < limit,
+            centre_error < 0.06,
             "centre error {centre_error} at d={}",
             2.0 * truth.a
         );
         assert!(
-            size_error < 0.3,
+            size_error < 0.15,
             "axis error {size_error} at d={}",
             2.0 * truth.a
         );
