@@ -185,12 +185,27 @@ impl RingReader {
         let arc = 2.0 * PI * radii[4] * outer.semi_major;
         let per_sector = ((arc * 2.0 / f64::from(2 * bits)).ceil() as usize).clamp(8, 256);
         let count = per_sector * 2 * bits as usize;
-        let frame = EllipseFrame::new(outer);
-        let Some(profile) = sample_profile(image, &frame, &radii, count) else {
+        let mut frame = EllipseFrame::new(outer);
+        let Some(mut profile) = sample_profile(image, &frame, &radii, count) else {
             return RingReading::unreadable(pixels_per_sector);
         };
+        let mut phase = edge_phase(&profile, bits, per_sector);
 
-        let phase = edge_phase(&profile, bits, per_sector);
+        // Under perspective the ring is not centred on the outer ellipse.
+        // Measure the offset from the ring's own radial edges and read
+        // again centred on it when it matters (a quarter pixel).
+        let mid_level = 0.5 * (black_level + white_level);
+        if let Some(shift) = perspective_shift(image, &frame, phase, bits, mid_level) {
+            let ring_shift = (1.0 - mid_ratio * mid_ratio) * shift.0.hypot(shift.1);
+            if ring_shift > 0.25 && ring_shift < 0.2 * outer.semi_minor {
+                let shifted = EllipseFrame { shift, ..frame };
+                if let Some(p) = sample_profile(image, &shifted, &radii, count) {
+                    profile = p;
+                    phase = edge_phase(&profile, bits, per_sector);
+                    frame = shifted;
+                }
+            }
+        }
         let halves_a = half_sector_means(&profile, bits, phase);
         let halves_b = half_sector_means(&profile, bits, phase + sector);
         let diffs_a = bit_differences(&halves_a);
@@ -287,8 +302,11 @@ impl RingReader {
                 }
                 reading.id = decoded.id;
                 let x_axis_t = start + 2.0 * sector * f64::from(decoded.rotation);
+                // The rim point on the outer ellipse, seen from the
+                // estimated projection of the marker centre.
                 let (du, dv) = frame.offset(x_axis_t, 1.0);
-                reading.yaw = Some(dv.atan2(du));
+                let (cx, cy) = frame.projected_centre();
+                reading.yaw = Some((outer.v + dv - cy).atan2(outer.u + du - cx));
                 reading.axis_point = Some((outer.u + du, outer.v + dv));
             }
             MatchStatus::Rejected => reading.confidence = quality,
@@ -382,10 +400,15 @@ fn logistic(x: f64) -> f64 {
 
 /// The ellipse's visually counter-clockwise parametrisation: with image v
 /// pointing down, the minor-axis direction is the major one turned by -90°.
+#[derive(Clone, Copy)]
 struct EllipseFrame {
     centre: (f64, f64),
     major: (f64, f64),
     minor: (f64, f64),
+    /// Estimated projection of the marker centre minus the outer ellipse's
+    /// centre, pixels. A concentric circle of radius ρ·R appears centred
+    /// at `centre + (1 - ρ²)·shift` (perspective offsets grow as ρ²).
+    shift: (f64, f64),
 }
 
 impl EllipseFrame {
@@ -395,7 +418,21 @@ impl EllipseFrame {
             centre: (e.u, e.v),
             major: (c * e.semi_major, s * e.semi_major),
             minor: (s * e.semi_minor, -c * e.semi_minor),
+            shift: (0.0, 0.0),
         }
+    }
+
+    /// Centre of the image of the concentric circle of radius `rho`·R.
+    fn centre_at(&self, rho: f64) -> (f64, f64) {
+        let k = 1.0 - rho * rho;
+        (
+            self.centre.0 + k * self.shift.0,
+            self.centre.1 + k * self.shift.1,
+        )
+    }
+
+    fn projected_centre(&self) -> (f64, f64) {
+        self.centre_at(0.0)
     }
 
     /// Offset from the centre of the point at parameter `t`, radius ratio `rho`.
@@ -423,8 +460,9 @@ fn sample_profile(
         let (dx, dy) = frame.offset(2.0 * PI * j as f64 / count as f64, 1.0);
         let mut sum = 0.0;
         for &rho in radii {
-            let x = frame.centre.0 + rho * dx;
-            let y = frame.centre.1 + rho * dy;
+            let (cx, cy) = frame.centre_at(rho);
+            let x = cx + rho * dx;
+            let y = cy + rho * dy;
             if !(0.0..=max_x).contains(&x) || !(0.0..=max_y).contains(&y) {
                 return None;
             }
@@ -433,6 +471,115 @@ fn sample_profile(
         profile.push(sum / radii.len() as f64);
     }
     Some(profile)
+}
+
+/// Offset (pixels) of the projected marker centre from the outer ellipse's
+/// centre, from where rays through the middle of each half-sector cross
+/// from white to black: at 0.343 R in black sectors, at 0.6 R in white
+/// ones. In the ellipse's unit-circle frame a circle of radius ρ shifted by
+/// (1 - ρ²)·D is crossed at ρ + (1 - ρ²)·D·u(t); a scale and a constant
+/// term absorb ellipse size errors and blur. `None` when the rays do not
+/// show the ring's structure.
+fn perspective_shift(
+    image: &GrayImage,
+    frame: &EllipseFrame,
+    phase: f64,
+    bits: u32,
+    mid_level: f64,
+) -> Option<(f64, f64)> {
+    let (w, h) = image.dimensions();
+    let (max_x, max_y) = (f64::from(w) - 1.0, f64::from(h) - 1.0);
+    let sector = PI / f64::from(bits);
+    let major = frame.major.0.hypot(frame.major.1);
+    let step = 0.25 / major.max(1.0);
+    let (start, end) = (0.25, 0.8);
+    // Normal equations of e = (1-ρ²)(Dx cos t + Dy sin t) + s·ρ + b.
+    let mut ata = [[0.0f64; 4]; 4];
+    let mut atb = [0.0f64; 4];
+    let mut used = [0usize; 2];
+    for k in 0..2 * bits {
+        for offset in [0.3, 0.5, 0.7] {
+            let t = phase + (f64::from(k) + offset) * sector;
+            let (dx, dy) = frame.offset(t, 1.0);
+            let at = |rho: f64| {
+                let x = frame.centre.0 + rho * dx;
+                let y = frame.centre.1 + rho * dy;
+                ((0.0..=max_x).contains(&x) && (0.0..=max_y).contains(&y))
+                    .then(|| bilinear(image, x, y))
+            };
+            let Some(mut previous) = at(start) else {
+                return None;
+            };
+            if previous <= mid_level {
+                continue;
+            }
+            let mut rho = start;
+            let mut crossing = None;
+            while rho < end {
+                let next_rho = rho + step;
+                let next = at(next_rho)?;
+                if next < mid_level {
+                    let f = (previous - mid_level) / (previous - next);
+                    crossing = Some(rho + f * step);
+                    break;
+                }
+                previous = next;
+                rho = next_rho;
+            }
+            let Some(rho_c) = crossing else { continue };
+            let middle = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
+            let (expected, class) = if rho_c < middle {
+                (RING_INNER_RATIO, 0)
+            } else {
+                (WHYCODE_WHITE_RATIO, 1)
+            };
+            used[class] += 1;
+            let k1 = 1.0 - expected * expected;
+            let row = [k1 * t.cos(), k1 * t.sin(), expected, 1.0];
+            let e = rho_c - expected;
+            for i in 0..4 {
+                for j in 0..4 {
+                    ata[i][j] += row[i] * row[j];
+                }
+                atb[i] += row[i] * e;
+            }
+        }
+    }
+    if used[0] < 3 || used[1] < 3 {
+        return None;
+    }
+    let solution = solve4(ata, atb)?;
+    let (ux, uy) = (solution[0], solution[1]);
+    let shift = (
+        ux * frame.major.0 + uy * frame.minor.0,
+        ux * frame.major.1 + uy * frame.minor.1,
+    );
+    (shift.0.is_finite() && shift.1.is_finite()).then_some(shift)
+}
+
+/// Solves a 4x4 linear system by Gaussian elimination with pivoting.
+fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
+    for col in 0..4 {
+        let pivot = (col..4).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[pivot][col].abs() < 1e-12 {
+            return None;
+        }
+        a.swap(col, pivot);
+        b.swap(col, pivot);
+        for row in col + 1..4 {
+            let f = a[row][col] / a[col][col];
+            for k in col..4 {
+                a[row][k] -= f * a[col][k];
+            }
+            b[row] -= f * b[col];
+        }
+    }
+    let mut x = [0.0; 4];
+    for row in (0..4).rev() {
+        let sum: f64 = (row + 1..4).map(|k| a[row][k] * x[k]).sum();
+        x[row] = (b[row] - sum) / a[row][row];
+    }
+    Some(x)
 }
 
 /// Bilinear interpolation with pixel centres at integer coordinates; the
