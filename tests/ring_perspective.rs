@@ -2,13 +2,12 @@
 //! ellipse is the exact projection of the rim, the ring is read with
 //! `RingReader`, and the yaw is compared with the ground truth.
 //!
-//! The reader works on the ellipse's affine parametrisation, so under
-//! strong perspective its sector spacing and its centre (the ellipse
-//! centre, not the projected marker centre) are slightly off. Measured
-//! here and bounded: the +x axis point on the rim stays within a small
-//! fraction of the radius of its true projection, and the yaw measured from
-//! the ellipse centre within 1.5° of the true image direction even for a
-//! marker filling a large part of a 90° field of view at 60° tilt.
+//! Markers 60 mm across at 20-35 cm from a 90° camera, tilted up to 60°
+//! (plus pan): perspective is strong, and a reader that treats the ellipse
+//! as an affine image of the circle is off by 2-6° in yaw here. Thresholds:
+//! at least 95 % read, no wrong ID, +x axis direction within 0.5° in the
+//! marker's own plane (mean under 0.15°), image yaw within 1°, and the +x
+//! rim point within 1 % of the radius of its true projection.
 
 use nalgebra::Vector3;
 use whycode::camera::Camera;
@@ -56,7 +55,7 @@ fn yaw_under_perspective_stays_within_stated_bounds() {
                 (tilt_deg * 0.3f64).to_radians(),
                 roll,
             );
-            let mut scene = Scene::new(camera.clone());
+            let mut scene = Scene::new(camera);
             scene
                 .objects
                 .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
@@ -93,7 +92,6 @@ fn yaw_under_perspective_stays_within_stated_bounds() {
             let local = placement.rotation.transpose() * (hit - placement.position);
             let plane_err = local.y.atan2(local.x).abs().to_degrees();
             worst_plane = worst_plane.max(plane_err);
-            println!("case {k}/{r}: image yaw error {yaw_err:.2}°, in-plane {plane_err:.2}°, axis {axis_err:.3} R");
             sum_plane += plane_err;
             worst_yaw = worst_yaw.max(yaw_err);
             worst_axis = worst_axis.max(axis_err);
@@ -101,7 +99,7 @@ fn yaw_under_perspective_stays_within_stated_bounds() {
             count += 1;
         }
     }
-    assert!(count * 10 >= total * 9, "read {count} of {total}");
+    assert!(count * 20 >= total * 19, "read {count} of {total}");
     println!(
         "in the marker plane: +x axis error mean {:.3}° worst {:.3}°",
         sum_plane / count as f64,
@@ -113,7 +111,8 @@ fn yaw_under_perspective_stays_within_stated_bounds() {
         worst_yaw,
         worst_axis
     );
-    assert!(worst_plane < 7.0, "{worst_plane}");
-    assert!(sum_plane / (count as f64) < 3.5);
-    assert!(worst_axis < 0.08, "{worst_axis}");
+    assert!(worst_plane < 0.5, "{worst_plane}");
+    assert!(sum_plane / (count as f64) < 0.15);
+    assert!(worst_yaw < 1.0, "{worst_yaw}");
+    assert!(worst_axis < 0.01, "{worst_axis}");
 }

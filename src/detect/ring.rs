@@ -191,21 +191,31 @@ impl RingReader {
         };
         let mut phase = edge_phase(&profile, bits, per_sector);
 
-        // Under perspective the ring is not centred on the outer ellipse.
-        // Measure the offset from the ring's own radial edges and read
-        // again centred on it when it matters (a quarter pixel).
+        // Under perspective the ring is neither centred on the outer ellipse
+        // nor evenly spaced in its parameter. Locate the projected marker
+        // centre from the ring's own radial edges and read again through the
+        // exact rectification when it moves by more than a tenth of a pixel.
         let mid_level = 0.5 * (black_level + white_level);
-        if let Some(shift) = perspective_shift(image, &frame, phase, bits, mid_level) {
-            let ring_shift = (1.0 - mid_ratio * mid_ratio) * shift.0.hypot(shift.1);
-            if ring_shift > 0.25 && ring_shift < 0.2 * outer.semi_minor {
-                let shifted = EllipseFrame { shift, ..frame };
-                if let Some(p) = sample_profile(image, &shifted, &radii, count) {
-                    profile = p;
-                    phase = edge_phase(&profile, bits, per_sector);
-                    frame = shifted;
-                }
+        for _ in 0..3 {
+            let Some(p) = refined_centre(image, &frame, phase, bits, mid_level) else {
+                break;
+            };
+            let moved = (p.0 - frame.projected_centre.0).hypot(p.1 - frame.projected_centre.1);
+            let offset = (p.0 - outer.u).hypot(p.1 - outer.v);
+            if moved < 0.1 || offset > 0.3 * outer.semi_minor {
+                break;
             }
+            let Some(rectified) = EllipseFrame::with_projected_centre(outer, p) else {
+                break;
+            };
+            let Some(resampled) = sample_profile(image, &rectified, &radii, count) else {
+                break;
+            };
+            profile = resampled;
+            phase = edge_phase(&profile, bits, per_sector);
+            frame = rectified;
         }
+
         let halves_a = half_sector_means(&profile, bits, phase);
         let halves_b = half_sector_means(&profile, bits, phase + sector);
         let diffs_a = bit_differences(&halves_a);
@@ -304,10 +314,10 @@ impl RingReader {
                 let x_axis_t = start + 2.0 * sector * f64::from(decoded.rotation);
                 // The rim point on the outer ellipse, seen from the
                 // estimated projection of the marker centre.
-                let (du, dv) = frame.offset(x_axis_t, 1.0);
-                let (cx, cy) = frame.projected_centre();
-                reading.yaw = Some((outer.v + dv - cy).atan2(outer.u + du - cx));
-                reading.axis_point = Some((outer.u + du, outer.v + dv));
+                let (ax, ay) = frame.point(x_axis_t, 1.0);
+                let (cx, cy) = frame.projected_centre;
+                reading.yaw = Some((ay - cy).atan2(ax - cx));
+                reading.axis_point = Some((ax, ay));
             }
             MatchStatus::Rejected => reading.confidence = quality,
             MatchStatus::Ambiguous => reading.confidence = 0.0,
@@ -398,49 +408,157 @@ fn logistic(x: f64) -> f64 {
     1.0 / (1.0 + (-x).exp())
 }
 
-/// The ellipse's visually counter-clockwise parametrisation: with image v
-/// pointing down, the minor-axis direction is the major one turned by -90°.
-#[derive(Clone, Copy)]
+/// Where marker angle t (up to the unknown in-plane rotation) and radius
+/// ρ·R land in the image. The outer ellipse alone fixes the map only up to
+/// perspective; with the projection `p` of the marker centre it is exact:
+/// the polar of `p` with respect to the ellipse is the image of the line at
+/// infinity, and the homography sending it back to infinity leaves an
+/// ellipse that is an affine image of the circle, centred on the image of
+/// `p`. Without an estimate of `p` (p = ellipse centre) this is the plain
+/// affine parametrisation. With image v pointing down, the minor-axis
+/// direction is the major one turned by -90°, which makes t run visually
+/// counter-clockwise.
+#[derive(Debug, Clone, Copy)]
 struct EllipseFrame {
+    /// Ellipse centre and scale (the semi-major axis) of the normalised
+    /// coordinates the homography works in.
     centre: (f64, f64),
+    scale: f64,
+    /// The homography y -> y / (1 - m·y) back to normalised image coordinates.
+    m: (f64, f64),
+    /// The rectified ellipse: centre and (scaled) axis vectors.
+    rectified_centre: (f64, f64),
     major: (f64, f64),
     minor: (f64, f64),
-    /// Estimated projection of the marker centre minus the outer ellipse's
-    /// centre, pixels. A concentric circle of radius ρ·R appears centred
-    /// at `centre + (1 - ρ²)·shift` (perspective offsets grow as ρ²).
-    shift: (f64, f64),
+    /// Projection of the marker centre, pixels.
+    projected_centre: (f64, f64),
 }
 
 impl EllipseFrame {
     fn new(e: &ImageEllipse) -> EllipseFrame {
         let (s, c) = e.angle.sin_cos();
+        let k = e.semi_minor / e.semi_major;
         EllipseFrame {
             centre: (e.u, e.v),
-            major: (c * e.semi_major, s * e.semi_major),
-            minor: (s * e.semi_minor, -c * e.semi_minor),
-            shift: (0.0, 0.0),
+            scale: e.semi_major,
+            m: (0.0, 0.0),
+            rectified_centre: (0.0, 0.0),
+            major: (c, s),
+            minor: (s * k, -c * k),
+            projected_centre: (e.u, e.v),
         }
     }
 
-    /// Centre of the image of the concentric circle of radius `rho`·R.
-    fn centre_at(&self, rho: f64) -> (f64, f64) {
-        let k = 1.0 - rho * rho;
+    /// The frame in which `p` is the projection of the marker centre;
+    /// `None` when that is inconsistent with the ellipse (p outside it, or
+    /// a degenerate rectification).
+    fn with_projected_centre(e: &ImageEllipse, p: (f64, f64)) -> Option<EllipseFrame> {
+        let a = e.semi_major;
+        let (s, c) = e.angle.sin_cos();
+        let q = 1.0 / (e.semi_minor / a).powi(2);
+        // Normalised conic x^T M x = 1, M = R diag(1, q) R^T.
+        let mm = [
+            [c * c + q * s * s, c * s * (1.0 - q)],
+            [c * s * (1.0 - q), s * s + q * c * c],
+        ];
+        let pn = ((p.0 - e.u) / a, (p.1 - e.v) / a);
+        if pn.0 * (mm[0][0] * pn.0 + mm[0][1] * pn.1) + pn.1 * (mm[1][0] * pn.0 + mm[1][1] * pn.1)
+            >= 0.25
+        {
+            return None;
+        }
+        // Polar line of p: (M p, -1) ~ (-M p, 1) =: (m, 1).
+        let m = (
+            -(mm[0][0] * pn.0 + mm[0][1] * pn.1),
+            -(mm[1][0] * pn.0 + mm[1][1] * pn.1),
+        );
+        // Conic in rectified coordinates: C' = H^-T C H^-1 with
+        // H^-1 = [[1,0,0],[0,1,0],[-m1,-m2,1]], C = [[M,0],[0,-1]].
+        let c3 = [
+            [mm[0][0], mm[0][1], 0.0],
+            [mm[1][0], mm[1][1], 0.0],
+            [0.0, 0.0, -1.0],
+        ];
+        let hinv = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-m.0, -m.1, 1.0]];
+        let mut tmp = [[0.0; 3]; 3];
+        let mut cr = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                tmp[i][j] = (0..3).map(|k| c3[i][k] * hinv[k][j]).sum();
+            }
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                cr[i][j] = (0..3).map(|k| hinv[k][i] * tmp[k][j]).sum();
+            }
+        }
+        let (a11, a12, a22) = (cr[0][0], cr[0][1], cr[1][1]);
+        let det = a11 * a22 - a12 * a12;
+        if det.is_nan() || det <= 1e-12 || a11 <= 0.0 {
+            return None;
+        }
+        let g = (cr[0][2], cr[1][2]);
+        let centre = (
+            -(a22 * g.0 - a12 * g.1) / det,
+            -(-a12 * g.0 + a11 * g.1) / det,
+        );
+        let level = -(cr[2][2] + g.0 * centre.0 + g.1 * centre.1);
+        if level.is_nan() || level <= 0.0 {
+            return None;
+        }
+        // Axes of (x-c)^T A (x-c) = level.
+        let mean = 0.5 * (a11 + a22);
+        let root = (0.25 * (a11 - a22).powi(2) + a12 * a12).sqrt();
+        let (small, large) = (mean - root, mean + root);
+        if small <= 0.0 {
+            return None;
+        }
+        let angle = 0.5 * (-2.0 * a12).atan2(a22 - a11);
+        let (major_len, minor_len) = ((level / small).sqrt(), (level / large).sqrt());
+        let (s2, c2) = angle.sin_cos();
+        let frame = EllipseFrame {
+            centre: (e.u, e.v),
+            scale: a,
+            m,
+            rectified_centre: centre,
+            major: (c2 * major_len, s2 * major_len),
+            minor: (s2 * minor_len, -c2 * minor_len),
+            projected_centre: p,
+        };
+        // The rectified centre must map back onto p, and the marker must
+        // stay on the near side of the vanishing line.
+        let back = frame.point(0.0, 0.0);
+        let near = (0..16).all(|k| {
+            let (sn, cs) = (f64::from(k) * PI / 8.0).sin_cos();
+            let y = (
+                centre.0 + cs * frame.major.0 + sn * frame.minor.0,
+                centre.1 + cs * frame.major.1 + sn * frame.minor.1,
+            );
+            1.0 - m.0 * y.0 - m.1 * y.1 > 0.2
+        });
+        ((back.0 - p.0).hypot(back.1 - p.1) < 0.01 * a && near).then_some(frame)
+    }
+
+    /// Image point of the rectified unit-circle coordinates `d`.
+    fn unit_point(&self, d: (f64, f64)) -> (f64, f64) {
+        let y0 = self.rectified_centre.0 + d.0 * self.major.0 + d.1 * self.minor.0;
+        let y1 = self.rectified_centre.1 + d.0 * self.major.1 + d.1 * self.minor.1;
+        let w = 1.0 - self.m.0 * y0 - self.m.1 * y1;
         (
-            self.centre.0 + k * self.shift.0,
-            self.centre.1 + k * self.shift.1,
+            self.centre.0 + self.scale * y0 / w,
+            self.centre.1 + self.scale * y1 / w,
         )
     }
 
-    fn projected_centre(&self) -> (f64, f64) {
-        self.centre_at(0.0)
-    }
-
-    /// Offset from the centre of the point at parameter `t`, radius ratio `rho`.
-    fn offset(&self, t: f64, rho: f64) -> (f64, f64) {
+    /// Image point of parameter `t` on the concentric circle of radius `rho`·R.
+    fn point(&self, t: f64, rho: f64) -> (f64, f64) {
         let (s, c) = t.sin_cos();
+        let y0 = self.rectified_centre.0 + rho * (c * self.major.0 + s * self.minor.0);
+        let y1 = self.rectified_centre.1 + rho * (c * self.major.1 + s * self.minor.1);
+        let w = 1.0 - self.m.0 * y0 - self.m.1 * y1;
         (
-            rho * (c * self.major.0 + s * self.minor.0),
-            rho * (c * self.major.1 + s * self.minor.1),
+            self.centre.0 + self.scale * y0 / w,
+            self.centre.1 + self.scale * y1 / w,
         )
     }
 }
@@ -457,12 +575,10 @@ fn sample_profile(
     let (max_x, max_y) = (f64::from(w) - 1.0, f64::from(h) - 1.0);
     let mut profile = Vec::with_capacity(count);
     for j in 0..count {
-        let (dx, dy) = frame.offset(2.0 * PI * j as f64 / count as f64, 1.0);
+        let t = 2.0 * PI * j as f64 / count as f64;
         let mut sum = 0.0;
         for &rho in radii {
-            let (cx, cy) = frame.centre_at(rho);
-            let x = cx + rho * dx;
-            let y = cy + rho * dy;
+            let (x, y) = frame.point(t, rho);
             if !(0.0..=max_x).contains(&x) || !(0.0..=max_y).contains(&y) {
                 return None;
             }
@@ -473,14 +589,15 @@ fn sample_profile(
     Some(profile)
 }
 
-/// Offset (pixels) of the projected marker centre from the outer ellipse's
-/// centre, from where rays through the middle of each half-sector cross
-/// from white to black: at 0.343 R in black sectors, at 0.6 R in white
-/// ones. In the ellipse's unit-circle frame a circle of radius ρ shifted by
-/// (1 - ρ²)·D is crossed at ρ + (1 - ρ²)·D·u(t); a scale and a constant
-/// term absorb ellipse size errors and blur. `None` when the rays do not
-/// show the ring's structure.
-fn perspective_shift(
+/// A better estimate of the projected marker centre (pixels), from where
+/// rays through the middle of each half-sector cross from white to black:
+/// at 0.343 R in black sectors, at 0.6 R in white ones. In the frame's
+/// rectified unit-circle coordinates, if the true centre sits at D, the
+/// circle of radius ρ appears shifted by (1 - ρ²)·D (to first order, the
+/// way perspective shifts concentric circles), so it is crossed at
+/// ρ + (1 - ρ²)·D·u(t); a scale and a constant term absorb ellipse size
+/// errors and blur. `None` when the rays do not show the ring's structure.
+fn refined_centre(
     image: &GrayImage,
     frame: &EllipseFrame,
     phase: f64,
@@ -490,7 +607,7 @@ fn perspective_shift(
     let (w, h) = image.dimensions();
     let (max_x, max_y) = (f64::from(w) - 1.0, f64::from(h) - 1.0);
     let sector = PI / f64::from(bits);
-    let major = frame.major.0.hypot(frame.major.1);
+    let major = frame.scale * frame.major.0.hypot(frame.major.1);
     let step = 0.25 / major.max(1.0);
     let (start, end) = (0.25, 0.8);
     // Normal equations of e = (1-ρ²)(Dx cos t + Dy sin t) + s·ρ + b.
@@ -500,16 +617,12 @@ fn perspective_shift(
     for k in 0..2 * bits {
         for offset in [0.3, 0.5, 0.7] {
             let t = phase + (f64::from(k) + offset) * sector;
-            let (dx, dy) = frame.offset(t, 1.0);
             let at = |rho: f64| {
-                let x = frame.centre.0 + rho * dx;
-                let y = frame.centre.1 + rho * dy;
+                let (x, y) = frame.point(t, rho);
                 ((0.0..=max_x).contains(&x) && (0.0..=max_y).contains(&y))
                     .then(|| bilinear(image, x, y))
             };
-            let Some(mut previous) = at(start) else {
-                return None;
-            };
+            let mut previous = at(start)?;
             if previous <= mid_level {
                 continue;
             }
@@ -550,11 +663,8 @@ fn perspective_shift(
     }
     let solution = solve4(ata, atb)?;
     let (ux, uy) = (solution[0], solution[1]);
-    let shift = (
-        ux * frame.major.0 + uy * frame.minor.0,
-        ux * frame.major.1 + uy * frame.minor.1,
-    );
-    (shift.0.is_finite() && shift.1.is_finite()).then_some(shift)
+    let centre = frame.unit_point((ux, uy));
+    (centre.0.is_finite() && centre.1.is_finite()).then_some(centre)
 }
 
 /// Solves a 4x4 linear system by Gaussian elimination with pivoting.
@@ -566,10 +676,11 @@ fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
         }
         a.swap(col, pivot);
         b.swap(col, pivot);
+        let pivot_row = a[col];
         for row in col + 1..4 {
-            let f = a[row][col] / a[col][col];
-            for k in col..4 {
-                a[row][k] -= f * a[col][k];
+            let f = a[row][col] / pivot_row[col];
+            for (x, p) in a[row].iter_mut().zip(pivot_row).skip(col) {
+                *x -= f * p;
             }
             b[row] -= f * b[col];
         }
