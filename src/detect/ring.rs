@@ -23,11 +23,18 @@
 //!    family's distance guarantees a unique answer, otherwise ID 0.
 //! 5. Decoding through [`Decoder`], yaw from the rotation and the phase.
 //!
-//! Under perspective the map from marker angle to `t` is projective rather
-//! than affine; at 60° tilt and a marker spanning a tenth of the field of
-//! view the resulting yaw error stays well below a degree, and
-//! [`RingReading::axis_point`] lets the pose stage use the measured
-//! direction of the +x axis rather than the ellipse-centred yaw.
+//! Perspective: the outer ellipse alone determines the marker-to-image map
+//! only up to perspective, under which the ring is neither centred on the
+//! ellipse nor evenly spaced in its parameter (2-6° of yaw error for a
+//! close, tilted marker in a wide-angle view). The reader locates the
+//! projected marker centre from the ring's radial edges (a white sector
+//! ends at 0.6 R, a black one starts at 0.343 R; perspective shifts
+//! concentric circles by amounts growing as ρ²), then rectifies exactly:
+//! the polar line of that centre is the image of the line at infinity. Yaw
+//! is the image direction from the projected centre to the rim point on
+//! the +x axis ([`RingReading::axis_point`], for the pose stage). Measured:
+//! 0.07° mean, 0.33° worst in the marker plane, 60 mm markers at 20-35 cm
+//! from a 90° camera at up to 60° tilt (tests/ring_perspective.rs).
 
 use crate::family::{Decoded, Decoder, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
@@ -93,6 +100,10 @@ pub struct RingReading {
     /// Image point of the marker-frame point (R, 0) (on the outer ellipse
     /// in the direction of the +x axis), for the pose stage.
     pub axis_point: Option<(f64, f64)>,
+    /// Projection of the marker centre as the ring shows it (under
+    /// perspective it differs from the outer ellipse's centre); `None`
+    /// when the ring was not sampled.
+    pub projected_centre: Option<(f64, f64)>,
 }
 
 impl RingReading {
@@ -108,6 +119,7 @@ impl RingReading {
             erasures: 0,
             pixels_per_sector,
             axis_point: None,
+            projected_centre: None,
         }
     }
 }
@@ -233,6 +245,7 @@ impl RingReader {
         let mut reading = RingReading {
             edge_strength,
             pixels_per_sector,
+            projected_centre: Some(frame.projected_centre),
             ..RingReading::unreadable(pixels_per_sector)
         };
         // Only a word with all bits equal reads alike under both pairings,
