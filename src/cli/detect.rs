@@ -119,10 +119,11 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
         Some(Family::generate(bits, distance).context("--bits/--distance")?)
     };
-    let _camera = args.camera.as_deref().map(Camera::load).transpose()?;
+    let camera = args.camera.as_deref().map(Camera::load).transpose()?;
     let mut config = DetectorConfig {
         family,
         diameter_m: args.diameter.map(Length::m),
+        camera,
         ..DetectorConfig::default()
     };
     if let Some(n) = args.max_markers {
@@ -299,7 +300,7 @@ fn frame_json(frame: &Frame) -> serde_json::Value {
         .markers
         .iter()
         .map(|m| {
-            let pose = pose_of(m);
+            let pose = m.pose.as_ref();
             serde_json::json!({
                 "id": m.id,
                 "code": m.code,
@@ -331,7 +332,7 @@ fn write_csv(out: &mut impl Write, frame: &Frame) -> Result<()> {
     let opt = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
     let image = csv_field(&frame.image.display().to_string());
     for m in &frame.markers {
-        let pose = pose_of(m);
+        let pose = m.pose.as_ref();
         writeln!(
             out,
             "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
@@ -382,7 +383,7 @@ fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Resul
         }
         return Ok(());
     }
-    let has_pose = frame.markers.iter().any(|m| pose_of(m).is_some());
+    let has_pose = frame.markers.iter().any(|m| m.pose.as_ref().is_some());
     write!(
         out,
         "{:>5} {:>6} {:>9} {:>9} {:>8} {:>15} {:>5}",
@@ -408,7 +409,7 @@ fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Resul
             "{id:>5} {code:>6} {:>9.2} {:>9.2} {yaw:>8} {axes:>15} {:>5.2}",
             m.u, m.v, m.confidence
         )?;
-        if let Some(p) = pose_of(m) {
+        if let Some(p) = m.pose.as_ref() {
             write!(
                 out,
                 " {:>26}",
@@ -424,9 +425,4 @@ fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Resul
         writeln!(out)?;
     }
     Ok(())
-}
-
-// Interim until the detector's pose output is merged.
-fn pose_of(_m: &Detection) -> Option<&crate::pose::Pose> {
-    None
 }
