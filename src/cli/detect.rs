@@ -295,35 +295,66 @@ fn round(x: f64, decimals: i32) -> f64 {
     (x * k).round() / k
 }
 
-fn frame_json(frame: &Frame) -> serde_json::Value {
-    let markers: Vec<serde_json::Value> = frame
+/// JSON records, fields in the documented order.
+#[derive(serde::Serialize)]
+struct FrameRecord {
+    image: String,
+    width: u32,
+    height: u32,
+    elapsed_ms: f64,
+    markers: Vec<MarkerRecord>,
+}
+
+#[derive(serde::Serialize)]
+struct MarkerRecord {
+    id: u32,
+    code: Option<u32>,
+    u: f64,
+    v: f64,
+    yaw: Option<f64>,
+    axes: [f64; 2],
+    confidence: f64,
+    position: Option<[f64; 3]>,
+    rotation: Option<[[f64; 3]; 3]>,
+    quaternion: Option<[f64; 4]>,
+}
+
+fn frame_json(frame: &Frame) -> String {
+    let markers = frame
         .markers
         .iter()
         .map(|m| {
             let pose = m.pose.as_ref();
-            serde_json::json!({
-                "id": m.id,
-                "code": m.code,
-                "u": round(m.u, 3),
-                "v": round(m.v, 3),
-                "yaw": m.yaw.map(|y| round(y, 5)),
-                "axes": [round(m.axes[0], 3), round(m.axes[1], 3)],
-                "confidence": round(m.confidence, 3),
-                "position": pose.map(|p| [round(p.position.x, 5), round(p.position.y, 5), round(p.position.z, 5)]),
-                "rotation": pose.map(|p| (0..3)
-                    .map(|r| (0..3).map(|c| round(p.rotation[(r, c)], 6)).collect::<Vec<_>>())
-                    .collect::<Vec<_>>()),
-                "quaternion": pose.map(|p| p.quaternion.map(|q| round(q, 6))),
-            })
+            MarkerRecord {
+                id: m.id,
+                code: m.code,
+                u: round(m.u, 3),
+                v: round(m.v, 3),
+                yaw: m.yaw.map(|y| round(y, 5)),
+                axes: [round(m.axes[0], 3), round(m.axes[1], 3)],
+                confidence: round(m.confidence, 3),
+                position: pose.map(|p| {
+                    [
+                        round(p.position.x, 5),
+                        round(p.position.y, 5),
+                        round(p.position.z, 5),
+                    ]
+                }),
+                rotation: pose.map(|p| {
+                    std::array::from_fn(|r| std::array::from_fn(|c| round(p.rotation[(r, c)], 6)))
+                }),
+                quaternion: pose.map(|p| p.quaternion.map(|q| round(q, 6))),
+            }
         })
         .collect();
-    serde_json::json!({
-        "image": frame.image.display().to_string(),
-        "width": frame.width,
-        "height": frame.height,
-        "elapsed_ms": round(frame.elapsed_ms, 3),
-        "markers": markers,
-    })
+    let record = FrameRecord {
+        image: frame.image.display().to_string(),
+        width: frame.width,
+        height: frame.height,
+        elapsed_ms: round(frame.elapsed_ms, 3),
+        markers,
+    };
+    serde_json::to_string(&record).expect("plain records serialise")
 }
 
 const CSV_HEADER: &str = "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw";
