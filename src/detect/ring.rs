@@ -193,12 +193,19 @@ impl RingReader {
             return RingReading::unreadable(pixels_per_sector.max(0.0));
         }
 
-        // About two samples per pixel along the outermost sample radius.
+        // About one sample per pixel along the outermost sample radius
+        // (bilinear interpolation keeps the profile smooth between them);
+        // small rings average more radii against noise.
         let arc = 2.0 * PI * radii[4] * outer.semi_major;
-        let per_sector = ((arc * 2.0 / f64::from(2 * bits)).ceil() as usize).clamp(8, 256);
+        let per_sector = ((arc / f64::from(2 * bits)).ceil() as usize).clamp(8, 256);
+        let radii: &[f64] = if outer.semi_minor < 20.0 {
+            &radii
+        } else {
+            &[radii[0], radii[2], radii[4]]
+        };
         let count = per_sector * 2 * bits as usize;
         let mut frame = EllipseFrame::new(outer);
-        let Some(mut profile) = sample_profile(image, &frame, &radii, count) else {
+        let Some(mut profile) = sample_profile(image, &frame, radii, count) else {
             return RingReading::unreadable(pixels_per_sector);
         };
         let mut phase = edge_phase(&profile, bits, per_sector);
@@ -208,24 +215,29 @@ impl RingReader {
         // centre from the ring's own radial edges and read again through the
         // exact rectification when it moves by more than a tenth of a pixel.
         let mid_level = 0.5 * (black_level + white_level);
+        // Starting needs a clear offset (noise and blur move the estimate
+        // by a tenth of a pixel on a face-on ring); once rectifying, refine
+        // until it settles.
+        let mut threshold = 0.25;
         for _ in 0..3 {
             let Some(p) = refined_centre(image, &frame, phase, bits, mid_level) else {
                 break;
             };
             let moved = (p.0 - frame.projected_centre.0).hypot(p.1 - frame.projected_centre.1);
             let offset = (p.0 - outer.u).hypot(p.1 - outer.v);
-            if moved < 0.1 || offset > 0.3 * outer.semi_minor {
+            if moved < threshold || offset > 0.3 * outer.semi_minor {
                 break;
             }
             let Some(rectified) = EllipseFrame::with_projected_centre(outer, p) else {
                 break;
             };
-            let Some(resampled) = sample_profile(image, &rectified, &radii, count) else {
+            let Some(resampled) = sample_profile(image, &rectified, radii, count) else {
                 break;
             };
             profile = resampled;
             phase = edge_phase(&profile, bits, per_sector);
             frame = rectified;
+            threshold = 0.1;
         }
 
         let halves_a = half_sector_means(&profile, bits, phase);
@@ -563,6 +575,26 @@ impl EllipseFrame {
         )
     }
 
+    /// Direction of parameter `t` in rectified coordinates (for [`Self::at`]).
+    fn direction(&self, t: f64) -> (f64, f64) {
+        let (s, c) = t.sin_cos();
+        (
+            c * self.major.0 + s * self.minor.0,
+            c * self.major.1 + s * self.minor.1,
+        )
+    }
+
+    /// Image point at radius `rho`·R along a rectified `direction`.
+    fn at(&self, direction: (f64, f64), rho: f64) -> (f64, f64) {
+        let y0 = self.rectified_centre.0 + rho * direction.0;
+        let y1 = self.rectified_centre.1 + rho * direction.1;
+        let w = 1.0 - self.m.0 * y0 - self.m.1 * y1;
+        (
+            self.centre.0 + self.scale * y0 / w,
+            self.centre.1 + self.scale * y1 / w,
+        )
+    }
+
     /// Image point of parameter `t` on the concentric circle of radius `rho`·R.
     fn point(&self, t: f64, rho: f64) -> (f64, f64) {
         let (s, c) = t.sin_cos();
@@ -584,18 +616,14 @@ fn sample_profile(
     radii: &[f64],
     count: usize,
 ) -> Option<Vec<f64>> {
-    let (w, h) = image.dimensions();
-    let (max_x, max_y) = (f64::from(w) - 1.0, f64::from(h) - 1.0);
+    let sampler = Sampler::new(image);
     let mut profile = Vec::with_capacity(count);
     for j in 0..count {
-        let t = 2.0 * PI * j as f64 / count as f64;
+        let direction = frame.direction(2.0 * PI * j as f64 / count as f64);
         let mut sum = 0.0;
         for &rho in radii {
-            let (x, y) = frame.point(t, rho);
-            if !(0.0..=max_x).contains(&x) || !(0.0..=max_y).contains(&y) {
-                return None;
-            }
-            sum += bilinear(image, x, y);
+            let (x, y) = frame.at(direction, rho);
+            sum += sampler.at(x, y)?;
         }
         profile.push(sum / radii.len() as f64);
     }
@@ -617,23 +645,23 @@ fn refined_centre(
     bits: u32,
     mid_level: f64,
 ) -> Option<(f64, f64)> {
-    let (w, h) = image.dimensions();
-    let (max_x, max_y) = (f64::from(w) - 1.0, f64::from(h) - 1.0);
+    let sampler = Sampler::new(image);
     let sector = PI / f64::from(bits);
     let major = frame.scale * frame.major.0.hypot(frame.major.1);
-    let step = 0.25 / major.max(1.0);
-    let (start, end) = (0.25, 0.8);
+    let step = 0.5 / major.max(1.0);
+    let (start, end) = (0.3, 0.75);
     // Normal equations of e = (1-ρ²)(Dx cos t + Dy sin t) + s·ρ + b.
     let mut ata = [[0.0f64; 4]; 4];
     let mut atb = [0.0f64; 4];
     let mut used = [0usize; 2];
     for k in 0..2 * bits {
-        for offset in [0.3, 0.5, 0.7] {
+        {
+            let offset = 0.5;
             let t = phase + (f64::from(k) + offset) * sector;
+            let direction = frame.direction(t);
             let at = |rho: f64| {
-                let (x, y) = frame.point(t, rho);
-                ((0.0..=max_x).contains(&x) && (0.0..=max_y).contains(&y))
-                    .then(|| bilinear(image, x, y))
+                let (x, y) = frame.at(direction, rho);
+                sampler.at(x, y)
             };
             let mut previous = at(start)?;
             if previous <= mid_level {
@@ -671,7 +699,7 @@ fn refined_centre(
             }
         }
     }
-    if used[0] < 3 || used[1] < 3 {
+    if used[0] < 2 || used[1] < 2 {
         return None;
     }
     let solution = solve4(ata, atb)?;
@@ -706,21 +734,43 @@ fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
     Some(x)
 }
 
-/// Bilinear interpolation with pixel centres at integer coordinates; the
-/// caller keeps (x, y) inside [0, w-1] x [0, h-1].
-fn bilinear(image: &GrayImage, x: f64, y: f64) -> f64 {
-    let (w, h) = image.dimensions();
-    let raw = image.as_raw();
-    let x0 = (x.floor() as u32).min(w - 1);
-    let y0 = (y.floor() as u32).min(h - 1);
-    let x1 = (x0 + 1).min(w - 1);
-    let y1 = (y0 + 1).min(h - 1);
-    let fx = x - f64::from(x0);
-    let fy = y - f64::from(y0);
-    let at = |xx: u32, yy: u32| f64::from(raw[yy as usize * w as usize + xx as usize]);
-    let top = at(x0, y0) * (1.0 - fx) + at(x1, y0) * fx;
-    let bottom = at(x0, y1) * (1.0 - fx) + at(x1, y1) * fx;
-    top * (1.0 - fy) + bottom * fy
+/// Bilinear interpolation with pixel centres at integer coordinates.
+struct Sampler<'a> {
+    raw: &'a [u8],
+    stride: usize,
+    max_x: f64,
+    max_y: f64,
+}
+
+impl<'a> Sampler<'a> {
+    fn new(image: &'a GrayImage) -> Sampler<'a> {
+        let (w, h) = image.dimensions();
+        Sampler {
+            raw: image.as_raw(),
+            stride: w as usize,
+            // Keep x0 + 1 inside the image; the last row and column are
+            // reached with a zero weight on the next one.
+            max_x: f64::from(w.max(2)) - 1.0 - 1e-9,
+            max_y: f64::from(h.max(2)) - 1.0 - 1e-9,
+        }
+    }
+
+    /// `None` outside the image (or for an image narrower than 2 pixels).
+    #[inline]
+    fn at(&self, x: f64, y: f64) -> Option<f64> {
+        if !(x >= 0.0 && y >= 0.0 && x <= self.max_x && y <= self.max_y) {
+            return None;
+        }
+        // Non-negative, so truncation is floor.
+        let (x0, y0) = (x as usize, y as usize);
+        let (fx, fy) = (x - x0 as f64, y - y0 as f64);
+        let i = y0 * self.stride + x0;
+        let row0 = self.raw.get(i..i + 2)?;
+        let row1 = self.raw.get(i + self.stride..i + self.stride + 2)?;
+        let top = f64::from(row0[0]) + fx * (f64::from(row0[1]) - f64::from(row0[0]));
+        let bottom = f64::from(row1[0]) + fx * (f64::from(row1[1]) - f64::from(row1[0]));
+        Some(top + fy * (bottom - top))
+    }
 }
 
 /// Parameter (radians, in [0, one sector)) of the ring's sector boundaries:
@@ -729,13 +779,16 @@ fn bilinear(image: &GrayImage, x: f64, y: f64) -> f64 {
 /// continuously with the marker and is not tied to the sample grid.
 fn edge_phase(profile: &[f64], bits: u32, per_sector: usize) -> f64 {
     let count = profile.len();
+    // 2n·t at the midpoint between samples j and j+1 repeats every sector.
+    let phasors: Vec<(f64, f64)> = (0..per_sector)
+        .map(|j| (2.0 * PI * (j as f64 + 0.5) / per_sector as f64).sin_cos())
+        .collect();
     let (mut re, mut im) = (0.0, 0.0);
     for j in 0..count {
         let g = (profile[(j + 1) % count] - profile[j]).abs();
-        // 2n·t at the midpoint between samples j and j+1.
-        let arg = 2.0 * PI * (j as f64 + 0.5) / per_sector as f64;
-        re += g * arg.cos();
-        im -= g * arg.sin();
+        let (sin, cos) = phasors[j % per_sector];
+        re += g * cos;
+        im -= g * sin;
     }
     let sector = PI / f64::from(bits);
     let phase = -im.atan2(re) / f64::from(2 * bits);
