@@ -20,8 +20,8 @@ Examples:
   whycode detect --legacy --annotate out/ many.png
 
 Folders are sequences: their images are read in name order and markers are
-tracked from frame to frame (IDs are filtered over the track). Files named on
-the command line are independent images, read in parallel.";
+tracked from frame to frame. Files named on the command line are independent
+images, read in parallel.";
 
 /// Image file extensions read from folders.
 const IMAGE_EXTENSIONS: [&str; 9] = [
@@ -77,8 +77,8 @@ pub struct DetectArgs {
     #[arg(long, value_name = "N")]
     max_markers: Option<usize>,
 
-    /// Treat the frames of a folder as independent images (no tracking,
-    /// no ID filtering across frames; processed in parallel)
+    /// Treat the frames of a folder as independent images (no tracking;
+    /// processed in parallel)
     #[arg(long)]
     no_tracking: bool,
 }
