@@ -242,3 +242,90 @@ fn legacy_markers_have_no_id_and_no_yaw() {
     assert!(m["yaw"].is_null() && m["code"].is_null(), "{m}");
     assert!((m["u"].as_f64().unwrap() - r.ellipse.u).abs() < 0.3);
 }
+
+#[test]
+fn with_a_camera_and_a_diameter_the_pose_is_reported() {
+    use nalgebra::Vector3;
+    use whycode::camera::Camera;
+    use whycode::simulate::{render as simulate, LooseMarker, Placement, Scene, SceneObject};
+    let dir = tempfile::tempdir().unwrap();
+    let camera = Camera::ideal(640, 480, 70.0);
+    let family = Family::generate(8, 2).unwrap();
+    let placement = Placement::viewed(Vector3::new(0.05, -0.02, 0.6), 0.5, 0.2, 1.0);
+    let marker = Marker::whycode(8, family.code(11).unwrap(), 122.0);
+    let mut scene = Scene::new(camera);
+    scene
+        .objects
+        .push(SceneObject::Marker(LooseMarker::new(marker, 11, placement)));
+    let (image, truth) = simulate(&scene);
+    let path = dir.path().join("view.png");
+    image.save(&path).unwrap();
+    let yaml = format!(
+        "image_width: 640\nimage_height: 480\ncamera_name: test\n\
+         camera_matrix:\n  rows: 3\n  cols: 3\n  data: [{fx}, 0, {cx}, 0, {fy}, {cy}, 0, 0, 1]\n\
+         distortion_model: plumb_bob\n\
+         distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n",
+        fx = camera.fx,
+        fy = camera.fy,
+        cx = camera.cx,
+        cy = camera.cy
+    );
+    let cam_path = dir.path().join("cam.yaml");
+    std::fs::write(&cam_path, yaml).unwrap();
+    let out = whycode(&[
+        "detect",
+        "--camera",
+        cam_path.to_str().unwrap(),
+        "--diameter",
+        "122mm",
+        "--format",
+        "json",
+        path.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let lines = json_lines(&out);
+    let m = &lines[0]["markers"][0];
+    assert_eq!(m["id"], 11, "{m}");
+    let t = &truth.markers[0];
+    let position: Vec<f64> = m["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let err = (0..3)
+        .map(|i| (position[i] - t.position[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(
+        err < 0.01 * 0.6,
+        "position {position:?} vs {:?}",
+        t.position
+    );
+    let q: Vec<f64> = m["quaternion"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let dot: f64 = (0..4).map(|i| q[i] * t.quaternion[i]).sum();
+    let angle = 2.0 * dot.abs().min(1.0).acos();
+    assert!(
+        angle < 2f64.to_radians(),
+        "rotation off by {}°",
+        angle.to_degrees()
+    );
+    assert_eq!(m["rotation"].as_array().unwrap().len(), 3);
+
+    // A metre figure without unit is metres; the table shows the position.
+    let out = whycode(&[
+        "detect",
+        "--camera",
+        cam_path.to_str().unwrap(),
+        "--diameter",
+        "0.122",
+        path.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stdout(&out).contains("position_m"), "{}", stdout(&out));
+}

@@ -20,8 +20,8 @@ Examples:
   whycode detect --legacy --annotate out/ many.png
 
 Folders are sequences: their images are read in name order and markers are
-tracked from frame to frame (IDs are filtered over the track). Files named on
-the command line are independent images, read in parallel.";
+tracked from frame to frame. Files named on the command line are independent
+images, read in parallel.";
 
 /// Image file extensions read from folders.
 const IMAGE_EXTENSIONS: [&str; 9] = [
@@ -77,8 +77,8 @@ pub struct DetectArgs {
     #[arg(long, value_name = "N")]
     max_markers: Option<usize>,
 
-    /// Treat the frames of a folder as independent images (no tracking,
-    /// no ID filtering across frames; processed in parallel)
+    /// Treat the frames of a folder as independent images (no tracking;
+    /// processed in parallel)
     #[arg(long)]
     no_tracking: bool,
 }
@@ -119,10 +119,11 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
         Some(Family::generate(bits, distance).context("--bits/--distance")?)
     };
-    let _camera = args.camera.as_deref().map(Camera::load).transpose()?;
+    let camera = args.camera.as_deref().map(Camera::load).transpose()?;
     let mut config = DetectorConfig {
         family,
         diameter_m: args.diameter.map(Length::m),
+        camera,
         ..DetectorConfig::default()
     };
     if let Some(n) = args.max_markers {
@@ -294,35 +295,66 @@ fn round(x: f64, decimals: i32) -> f64 {
     (x * k).round() / k
 }
 
-fn frame_json(frame: &Frame) -> serde_json::Value {
-    let markers: Vec<serde_json::Value> = frame
+/// JSON records, fields in the documented order.
+#[derive(serde::Serialize)]
+struct FrameRecord {
+    image: String,
+    width: u32,
+    height: u32,
+    elapsed_ms: f64,
+    markers: Vec<MarkerRecord>,
+}
+
+#[derive(serde::Serialize)]
+struct MarkerRecord {
+    id: u32,
+    code: Option<u32>,
+    u: f64,
+    v: f64,
+    yaw: Option<f64>,
+    axes: [f64; 2],
+    confidence: f64,
+    position: Option<[f64; 3]>,
+    rotation: Option<[[f64; 3]; 3]>,
+    quaternion: Option<[f64; 4]>,
+}
+
+fn frame_json(frame: &Frame) -> String {
+    let markers = frame
         .markers
         .iter()
         .map(|m| {
-            let pose = pose_of(m);
-            serde_json::json!({
-                "id": m.id,
-                "code": m.code,
-                "u": round(m.u, 3),
-                "v": round(m.v, 3),
-                "yaw": m.yaw.map(|y| round(y, 5)),
-                "axes": [round(m.axes[0], 3), round(m.axes[1], 3)],
-                "confidence": round(m.confidence, 3),
-                "position": pose.map(|p| [round(p.position.x, 5), round(p.position.y, 5), round(p.position.z, 5)]),
-                "rotation": pose.map(|p| (0..3)
-                    .map(|r| (0..3).map(|c| round(p.rotation[(r, c)], 6)).collect::<Vec<_>>())
-                    .collect::<Vec<_>>()),
-                "quaternion": pose.map(|p| p.quaternion.map(|q| round(q, 6))),
-            })
+            let pose = m.pose.as_ref();
+            MarkerRecord {
+                id: m.id,
+                code: m.code,
+                u: round(m.u, 3),
+                v: round(m.v, 3),
+                yaw: m.yaw.map(|y| round(y, 5)),
+                axes: [round(m.axes[0], 3), round(m.axes[1], 3)],
+                confidence: round(m.confidence, 3),
+                position: pose.map(|p| {
+                    [
+                        round(p.position.x, 5),
+                        round(p.position.y, 5),
+                        round(p.position.z, 5),
+                    ]
+                }),
+                rotation: pose.map(|p| {
+                    std::array::from_fn(|r| std::array::from_fn(|c| round(p.rotation[(r, c)], 6)))
+                }),
+                quaternion: pose.map(|p| p.quaternion.map(|q| round(q, 6))),
+            }
         })
         .collect();
-    serde_json::json!({
-        "image": frame.image.display().to_string(),
-        "width": frame.width,
-        "height": frame.height,
-        "elapsed_ms": round(frame.elapsed_ms, 3),
-        "markers": markers,
-    })
+    let record = FrameRecord {
+        image: frame.image.display().to_string(),
+        width: frame.width,
+        height: frame.height,
+        elapsed_ms: round(frame.elapsed_ms, 3),
+        markers,
+    };
+    serde_json::to_string(&record).expect("plain records serialise")
 }
 
 const CSV_HEADER: &str = "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw";
@@ -331,7 +363,7 @@ fn write_csv(out: &mut impl Write, frame: &Frame) -> Result<()> {
     let opt = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
     let image = csv_field(&frame.image.display().to_string());
     for m in &frame.markers {
-        let pose = pose_of(m);
+        let pose = m.pose.as_ref();
         writeln!(
             out,
             "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
@@ -382,7 +414,7 @@ fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Resul
         }
         return Ok(());
     }
-    let has_pose = frame.markers.iter().any(|m| pose_of(m).is_some());
+    let has_pose = frame.markers.iter().any(|m| m.pose.as_ref().is_some());
     write!(
         out,
         "{:>5} {:>6} {:>9} {:>9} {:>8} {:>15} {:>5}",
@@ -408,7 +440,7 @@ fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Resul
             "{id:>5} {code:>6} {:>9.2} {:>9.2} {yaw:>8} {axes:>15} {:>5.2}",
             m.u, m.v, m.confidence
         )?;
-        if let Some(p) = pose_of(m) {
+        if let Some(p) = m.pose.as_ref() {
             write!(
                 out,
                 " {:>26}",
@@ -424,9 +456,4 @@ fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Resul
         writeln!(out)?;
     }
     Ok(())
-}
-
-// Interim until the detector's pose output is merged.
-fn pose_of(_m: &Detection) -> Option<&crate::pose::Pose> {
-    None
 }
