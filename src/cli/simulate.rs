@@ -242,7 +242,7 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
                 .with_context(|| format!("--blot {id}: no marker {id} on page {}", args.page))?;
             let marker = SheetPage::marker_of(&manifest, entry);
             page.blots
-                .push(layout::ring_blot(&marker, entry.x_mm, entry.y_mm, false));
+                .extend(layout::ring_blots(&marker, entry.x_mm, entry.y_mm, false));
         }
         scene.objects.push(SceneObject::Page(page));
         scene.background = Background::Table;
@@ -286,8 +286,8 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
                 .iter_mut()
                 .find(|m| m.id == id)
                 .with_context(|| format!("--blot {id}: no marker {id} in the scene"))?;
-            let blot = layout::ring_blot(&m.marker, 0.0, 0.0, true);
-            m.blots.push(blot);
+            let blots = layout::ring_blots(&m.marker, 0.0, 0.0, true);
+            m.blots.extend(blots);
         }
         scene
             .objects

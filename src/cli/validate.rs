@@ -1,9 +1,115 @@
-use anyhow::Result;
+//! `whycode validate`: check photos of printed sheets against the manifest.
+
+use crate::camera::Camera;
+use crate::render::manifest::Manifest;
+use crate::validate::{self, annotate};
+use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-#[derive(Debug, clap::Args)]
-pub struct ValidateArgs {}
+/// Exit status when the check ran but the sheet has problems.
+const PROBLEMS: u8 = 2;
 
-pub fn run(_args: ValidateArgs) -> Result<ExitCode> {
-    anyhow::bail!("'validate' is not implemented yet")
+#[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Exit status: 0 when every printed marker was found reading as its \
+own ID and no page is printed at a wrong scale; 2 when a marker is missing, misread or \
+unidentified, or a page's scale is off by more than 1 %; 1 on errors. The printed scale is \
+measured against the paper's edges: keep the whole sheet, with some background around it, \
+in the photo (otherwise the scale is reported as unknown)."
+)]
+pub struct ValidateArgs {
+    /// The manifest written with the sheet
+    #[arg(long, value_name = "FILE")]
+    manifest: PathBuf,
+    /// Photos of the printed pages (PNG, JPEG, PGM, BMP)
+    #[arg(required = true, value_name = "PHOTO")]
+    photos: Vec<PathBuf>,
+    /// Camera calibration (ROS camera_info or OpenCV YAML): removes lens distortion
+    #[arg(long, value_name = "FILE")]
+    camera: Option<PathBuf>,
+    /// Write an annotated copy of each photo into this folder
+    #[arg(long, value_name = "DIR")]
+    annotate: Option<PathBuf>,
+    /// Report format on standard output
+    #[arg(long, value_enum, default_value_t = Format::Table)]
+    format: Format,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Format {
+    Table,
+    Json,
+}
+
+/// The calibration at the photo's resolution (a calibration made at full
+/// resolution also serves a scaled-down photo of the same aspect).
+fn camera_for(camera: &Camera, path: &Path, width: u32, height: u32) -> Result<Camera> {
+    if camera.width == width && camera.height == height {
+        return Ok(*camera);
+    }
+    let aspect = |w: u32, h: u32| f64::from(w) / f64::from(h);
+    if (aspect(camera.width, camera.height) / aspect(width, height) - 1.0).abs() > 0.01 {
+        bail!(
+            "{}: photo is {width}x{height} but the camera calibration is for {}x{}",
+            path.display(),
+            camera.width,
+            camera.height
+        );
+    }
+    Ok(camera.with_resolution(width, height))
+}
+
+pub fn run(args: ValidateArgs) -> Result<ExitCode> {
+    let manifest = Manifest::load(&args.manifest)?;
+    let mut detector =
+        validate::detector_for(&manifest).with_context(|| args.manifest.display().to_string())?;
+    let camera = args.camera.as_deref().map(Camera::load).transpose()?;
+    if let Some(dir) = &args.annotate {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create folder {}", dir.display()))?;
+    }
+    let mut photos = Vec::new();
+    for path in &args.photos {
+        let image = crate::detect::load_gray(path)?;
+        let cam = camera
+            .as_ref()
+            .map(|c| camera_for(c, path, image.width(), image.height()))
+            .transpose()?;
+        let name = path.display().to_string();
+        let report = validate::check_image(&name, &manifest, &image, cam.as_ref(), &mut detector);
+        if let Some(dir) = &args.annotate {
+            let stem = path
+                .file_stem()
+                .map_or_else(|| "photo".into(), |s| s.to_string_lossy().into_owned());
+            let out = dir.join(format!("{stem}.annotated.png"));
+            save_rgb(&out, &annotate::annotate(&image, &report))?;
+        }
+        photos.push(report);
+    }
+    let report = validate::summarise(&manifest, photos);
+    match args.format {
+        Format::Table => print!("{}", report.to_table()),
+        Format::Json => print!("{}", report.to_json()),
+    }
+    Ok(if report.ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(PROBLEMS)
+    })
+}
+
+fn save_rgb(path: &Path, picture: &image::RgbImage) -> Result<()> {
+    use image::ImageEncoder;
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes)
+        .write_image(
+            picture.as_raw(),
+            picture.width(),
+            picture.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", path.display()))?;
+    crate::io::write_atomic(path, &bytes)
 }

@@ -9,7 +9,11 @@
 //! marker is predicted to be, so a frame in which every marker is found
 //! again only touches the markers' own pixels.
 
+pub mod annotate;
 pub mod ellipse;
+pub mod idfilter;
+pub mod rectify;
+pub mod ring;
 pub mod segment;
 pub mod threshold;
 pub mod track;
@@ -20,9 +24,12 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use image::GrayImage;
 
+use crate::camera::Camera;
 use crate::family::{Decoder, Family, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
+use crate::pose::{self, CirclePose, Pose};
 use ellipse::Ellipse;
+use ring::RingReader;
 use segment::{Fill, Filler, Gray, Labels, Stats};
 use threshold::{ThresholdMap, ThresholdSearch};
 use track::{Adaptive, Track};
@@ -37,6 +44,8 @@ pub struct DetectorConfig {
     pub max_markers: usize,
     /// Outer diameter of the black disc in metres (needed for pose).
     pub diameter_m: Option<f64>,
+    /// Calibrated camera (needed for pose).
+    pub camera: Option<Camera>,
     /// Keep state between frames: predicted search, slow adaptation.
     pub tracking: bool,
     /// Smallest outer diameter, pixels, worth reporting.
@@ -55,6 +64,7 @@ impl Default for DetectorConfig {
             family: None,
             max_markers: 1024,
             diameter_m: None,
+            camera: None,
             tracking: false,
             min_diameter_px: 7.0,
             roundness_tolerance: 0.4,
@@ -71,7 +81,10 @@ pub struct Detection {
     pub id: u32,
     /// The member's code when the ring decoded to one.
     pub code: Option<u32>,
-    /// Centre in pixels, origin at the centre of the top-left pixel.
+    /// Centre in pixels, origin at the centre of the top-left pixel: the
+    /// projected marker centre when a camera and diameter are configured,
+    /// otherwise the centre of the outer ellipse (which perspective moves
+    /// off the true centre by up to a pixel or two on large tilted markers).
     pub u: f64,
     pub v: f64,
     /// Direction of the marker's +x axis in the image, atan2(dv, du).
@@ -84,6 +97,10 @@ pub struct Detection {
     pub confidence: f64,
     /// How the ring decoded, with a family.
     pub status: Option<MatchStatus>,
+    /// Marker → camera pose, with a camera and a diameter. For legacy
+    /// markers (no yaw) the in-plane rotation is arbitrary: +x is the
+    /// image +u direction projected onto the marker plane.
+    pub pose: Option<Pose>,
 }
 
 /// The detector: configuration, tracking state and reusable buffers.
@@ -91,11 +108,11 @@ pub struct Detection {
 #[derive(Debug, Clone)]
 pub struct Detector {
     config: DetectorConfig,
-    #[allow(dead_code)]
-    decoder: Option<Decoder>,
+    reader: Option<RingReader>,
     labels: Labels,
     filler: Filler,
     edge_scratch: Vec<(f64, f64)>,
+    inner_scratch: Vec<(f64, f64)>,
     tracks: Vec<Track>,
     search: ThresholdSearch,
     ratio: Adaptive,
@@ -105,15 +122,19 @@ pub struct Detector {
 }
 
 /// A disc that passed every test.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Candidate {
     outer: Ellipse,
+    /// Sub-pixel points of the outer edge (for pose under distortion).
+    edge: Vec<(f64, f64)>,
     black: f64,
     white: f64,
     /// Test values, for adaptation and confidence.
     ratio: f64,
     roundness: f64,
     area_error: f64,
+    /// The values above were measured (not a marker followed by its edge).
+    tested: bool,
     track: Option<usize>,
 }
 
@@ -141,7 +162,10 @@ fn concentricity_tolerance(whycode: bool) -> f64 {
 
 impl Detector {
     pub fn new(config: DetectorConfig) -> Detector {
-        let decoder = config.family.as_ref().map(Decoder::new);
+        let reader = config
+            .family
+            .as_ref()
+            .map(|family| RingReader::new(Some(Decoder::new(family))));
         let whycode = config.family.is_some();
         let white = expected_white_fraction(whycode);
         Detector {
@@ -149,10 +173,11 @@ impl Detector {
             roundness: Adaptive::new(0.0, config.roundness_tolerance),
             area: Adaptive::new(0.0, config.area_tolerance),
             config,
-            decoder,
+            reader,
             labels: Labels::default(),
             filler: Filler::default(),
             edge_scratch: Vec::new(),
+            inner_scratch: Vec::new(),
             tracks: Vec::new(),
             search: ThresholdSearch::default(),
             frame: 0,
@@ -202,8 +227,23 @@ impl Detector {
         }
         let all_followed = found.len() == self.tracks.len();
         if !(tracking && all_followed && found.len() >= limit) {
+            let followed = found.len();
             let map = ThresholdMap::adaptive(gray.pixels, width, height);
-            self.scan(gray, &map, &mut found, limit);
+            self.scan(gray, &map, &mut found, limit + followed);
+            // Markers followed by their edges left no labels, so the scan
+            // meets them again.
+            let (old, new) = found.split_at(followed);
+            let fresh: Vec<Candidate> = new
+                .iter()
+                .filter(|c| {
+                    !old.iter()
+                        .any(|o| (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.b)
+                })
+                .cloned()
+                .collect();
+            found.truncate(followed);
+            found.extend(fresh);
+            found.truncate(limit);
             if found.is_empty() {
                 // The local map found nothing; the reference's global
                 // threshold walk gets one try per frame.
@@ -216,20 +256,31 @@ impl Detector {
         }
         if tracking {
             self.update_tracks(&found);
-            for c in &found {
+            for c in found.iter().filter(|c| c.tested) {
                 self.ratio.learn(c.ratio);
                 self.roundness.learn(c.roundness);
                 self.area.learn(c.area_error);
             }
         }
-        let mut detections: Vec<Detection> = found.iter().map(|c| self.describe(c)).collect();
+        let mut detections: Vec<Detection> = Vec::with_capacity(found.len());
+        for c in &found {
+            let d = self.describe(image, gray, c);
+            detections.push(d);
+        }
         detections.sort_by(|a, b| a.v.total_cmp(&b.v).then(a.u.total_cmp(&b.u)));
         detections
     }
 
-    fn describe(&self, c: &Candidate) -> Detection {
+    fn describe(&mut self, image: &GrayImage, gray: Gray<'_>, c: &Candidate) -> Detection {
         let quality = 1.0 - (c.area_error / self.area.tolerance()).min(1.0);
-        Detection {
+        let outer = pose::ImageEllipse {
+            u: c.outer.u,
+            v: c.outer.v,
+            semi_major: c.outer.a,
+            semi_minor: c.outer.b,
+            angle: c.outer.angle,
+        };
+        let mut d = Detection {
             id: 0,
             code: None,
             u: c.outer.u,
@@ -239,7 +290,89 @@ impl Detector {
             angle: c.outer.angle,
             confidence: (0.5 + 0.5 * quality).clamp(0.0, 1.0),
             status: None,
+            pose: None,
+        };
+        let mut axis_point = None;
+        if let Some(reader) = &self.reader {
+            let reading = reader.read(image, &outer, c.black, c.white);
+            d.id = reading.id;
+            d.code = reading.decoded.filter(|x| x.is_member()).map(|x| x.code);
+            d.status = reading.decoded.map(|x| x.status);
+            d.yaw = reading.yaw;
+            d.confidence = reading.confidence;
+            axis_point = reading.axis_point;
         }
+        if let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) {
+            d.pose = self.pose(&camera, diameter / 2.0, gray, c, &outer, d.yaw, axis_point);
+            if let (Some(pose), Some(code), Some(family)) = (&d.pose, d.code, &self.config.family) {
+                let bits = family.bits();
+                if let Some(better) =
+                    rectify::refine_rotation(gray, &camera, pose, diameter / 2.0, bits, code)
+                {
+                    d.pose = Some(better);
+                }
+            }
+            // Under perspective the centre of the outer ellipse is not the
+            // image of the marker's centre, nor is the ellipse-based yaw
+            // the direction of +x at that centre: the pose knows both.
+            if let Some(pose) = &d.pose {
+                if let Some((u, v)) = camera.project(&pose.position) {
+                    d.u = u;
+                    d.v = v;
+                }
+                if d.yaw.is_some() {
+                    d.yaw = pose.image_yaw(&camera).or(d.yaw);
+                }
+            }
+        }
+        d
+    }
+
+    /// Position and normal from the outer edge, the two-fold ambiguity
+    /// decided by the inner white edges, the rotation from the yaw.
+    #[allow(clippy::too_many_arguments)]
+    fn pose(
+        &mut self,
+        camera: &Camera,
+        radius_m: f64,
+        gray: Gray<'_>,
+        c: &Candidate,
+        outer: &pose::ImageEllipse,
+        yaw: Option<f64>,
+        axis_point: Option<(f64, f64)>,
+    ) -> Option<Pose> {
+        let candidates = pose::circle_poses_from_points(camera, &c.edge, radius_m)
+            .or_else(|| pose::try_circle_poses(camera, outer, radius_m))?;
+        let mid = (c.black + c.white) / 2.0;
+        let whycode = self.config.family.is_some();
+        let inner_ratios: &[f64] = if whycode {
+            &[RING_INNER_RATIO, WHYCODE_WHITE_RATIO]
+        } else {
+            &[WHYCON_WHITE_RATIO]
+        };
+        let mut errors = [0.0f64; 2];
+        for &ratio in inner_ratios {
+            ellipse::inner_edge_points(gray, &c.outer, ratio, mid, &mut self.inner_scratch);
+            for (k, candidate) in candidates.iter().enumerate() {
+                let rms = pose::circle_point_rms(
+                    camera,
+                    candidate,
+                    &self.inner_scratch,
+                    ratio * radius_m,
+                );
+                errors[k] += rms.map_or(0.0, |r| r * r * self.inner_scratch.len() as f64);
+            }
+        }
+        let circle: &CirclePose = if errors[1] < errors[0] {
+            &candidates[1]
+        } else {
+            &candidates[0]
+        };
+        Some(match (axis_point, yaw) {
+            (Some(p), _) => pose::full_pose(camera, circle, p),
+            (None, Some(yaw)) => pose::full_pose_from_yaw(camera, circle, yaw),
+            (None, None) => pose::full_pose_from_yaw(camera, circle, 0.0),
+        })
     }
 
     /// Scans every row for dark pixels not yet visited and tests the
@@ -280,12 +413,18 @@ impl Detector {
         }
     }
 
-    /// Looks for a tracked marker where it should be now: from the
-    /// predicted centre (inside the white centre) along the row to the
-    /// first dark pixel, which starts the marker's dark segment.
+    /// Looks for a tracked marker where it should be now. First the cheap
+    /// way: edge points around the predicted outline, a conic fit, and a
+    /// check that the centre is white and the annulus black (a few hundred
+    /// pixels). If that fails, the paper's way: from the predicted centre
+    /// (inside the white centre) along the row to the first dark pixel,
+    /// which starts the marker's dark segment and the full tests.
     fn follow(&mut self, gray: Gray<'_>, index: usize) -> Option<Candidate> {
         let track = self.tracks[index];
         let (pu, pv) = track.predicted();
+        if let Some(c) = self.follow_edges(gray, &track) {
+            return Some(c);
+        }
         let (x, y) = (pu.round(), pv.round());
         if !(x >= 0.0 && y >= 0.0 && (x as usize) < gray.width && (y as usize) < gray.height) {
             return None;
@@ -303,6 +442,70 @@ impl Detector {
         let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
         let same_size = (c.outer.a / track.a - 1.0).abs() < 0.3;
         (moved < track.a.max(4.0) && same_size).then_some(c)
+    }
+
+    fn follow_edges(&mut self, gray: Gray<'_>, track: &Track) -> Option<Candidate> {
+        let (pu, pv) = track.predicted();
+        let guess = Ellipse {
+            u: pu,
+            v: pv,
+            a: track.a,
+            b: track.b,
+            angle: track.angle,
+        };
+        let mid = (track.black + track.white) / 2.0;
+        let window = 3.0 + 0.08 * track.a;
+        let rays = ellipse::tracked_edge_points(gray, &guess, mid, window, &mut self.edge_scratch);
+        if self.edge_scratch.len() * 5 < rays * 4 {
+            return None;
+        }
+        let fitted = ellipse::fit_conic(&self.edge_scratch, (pu, pv), track.a)?;
+        let rms = (self
+            .edge_scratch
+            .iter()
+            .map(|&(x, y)| ellipse::radial_distance(&fitted, x, y).powi(2))
+            .sum::<f64>()
+            / self.edge_scratch.len() as f64)
+            .sqrt();
+        let consistent = rms < 0.3 + 0.01 * track.a
+            && (fitted.a / track.a - 1.0).abs() < 0.1
+            && (fitted.b / track.b - 1.0).abs() < 0.1
+            && (fitted.u - pu).hypot(fitted.v - pv) < window;
+        if !consistent {
+            return None;
+        }
+        // Inside: white at the centre, black across the annulus.
+        let white_ratio = if self.config.family.is_some() {
+            RING_INNER_RATIO
+        } else {
+            WHYCON_WHITE_RATIO
+        };
+        let (mut white_sum, mut black_sum) = (0.0, 0.0);
+        const PROBES: usize = 8;
+        for k in 0..PROBES {
+            let t = std::f64::consts::TAU * k as f64 / PROBES as f64;
+            let inner = fitted.scaled(0.6 * white_ratio).point(t);
+            let annulus = fitted.scaled(0.8).point(t);
+            let w = ellipse::sample(gray, inner.0, inner.1)?;
+            let b = ellipse::sample(gray, annulus.0, annulus.1)?;
+            if w < mid || b >= mid {
+                return None;
+            }
+            white_sum += w;
+            black_sum += b;
+        }
+        let (white, black) = (white_sum / PROBES as f64, black_sum / PROBES as f64);
+        Some(Candidate {
+            outer: fitted,
+            edge: self.edge_scratch.clone(),
+            black,
+            white,
+            ratio: self.ratio.expected,
+            roundness: 0.0,
+            area_error: 0.0,
+            tested: false,
+            track: None,
+        })
     }
 
     fn update_tracks(&mut self, found: &[Candidate]) {
@@ -326,9 +529,14 @@ impl Detector {
                 Some(i) => {
                     let mut t = self.tracks[i];
                     t.update(u, v, a, b, threshold);
+                    t.observe_appearance(c.outer.angle, c.black, c.white);
                     next.push(t);
                 }
-                None => next.push(Track::new(u, v, a, b, threshold)),
+                None => {
+                    let mut t = Track::new(u, v, a, b, threshold);
+                    t.observe_appearance(c.outer.angle, c.black, c.white);
+                    next.push(t);
+                }
             }
         }
         self.tracks = next;
@@ -392,14 +600,26 @@ impl Detector {
         }
         let black = dark.mean_intensity();
         let white_level = white.mean_intensity();
-        let outer = ellipse::refine(gray, &coarse, &mut self.edge_scratch).unwrap_or(coarse);
+        if white_level - black < map.min_contrast() {
+            return None;
+        }
+        // The outline must be an ellipse along the whole edge: squares and
+        // blobs pass the moment tests (a square's area is within 5 % of its
+        // moment ellipse's) but not this.
+        let refined = ellipse::refine(gray, &coarse, &mut self.edge_scratch)?;
+        if refined.support < 0.75 || refined.rms > 0.35 + 0.015 * coarse.a {
+            return None;
+        }
+        let outer = refined.ellipse;
         Some(Candidate {
             outer,
+            edge: self.edge_scratch.clone(),
             black,
             white: white_level,
             ratio,
             roundness,
             area_error: area_error.abs(),
+            tested: true,
             track: None,
         })
     }

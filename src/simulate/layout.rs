@@ -4,7 +4,7 @@
 use super::rng::Pcg32;
 use super::{Blot, LooseMarker, Placement};
 use crate::camera::Camera;
-use crate::geometry::{sector_is_black, sector_width, Marker, MarkerKind, RING_SAMPLE_RATIO};
+use crate::geometry::{sector_width, Marker, MarkerKind, RING_SAMPLE_RATIO};
 use nalgebra::Vector3;
 
 /// Distance (metres) at which an object `width_mm` × `height_mm` seen
@@ -90,27 +90,39 @@ pub fn marker_scatter(
     placed.into_iter().map(|(m, ..)| m).collect()
 }
 
-/// A black blot that covers one white ring sector of a marker centred at
-/// (x, y) in print coordinates with y down (a page; use `y_up = false`) or
-/// y up (a marker frame; `y_up = true`), so that bit reads as neither 0
-/// nor 1. It stays inside the ring and leaves the black disc's shape alone.
-pub fn ring_blot(marker: &Marker, x: f64, y: f64, y_up: bool) -> Blot {
+/// An ink smear over a marker's code ring: three overlapping black discs
+/// along the ring over two adjacent white sectors of two neighbouring bits
+/// (a 0 bit followed by a 1 bit: black-white, white-black), so that both
+/// bits read as neither 0 nor 1. A single erased bit a decoder could still
+/// recover from the family's distance; two it cannot with distance 2. The
+/// smear stays inside the ring and leaves the black disc's outline alone.
+/// The marker is centred at (x, y) in print coordinates with y down (a
+/// page; `y_up = false`) or y up (a marker frame; `y_up = true`).
+pub fn ring_blots(marker: &Marker, x: f64, y: f64, y_up: bool) -> Vec<Blot> {
     let r = marker.outer_radius();
-    let angle = match marker.kind {
+    let (boundary, step) = match marker.kind {
         MarkerKind::WhyCode { bits, code } => {
-            let white = (0..2 * bits)
-                .find(|&k| !sector_is_black(bits, code, k))
+            let bit = |i: u32| (code >> (bits - 1 - (i % bits))) & 1;
+            let i = (0..bits)
+                .find(|&i| bit(i) == 0 && bit(i + 1) == 1)
                 .unwrap_or(0);
-            (f64::from(white) + 0.5) * sector_width(bits)
+            let w = sector_width(bits);
+            (f64::from(2 * i + 2) * w, 0.6 * w)
         }
-        MarkerKind::WhyCon => 0.0,
+        MarkerKind::WhyCon => (0.0, std::f64::consts::PI / 12.0),
     };
     let ring = RING_SAMPLE_RATIO * r;
-    let (dx, dy) = (ring * angle.cos(), ring * angle.sin());
-    Blot {
-        x_mm: x + dx,
-        y_mm: if y_up { y + dy } else { y - dy },
-        radius_mm: 0.12 * r,
-        black: true,
-    }
+    [-1.0, 0.0, 1.0]
+        .iter()
+        .map(|k| {
+            let angle = boundary + k * step;
+            let (dx, dy) = (ring * angle.cos(), ring * angle.sin());
+            Blot {
+                x_mm: x + dx,
+                y_mm: if y_up { y + dy } else { y - dy },
+                radius_mm: 0.12 * r,
+                black: true,
+            }
+        })
+        .collect()
 }

@@ -24,7 +24,7 @@ mod raster;
 pub mod rng;
 mod truth;
 
-pub use truth::{GroundTruth, TrueMarker, TruePage};
+pub use truth::{GroundTruth, TrueEllipse, TrueMarker, TruePage};
 
 use crate::camera::Camera;
 use crate::geometry::Marker;

@@ -42,6 +42,11 @@ pub struct TrueMarker {
     pub yaw: f64,
     /// Longest projected diameter of the black disc, pixels.
     pub diameter_px: f64,
+    /// The projected outline of the black disc (exact for a camera without
+    /// distortion; with distortion, the ellipse of the undistorted view moved
+    /// to the distorted centre). Its centre is where a detector's ellipse
+    /// fit lands, which under perspective is not (u, v).
+    pub ellipse: Option<TrueEllipse>,
     /// Diameter of the black disc as printed, mm.
     pub diameter_mm: f64,
     /// Facing the camera and wholly inside the frame.
@@ -56,6 +61,16 @@ pub struct TrueMarker {
     pub normal: [f64; 3],
     /// The rotation as a quaternion x, y, z, w.
     pub quaternion: [f64; 4],
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TrueEllipse {
+    pub u: f64,
+    pub v: f64,
+    pub semi_major: f64,
+    pub semi_minor: f64,
+    /// Direction of the major axis, atan2(dv, du).
+    pub angle: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -199,6 +214,7 @@ fn true_marker(
     let inside = rim.iter().all(|p| {
         p.is_some_and(|(pu, pv)| pu >= -0.5 && pv >= -0.5 && pu <= w - 0.5 && pv <= h - 0.5)
     });
+    let ellipse = outline_ellipse(camera, placement, centre, r, facing);
     let rot = placement.rotation;
     let quaternion =
         UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rot)).into_inner();
@@ -211,6 +227,7 @@ fn true_marker(
         v,
         yaw,
         diameter_px,
+        ellipse,
         diameter_mm: 2.0 * r,
         visible: facing && inside,
         blotted,
@@ -223,6 +240,39 @@ fn true_marker(
         normal: vec3(normal),
         quaternion: [quaternion.i, quaternion.j, quaternion.k, quaternion.w],
     }
+}
+
+/// The image of the marker's outer circle through the plane's homography
+/// K·[r1 r2 t] (mm in the plane → ideal pixels).
+fn outline_ellipse(
+    camera: &Camera,
+    placement: &Placement,
+    centre: (f64, f64),
+    r: f64,
+    facing: bool,
+) -> Option<TrueEllipse> {
+    if !facing || placement.position.z <= 0.0 {
+        return None;
+    }
+    let k = nalgebra::Matrix3::new(
+        camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0,
+    );
+    let rot = placement.rotation;
+    let mut plane = nalgebra::Matrix3::zeros();
+    plane.set_column(0, &(rot.column(0) / 1000.0));
+    plane.set_column(1, &(rot.column(1) / 1000.0));
+    plane.set_column(2, &placement.position);
+    let h = crate::validate::homography::Homography { matrix: k * plane };
+    let e = h.circle_image(centre.0, centre.1, r)?;
+    let (u, v) =
+        camera.distort_normalized((e.u - camera.cx) / camera.fx, (e.v - camera.cy) / camera.fy);
+    Some(TrueEllipse {
+        u,
+        v,
+        semi_major: e.semi_major,
+        semi_minor: e.semi_minor,
+        angle: e.angle,
+    })
 }
 
 fn vec3(v: Vector3<f64>) -> [f64; 3] {

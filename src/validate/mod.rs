@@ -1,1 +1,712 @@
-//! (in progress)
+//! Validation of printed sheets from photos: is every printed marker there,
+//! does it read as its own ID, and was the page printed at the right size?
+//!
+//! Per photo: markers are detected, ID-matched to each page of the
+//! manifest, and the page's homography (manifest mm → image pixels) is
+//! fitted robustly to the matched centres (RANSAC, then least squares,
+//! with the perspective shift between a circle's centre and its ellipse's
+//! centre taken out). The homography predicts where every printed marker
+//! must be; what was detected there decides its status. The printed scale
+//! is measured against the paper's edges ([`scale`]). Over several photos
+//! the best observation of each marker counts.
+
+pub mod annotate;
+pub mod homography;
+pub mod scale;
+
+use crate::camera::Camera;
+use crate::render::manifest::{Manifest, PrintedMarker};
+use homography::{fit_robust, Correspondence, Homography, ImageEllipse};
+use image::GrayImage;
+use scale::{PixelModel, ScaleMeasurement, ScaleStatus};
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// A detected marker as validation needs it (pixel coordinates of the
+/// photo, origin at the top-left pixel centre).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Observation {
+    /// Decoded ID, 0 when the ring did not read as a family member.
+    pub id: u32,
+    pub u: f64,
+    pub v: f64,
+    pub semi_major: f64,
+    pub semi_minor: f64,
+    /// Direction of the major axis, atan2(dv, du).
+    pub angle: f64,
+}
+
+impl From<&crate::detect::Detection> for Observation {
+    fn from(d: &crate::detect::Detection) -> Observation {
+        Observation {
+            id: d.id,
+            u: d.u,
+            v: d.v,
+            semi_major: d.axes[0],
+            semi_minor: d.axes[1],
+            angle: d.angle,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MarkerStatus {
+    /// Detected where it was printed, reading as its own ID.
+    Found,
+    /// Detected where it was printed, reading as another ID.
+    Misread,
+    /// Detected where it was printed, but the ring did not read.
+    Unidentified,
+    /// Its place is in the photo, but nothing was detected there.
+    Missing,
+    /// Its place is outside the photo (or its page was not located).
+    NotInView,
+}
+
+impl MarkerStatus {
+    fn rank(self) -> u8 {
+        match self {
+            MarkerStatus::Found => 0,
+            MarkerStatus::Misread => 1,
+            MarkerStatus::Unidentified => 2,
+            MarkerStatus::Missing => 3,
+            MarkerStatus::NotInView => 4,
+        }
+    }
+
+    pub fn label(self) -> &'static str {
+        match self {
+            MarkerStatus::Found => "found",
+            MarkerStatus::Misread => "misread",
+            MarkerStatus::Unidentified => "unidentified",
+            MarkerStatus::Missing => "missing",
+            MarkerStatus::NotInView => "not in view",
+        }
+    }
+}
+
+/// One printed marker as seen in one photo.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MarkerCheck {
+    pub id: u32,
+    pub page: u32,
+    pub status: MarkerStatus,
+    /// The ID it read as, when misread.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub read_as: Option<u32>,
+    /// Where it is (detected) or should be (predicted), image pixels.
+    pub u: f64,
+    pub v: f64,
+    /// Distance between the detection and the predicted centre, pixels.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset_px: Option<f64>,
+    /// Detected / predicted size of the disc: a marker printed at another
+    /// size than its neighbours shows here.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub size_ratio: Option<f64>,
+    /// The outline to draw: the detected ellipse, or the predicted one.
+    #[serde(skip)]
+    pub outline: Option<ImageEllipse>,
+}
+
+/// A page located in a photo.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PageCheck {
+    pub page: u32,
+    /// Detections whose ID is printed on this page.
+    pub id_matches: usize,
+    /// Of those, the ones that agree with the fitted homography.
+    pub inliers: usize,
+    /// Reprojection error of the inliers, pixels.
+    pub rms_px: f64,
+    pub scale: ScaleMeasurement,
+    #[serde(skip)]
+    pub homography: Option<Homography>,
+}
+
+/// A detection on a located page where no marker was printed.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StrayDetection {
+    pub id: u32,
+    pub page: u32,
+    pub u: f64,
+    pub v: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PhotoReport {
+    pub photo: String,
+    pub width: u32,
+    pub height: u32,
+    pub detections: usize,
+    pub pages: Vec<PageCheck>,
+    pub markers: Vec<MarkerCheck>,
+    pub stray: Vec<StrayDetection>,
+}
+
+/// Least ID matches that locate a page (a homography needs four).
+const MIN_PAGE_MATCHES: usize = 4;
+
+fn page_markers(manifest: &Manifest, page: u32) -> Vec<&PrintedMarker> {
+    manifest.markers.iter().filter(|m| m.page == page).collect()
+}
+
+/// Checks one photo's detections against the manifest. The image is
+/// needed for the paper-edge scale measurement; `camera` (with lens
+/// distortion) makes the homography exact for wide-angle lenses.
+pub fn check_photo(
+    photo: &str,
+    manifest: &Manifest,
+    observations: &[Observation],
+    image: &GrayImage,
+    camera: Option<&Camera>,
+) -> PhotoReport {
+    let model = PixelModel::new(camera);
+    let ideal: Vec<(f64, f64)> = observations
+        .iter()
+        .map(|o| model.to_ideal(o.u, o.v))
+        .collect();
+    let mut report = PhotoReport {
+        photo: photo.to_string(),
+        width: image.width(),
+        height: image.height(),
+        detections: observations.len(),
+        pages: Vec::new(),
+        markers: Vec::new(),
+        stray: Vec::new(),
+    };
+    let page_count = manifest
+        .pages
+        .max(manifest.markers.iter().map(|m| m.page).max().unwrap_or(0));
+    let mut claimed = vec![false; observations.len()];
+    for page in 1..=page_count {
+        let printed = page_markers(manifest, page);
+        // ID-matched pairs: manifest position ↔ detected centre.
+        let matches: Vec<(usize, &PrintedMarker)> = observations
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.id != 0)
+            .filter_map(|(k, o)| printed.iter().find(|m| m.id == o.id).map(|m| (k, *m)))
+            .collect();
+        let Some((h, fit_inliers, rms)) = locate_page(&matches, observations, &ideal) else {
+            continue;
+        };
+        let (checks, strays) = classify(
+            manifest,
+            page,
+            &printed,
+            &h,
+            observations,
+            &ideal,
+            &model,
+            image,
+            &mut claimed,
+        );
+        report.markers.extend(checks);
+        report.stray.extend(strays);
+        let discs: Vec<(f64, f64, f64)> = printed
+            .iter()
+            .map(|m| (m.x_mm, m.y_mm, m.diameter_mm / 2.0))
+            .collect();
+        let scale = scale::measure(image, &model, &h, manifest.page_size_mm, &discs);
+        report.pages.push(PageCheck {
+            page,
+            id_matches: matches.len(),
+            inliers: fit_inliers,
+            rms_px: rms,
+            scale,
+            homography: Some(h),
+        });
+    }
+    report
+}
+
+/// Fits the page's homography to its ID matches, refining it so that the
+/// projected circles' ellipse centres (what a detector measures) match.
+fn locate_page(
+    matches: &[(usize, &PrintedMarker)],
+    observations: &[Observation],
+    ideal: &[(f64, f64)],
+) -> Option<(Homography, usize, f64)> {
+    if matches.len() < MIN_PAGE_MATCHES {
+        return None;
+    }
+    let mut pairs: Vec<Correspondence> = matches
+        .iter()
+        .map(|&(k, m)| Correspondence {
+            plane: (m.x_mm, m.y_mm),
+            image: ideal[k],
+            // A detection more than a third of a radius off is not this marker.
+            tolerance: (observations[k].semi_major / 3.0).max(2.0),
+        })
+        .collect();
+    let observed: Vec<(f64, f64)> = pairs.iter().map(|p| p.image).collect();
+    let mut fit = fit_robust(&pairs)?;
+    for _ in 0..3 {
+        // Under perspective a circle's image centre is not the image of its
+        // centre: move each observation by the predicted shift and refit.
+        for (pair, (&(_, m), obs)) in pairs.iter_mut().zip(matches.iter().zip(&observed)) {
+            let centre = fit.homography.apply(m.x_mm, m.y_mm);
+            let ellipse = fit
+                .homography
+                .circle_image(m.x_mm, m.y_mm, m.diameter_mm / 2.0);
+            if let (Some(c), Some(e)) = (centre, ellipse) {
+                pair.image = (obs.0 - (e.u - c.0), obs.1 - (e.v - c.1));
+            }
+        }
+        fit = fit_robust(&pairs)?;
+    }
+    let inliers = fit.inliers.iter().filter(|&&i| i).count();
+    (inliers >= MIN_PAGE_MATCHES).then_some((fit.homography, inliers, fit.rms_px))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn classify(
+    manifest: &Manifest,
+    page: u32,
+    printed: &[&PrintedMarker],
+    h: &Homography,
+    observations: &[Observation],
+    ideal: &[(f64, f64)],
+    model: &PixelModel,
+    image: &GrayImage,
+    claimed: &mut [bool],
+) -> (Vec<MarkerCheck>, Vec<StrayDetection>) {
+    let (w, hgt) = (f64::from(image.width()), f64::from(image.height()));
+    let mut checks = Vec::new();
+    for m in printed {
+        let predicted = h.circle_image(m.x_mm, m.y_mm, m.diameter_mm / 2.0);
+        let Some(e) = predicted else {
+            checks.push(not_in_view(m, (f64::NAN, f64::NAN)));
+            continue;
+        };
+        let centre = model.to_image(e.u, e.v);
+        // The nearest unclaimed detection within half the predicted radius.
+        let near = ideal
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| !claimed[*k])
+            .map(|(k, p)| (k, (p.0 - e.u).hypot(p.1 - e.v)))
+            .filter(|&(_, d)| d < 0.5 * e.semi_minor.max(1.0))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((k, d)) = near {
+            claimed[k] = true;
+            let o = &observations[k];
+            let (status, read_as) = match o.id {
+                id if id == m.id => (MarkerStatus::Found, None),
+                0 => (MarkerStatus::Unidentified, None),
+                other => (MarkerStatus::Misread, Some(other)),
+            };
+            checks.push(MarkerCheck {
+                id: m.id,
+                page,
+                status,
+                read_as,
+                u: o.u,
+                v: o.v,
+                offset_px: Some(d),
+                size_ratio: Some(
+                    (o.semi_major * o.semi_minor).sqrt() / (e.semi_major * e.semi_minor).sqrt(),
+                ),
+                outline: Some(ImageEllipse {
+                    u: o.u,
+                    v: o.v,
+                    semi_major: o.semi_major,
+                    semi_minor: o.semi_minor,
+                    angle: o.angle,
+                }),
+            });
+            continue;
+        }
+        // Wholly inside the photo (with a little margin for the detector)?
+        let inside = (0..16).all(|k| {
+            let (x, y) = e.point(k as f64 / 16.0 * std::f64::consts::TAU);
+            let (u, v) = model.to_image(x, y);
+            u >= 1.0 && v >= 1.0 && u <= w - 2.0 && v <= hgt - 2.0
+        });
+        let outline = Some(ImageEllipse {
+            u: centre.0,
+            v: centre.1,
+            ..e
+        });
+        checks.push(MarkerCheck {
+            status: if inside {
+                MarkerStatus::Missing
+            } else {
+                MarkerStatus::NotInView
+            },
+            outline,
+            ..not_in_view(m, centre)
+        });
+    }
+    // Detections inside this page's paper that belong to no printed marker.
+    let mut strays = Vec::new();
+    if let Some(inv) = h.inverse() {
+        let [pw, ph] = manifest.page_size_mm;
+        for (k, p) in ideal.iter().enumerate() {
+            if claimed[k] {
+                continue;
+            }
+            if let Some((x, y)) = inv.apply(p.0, p.1) {
+                if (0.0..=pw).contains(&x) && (0.0..=ph).contains(&y) {
+                    claimed[k] = true;
+                    strays.push(StrayDetection {
+                        id: observations[k].id,
+                        page,
+                        u: observations[k].u,
+                        v: observations[k].v,
+                    });
+                }
+            }
+        }
+    }
+    (checks, strays)
+}
+
+fn not_in_view(m: &PrintedMarker, (u, v): (f64, f64)) -> MarkerCheck {
+    MarkerCheck {
+        id: m.id,
+        page: m.page,
+        status: MarkerStatus::NotInView,
+        read_as: None,
+        u,
+        v,
+        offset_px: None,
+        size_ratio: None,
+        outline: None,
+    }
+}
+
+/// A printed marker's verdict over all photos.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MarkerVerdict {
+    pub id: u32,
+    pub page: u32,
+    pub status: MarkerStatus,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub read_as: Option<u32>,
+    /// The photo that gave the verdict.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub photo: Option<String>,
+}
+
+/// A page's verdict over all photos.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PageVerdict {
+    pub page: u32,
+    /// Photos in which the page was located.
+    pub photos: Vec<String>,
+    pub scale: Option<f64>,
+    pub scale_status: ScaleStatus,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Counts {
+    pub printed: usize,
+    pub found: usize,
+    pub misread: usize,
+    pub unidentified: usize,
+    pub missing: usize,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Report {
+    /// Every marker found and right, and no page printed at a wrong scale.
+    pub ok: bool,
+    pub counts: Counts,
+    pub pages: Vec<PageVerdict>,
+    pub markers: Vec<MarkerVerdict>,
+    pub photos: Vec<PhotoReport>,
+}
+
+/// Combines the photos: each marker keeps its best observation (a marker
+/// read right in one photo is fine even if another photo was too blurred);
+/// a marker never in view counts as missing.
+pub fn summarise(manifest: &Manifest, photos: Vec<PhotoReport>) -> Report {
+    let mut markers = Vec::new();
+    let mut counts = Counts::default();
+    for m in &manifest.markers {
+        let best = photos
+            .iter()
+            .flat_map(|p| p.markers.iter().map(move |c| (p, c)))
+            .filter(|(_, c)| c.id == m.id && c.page == m.page)
+            .min_by_key(|(_, c)| c.status.rank());
+        let verdict = match best {
+            Some((p, c)) => MarkerVerdict {
+                id: m.id,
+                page: m.page,
+                status: if c.status == MarkerStatus::NotInView {
+                    MarkerStatus::Missing
+                } else {
+                    c.status
+                },
+                read_as: c.read_as,
+                photo: (c.status != MarkerStatus::NotInView).then(|| p.photo.clone()),
+            },
+            None => MarkerVerdict {
+                id: m.id,
+                page: m.page,
+                status: MarkerStatus::Missing,
+                read_as: None,
+                photo: None,
+            },
+        };
+        counts.printed += 1;
+        match verdict.status {
+            MarkerStatus::Found => counts.found += 1,
+            MarkerStatus::Misread => counts.misread += 1,
+            MarkerStatus::Unidentified => counts.unidentified += 1,
+            MarkerStatus::Missing | MarkerStatus::NotInView => counts.missing += 1,
+        }
+        markers.push(verdict);
+    }
+    let page_count = manifest
+        .pages
+        .max(manifest.markers.iter().map(|m| m.page).max().unwrap_or(0));
+    let mut pages = Vec::new();
+    for page in 1..=page_count {
+        let checks: Vec<(&PhotoReport, &PageCheck)> = photos
+            .iter()
+            .flat_map(|p| p.pages.iter().map(move |c| (p, c)))
+            .filter(|(_, c)| c.page == page)
+            .collect();
+        let mut scales: Vec<f64> = checks.iter().filter_map(|(_, c)| c.scale.scale).collect();
+        scales.sort_by(f64::total_cmp);
+        let scale = (!scales.is_empty()).then(|| scales[scales.len() / 2]);
+        let worst_axis = checks
+            .iter()
+            .map(|(_, c)| c.scale.status)
+            .filter(|s| *s != ScaleStatus::Unknown)
+            .max_by_key(|s| match s {
+                ScaleStatus::Error => 2,
+                ScaleStatus::Warning => 1,
+                _ => 0,
+            });
+        let (scale_status, note) = match (scale, worst_axis) {
+            (Some(_), Some(s)) => (s, checks.iter().find_map(|(_, c)| c.scale.note.clone())),
+            _ if checks.is_empty() => (
+                ScaleStatus::Unknown,
+                Some("page not located in any photo".to_string()),
+            ),
+            _ => (
+                ScaleStatus::Unknown,
+                Some(
+                    checks
+                        .iter()
+                        .filter_map(|(p, c)| {
+                            c.scale.note.as_ref().map(|n| format!("{}: {n}", p.photo))
+                        })
+                        .collect::<Vec<_>>()
+                        .join("; "),
+                ),
+            ),
+        };
+        pages.push(PageVerdict {
+            page,
+            photos: checks.iter().map(|(p, _)| p.photo.clone()).collect(),
+            scale,
+            scale_status,
+            note,
+        });
+    }
+    let scale_ok = pages
+        .iter()
+        .all(|p| matches!(p.scale_status, ScaleStatus::Ok | ScaleStatus::Unknown));
+    Report {
+        ok: counts.found == counts.printed && scale_ok,
+        counts,
+        pages,
+        markers,
+        photos,
+    }
+}
+
+impl Report {
+    pub fn to_json(&self) -> String {
+        let mut s = serde_json::to_string_pretty(self).expect("report serialises");
+        s.push('\n');
+        s
+    }
+
+    /// A readable summary: pages with their scale, then every marker that
+    /// is not right, then the totals.
+    pub fn to_table(&self) -> String {
+        let mut out = String::new();
+        for photo in &self.photos {
+            let pages: Vec<String> = photo.pages.iter().map(|p| p.page.to_string()).collect();
+            let _ = writeln!(
+                out,
+                "{}: {}x{}, {} markers detected, page(s) located: {}",
+                photo.photo,
+                photo.width,
+                photo.height,
+                photo.detections,
+                if pages.is_empty() {
+                    "none".to_string()
+                } else {
+                    pages.join(", ")
+                }
+            );
+        }
+        let _ = writeln!(out);
+        let _ = writeln!(out, "page  scale     status   note");
+        for p in &self.pages {
+            let scale = p
+                .scale
+                .map_or("-".to_string(), |s| format!("{:.1} %", s * 100.0));
+            let status = match p.scale_status {
+                ScaleStatus::Ok => "ok",
+                ScaleStatus::Warning => "WARNING",
+                ScaleStatus::Error => "ERROR",
+                ScaleStatus::Unknown => "unknown",
+            };
+            let mut note = p.note.clone().unwrap_or_default();
+            if let Some(s) = p.scale {
+                if p.scale_status != ScaleStatus::Ok {
+                    note = format!("printed at {:.1} % of the intended size. {note}", s * 100.0);
+                }
+            }
+            let _ = writeln!(
+                out,
+                "{:<5} {:<9} {:<8} {}",
+                p.page,
+                scale,
+                status,
+                note.trim()
+            );
+        }
+        let problems: Vec<&MarkerVerdict> = self
+            .markers
+            .iter()
+            .filter(|m| m.status != MarkerStatus::Found)
+            .collect();
+        if !problems.is_empty() {
+            let _ = writeln!(out);
+            let _ = writeln!(out, "id     page  status        detail");
+            for m in problems {
+                let detail = match (m.status, m.read_as, &m.photo) {
+                    (MarkerStatus::Misread, Some(r), Some(p)) => format!("read as ID {r} in {p}"),
+                    (_, _, Some(p)) => format!("in {p}"),
+                    _ => "its place was not in any photo".to_string(),
+                };
+                let _ = writeln!(
+                    out,
+                    "{:<6} {:<5} {:<13} {}",
+                    m.id,
+                    m.page,
+                    m.status.label(),
+                    detail
+                );
+            }
+        }
+        let c = &self.counts;
+        let _ = writeln!(out);
+        let _ = writeln!(
+            out,
+            "{} printed: {} found, {} misread, {} unidentified, {} missing -> {}",
+            c.printed,
+            c.found,
+            c.misread,
+            c.unidentified,
+            c.missing,
+            if self.ok { "OK" } else { "PROBLEMS" }
+        );
+        out
+    }
+}
+
+/// A detector for the manifest's family (legacy WhyCon sheets carry no IDs
+/// and cannot be validated by ID).
+pub fn detector_for(manifest: &Manifest) -> anyhow::Result<crate::detect::Detector> {
+    let family_ref = match manifest.family {
+        Some(f) if !manifest.legacy => f,
+        _ => anyhow::bail!(
+            "the sheet has legacy WhyCon markers without IDs; validation matches markers by ID"
+        ),
+    };
+    let family = crate::family::Family::generate(family_ref.bits, family_ref.distance)
+        .map_err(|e| anyhow::anyhow!("the manifest's family: {e}"))?;
+    Ok(crate::detect::Detector::new(
+        crate::detect::DetectorConfig {
+            family: Some(family),
+            max_markers: manifest.markers.len() * 2 + 64,
+            tracking: false,
+            ..Default::default()
+        },
+    ))
+}
+
+/// Detects the markers in one photo and checks them against the manifest.
+pub fn check_image(
+    photo: &str,
+    manifest: &Manifest,
+    image: &GrayImage,
+    camera: Option<&Camera>,
+    detector: &mut crate::detect::Detector,
+) -> PhotoReport {
+    detector.reset();
+    let observations: Vec<Observation> = detector
+        .detect(image)
+        .iter()
+        .map(Observation::from)
+        .collect();
+    check_photo(photo, manifest, &observations, image, camera)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::manifest::FamilyRef;
+
+    #[test]
+    fn best_observation_over_photos_wins() {
+        let manifest = Manifest {
+            format: "whycode-sheet".into(),
+            version: 1,
+            tool: String::new(),
+            family: Some(FamilyRef {
+                bits: 8,
+                distance: 2,
+            }),
+            legacy: false,
+            template: String::new(),
+            page_size_mm: [100.0, 100.0],
+            pages: 1,
+            markers: vec![PrintedMarker {
+                id: 3,
+                code: 11,
+                page: 1,
+                x_mm: 50.0,
+                y_mm: 50.0,
+                diameter_mm: 40.0,
+            }],
+        };
+        let photo = |name: &str, status| PhotoReport {
+            photo: name.into(),
+            width: 10,
+            height: 10,
+            detections: 1,
+            pages: Vec::new(),
+            markers: vec![MarkerCheck {
+                status,
+                ..not_in_view(&manifest.markers[0], (1.0, 1.0))
+            }],
+            stray: Vec::new(),
+        };
+        let report = summarise(
+            &manifest,
+            vec![
+                photo("a", MarkerStatus::Unidentified),
+                photo("b", MarkerStatus::Found),
+            ],
+        );
+        assert!(report.ok);
+        assert_eq!(report.markers[0].photo.as_deref(), Some("b"));
+        let report = summarise(&manifest, vec![photo("a", MarkerStatus::NotInView)]);
+        assert!(!report.ok);
+        assert_eq!(report.markers[0].status, MarkerStatus::Missing);
+    }
+}

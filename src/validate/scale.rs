@@ -1,0 +1,426 @@
+//! The printed scale of a page, measured against the paper itself.
+//!
+//! A homography fitted to the marker centres absorbs any uniform scale of
+//! the print, so the markers alone cannot tell a 97 % print from a 100 %
+//! one. The paper can: its size is fixed. We look for the paper's edges
+//! along the normals of the page border predicted by the homography, fit a
+//! line to each edge in page coordinates, and compare the paper's size in
+//! manifest millimetres with the template's page size.
+
+use super::homography::Homography;
+use crate::camera::Camera;
+use image::GrayImage;
+use serde::Serialize;
+
+/// Above this deviation from 100 % the scale earns a warning.
+pub const SCALE_WARNING: f64 = 0.01;
+/// Above this deviation it is an error.
+pub const SCALE_ERROR: f64 = 0.03;
+
+/// Maps between image pixels and ideal (distortion-free) pixels.
+#[derive(Debug, Clone, Copy)]
+pub struct PixelModel {
+    camera: Option<Camera>,
+}
+
+impl PixelModel {
+    pub fn new(camera: Option<&Camera>) -> PixelModel {
+        PixelModel {
+            camera: camera.filter(|c| c.has_distortion()).copied(),
+        }
+    }
+
+    pub fn to_ideal(&self, u: f64, v: f64) -> (f64, f64) {
+        match &self.camera {
+            Some(c) => {
+                let (x, y) = c.undistort(u, v);
+                c.pinhole(x, y)
+            }
+            None => (u, v),
+        }
+    }
+
+    pub fn to_image(&self, x: f64, y: f64) -> (f64, f64) {
+        match &self.camera {
+            Some(c) => c.distort_normalized((x - c.cx) / c.fx, (y - c.cy) / c.fy),
+            None => (x, y),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ScaleStatus {
+    Ok,
+    Warning,
+    Error,
+    Unknown,
+}
+
+impl ScaleStatus {
+    pub fn of(scale: f64) -> ScaleStatus {
+        let deviation = (scale - 1.0).abs();
+        if deviation > SCALE_ERROR {
+            ScaleStatus::Error
+        } else if deviation > SCALE_WARNING {
+            ScaleStatus::Warning
+        } else {
+            ScaleStatus::Ok
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ScaleMeasurement {
+    /// Printed size / intended size (0.97 = "printed at 97 %").
+    pub scale: Option<f64>,
+    /// The same across the page (from its left and right edges) ...
+    pub scale_x: Option<f64>,
+    /// ... and down the page (from its top and bottom edges).
+    pub scale_y: Option<f64>,
+    pub status: ScaleStatus,
+    /// Paper edges found: "top", "right", "bottom", "left".
+    pub edges: Vec<&'static str>,
+    /// Why the scale is unknown, or a remark on it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+    /// The paper's corners in the image (top-left, top-right, bottom-right,
+    /// bottom-left) when all four edges were found.
+    #[serde(skip)]
+    pub corners: Option<[(f64, f64); 4]>,
+}
+
+impl ScaleMeasurement {
+    pub fn unknown(note: impl Into<String>) -> ScaleMeasurement {
+        ScaleMeasurement {
+            scale: None,
+            scale_x: None,
+            scale_y: None,
+            status: ScaleStatus::Unknown,
+            edges: Vec::new(),
+            note: Some(note.into()),
+            corners: None,
+        }
+    }
+}
+
+const SIDE_NAMES: [&str; 4] = ["top", "right", "bottom", "left"];
+/// Sample lines per side.
+const LINES_PER_SIDE: usize = 32;
+
+/// A fitted paper edge: its outward offset from the nominal border,
+/// `offset(s) = a + b·s`, s the coordinate along the side (mm).
+#[derive(Debug, Clone, Copy)]
+struct EdgeLine {
+    a: f64,
+    b: f64,
+}
+
+impl EdgeLine {
+    fn offset(&self, s: f64) -> f64 {
+        self.a + self.b * s
+    }
+}
+
+/// Measures the printed scale of one page. `markers` are the page's
+/// markers as (x, y, radius) in manifest millimetres; the search keeps
+/// clear of them so that a disc's edge is not taken for the paper's.
+pub fn measure(
+    image: &GrayImage,
+    model: &PixelModel,
+    homography: &Homography,
+    page_size_mm: [f64; 2],
+    markers: &[(f64, f64, f64)],
+) -> ScaleMeasurement {
+    let [w, h] = page_size_mm;
+    let mut lines: [Option<EdgeLine>; 4] = [None; 4];
+    let mut failures = Vec::new();
+    for (side, line) in lines.iter_mut().enumerate() {
+        match find_edge(image, model, homography, [w, h], markers, side) {
+            Ok(l) => *line = Some(l),
+            Err(why) => failures.push(format!("{} edge {why}", SIDE_NAMES[side])),
+        }
+    }
+    let [top, right, bottom, left] = lines;
+    // Paper width in manifest units at mid-height, height at mid-width.
+    let scale_x = match (left, right) {
+        (Some(l), Some(r)) => Some(w / (w + l.offset(h / 2.0) + r.offset(h / 2.0))),
+        _ => None,
+    };
+    let scale_y = match (top, bottom) {
+        (Some(t), Some(b)) => Some(h / (h + t.offset(w / 2.0) + b.offset(w / 2.0))),
+        _ => None,
+    };
+    let edges: Vec<&'static str> = lines
+        .iter()
+        .zip(SIDE_NAMES)
+        .filter(|(l, _)| l.is_some())
+        .map(|(_, n)| n)
+        .collect();
+    let scale = match (scale_x, scale_y) {
+        (Some(x), Some(y)) => Some((x + y) / 2.0),
+        (x, y) => x.or(y),
+    };
+    let Some(s) = scale else {
+        return ScaleMeasurement {
+            edges,
+            ..ScaleMeasurement::unknown(format!(
+                "needs two opposite paper edges: {}",
+                failures.join(", ")
+            ))
+        };
+    };
+    let mut notes = Vec::new();
+    if let (Some(x), Some(y)) = (scale_x, scale_y) {
+        if (x - y).abs() > SCALE_WARNING {
+            notes.push(format!(
+                "uneven scale: {:.1} % across, {:.1} % down",
+                x * 100.0,
+                y * 100.0
+            ));
+        }
+    } else {
+        notes.push(format!(
+            "measured {} only ({})",
+            if scale_x.is_some() { "across" } else { "down" },
+            failures.join(", ")
+        ));
+    }
+    let corners = match lines {
+        [Some(t), Some(r), Some(b), Some(l)] => paper_corners([w, h], t, r, b, l).and_then(|c| {
+            let mut out = [(0.0, 0.0); 4];
+            for (o, (x, y)) in out.iter_mut().zip(c) {
+                let (iu, iv) = homography.apply(x, y)?;
+                *o = model.to_image(iu, iv);
+            }
+            Some(out)
+        }),
+        _ => None,
+    };
+    // The worse of the two axes decides the status.
+    let worst = [scale_x, scale_y]
+        .iter()
+        .flatten()
+        .copied()
+        .max_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()))
+        .unwrap_or(s);
+    ScaleMeasurement {
+        scale: Some(s),
+        scale_x,
+        scale_y,
+        status: ScaleStatus::of(worst),
+        edges,
+        note: (!notes.is_empty()).then(|| notes.join("; ")),
+        corners,
+    }
+}
+
+/// Corners of the paper in manifest coordinates from its four edge lines.
+fn paper_corners(
+    [w, h]: [f64; 2],
+    top: EdgeLine,
+    right: EdgeLine,
+    bottom: EdgeLine,
+    left: EdgeLine,
+) -> Option<[(f64, f64); 4]> {
+    // top: y = -(a + b x); bottom: y = h + a + b x;
+    // left: x = -(a + b y); right: x = w + a + b y.
+    let solve = |hy: (f64, f64, f64), vx: (f64, f64, f64)| -> Option<(f64, f64)> {
+        // y = hy.0 + hy.1 * x ; x = vx.0 + vx.1 * y
+        let det = 1.0 - hy.1 * vx.1;
+        if det.abs() < 1e-9 {
+            return None;
+        }
+        let x = (vx.0 + vx.1 * hy.0) / det;
+        Some((x, hy.0 + hy.1 * x))
+    };
+    let t = (-top.a, -top.b, 0.0);
+    let b = (h + bottom.a, bottom.b, 0.0);
+    let l = (-left.a, -left.b, 0.0);
+    let r = (w + right.a, right.b, 0.0);
+    Some([solve(t, l)?, solve(t, r)?, solve(b, r)?, solve(b, l)?])
+}
+
+/// Bilinear grey value, `None` outside the image.
+fn sample(image: &GrayImage, u: f64, v: f64) -> Option<f64> {
+    let (w, h) = (f64::from(image.width()), f64::from(image.height()));
+    if !(u >= 0.0 && v >= 0.0 && u <= w - 1.0 && v <= h - 1.0) {
+        return None;
+    }
+    let (x0, y0) = (u.floor() as u32, v.floor() as u32);
+    let (x1, y1) = (
+        (x0 + 1).min(image.width() - 1),
+        (y0 + 1).min(image.height() - 1),
+    );
+    let (tx, ty) = (u - f64::from(x0), v - f64::from(y0));
+    let at = |x: u32, y: u32| f64::from(image.get_pixel(x, y)[0]);
+    Some(
+        (at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx) * (1.0 - ty)
+            + (at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx) * ty,
+    )
+}
+
+/// Finds one paper edge. Side 0..4 = top, right, bottom, left.
+fn find_edge(
+    image: &GrayImage,
+    model: &PixelModel,
+    homography: &Homography,
+    [w, h]: [f64; 2],
+    markers: &[(f64, f64, f64)],
+    side: usize,
+) -> Result<EdgeLine, String> {
+    // Base point on the nominal border at along-side coordinate s, and the
+    // outward normal.
+    let (length, across) = if side % 2 == 0 { (w, h) } else { (h, w) };
+    let base = |s: f64| -> (f64, f64) {
+        match side {
+            0 => (s, 0.0),
+            1 => (w, s),
+            2 => (s, h),
+            _ => (0.0, s),
+        }
+    };
+    let normal = match side {
+        0 => (0.0, -1.0),
+        1 => (1.0, 0.0),
+        2 => (0.0, 1.0),
+        _ => (-1.0, 0.0),
+    };
+    // Prints from about 85 % to 115 % keep their paper edge in this range.
+    let half = across / 2.0;
+    let (t_lo, t_hi) = (-0.12 * half, 0.2 * half);
+
+    let mut points: Vec<(f64, f64)> = Vec::new();
+    let mut out_of_view = 0;
+    let mut low_contrast = 0;
+    for k in 0..LINES_PER_SIDE {
+        let s = length * (0.1 + 0.8 * (k as f64 + 0.5) / LINES_PER_SIDE as f64);
+        let b = base(s);
+        let mut t_start = t_lo;
+        for &(mx, my, r) in markers {
+            let (dx, dy) = (mx - b.0, my - b.1);
+            let along = dx * normal.0 + dy * normal.1;
+            let perpendicular = (dx * normal.1 - dy * normal.0).abs();
+            let clearance = 1.15 * r;
+            if perpendicular < clearance {
+                t_start = t_start.max(along + clearance);
+            }
+        }
+        if t_start >= t_hi - 0.02 * half {
+            continue;
+        }
+        let to_image = |t: f64| -> Option<(f64, f64)> {
+            let (x, y) = (b.0 + t * normal.0, b.1 + t * normal.1);
+            let (iu, iv) = homography.apply(x, y)?;
+            Some(model.to_image(iu, iv))
+        };
+        // Step of about half a pixel in the image.
+        let j = homography.jacobian(b.0, b.1);
+        let px_per_mm = (j * nalgebra::Vector2::new(normal.0, normal.1)).norm();
+        if px_per_mm.is_nan() || px_per_mm <= 1e-6 {
+            continue;
+        }
+        let step = 0.5 / px_per_mm;
+        let count = (((t_hi - t_start) / step).ceil() as usize).min(4000);
+        let mut profile = Vec::with_capacity(count);
+        for i in 0..count {
+            let t = t_start + i as f64 * step;
+            match to_image(t).and_then(|(u, v)| sample(image, u, v)) {
+                Some(g) => profile.push(g),
+                None => break,
+            }
+        }
+        // Windows of ~2.5 mm (at least 3 px): the paper edge is the
+        // strongest bright-to-dark step on that scale; thin printed strokes
+        // and small clutter score less.
+        let window = ((2.5 / step).round() as usize).clamp(6, 40);
+        if profile.len() < 2 * window + 3 {
+            out_of_view += 1;
+            continue;
+        }
+        let mut prefix = vec![0.0; profile.len() + 1];
+        for (i, g) in profile.iter().enumerate() {
+            prefix[i + 1] = prefix[i] + g;
+        }
+        let mean = |a: usize, b: usize| (prefix[b] - prefix[a]) / (b - a) as f64;
+        let (mut best_i, mut best_step, mut best_inside) = (0, f64::MIN, 0.0);
+        for i in window..profile.len() - window {
+            let inside = mean(i - window, i);
+            let stepv = inside - mean(i, i + window);
+            if stepv > best_step {
+                (best_i, best_step, best_inside) = (i, stepv, inside);
+            }
+        }
+        if best_step < 12.0f64.max(0.25 * best_inside) {
+            low_contrast += 1;
+            continue;
+        }
+        // Sub-sample location: the steepest descent near the step, refined
+        // by a parabola through the gradient.
+        let lo = best_i.saturating_sub(window / 2).max(1);
+        let hi = (best_i + window / 2).min(profile.len() - 2);
+        let grad = |i: usize| profile[i - 1] - profile[i + 1];
+        let peak = (lo..=hi)
+            .max_by(|&a, &b| grad(a).total_cmp(&grad(b)))
+            .unwrap_or(best_i);
+        let mut pos = peak as f64;
+        if peak > lo && peak < hi {
+            let (gm, g0, gp) = (grad(peak - 1), grad(peak), grad(peak + 1));
+            let denom = gm - 2.0 * g0 + gp;
+            if denom.abs() > 1e-9 {
+                pos += (0.5 * (gm - gp) / denom).clamp(-0.5, 0.5);
+            }
+        }
+        points.push((s, t_start + pos * step));
+    }
+    if points.len() < 6 {
+        return Err(if out_of_view >= low_contrast && out_of_view > 0 {
+            "is not in the photo".to_string()
+        } else if low_contrast > 0 {
+            "shows no contrast against the background".to_string()
+        } else {
+            "is hidden behind markers".to_string()
+        });
+    }
+    fit_edge_line(&points).ok_or_else(|| "is not straight (folded or occluded?)".to_string())
+}
+
+/// Robust straight-line fit offset = a + b·s: least squares, then again
+/// without the points far from the first fit.
+fn fit_edge_line(points: &[(f64, f64)]) -> Option<EdgeLine> {
+    let fit = |pts: &[(f64, f64)]| -> Option<EdgeLine> {
+        let n = pts.len() as f64;
+        let (ms, mt) = pts
+            .iter()
+            .fold((0.0, 0.0), |(a, b), p| (a + p.0 / n, b + p.1 / n));
+        let sxx: f64 = pts.iter().map(|p| (p.0 - ms).powi(2)).sum();
+        let sxy: f64 = pts.iter().map(|p| (p.0 - ms) * (p.1 - mt)).sum();
+        if sxx <= 0.0 {
+            return None;
+        }
+        let b = sxy / sxx;
+        Some(EdgeLine { a: mt - b * ms, b })
+    };
+    let mut line = fit(points)?;
+    for _ in 0..3 {
+        let mut residuals: Vec<f64> = points
+            .iter()
+            .map(|p| (p.1 - line.offset(p.0)).abs())
+            .collect();
+        let mut sorted = residuals.clone();
+        sorted.sort_by(f64::total_cmp);
+        let mad = sorted[sorted.len() / 2];
+        let limit = (3.0 * 1.4826 * mad).max(0.15);
+        let kept: Vec<(f64, f64)> = points
+            .iter()
+            .zip(residuals.iter_mut())
+            .filter(|(_, r)| **r <= limit)
+            .map(|(p, _)| *p)
+            .collect();
+        if kept.len() < 6 || kept.len() * 5 < points.len() * 2 {
+            return None;
+        }
+        line = fit(&kept)?;
+    }
+    Some(line)
+}

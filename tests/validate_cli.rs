@@ -1,0 +1,112 @@
+//! `whycode simulate` and `whycode validate` end to end through the binary:
+//! files in, report and exit status out.
+
+use std::path::Path;
+use std::process::Command;
+
+mod validate_common;
+
+fn whycode(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_whycode"))
+        .args(args)
+        .output()
+        .expect("whycode runs")
+}
+
+fn simulate_photo(dir: &Path, name: &str, extra: &[&str]) -> String {
+    let manifest = dir.join("sheet.json");
+    validate_common::a4_manifest().save(&manifest).unwrap();
+    let photo = dir.join(name);
+    let mut args = vec![
+        "simulate",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "--size",
+        "1600x1200",
+        "--tilt",
+        "20deg",
+        "--pan",
+        "-10deg",
+        "--blur",
+        "1px",
+        "--noise",
+        "3",
+        "--gradient",
+        "2.5",
+        "-o",
+        photo.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let out = whycode(&args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(photo.exists() && photo.with_extension("json").exists());
+    photo.to_str().unwrap().to_string()
+}
+
+#[test]
+fn simulated_photo_validates_with_exit_0_and_annotates() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = simulate_photo(dir.path(), "good.jpg", &["--jpeg", "90"]);
+    let manifest = dir.path().join("sheet.json");
+    let annotated = dir.path().join("out");
+    let out = whycode(&[
+        "validate",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        &photo,
+        "--annotate",
+        annotated.to_str().unwrap(),
+        "--format",
+        "json",
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}");
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(report["ok"], true);
+    assert_eq!(report["counts"]["found"], 12);
+    let picture = image::open(annotated.join("good.annotated.png")).unwrap();
+    assert_eq!((picture.width(), picture.height()), (1600, 1200));
+}
+
+#[test]
+fn shrunken_print_and_blot_fail_with_exit_2_and_a_readable_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = simulate_photo(
+        dir.path(),
+        "bad.png",
+        &["--print-scale", "95%", "--blot", "8"],
+    );
+    let manifest = dir.path().join("sheet.json");
+    let out = whycode(&["validate", "--manifest", manifest.to_str().unwrap(), &photo]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(2), "{stdout}");
+    assert!(stdout.contains("printed at 95."), "{stdout}");
+    let line8 = stdout
+        .lines()
+        .find(|l| l.starts_with("8 "))
+        .unwrap_or_else(|| panic!("no line for marker 8 in\n{stdout}"));
+    assert!(
+        line8.contains("unidentified") || line8.contains("misread"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn bad_input_is_one_line_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("nope.json");
+    let out = whycode(&["validate", "--manifest", missing.to_str().unwrap(), "x.jpg"]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.starts_with("whycode: error: ") && stderr.lines().count() == 1,
+        "{stderr}"
+    );
+    let out = whycode(&["simulate", "--bits", "8", "--ids", "1-40", "-o", "x.png"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not in the 8-bit family"));
+}
