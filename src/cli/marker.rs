@@ -10,6 +10,13 @@ use std::process::ExitCode;
 
 /// Render one marker; the format follows the output's extension (.svg, .pdf, .png).
 #[derive(Debug, clap::Args)]
+#[command(
+    after_help = "The page is the black disc plus its white margin, at exact size; the \
+format follows the output's extension.\n\nExamples:\n  \
+whycode marker --bits 8 --distance 2 --id 5 --diameter 50mm -o id5.pdf\n  \
+whycode marker --bits 8 --id 5 --diameter 2in --dpi 600 -o id5.png\n  \
+whycode marker --legacy --diameter 122mm -o whycon.svg"
+)]
 pub struct MarkerArgs {
     /// Code length of the family, in bits
     #[arg(long, required_unless_present = "legacy")]

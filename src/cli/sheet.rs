@@ -13,6 +13,16 @@ use std::process::ExitCode;
 /// per page (name-1.svg, name-2.svg, ... when there is more than one page).
 /// A manifest (name.json) records where each marker is.
 #[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Output: PDF is one file; SVG and PNG are one file per page, named NAME-1.svg, \
+NAME-2.svg, ... when there is more than one page. NAME.json next to the output records every \
+marker's ID, code, page and centre (mm from the page's top-left corner). Before writing, every \
+page is rendered at 300 dpi and at a coarse resolution and each marker must read back as its \
+own ID (--no-check skips this).\n\nExamples:\n  \
+whycode sheet --bits 8 --distance 2 --ids 1-16 --diameter 40mm --template a4 -o swarm.pdf\n  \
+whycode sheet --bits 12 --distance 3 --all --diameter 30mm --template letter -o set.svg\n  \
+whycode sheet --legacy --count 6 --diameter 80mm -o whycon.pdf"
+)]
 pub struct SheetArgs {
     /// Code length of the family, in bits
     #[arg(long, required_unless_present_any = ["legacy", "list_templates"])]
