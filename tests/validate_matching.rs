@@ -154,8 +154,15 @@ fn lens_distortion_is_removed_with_the_camera_calibration() {
     let report = check_photo("p.png", &manifest, &obs, &image, Some(&camera));
     let scale = report.pages[0].scale.scale.unwrap();
     assert!((scale - 0.98).abs() < 0.003, "scale {scale}");
-    assert!(report.pages[0].rms_px < 0.5, "rms {}", report.pages[0].rms_px);
-    assert!(report.markers.iter().all(|m| m.status == MarkerStatus::Found));
+    assert!(
+        report.pages[0].rms_px < 0.5,
+        "rms {}",
+        report.pages[0].rms_px
+    );
+    assert!(report
+        .markers
+        .iter()
+        .all(|m| m.status == MarkerStatus::Found));
 }
 
 #[test]
@@ -164,14 +171,16 @@ fn two_pages_in_two_photos_combine_into_one_verdict() {
     let mut manifest = a4_manifest();
     manifest.pages = 2;
     for (k, id) in (13..=16u32).enumerate() {
-        manifest.markers.push(whycode::render::manifest::PrintedMarker {
-            id,
-            code: family.code(id).unwrap(),
-            page: 2,
-            x_mm: 60.0 + 90.0 * (k % 2) as f64,
-            y_mm: 70.0 + 150.0 * (k / 2) as f64,
-            diameter_mm: 60.0,
-        });
+        manifest
+            .markers
+            .push(whycode::render::manifest::PrintedMarker {
+                id,
+                code: family.code(id).unwrap(),
+                page: 2,
+                x_mm: 60.0 + 90.0 * (k % 2) as f64,
+                y_mm: 70.0 + 150.0 * (k / 2) as f64,
+                diameter_mm: 60.0,
+            });
     }
     let mut reports = Vec::new();
     for page in [1, 2] {
@@ -181,7 +190,12 @@ fn two_pages_in_two_photos_combine_into_one_verdict() {
         scene.objects.push(SceneObject::Page(SheetPage::new(
             manifest.clone(),
             page,
-            layout::centred(layout::distance_to_fill(&camera, 210.0, 297.0, 0.8), 0.2, 0.0, 0.0),
+            layout::centred(
+                layout::distance_to_fill(&camera, 210.0, 297.0, 0.8),
+                0.2,
+                0.0,
+                0.0,
+            ),
         )));
         let (image, truth) = render(&scene);
         reports.push(check_photo(
