@@ -216,3 +216,24 @@ fn two_pages_in_two_photos_combine_into_one_verdict() {
     assert_eq!(both.counts.found, 16);
     assert!(both.pages.iter().all(|p| p.scale_status == ScaleStatus::Ok));
 }
+
+#[test]
+fn a_marker_printed_at_another_size_is_noted() {
+    let manifest = a4_manifest();
+    let mut printed = manifest.clone();
+    printed.markers[5].diameter_mm = 38.0; // ID 6, 45 mm in the manifest
+    let (image, truth) = photo(&printed, &Photo::default());
+    let report = check_photo(
+        "p.jpg",
+        &manifest,
+        &ideal_observations(&truth),
+        &image,
+        None,
+    );
+    let odd = &report.pages[0].odd_sizes;
+    assert_eq!(odd.len(), 1, "{odd:?}");
+    assert_eq!(odd[0].id, 6);
+    assert!((odd[0].relative_size - 38.0 / 45.0).abs() < 0.02, "{odd:?}");
+    let table = summarise(&manifest, vec![report]).to_table();
+    assert!(table.contains("marker 6 on page 1 is -16 %"), "{table}");
+}
