@@ -13,7 +13,7 @@ use nalgebra::{Matrix2, Vector2, Vector3};
 use serde_yaml::Value;
 
 /// Intrinsic calibration of one camera.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Camera {
     pub fx: f64,
     pub fy: f64,
@@ -174,8 +174,10 @@ impl Camera {
     }
 
     /// Read a calibration file: a ROS `camera_info` YAML (as written by
-    /// `camera_calibration`, or the message form with `K`/`D`), or an OpenCV
-    /// FileStorage YAML (`%YAML:1.0`, `!!opencv-matrix`).
+    /// `camera_calibration`, or the message form with `K`/`D` or `k`/`d`),
+    /// an OpenCV FileStorage YAML (`%YAML:1.0`, `!!opencv-matrix`) or XML,
+    /// or a Kalibr camchain YAML (first camera, pinhole/radtan).
+    /// Errors carry the file name as context and say what is missing.
     pub fn load(path: impl AsRef<Path>) -> Result<Camera> {
         let path = path.as_ref();
         let text = std::fs::read_to_string(path)
@@ -186,21 +188,30 @@ impl Camera {
 
     /// Parse the text of a calibration file (see [`Camera::load`]).
     pub fn parse(text: &str) -> Result<Camera> {
-        let cleaned = strip_opencv_yaml(text);
-        let doc: Value = serde_yaml::from_str(&cleaned)
-            .map_err(|e| anyhow!("not a readable calibration YAML: {}", one_line(&e)))?;
+        let doc = if text.trim_start().starts_with("<?xml") || text.contains("<opencv_storage>") {
+            opencv_xml_to_value(text)?
+        } else {
+            let cleaned = strip_opencv_yaml(text);
+            serde_yaml::from_str(&cleaned)
+                .map_err(|e| anyhow!("not a readable calibration YAML: {}", one_line(&e)))?
+        };
         let Value::Mapping(_) = doc else {
             bail!("not a camera calibration (expected a YAML mapping)");
         };
+        // Kalibr camchain files nest each camera under cam0, cam1, ...
+        let doc = match field(&doc, &["cam0"]) {
+            Some(cam0) if field(&doc, CAMERA_MATRIX_KEYS).is_none() => cam0.clone(),
+            _ => doc,
+        };
 
-        let k = matrix_field(
-            &doc,
-            &["camera_matrix", "cameraMatrix", "K", "k", "intrinsics"],
-        )?
-        .ok_or_else(|| anyhow!("missing camera_matrix (or K)"))?;
-        if k.len() != 9 {
-            bail!("camera_matrix has {} values, expected 9 (3x3)", k.len());
-        }
+        let k = matrix_field(&doc, CAMERA_MATRIX_KEYS)?
+            .ok_or_else(|| anyhow!("missing camera_matrix (or K)"))?;
+        let k = match k.len() {
+            9 => k,
+            // Kalibr: [fu, fv, pu, pv].
+            4 => vec![k[0], 0.0, k[2], 0.0, k[1], k[3], 0.0, 0.0, 1.0],
+            n => bail!("camera_matrix has {n} values, expected 9 (3x3)"),
+        };
         let (fx, skew, cx, fy, cy) = (k[0], k[1], k[2], k[4], k[5]);
         if !(fx > 0.0 && fy > 0.0 && fx.is_finite() && fy.is_finite()) {
             bail!("camera_matrix has invalid focal lengths fx={fx}, fy={fy}");
@@ -219,6 +230,11 @@ impl Camera {
                 bail!("unsupported distortion_model {model:?} (only plumb_bob)");
             }
         }
+        if let Some(model) = field(&doc, &["camera_model"]).and_then(Value::as_str) {
+            if model != "pinhole" {
+                bail!("unsupported camera_model {model:?} (only pinhole)");
+            }
+        }
         let coefficients = matrix_field(
             &doc,
             &[
@@ -226,6 +242,7 @@ impl Camera {
                 "distortionCoefficients",
                 "dist_coeffs",
                 "distCoeffs",
+                "distortion_coeffs",
                 "D",
                 "d",
             ],
@@ -237,7 +254,7 @@ impl Camera {
         }
         if coefficients.len() > 5 && coefficients[5..].iter().any(|&c| c != 0.0) {
             bail!(
-                "distortion_coefficients has {} non-zero-extended values; only the 5-term \
+                "distortion_coefficients has {} terms with non-zero k4.. ; only the 5-term \
                  plumb_bob model (k1 k2 p1 p2 k3) is supported",
                 coefficients.len()
             );
@@ -246,10 +263,26 @@ impl Camera {
             bail!("distortion_coefficients contains a non-finite value");
         }
 
-        let width = size_field(&doc, &["image_width", "imageWidth", "width"])?
-            .ok_or_else(|| anyhow!("missing image_width"))?;
-        let height = size_field(&doc, &["image_height", "imageHeight", "height"])?
-            .ok_or_else(|| anyhow!("missing image_height"))?;
+        // Kalibr gives `resolution: [width, height]` instead.
+        let resolution = matrix_field(&doc, &["resolution"])?;
+        let from_resolution = |index: usize, name: &str| -> Result<Option<u32>> {
+            match &resolution {
+                Some(r) if r.len() == 2 => image_size(r[index], name).map(Some),
+                Some(_) => bail!("resolution must be [width, height]"),
+                None => Ok(None),
+            }
+        };
+        let width = match size_field(&doc, &["image_width", "imageWidth", "width"])? {
+            Some(w) => w,
+            None => {
+                from_resolution(0, "image_width")?.ok_or_else(|| anyhow!("missing image_width"))?
+            }
+        };
+        let height = match size_field(&doc, &["image_height", "imageHeight", "height"])? {
+            Some(h) => h,
+            None => from_resolution(1, "image_height")?
+                .ok_or_else(|| anyhow!("missing image_height"))?,
+        };
 
         Ok(Camera {
             fx,
@@ -260,6 +293,91 @@ impl Camera {
             width,
             height,
         })
+    }
+}
+
+const CAMERA_MATRIX_KEYS: &[&str] = &["camera_matrix", "cameraMatrix", "K", "k", "intrinsics"];
+
+/// The subset of OpenCV's FileStorage XML a calibration uses: top-level
+/// scalars (`<image_width>640</image_width>`) and matrices
+/// (`<camera_matrix type_id="opencv-matrix"><rows>..<data>..</data>`),
+/// turned into the same structure the YAML reader produces.
+fn opencv_xml_to_value(text: &str) -> Result<Value> {
+    let body = inner_xml(text, "opencv_storage").ok_or_else(|| {
+        anyhow!("not an OpenCV calibration XML (no complete <opencv_storage> element)")
+    })?;
+    let mut map = serde_yaml::Mapping::new();
+    let mut rest = body;
+    while let Some(open) = rest.find('<') {
+        let after = &rest[open + 1..];
+        if after.starts_with('!') || after.starts_with('?') || after.starts_with('/') {
+            rest = &after[after.find('>').map_or(after.len(), |i| i + 1)..];
+            continue;
+        }
+        let name_end = after
+            .find(|c: char| c.is_whitespace() || c == '>' || c == '/')
+            .ok_or_else(|| anyhow!("malformed XML element"))?;
+        let name = &after[..name_end];
+        let content = inner_xml(rest, name)
+            .ok_or_else(|| anyhow!("malformed XML: <{name}> is not closed"))?;
+        let value = match inner_xml(content, "data") {
+            Some(data) => Value::Sequence(data.split_whitespace().map(|t| t.into()).collect()),
+            None => content.trim().trim_matches('"').into(),
+        };
+        map.insert(name.into(), value);
+        let close = format!("</{name}>");
+        let end = rest
+            .find(&close)
+            .ok_or_else(|| anyhow!("malformed XML: <{name}> is not closed"))?;
+        rest = &rest[end + close.len()..];
+    }
+    Ok(Value::Mapping(map))
+}
+
+/// Text between the first `<tag ...>` and its `</tag>`.
+fn inner_xml<'a>(text: &'a str, tag: &str) -> Option<&'a str> {
+    let mut search = 0;
+    let start = loop {
+        let found = search + text[search..].find(&format!("<{tag}"))?;
+        let next = text[found + 1 + tag.len()..].chars().next()?;
+        if next == '>' || next.is_whitespace() {
+            break found + text[found..].find('>')? + 1;
+        }
+        search = found + 1;
+    };
+    let end = start + text[start..].find(&format!("</{tag}>"))?;
+    Some(&text[start..end])
+}
+
+impl Camera {
+    /// The calibration as a ROS `camera_info` YAML file (the format
+    /// `camera_calibration` writes), which [`Camera::load`] reads back
+    /// exactly.
+    pub fn to_ros_yaml(&self, camera_name: &str) -> String {
+        let list = |values: &[f64]| {
+            values
+                .iter()
+                .map(|v| format!("{v:?}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let (fx, fy, cx, cy) = (self.fx, self.fy, self.cx, self.cy);
+        format!(
+            "image_width: {}\nimage_height: {}\ncamera_name: {}\n\
+             camera_matrix:\n  rows: 3\n  cols: 3\n  data: [{}]\n\
+             distortion_model: plumb_bob\n\
+             distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [{}]\n\
+             rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]\n\
+             projection_matrix:\n  rows: 3\n  cols: 4\n  data: [{}]\n",
+            self.width,
+            self.height,
+            serde_yaml::to_string(camera_name)
+                .map(|s| s.trim_end().to_string())
+                .unwrap_or_default(),
+            list(&[fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0]),
+            list(&self.distortion),
+            list(&[fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0]),
+        )
     }
 }
 
@@ -342,10 +460,14 @@ fn size_field(doc: &Value, names: &[&str]) -> Result<Option<u32>> {
         return Ok(None);
     };
     let n = number(value).ok_or_else(|| anyhow!("{} is not a number", names[0]))?;
+    image_size(n, names[0]).map(Some)
+}
+
+fn image_size(n: f64, name: &str) -> Result<u32> {
     if !((1.0..=1_000_000.0).contains(&n) && n.fract() == 0.0) {
-        bail!("{} = {n} is not a valid image size", names[0]);
+        bail!("{name} = {n} is not a valid image size");
     }
-    Ok(Some(n as u32))
+    Ok(n as u32)
 }
 
 fn untag(value: &Value) -> &Value {
@@ -535,6 +657,62 @@ avg_reprojection_error: 2.1e-01
         }
     }
 
+    const OPENCV_XML: &str = r#"<?xml version="1.0"?>
+<opencv_storage>
+<calibration_time>"Mon 01 Jan 2024"</calibration_time>
+<!-- written by the calibration sample -->
+<image_width>640</image_width>
+<image_height>480</image_height>
+<camera_matrix type_id="opencv-matrix">
+  <rows>3</rows>
+  <cols>3</cols>
+  <dt>d</dt>
+  <data>
+    6.1e+02 0. 3.184e+02 0. 6.12e+02 2.431e+02 0. 0. 1.</data></camera_matrix>
+<distortion_coefficients type_id="opencv-matrix">
+  <rows>5</rows>
+  <cols>1</cols>
+  <dt>d</dt>
+  <data>
+    -2.8e-01 9.0e-02 1.2e-03 -8.0e-04 -1.2e-02</data></distortion_coefficients>
+<avg_reprojection_error>2.1e-01</avg_reprojection_error>
+</opencv_storage>
+"#;
+
+    const KALIBR: &str = "\
+cam0:
+  camera_model: pinhole
+  intrinsics: [610.0, 612.0, 318.4, 243.1]
+  distortion_model: radtan
+  distortion_coeffs: [-0.28, 0.09, 0.0012, -0.0008]
+  resolution: [640, 480]
+  rostopic: /cam0/image_raw
+";
+
+    #[test]
+    fn parses_opencv_xml_and_kalibr() {
+        assert_eq!(Camera::parse(OPENCV_XML).unwrap(), distorted());
+        let kalibr = Camera::parse(KALIBR).unwrap();
+        assert_eq!(
+            kalibr,
+            Camera {
+                distortion: [-0.28, 0.09, 0.0012, -0.0008, 0.0],
+                ..distorted()
+            }
+        );
+    }
+
+    #[test]
+    fn ros_yaml_writer_round_trips() {
+        let cam = Camera {
+            fx: 1234.5678901234,
+            cx: 0.1 + 0.2,
+            ..distorted()
+        };
+        let text = cam.to_ros_yaml("front: camera");
+        assert_eq!(Camera::parse(&text).unwrap(), cam, "{text}");
+    }
+
     #[test]
     fn parses_opencv_tutorial_key_spelling_and_four_coefficients() {
         let text = "%YAML:1.0\nimage_Width: 800\nimage_Height: 600\n\
@@ -574,6 +752,21 @@ avg_reprojection_error: 2.1e-01
             ),
             ("garbage.yaml", "{ this is: [not yaml\n", "YAML"),
             ("list.yaml", "- 1\n- 2\n", "mapping"),
+            (
+                "open.xml",
+                "<?xml version=\"1.0\"?>\n<opencv_storage>\n<camera_matrix><data>1 0\n</opencv_storage>",
+                "not closed",
+            ),
+            (
+                "other.xml",
+                "<?xml version=\"1.0\"?>\n<svg></svg>\n",
+                "opencv_storage",
+            ),
+            (
+                "wide.yaml",
+                "width: 4\nheight: 4\nK: [1,0,1,0,1,1,0,0,1]\nD: [0, 0, 0, 0, 0, 0.3, 0, 0]\n",
+                "plumb_bob",
+            ),
         ];
         for (name, text, expected) in cases {
             let path = dir.path().join(name);

@@ -52,9 +52,22 @@ pub fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(err) => {
-            // One line: the context chain joined with ": ".
-            eprintln!("whycode: error: {err:#}");
+            eprintln!("whycode: error: {}", one_line(&err));
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error's context chain joined with ": " on one line. Causes whose text
+/// their parent already quotes (image decoding errors do) are left out.
+pub(crate) fn one_line(err: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in err.chain() {
+        let text = cause.to_string().split_whitespace().collect::<Vec<_>>().join(" ");
+        if text.is_empty() || parts.last().is_some_and(|p| p.contains(&text)) {
+            continue;
+        }
+        parts.push(text);
+    }
+    parts.join(": ")
 }

@@ -1,9 +1,195 @@
-use anyhow::Result;
+use crate::family::Family;
+use crate::render::check::check_sheet;
+use crate::render::manifest::FamilyRef;
+use crate::render::sheet::{family_markers, layout, legacy_markers, SheetSpec};
+use crate::render::template::Template;
+use crate::render::{encode_pages, write_all, Format};
+use crate::units::Length;
+use anyhow::{bail, Context, Result};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// Lay out markers on print pages; PDF gives one file, SVG and PNG one file
+/// per page (name-1.svg, name-2.svg, ... when there is more than one page).
+/// A manifest (name.json) records where each marker is.
 #[derive(Debug, clap::Args)]
-pub struct SheetArgs {}
+pub struct SheetArgs {
+    /// Code length of the family, in bits
+    #[arg(long, required_unless_present_any = ["legacy", "list_templates"])]
+    bits: Option<u32>,
+    /// Minimum Hamming distance of the family
+    #[arg(long, default_value_t = 2)]
+    distance: u32,
+    /// IDs to print: a list of IDs and ranges, e.g. 1-5,9,12-14
+    #[arg(long, conflicts_with_all = ["all", "legacy"])]
+    ids: Option<String>,
+    /// Print every ID of the family
+    #[arg(long, conflicts_with = "legacy")]
+    all: bool,
+    /// Legacy WhyCon circles without IDs (with --count)
+    #[arg(long, conflicts_with = "bits", requires = "count")]
+    legacy: bool,
+    /// Number of legacy WhyCon circles
+    #[arg(long, requires = "legacy")]
+    count: Option<usize>,
+    /// Outer diameter of the black disc, with a unit (40mm, 4cm, 1.5in)
+    #[arg(long, required_unless_present = "list_templates")]
+    diameter: Option<Length>,
+    /// Page template: a built-in name (see --list-templates) or a .toml file
+    #[arg(long, default_value = "a4")]
+    template: String,
+    /// Resolution of PNG output, in dots per inch
+    #[arg(long, default_value_t = 300.0)]
+    dpi: f64,
+    /// Skip the self-check that renders each page and reads every marker back
+    #[arg(long)]
+    no_check: bool,
+    /// List the built-in templates and exit
+    #[arg(long)]
+    list_templates: bool,
+    /// Output file: .pdf, .svg or .png
+    #[arg(short, long, required_unless_present = "list_templates")]
+    output: Option<PathBuf>,
+}
 
-pub fn run(_args: SheetArgs) -> Result<ExitCode> {
-    anyhow::bail!("'sheet' is not implemented yet")
+/// Parses "1-5,9,12-14" into IDs in the order given.
+pub fn parse_id_list(text: &str) -> Result<Vec<u32>> {
+    let mut ids = Vec::new();
+    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+        let parse = |s: &str| -> Result<u32> {
+            s.trim()
+                .parse()
+                .with_context(|| format!("--ids: '{part}' is not an ID or a range like 3-7"))
+        };
+        match part.split_once('-') {
+            Some((a, b)) => {
+                let (a, b) = (parse(a)?, parse(b)?);
+                if a > b {
+                    bail!("--ids: range '{part}' runs backwards");
+                }
+                if b - a >= 1_000_000 {
+                    bail!("--ids: range '{part}' is too long");
+                }
+                ids.extend(a..=b);
+            }
+            None => ids.push(parse(part)?),
+        }
+    }
+    if ids.is_empty() {
+        bail!("--ids: no IDs given");
+    }
+    Ok(ids)
+}
+
+pub fn run(args: SheetArgs) -> Result<ExitCode> {
+    if args.list_templates {
+        for t in Template::all_builtin() {
+            println!(
+                "{:<8} {:>6} x {:<6} mm  margin {} mm  {}",
+                t.name,
+                crate::units::trim_float(t.page_width_mm),
+                crate::units::trim_float(t.page_height_mm),
+                crate::units::trim_float(t.margin_mm),
+                t.description
+            );
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let output = args.output.expect("clap requires --output");
+    let diameter = args.diameter.expect("clap requires --diameter").mm();
+    let format = Format::from_path(&output)?;
+    if format == Format::Png && !(args.dpi.is_finite() && (10.0..=1200.0).contains(&args.dpi)) {
+        bail!("--dpi must be between 10 and 1200, got {}", args.dpi);
+    }
+    crate::render::check_output_dir(&output)?;
+    let template = Template::resolve(&args.template)?;
+    let mut check_family = None;
+    let (markers, family) = if args.legacy {
+        let count = args.count.expect("clap requires --count with --legacy");
+        if count == 0 || count > 100_000 {
+            bail!("--count must be between 1 and 100000, got {count}");
+        }
+        (legacy_markers(count, diameter), None)
+    } else {
+        let bits = args.bits.expect("clap requires --bits without --legacy");
+        let family = Family::generate(bits, args.distance)?;
+        let ids: Vec<u32> = match (&args.ids, args.all) {
+            (Some(list), _) => parse_id_list(list)?,
+            (None, true) => (1..=family.len() as u32).collect(),
+            (None, false) => bail!("say which markers to print: --ids 1-16 or --all"),
+        };
+        let markers = family_markers(&family, &ids, diameter)?;
+        check_family = Some(family);
+        (
+            markers,
+            Some(FamilyRef {
+                bits,
+                distance: args.distance,
+            }),
+        )
+    };
+    let name = output
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let spec = SheetSpec {
+        markers,
+        template,
+        name: name.clone(),
+        family,
+        legacy: args.legacy,
+    };
+    let sheet = layout(&spec)?;
+    if args.no_check {
+        eprintln!("whycode: note: self-check skipped (--no-check): the markers were not read back before writing");
+    } else {
+        let report = check_sheet(&sheet, check_family.as_ref())?;
+        let dpis: Vec<String> = report.resolutions.iter().map(|d| format!("{d}")).collect();
+        let what = if args.legacy {
+            "found in place"
+        } else {
+            "read back as its own ID, upright,"
+        };
+        eprintln!(
+            "whycode: self-check passed: every marker {what} at {} dpi",
+            dpis.join(" and ")
+        );
+    }
+    let mut files = encode_pages(&sheet.pages, &output, &name, args.dpi)?;
+    files.push((
+        output.with_extension("json"),
+        sheet.manifest.to_json().into_bytes(),
+    ));
+    write_all(&files)?;
+    let written: Vec<String> = files.iter().map(|(p, _)| p.display().to_string()).collect();
+    eprintln!(
+        "whycode: {} markers on {} page{}: {}",
+        sheet.manifest.markers.len(),
+        sheet.pages.len(),
+        if sheet.pages.len() == 1 { "" } else { "s" },
+        written.join(", ")
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_id_list;
+
+    #[test]
+    fn id_lists_take_ranges_and_single_ids() {
+        assert_eq!(
+            parse_id_list("1-5,9, 12-14").unwrap(),
+            [1, 2, 3, 4, 5, 9, 12, 13, 14]
+        );
+        assert!(parse_id_list("5-3")
+            .unwrap_err()
+            .to_string()
+            .contains("backwards"));
+        assert!(parse_id_list("1,x")
+            .unwrap_err()
+            .to_string()
+            .contains("'x'"));
+        assert!(parse_id_list(" , ").is_err());
+    }
 }

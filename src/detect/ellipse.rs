@@ -251,6 +251,51 @@ pub fn inner_edge_points(
     }
 }
 
+/// Edge points of a tracked marker near where its outer edge is expected:
+/// along `rays` rays through `guess`, the rising crossing of `mid` (the
+/// marker's known mid-grey) nearest the guessed edge within ±`window`
+/// pixels. Returns the number of rays cast. Touches a few hundred pixels.
+pub fn tracked_edge_points(
+    image: Gray<'_>,
+    guess: &Ellipse,
+    mid: f64,
+    window: f64,
+    out: &mut Vec<(f64, f64)>,
+) -> usize {
+    out.clear();
+    let rays = 40;
+    let steps = (2.0 * window).ceil() as usize + 1;
+    let (sin_a, cos_a) = guess.angle.sin_cos();
+    for k in 0..rays {
+        let t = std::f64::consts::TAU * (k as f64 + 0.5) / rays as f64;
+        let (st, ct) = t.sin_cos();
+        let (x, y) = (guess.a * ct, guess.b * st);
+        let (dx, dy) = (x * cos_a - y * sin_a, x * sin_a + y * cos_a);
+        let r = dx.hypot(dy);
+        let (ux, uy) = (dx / r, dy / r);
+        let s0 = r - window;
+        let mut previous = sample(image, guess.u + ux * s0, guess.v + uy * s0);
+        let mut best: Option<f64> = None;
+        for j in 1..steps {
+            let s = s0 + j as f64;
+            let current = sample(image, guess.u + ux * s, guess.v + uy * s);
+            if let (Some(p), Some(q)) = (previous, current) {
+                if p < mid && q >= mid {
+                    let hit = s - 1.0 + (mid - p) / (q - p);
+                    if best.map_or(true, |b| (hit - r).abs() < (b - r).abs()) {
+                        best = Some(hit);
+                    }
+                }
+            }
+            previous = current;
+        }
+        if let Some(s) = best {
+            out.push((guess.u + ux * s, guess.v + uy * s));
+        }
+    }
+    rays
+}
+
 /// Least-squares conic through the points, normalised by A + C = 1 (never
 /// zero for an ellipse), in coordinates centred on `origin` and scaled to
 /// unit size for conditioning.

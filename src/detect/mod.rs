@@ -9,8 +9,10 @@
 //! marker is predicted to be, so a frame in which every marker is found
 //! again only touches the markers' own pixels.
 
+pub mod annotate;
 pub mod ellipse;
 pub mod idfilter;
+pub mod rectify;
 pub mod ring;
 pub mod segment;
 pub mod threshold;
@@ -79,7 +81,10 @@ pub struct Detection {
     pub id: u32,
     /// The member's code when the ring decoded to one.
     pub code: Option<u32>,
-    /// Centre in pixels, origin at the centre of the top-left pixel.
+    /// Centre in pixels, origin at the centre of the top-left pixel: the
+    /// projected marker centre when a camera and diameter are configured,
+    /// otherwise the centre of the outer ellipse (which perspective moves
+    /// off the true centre by up to a pixel or two on large tilted markers).
     pub u: f64,
     pub v: f64,
     /// Direction of the marker's +x axis in the image, atan2(dv, du).
@@ -128,6 +133,8 @@ struct Candidate {
     ratio: f64,
     roundness: f64,
     area_error: f64,
+    /// The values above were measured (not a marker followed by its edge).
+    tested: bool,
     track: Option<usize>,
 }
 
@@ -220,8 +227,23 @@ impl Detector {
         }
         let all_followed = found.len() == self.tracks.len();
         if !(tracking && all_followed && found.len() >= limit) {
+            let followed = found.len();
             let map = ThresholdMap::adaptive(gray.pixels, width, height);
-            self.scan(gray, &map, &mut found, limit);
+            self.scan(gray, &map, &mut found, limit + followed);
+            // Markers followed by their edges left no labels, so the scan
+            // meets them again.
+            let (old, new) = found.split_at(followed);
+            let fresh: Vec<Candidate> = new
+                .iter()
+                .filter(|c| {
+                    !old.iter()
+                        .any(|o| (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.b)
+                })
+                .cloned()
+                .collect();
+            found.truncate(followed);
+            found.extend(fresh);
+            found.truncate(limit);
             if found.is_empty() {
                 // The local map found nothing; the reference's global
                 // threshold walk gets one try per frame.
@@ -234,7 +256,7 @@ impl Detector {
         }
         if tracking {
             self.update_tracks(&found);
-            for c in &found {
+            for c in found.iter().filter(|c| c.tested) {
                 self.ratio.learn(c.ratio);
                 self.roundness.learn(c.roundness);
                 self.area.learn(c.area_error);
@@ -272,14 +294,7 @@ impl Detector {
         };
         let mut axis_point = None;
         if let Some(reader) = &self.reader {
-            let ring_outer = ring::ImageEllipse {
-                u: outer.u,
-                v: outer.v,
-                semi_major: outer.semi_major,
-                semi_minor: outer.semi_minor,
-                angle: outer.angle,
-            };
-            let reading = reader.read(image, &ring_outer, c.black, c.white);
+            let reading = reader.read(image, &outer, c.black, c.white);
             d.id = reading.id;
             d.code = reading.decoded.filter(|x| x.is_member()).map(|x| x.code);
             d.status = reading.decoded.map(|x| x.status);
@@ -289,6 +304,26 @@ impl Detector {
         }
         if let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) {
             d.pose = self.pose(&camera, diameter / 2.0, gray, c, &outer, d.yaw, axis_point);
+            if let (Some(pose), Some(code), Some(family)) = (&d.pose, d.code, &self.config.family) {
+                let bits = family.bits();
+                if let Some(better) =
+                    rectify::refine_rotation(gray, &camera, pose, diameter / 2.0, bits, code)
+                {
+                    d.pose = Some(better);
+                }
+            }
+            // Under perspective the centre of the outer ellipse is not the
+            // image of the marker's centre, nor is the ellipse-based yaw
+            // the direction of +x at that centre: the pose knows both.
+            if let Some(pose) = &d.pose {
+                if let Some((u, v)) = camera.project(&pose.position) {
+                    d.u = u;
+                    d.v = v;
+                }
+                if d.yaw.is_some() {
+                    d.yaw = pose.image_yaw(&camera).or(d.yaw);
+                }
+            }
         }
         d
     }
@@ -378,12 +413,18 @@ impl Detector {
         }
     }
 
-    /// Looks for a tracked marker where it should be now: from the
-    /// predicted centre (inside the white centre) along the row to the
-    /// first dark pixel, which starts the marker's dark segment.
+    /// Looks for a tracked marker where it should be now. First the cheap
+    /// way: edge points around the predicted outline, a conic fit, and a
+    /// check that the centre is white and the annulus black (a few hundred
+    /// pixels). If that fails, the paper's way: from the predicted centre
+    /// (inside the white centre) along the row to the first dark pixel,
+    /// which starts the marker's dark segment and the full tests.
     fn follow(&mut self, gray: Gray<'_>, index: usize) -> Option<Candidate> {
         let track = self.tracks[index];
         let (pu, pv) = track.predicted();
+        if let Some(c) = self.follow_edges(gray, &track) {
+            return Some(c);
+        }
         let (x, y) = (pu.round(), pv.round());
         if !(x >= 0.0 && y >= 0.0 && (x as usize) < gray.width && (y as usize) < gray.height) {
             return None;
@@ -401,6 +442,70 @@ impl Detector {
         let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
         let same_size = (c.outer.a / track.a - 1.0).abs() < 0.3;
         (moved < track.a.max(4.0) && same_size).then_some(c)
+    }
+
+    fn follow_edges(&mut self, gray: Gray<'_>, track: &Track) -> Option<Candidate> {
+        let (pu, pv) = track.predicted();
+        let guess = Ellipse {
+            u: pu,
+            v: pv,
+            a: track.a,
+            b: track.b,
+            angle: track.angle,
+        };
+        let mid = (track.black + track.white) / 2.0;
+        let window = 3.0 + 0.08 * track.a;
+        let rays = ellipse::tracked_edge_points(gray, &guess, mid, window, &mut self.edge_scratch);
+        if self.edge_scratch.len() * 5 < rays * 4 {
+            return None;
+        }
+        let fitted = ellipse::fit_conic(&self.edge_scratch, (pu, pv), track.a)?;
+        let rms = (self
+            .edge_scratch
+            .iter()
+            .map(|&(x, y)| ellipse::radial_distance(&fitted, x, y).powi(2))
+            .sum::<f64>()
+            / self.edge_scratch.len() as f64)
+            .sqrt();
+        let consistent = rms < 0.3 + 0.01 * track.a
+            && (fitted.a / track.a - 1.0).abs() < 0.1
+            && (fitted.b / track.b - 1.0).abs() < 0.1
+            && (fitted.u - pu).hypot(fitted.v - pv) < window;
+        if !consistent {
+            return None;
+        }
+        // Inside: white at the centre, black across the annulus.
+        let white_ratio = if self.config.family.is_some() {
+            RING_INNER_RATIO
+        } else {
+            WHYCON_WHITE_RATIO
+        };
+        let (mut white_sum, mut black_sum) = (0.0, 0.0);
+        const PROBES: usize = 8;
+        for k in 0..PROBES {
+            let t = std::f64::consts::TAU * k as f64 / PROBES as f64;
+            let inner = fitted.scaled(0.6 * white_ratio).point(t);
+            let annulus = fitted.scaled(0.8).point(t);
+            let w = ellipse::sample(gray, inner.0, inner.1)?;
+            let b = ellipse::sample(gray, annulus.0, annulus.1)?;
+            if w < mid || b >= mid {
+                return None;
+            }
+            white_sum += w;
+            black_sum += b;
+        }
+        let (white, black) = (white_sum / PROBES as f64, black_sum / PROBES as f64);
+        Some(Candidate {
+            outer: fitted,
+            edge: self.edge_scratch.clone(),
+            black,
+            white,
+            ratio: self.ratio.expected,
+            roundness: 0.0,
+            area_error: 0.0,
+            tested: false,
+            track: None,
+        })
     }
 
     fn update_tracks(&mut self, found: &[Candidate]) {
@@ -424,9 +529,14 @@ impl Detector {
                 Some(i) => {
                     let mut t = self.tracks[i];
                     t.update(u, v, a, b, threshold);
+                    t.observe_appearance(c.outer.angle, c.black, c.white);
                     next.push(t);
                 }
-                None => next.push(Track::new(u, v, a, b, threshold)),
+                None => {
+                    let mut t = Track::new(u, v, a, b, threshold);
+                    t.observe_appearance(c.outer.angle, c.black, c.white);
+                    next.push(t);
+                }
             }
         }
         self.tracks = next;
@@ -509,6 +619,7 @@ impl Detector {
             ratio,
             roundness,
             area_error: area_error.abs(),
+            tested: true,
             track: None,
         })
     }

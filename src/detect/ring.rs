@@ -32,19 +32,9 @@
 use crate::family::{Decoded, Decoder, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
 use image::GrayImage;
-use std::f64::consts::PI;
 
-/// An ellipse in the image, in pixels (centre origin at the top-left pixel's
-/// centre; `angle` is the direction of the major axis, atan2(dv, du)).
-/// Kept here until the pose module's identical type is available.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImageEllipse {
-    pub u: f64,
-    pub v: f64,
-    pub semi_major: f64,
-    pub semi_minor: f64,
-    pub angle: f64,
-}
+pub use crate::pose::ImageEllipse;
+use std::f64::consts::PI;
 
 /// Rings whose sectors are narrower than this many pixels (at the sample
 /// radius, along the ellipse's minor axis) are not read: below it the
@@ -57,7 +47,15 @@ const MIN_RING_CONTRAST: f64 = 0.10;
 
 /// A bit whose two halves differ by less than this fraction of the ring's
 /// typical bit contrast is an erasure (broken Manchester structure).
-const ERASURE_RATIO: f64 = 0.4;
+const ERASURE_RATIO: f64 = 0.45;
+
+/// Below this confidence a decoded member is not reported as the ID.
+pub const MIN_ID_CONFIDENCE: f64 = 0.1;
+
+/// Least edge strength and sector width (pixels) at which erased bits are
+/// filled from the family's distance.
+const MIN_FILL_STRENGTH: f64 = 0.3;
+const MIN_FILL_PIXELS: f64 = 2.0;
 
 /// Most erasures the reader tries to fill from the family's distance.
 const MAX_ERASURES: u32 = 4;
@@ -73,7 +71,9 @@ pub struct RingReading {
     /// reliably (too small, no contrast, broken Manchester structure):
     /// no evidence either way.
     pub decoded: Option<Decoded>,
-    /// The member ID, 0 when unknown or not a member.
+    /// The member ID, 0 when unknown, not a member, or decoded with a
+    /// confidence under [`MIN_ID_CONFIDENCE`] (then only `decoded` names
+    /// the candidate, for the ID filter to weigh).
     pub id: u32,
     /// Image direction of the marker's +x axis, atan2(dv, du), radians;
     /// `None` unless the ID is known.
@@ -196,51 +196,75 @@ impl RingReader {
         let diffs_a = bit_differences(&halves_a);
         let diffs_b = bit_differences(&halves_b);
         let score = |d: &[f64]| d.iter().map(|x| x.abs()).sum::<f64>();
-        let (start, diffs, other_score) = if score(&diffs_a) >= score(&diffs_b) {
-            (phase, diffs_a, score(&diffs_b))
+        let (start, diffs, other_diffs) = if score(&diffs_a) >= score(&diffs_b) {
+            (phase, diffs_a, diffs_b)
         } else {
-            (phase + sector, diffs_b, score(&diffs_a))
+            (phase + sector, diffs_b, diffs_a)
         };
-        let best_score = score(&diffs);
+        let (best_score, other_score) = (score(&diffs), score(&other_diffs));
 
-        let mut magnitudes: Vec<f64> = diffs.iter().map(|d| d.abs()).collect();
-        magnitudes.sort_by(f64::total_cmp);
-        let typical = magnitudes[magnitudes.len() / 2];
+        let typical = median(diffs.iter().map(|d| d.abs()).collect());
         let edge_strength = typical / contrast;
-        let weakest_bit = if typical > 0.0 {
-            magnitudes[0] / typical
-        } else {
-            0.0
-        };
         let mut reading = RingReading {
             edge_strength,
-            weakest_bit,
             pixels_per_sector,
             ..RingReading::unreadable(pixels_per_sector)
         };
         // Only a word with all bits equal reads alike under both pairings,
         // and those are periodic; anything close to a tie is noise.
         let parity_clear = best_score - other_score > 0.5 * typical;
-        if edge_strength < MIN_RING_CONTRAST || !parity_clear {
+        if edge_strength < MIN_RING_CONTRAST {
+            return reading;
+        }
+        if !parity_clear {
+            // Clean Manchester bits under both pairings: a ring alternating
+            // every sector, i.e. all bits equal. Either reading is periodic,
+            // so it is no member whichever way it is paired.
+            let all_clear = diffs
+                .iter()
+                .chain(&other_diffs)
+                .all(|d| d.abs() > (1.0 - ERASURE_RATIO) * typical);
+            if all_clear {
+                let decoded = decoder.decode(0);
+                reading.word = Some(0);
+                reading.decoded = Some(decoded);
+                reading.confidence = logistic((edge_strength - 0.15) / 0.03);
+            }
             return reading;
         }
 
         let mut word = 0u32;
-        let mut erasures = Vec::new();
         for (j, d) in diffs.iter().enumerate() {
             // First half brighter than the second: white then black, a 1.
             if *d > 0.0 {
                 word |= 1 << (bits as usize - 1 - j);
             }
-            if d.abs() < ERASURE_RATIO * typical {
+        }
+        let references = bit_references(&diffs, typical);
+        let mut erasures = Vec::new();
+        let mut weakest_bit = f64::INFINITY;
+        // Erased bits are paid for by the decoded distance instead.
+        let mut weakest_kept = 1.0f64;
+        for (j, (d, reference)) in diffs.iter().zip(&references).enumerate() {
+            let relative = d.abs() / reference;
+            weakest_bit = weakest_bit.min(relative);
+            if relative < ERASURE_RATIO {
                 erasures.push(j as u32);
+            } else {
+                weakest_kept = weakest_kept.min(relative);
             }
         }
+        reading.weakest_bit = weakest_bit.min(1.0);
         reading.word = Some(word);
         reading.erasures = erasures.len() as u32;
 
+        // Filling erasures assumes every other bit is right, which only a
+        // sharp, well-resolved ring (a local smudge or glare) warrants.
+        let fillable = edge_strength >= MIN_FILL_STRENGTH && pixels_per_sector >= MIN_FILL_PIXELS;
         let decoded = if erasures.is_empty() {
             decoder.decode(word)
+        } else if !fillable {
+            return reading;
         } else {
             match fill_erasures(decoder, word, &erasures) {
                 Some(d) => d,
@@ -249,14 +273,19 @@ impl RingReader {
         };
         reading.decoded = Some(decoded);
 
-        let quality = logistic((edge_strength - 0.2) / 0.04)
-            * logistic((pixels_per_sector - 1.6) / 0.2)
-            * (weakest_bit / 0.7).min(1.0);
+        let quality = logistic((edge_strength - 0.15) / 0.03)
+            * logistic((pixels_per_sector - 1.1) / 0.1)
+            * (weakest_kept / 0.7).min(1.0);
         match decoded.status {
             MatchStatus::Exact | MatchStatus::Corrected => {
                 let status_factor = 0.5f64.powi(decoded.distance as i32);
-                reading.id = decoded.id;
                 reading.confidence = quality * status_factor;
+                if reading.confidence < MIN_ID_CONFIDENCE {
+                    // Kept in `decoded` as (weak) evidence for the ID
+                    // filter, but not named: a guess is not an answer.
+                    return reading;
+                }
+                reading.id = decoded.id;
                 let x_axis_t = start + 2.0 * sector * f64::from(decoded.rotation);
                 let (du, dv) = frame.offset(x_axis_t, 1.0);
                 reading.yaw = Some(dv.atan2(du));
@@ -309,6 +338,42 @@ fn fill_erasures(decoder: &Decoder, word: u32, erasures: &[u32]) -> Option<Decod
         }
     }
     found
+}
+
+/// The contrast each bit should show if the ring were read cleanly. Blur
+/// attenuates a half-sector flanked by the opposite colour (a bit next to
+/// an equal bit) more than one that joins a run of two, so bits are
+/// compared within their class (how many of their halves are isolated);
+/// within a class the clearer bits set the reference, since motion blur
+/// fades (or even inverts) a whole arc of the ring and the median can fall
+/// inside it.
+fn bit_references(diffs: &[f64], typical: f64) -> Vec<f64> {
+    let n = diffs.len();
+    let bit = |j: usize| diffs[j % n] > 0.0;
+    let class =
+        |j: usize| usize::from(bit(j + n - 1) == bit(j)) + usize::from(bit(j + 1) == bit(j));
+    let mut per_class: [Vec<f64>; 3] = Default::default();
+    for (j, d) in diffs.iter().enumerate() {
+        per_class[class(j)].push(d.abs());
+    }
+    let class_reference: Vec<f64> = per_class
+        .into_iter()
+        .map(|mut m| {
+            if m.len() < 3 {
+                return typical;
+            }
+            m.sort_by(f64::total_cmp);
+            m[m.len() * 3 / 4]
+        })
+        .collect();
+    (0..n)
+        .map(|j| class_reference[class(j)].max(f64::MIN_POSITIVE))
+        .collect()
+}
+
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
 }
 
 fn logistic(x: f64) -> f64 {

@@ -19,6 +19,11 @@ pub struct Track {
     pub threshold: u8,
     /// Frames in a row this marker was seen.
     pub hits: u32,
+    /// Direction of the outer ellipse's major axis.
+    pub angle: f64,
+    /// Grey levels of the black disc and the white inside.
+    pub black: f64,
+    pub white: f64,
 }
 
 impl Track {
@@ -32,6 +37,9 @@ impl Track {
             b,
             threshold,
             hits: 1,
+            angle: 0.0,
+            black: f64::from(threshold) / 2.0,
+            white: f64::from(threshold) * 1.5,
         }
     }
 
@@ -53,6 +61,13 @@ impl Track {
         self.b = b;
         self.threshold = threshold;
         self.hits += 1;
+    }
+
+    /// Remembers how the marker looked, for the next frame's edge search.
+    pub fn observe_appearance(&mut self, angle: f64, black: f64, white: f64) {
+        self.angle = angle;
+        self.black = black;
+        self.white = white;
     }
 
     /// True when an observation at (u, v) is this marker moved on.

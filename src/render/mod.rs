@@ -1,3 +1,131 @@
-//! Rendering markers and print sheets (in progress).
+//! Rendering markers and print sheets at exact physical size.
+//!
+//! Everything is first laid out as [`page::Page`]s (items in millimetres,
+//! markers drawn from [`crate::geometry::Marker::shapes`]); the SVG, PDF and
+//! PNG writers and the rasteriser used for checking all draw those pages.
 
+pub mod check;
+pub mod font;
 pub mod manifest;
+pub mod marker;
+pub mod page;
+pub mod pdf;
+pub mod png;
+pub mod raster;
+pub mod sheet;
+pub mod svg;
+pub mod template;
+
+pub use marker::{marker_page, MarkerOptions};
+pub use page::{Item, Page};
+pub use raster::{render_marker, render_page};
+pub use sheet::{layout, Sheet, SheetMarker, SheetSpec};
+pub use template::Template;
+
+use anyhow::{bail, Result};
+use std::path::{Path, PathBuf};
+
+/// Output file formats, chosen by file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    Svg,
+    Pdf,
+    Png,
+}
+
+impl Format {
+    pub fn from_path(path: &Path) -> Result<Format> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("svg") => Ok(Format::Svg),
+            Some("pdf") => Ok(Format::Pdf),
+            Some("png") => Ok(Format::Png),
+            Some(other) => bail!(
+                "{}: unknown output format '.{other}' (use .svg, .pdf or .png)",
+                path.display()
+            ),
+            None => bail!(
+                "{}: no file extension to choose the format by (use .svg, .pdf or .png)",
+                path.display()
+            ),
+        }
+    }
+}
+
+/// Paths of a multi-page output: one page keeps the given name; several
+/// pages in SVG or PNG become `stem-1.ext`, `stem-2.ext`, ...
+pub fn page_paths(path: &Path, pages: usize) -> Vec<PathBuf> {
+    if pages <= 1 {
+        return vec![path.to_path_buf()];
+    }
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    (1..=pages)
+        .map(|k| path.with_file_name(format!("{stem}-{k}.{ext}")))
+        .collect()
+}
+
+/// Encodes pages for `path`'s format: one file for PDF, one per page for SVG
+/// and PNG. Nothing is written; the caller writes all files or none.
+pub fn encode_pages(
+    pages: &[Page],
+    path: &Path,
+    title: &str,
+    dpi: f64,
+) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+    let format = Format::from_path(path)?;
+    Ok(match format {
+        Format::Pdf => vec![(path.to_path_buf(), pdf::pages_pdf(pages, title)?)],
+        Format::Svg => page_paths(path, pages.len())
+            .into_iter()
+            .zip(pages)
+            .map(|(p, page)| (p, svg::page_svg(page, title).into_bytes()))
+            .collect(),
+        Format::Png => {
+            let mut out = Vec::with_capacity(pages.len());
+            for (p, page) in page_paths(path, pages.len()).into_iter().zip(pages) {
+                out.push((p, png::page_png(page, dpi)?));
+            }
+            out
+        }
+    })
+}
+
+/// Fails early, before any rendering, when the output's folder is missing.
+pub fn check_output_dir(path: &Path) -> Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        bail!(
+            "cannot write {}: folder {} does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
+
+/// Writes every file atomically; if one fails, the ones already written by
+/// this call are removed again, so a failed run leaves nothing behind.
+pub fn write_all(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
+    for (k, (path, bytes)) in files.iter().enumerate() {
+        if let Err(err) = crate::io::write_atomic(path, bytes) {
+            for (written, _) in &files[..k] {
+                let _ = std::fs::remove_file(written);
+            }
+            return Err(err);
+        }
+    }
+    Ok(())
+}

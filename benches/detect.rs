@@ -1,0 +1,142 @@
+//! Detector speed, single thread (paper Table 5 setting).
+//!
+//! Targets: a 5000x5000 grey image with 550 markers of 60-120 px, first
+//! frame (no tracking) under 150 ms and a tracked frame under 15 ms;
+//! 640x480 with a few markers under 1 ms. Memory: divan's "max alloc"
+//! column shows what a frame allocates on top of the image (target: the
+//! whole process under 3x the image size, i.e. under 2x on top of it).
+//! Run with `cargo bench --bench detect`.
+
+#[path = "../tests/detect_common/mod.rs"]
+mod detect_common;
+
+use std::sync::OnceLock;
+
+use detect_common::{render, scatter, Look, Pinhole, Rng};
+use divan::{black_box, AllocProfiler, Bencher};
+use image::GrayImage;
+use whycode::detect::{Detector, DetectorConfig};
+use whycode::family::Family;
+use whycode::geometry::Marker;
+
+#[global_allocator]
+static ALLOC: AllocProfiler = AllocProfiler::system();
+
+fn main() {
+    divan::main();
+}
+
+fn family() -> Family {
+    Family::generate(8, 2).unwrap()
+}
+
+/// 5000x5000, 550 WhyCode markers of 60-120 px at random places and
+/// rotations, light falling 2:1 across the frame, mild blur and noise.
+fn big_scene() -> &'static GrayImage {
+    static SCENE: OnceLock<GrayImage> = OnceLock::new();
+    SCENE.get_or_init(|| {
+        let codes = family().codes().to_vec();
+        let camera = Pinhole {
+            f: 5000.0,
+            cx: 2500.0,
+            cy: 2500.0,
+        };
+        let mut rng = Rng(5000);
+        let placements = scatter(
+            &mut rng,
+            &camera,
+            5000,
+            5000,
+            550,
+            (60.0, 120.0),
+            &mut |k| Marker::whycode(8, codes[k % codes.len()], 100.0),
+        );
+        assert_eq!(placements.len(), 550);
+        let look = Look {
+            gradient_right: 0.5,
+            blur: 1,
+            noise: 2.0,
+            ..Look::default()
+        };
+        render(5000, 5000, &camera, &placements, look)
+    })
+}
+
+fn small_scene() -> &'static GrayImage {
+    static SCENE: OnceLock<GrayImage> = OnceLock::new();
+    SCENE.get_or_init(|| {
+        let codes = family().codes().to_vec();
+        let camera = Pinhole {
+            f: 600.0,
+            cx: 320.0,
+            cy: 240.0,
+        };
+        let mut rng = Rng(640);
+        let placements = scatter(&mut rng, &camera, 640, 480, 4, (40.0, 90.0), &mut |k| {
+            Marker::whycode(8, codes[k % codes.len()], 100.0)
+        });
+        render(
+            640,
+            480,
+            &camera,
+            &placements,
+            Look {
+                blur: 1,
+                noise: 2.0,
+                ..Look::default()
+            },
+        )
+    })
+}
+
+fn config(tracking: bool, max_markers: usize) -> DetectorConfig {
+    DetectorConfig {
+        family: Some(family()),
+        tracking,
+        max_markers,
+        ..DetectorConfig::default()
+    }
+}
+
+/// A frame seen without tracking, buffers already allocated (a folder of
+/// unrelated frames, or the first frame of a sequence after the first).
+#[divan::bench(sample_count = 10)]
+fn first_frame_5000x5000_550_markers(bencher: Bencher) {
+    let image = big_scene();
+    let mut detector = Detector::new(config(false, 1024));
+    assert_eq!(detector.detect(image).len(), 550);
+    bencher.bench_local(|| detector.detect(black_box(image)).len());
+}
+
+/// The very first frame of a fresh detector (allocates its buffers).
+#[divan::bench(sample_count = 5)]
+fn fresh_detector_5000x5000_550_markers(bencher: Bencher) {
+    let image = big_scene();
+    bencher.bench_local(|| {
+        Detector::new(config(false, 1024))
+            .detect(black_box(image))
+            .len()
+    });
+}
+
+/// A tracked frame: every marker found again where it was, so only the
+/// markers' own pixels are touched.
+#[divan::bench(sample_count = 20)]
+fn tracked_frame_5000x5000_550_markers(bencher: Bencher) {
+    let image = big_scene();
+    let mut detector = Detector::new(config(true, 550));
+    assert_eq!(detector.detect(image).len(), 550);
+    bencher.bench_local(|| {
+        let found = detector.detect(black_box(image)).len();
+        assert_eq!(found, 550);
+        found
+    });
+}
+
+#[divan::bench(sample_count = 100)]
+fn frame_640x480_4_markers(bencher: Bencher) {
+    let image = small_scene();
+    let mut detector = Detector::new(config(false, 1024));
+    assert_eq!(detector.detect(image).len(), 4);
+    bencher.bench_local(|| detector.detect(black_box(image)).len());
+}

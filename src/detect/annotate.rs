@@ -1,0 +1,184 @@
+//! Drawing detections over the image they came from: each marker's outer
+//! ellipse, its +x axis and its ID, for checking a detector run by eye.
+
+use super::Detection;
+use anyhow::{Context, Result};
+use image::GrayImage;
+use std::f64::consts::PI;
+use tiny_skia::{Color, LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
+
+/// Ellipse colour of a marker with a known ID (green), an unknown ID
+/// (orange) and a legacy marker without ring (cyan); axis in red.
+const KNOWN: [u8; 3] = [40, 200, 60];
+const UNKNOWN: [u8; 3] = [255, 150, 0];
+const LEGACY: [u8; 3] = [0, 190, 230];
+const AXIS: [u8; 3] = [230, 30, 30];
+
+/// The image in colour with the detections drawn, encoded as PNG.
+pub fn annotated_png(image: &GrayImage, detections: &[Detection]) -> Result<Vec<u8>> {
+    let (w, h) = image.dimensions();
+    let mut pixmap = Pixmap::new(w.max(1), h.max(1)).context("image too large to annotate")?;
+    for (dst, &g) in pixmap.data_mut().chunks_exact_mut(4).zip(image.as_raw()) {
+        dst.copy_from_slice(&[g, g, g, 255]);
+    }
+    let line = (f64::from(w.max(h)) / 800.0).clamp(1.0, 4.0) as f32;
+    for d in detections {
+        draw_detection(&mut pixmap, d, line);
+    }
+    let rgb: Vec<u8> = pixmap
+        .data()
+        .chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes).write_image_rgb(
+        &rgb,
+        pixmap.width(),
+        pixmap.height(),
+    )?;
+    Ok(bytes)
+}
+
+trait WriteRgb {
+    fn write_image_rgb(self, rgb: &[u8], w: u32, h: u32) -> Result<()>;
+}
+
+impl<W: std::io::Write> WriteRgb for image::codecs::png::PngEncoder<W> {
+    fn write_image_rgb(self, rgb: &[u8], w: u32, h: u32) -> Result<()> {
+        use image::ImageEncoder;
+        self.write_image(rgb, w, h, image::ExtendedColorType::Rgb8)?;
+        Ok(())
+    }
+}
+
+fn paint(rgb: [u8; 3]) -> Paint<'static> {
+    let mut paint = Paint::default();
+    paint.set_color(Color::from_rgba8(rgb[0], rgb[1], rgb[2], 255));
+    paint.anti_alias = true;
+    paint
+}
+
+/// Point of the outer ellipse at parameter `t` (pixel centres at integer
+/// coordinates; tiny-skia's pixel centres sit at +0.5).
+fn ellipse_point(d: &Detection, t: f64) -> (f32, f32) {
+    let (s, c) = d.angle.sin_cos();
+    let (st, ct) = t.sin_cos();
+    let x = d.u + d.axes[0] * ct * c - d.axes[1] * st * s;
+    let y = d.v + d.axes[0] * ct * s + d.axes[1] * st * c;
+    ((x + 0.5) as f32, (y + 0.5) as f32)
+}
+
+fn draw_detection(pixmap: &mut Pixmap, d: &Detection, line: f32) {
+    let colour = match (d.id, d.yaw, d.status) {
+        (0, _, None) => LEGACY,
+        (0, _, Some(_)) => UNKNOWN,
+        _ => KNOWN,
+    };
+    let stroke = Stroke {
+        width: line,
+        line_cap: LineCap::Round,
+        ..Stroke::default()
+    };
+    let mut pb = PathBuilder::new();
+    const STEPS: usize = 72;
+    for k in 0..=STEPS {
+        let (x, y) = ellipse_point(d, 2.0 * PI * k as f64 / STEPS as f64);
+        if k == 0 {
+            pb.move_to(x, y);
+        } else {
+            pb.line_to(x, y);
+        }
+    }
+    if let Some(path) = pb.finish() {
+        pixmap.stroke_path(&path, &paint(colour), &stroke, Transform::identity(), None);
+    }
+    if let Some(yaw) = d.yaw {
+        // Out to where the +x axis meets the outer ellipse.
+        let rel = yaw - d.angle;
+        let r = 1.0
+            / ((rel.cos() / d.axes[0].max(1e-9)).powi(2)
+                + (rel.sin() / d.axes[1].max(1e-9)).powi(2))
+            .sqrt();
+        let mut pb = PathBuilder::new();
+        pb.move_to((d.u + 0.5) as f32, (d.v + 0.5) as f32);
+        pb.line_to(
+            (d.u + 0.5 + r * yaw.cos()) as f32,
+            (d.v + 0.5 + r * yaw.sin()) as f32,
+        );
+        if let Some(path) = pb.finish() {
+            pixmap.stroke_path(&path, &paint(AXIS), &stroke, Transform::identity(), None);
+        }
+    }
+    if d.status.is_some() {
+        let label = if d.id == 0 {
+            "?".to_string()
+        } else {
+            d.id.to_string()
+        };
+        // Digits about a third of the marker tall, right of the ellipse.
+        let cell = (d.axes[0] / 8.0).clamp(1.5, 12.0);
+        let x = d.u + d.axes[0] + cell;
+        let y = d.v - 2.5 * cell;
+        draw_text(pixmap, &label, x, y, cell, colour);
+    }
+}
+
+/// 3x5 bitmap glyphs: rows top to bottom, bit 2 is the left column.
+fn glyph(c: char) -> [u8; 5] {
+    match c {
+        '0' => [7, 5, 5, 5, 7],
+        '1' => [2, 6, 2, 2, 7],
+        '2' => [7, 1, 7, 4, 7],
+        '3' => [7, 1, 7, 1, 7],
+        '4' => [5, 5, 7, 1, 1],
+        '5' => [7, 4, 7, 1, 7],
+        '6' => [7, 4, 7, 5, 7],
+        '7' => [7, 1, 1, 2, 2],
+        '8' => [7, 5, 7, 5, 7],
+        '9' => [7, 5, 7, 1, 7],
+        _ => [7, 1, 3, 0, 2],
+    }
+}
+
+fn draw_text(pixmap: &mut Pixmap, text: &str, x: f64, y: f64, cell: f64, rgb: [u8; 3]) {
+    let ink = paint(rgb);
+    let mut shadow = paint([0, 0, 0]);
+    shadow.anti_alias = false;
+    for (k, c) in text.chars().enumerate() {
+        let rows = glyph(c);
+        let gx = x + k as f64 * 4.0 * cell;
+        for (row, bits) in rows.iter().enumerate() {
+            for col in 0..3 {
+                if bits >> (2 - col) & 1 == 0 {
+                    continue;
+                }
+                let px = gx + col as f64 * cell;
+                let py = y + row as f64 * cell;
+                // A dark outline keeps the glyph readable on white paper.
+                if let Some(r) = Rect::from_xywh(
+                    (px - 0.5) as f32,
+                    (py - 0.5) as f32,
+                    (cell + 1.0) as f32,
+                    (cell + 1.0) as f32,
+                ) {
+                    pixmap.fill_rect(r, &shadow, Transform::identity(), None);
+                }
+            }
+        }
+        for (row, bits) in rows.iter().enumerate() {
+            for col in 0..3 {
+                if bits >> (2 - col) & 1 == 0 {
+                    continue;
+                }
+                if let Some(r) = Rect::from_xywh(
+                    (gx + col as f64 * cell) as f32,
+                    (y + row as f64 * cell) as f32,
+                    cell as f32,
+                    cell as f32,
+                ) {
+                    pixmap.fill_rect(r, &ink, Transform::identity(), None);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,149 @@
+//! The sheet self-check: before a sheet is written, every page is
+//! rasterised at a typical print resolution and at a deliberately coarse
+//! one, the detector runs on each raster, and every marker must be found at
+//! its place, read as its own ID, with yaw 0 (markers are printed upright).
+
+use super::manifest::PrintedMarker;
+use super::raster;
+use super::sheet::Sheet;
+use crate::detect::{Detection, Detector, DetectorConfig};
+use crate::family::Family;
+use anyhow::{bail, Result};
+use rayon::prelude::*;
+
+/// The resolution a sheet is usually printed at.
+pub const PRINT_DPI: f64 = 300.0;
+/// Outer diameter, in pixels, of the smallest marker in the coarse raster.
+pub const COARSE_DIAMETER_PX: f64 = 30.0;
+/// Largest yaw error accepted, degrees.
+pub const MAX_YAW_ERROR_DEG: f64 = 4.0;
+
+/// The resolutions a sheet is checked at: print resolution, and the one at
+/// which its smallest marker is [`COARSE_DIAMETER_PX`] across (if lower).
+pub fn check_resolutions(sheet: &Sheet) -> Vec<f64> {
+    let smallest = sheet
+        .manifest
+        .markers
+        .iter()
+        .map(|m| m.diameter_mm)
+        .fold(f64::INFINITY, f64::min);
+    let coarse = (COARSE_DIAMETER_PX / smallest * 25.4 * 10.0).ceil() / 10.0;
+    if coarse.is_finite() && coarse < PRINT_DPI {
+        vec![PRINT_DPI, coarse]
+    } else {
+        vec![PRINT_DPI]
+    }
+}
+
+/// What the check did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CheckReport {
+    pub resolutions: Vec<f64>,
+    /// Marker readings checked (markers x resolutions).
+    pub readings: usize,
+}
+
+fn describe(m: &PrintedMarker) -> String {
+    let what = if m.id == 0 {
+        "WhyCon marker".to_string()
+    } else {
+        format!("ID {}", m.id)
+    };
+    format!(
+        "{what} on page {} (x {:.1} mm, y {:.1} mm)",
+        m.page, m.x_mm, m.y_mm
+    )
+}
+
+fn wrap_degrees(rad: f64) -> f64 {
+    let deg = rad.to_degrees();
+    (deg + 180.0).rem_euclid(360.0) - 180.0
+}
+
+/// Checks one expected marker against a page's detections.
+fn check_marker(
+    m: &PrintedMarker,
+    detections: &[Detection],
+    dpi: f64,
+    whycode: bool,
+) -> Result<(), String> {
+    let s = raster::px_per_mm(dpi);
+    // Detector pixel coordinates have their origin at the top-left pixel's centre.
+    let (u, v) = (m.x_mm * s - 0.5, m.y_mm * s - 0.5);
+    let radius_px = m.diameter_mm / 2.0 * s;
+    let tolerance = (0.1 * radius_px).max(1.5);
+    let nearest = detections
+        .iter()
+        .map(|d| (d, (d.u - u).hypot(d.v - v)))
+        .min_by(|a, b| a.1.total_cmp(&b.1));
+    let Some((d, dist)) = nearest.filter(|(_, dist)| *dist <= tolerance) else {
+        return Err(format!("{} was not found", describe(m)));
+    };
+    let _ = dist;
+    if !whycode {
+        return Ok(());
+    }
+    if d.id != m.id {
+        return Err(if d.id == 0 {
+            format!("{} could not be read", describe(m))
+        } else {
+            format!("{} reads as ID {}", describe(m), d.id)
+        });
+    }
+    match d.yaw {
+        Some(yaw) if wrap_degrees(yaw).abs() <= MAX_YAW_ERROR_DEG => Ok(()),
+        Some(yaw) => Err(format!(
+            "{} reads with yaw {:.1}°, expected 0°",
+            describe(m),
+            wrap_degrees(yaw)
+        )),
+        None => Err(format!("{} gives no yaw", describe(m))),
+    }
+}
+
+/// Renders each page at each check resolution, detects, and confirms every
+/// marker. `family` is the family of the sheet's IDs (None for legacy
+/// WhyCon sheets, where only presence and position are checked).
+pub fn check_sheet(sheet: &Sheet, family: Option<&Family>) -> Result<CheckReport> {
+    let resolutions = check_resolutions(sheet);
+    let jobs: Vec<(usize, f64)> = (0..sheet.pages.len())
+        .flat_map(|p| resolutions.iter().map(move |&dpi| (p, dpi)))
+        .collect();
+    let failures: Vec<Result<usize, String>> = jobs
+        .par_iter()
+        .map(|&(p, dpi)| {
+            let page = &sheet.pages[p];
+            let expected: Vec<&PrintedMarker> = sheet
+                .manifest
+                .markers
+                .iter()
+                .filter(|m| m.page as usize == p + 1)
+                .collect();
+            let image = raster::render_page(page, dpi).map_err(|e| format!("{e:#}"))?;
+            let mut detector = Detector::new(DetectorConfig {
+                family: family.cloned(),
+                max_markers: expected.len() * 2 + 16,
+                ..DetectorConfig::default()
+            });
+            let detections = detector.detect(&image);
+            for m in &expected {
+                check_marker(m, &detections, dpi, family.is_some())
+                    .map_err(|e| format!("{e} in a {dpi} dpi rendering"))?;
+            }
+            Ok(expected.len())
+        })
+        .collect();
+    let mut readings = 0;
+    for outcome in failures {
+        match outcome {
+            Ok(n) => readings += n,
+            Err(problem) => {
+                bail!("self-check failed: {problem} (nothing written; --no-check skips the check)")
+            }
+        }
+    }
+    Ok(CheckReport {
+        resolutions,
+        readings,
+    })
+}

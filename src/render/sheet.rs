@@ -1,0 +1,561 @@
+//! Print sheets: many labelled markers packed onto template pages, each page
+//! with a scale check bar, plus the manifest recording where each marker is.
+
+use super::font::{helvetica_width_mm, CAP_HEIGHT};
+use super::manifest::{FamilyRef, Manifest, PrintedMarker};
+use super::marker::{cut_circle, marker_label, LABEL_GAP_MM, MIN_LABEL_PT};
+use super::page::{Anchor, Item, Page, MM_PER_PT};
+use super::template::Template;
+use crate::family::Family;
+use crate::geometry::{Marker, MIN_MARGIN_RATIO};
+use crate::units::trim_float;
+use anyhow::{bail, Result};
+
+/// One marker to place on a sheet.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SheetMarker {
+    pub marker: Marker,
+    /// Family ID (0 for a legacy WhyCon circle).
+    pub id: u32,
+    /// Ring code (0 for a legacy WhyCon circle).
+    pub code: u32,
+    /// Label lines: the one-line form and a two-line fallback for narrow cells.
+    pub label: String,
+    pub label_lines: [String; 2],
+}
+
+/// What to print and how.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SheetSpec {
+    pub markers: Vec<SheetMarker>,
+    pub template: Template,
+    /// Name printed in each page's footer (usually the output file's stem).
+    pub name: String,
+    pub family: Option<FamilyRef>,
+    pub legacy: bool,
+}
+
+/// A laid-out sheet: its pages and the record of what is where.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sheet {
+    pub pages: Vec<Page>,
+    pub manifest: Manifest,
+}
+
+/// Markers of a family for a list of IDs; an ID outside the family is an
+/// error naming the valid range.
+pub fn family_markers(family: &Family, ids: &[u32], diameter_mm: f64) -> Result<Vec<SheetMarker>> {
+    ids.iter()
+        .map(|&id| {
+            let Some(code) = family.code(id) else {
+                bail!("{}", id_range_error(family, id));
+            };
+            let marker = Marker::whycode(family.bits(), code, diameter_mm);
+            let size = format!("{} mm", trim_float((diameter_mm * 10.0).round() / 10.0));
+            Ok(SheetMarker {
+                marker,
+                id,
+                code,
+                label: marker_label(&marker, Some(id), Some(family.distance())),
+                label_lines: [
+                    format!("ID {id}"),
+                    format!("{}b d{} · {size}", family.bits(), family.distance()),
+                ],
+            })
+        })
+        .collect()
+}
+
+/// The message for an ID that is not in a family.
+pub fn id_range_error(family: &Family, id: u32) -> String {
+    if family.is_empty() {
+        format!(
+            "ID {id} is not in the {}-bit distance-{} family (it has no IDs)",
+            family.bits(),
+            family.distance()
+        )
+    } else {
+        format!(
+            "ID {id} is not in the {}-bit distance-{} family (IDs 1-{})",
+            family.bits(),
+            family.distance(),
+            family.len()
+        )
+    }
+}
+
+/// `count` legacy WhyCon circles.
+pub fn legacy_markers(count: usize, diameter_mm: f64) -> Vec<SheetMarker> {
+    let marker = Marker::whycon(diameter_mm);
+    let label = marker_label(&marker, None, None);
+    let size = format!("{} mm", trim_float((diameter_mm * 10.0).round() / 10.0));
+    (0..count)
+        .map(|_| SheetMarker {
+            marker,
+            id: 0,
+            code: 0,
+            label: label.clone(),
+            label_lines: ["WhyCon".to_string(), size.clone()],
+        })
+        .collect()
+}
+
+/// Height of the page footer (scale bar and page caption) above the bottom margin.
+const FOOTER_MM: f64 = 11.0;
+/// Scale bar thickness and end-tick height, mm.
+const BAR_MM: f64 = 0.8;
+const TICK_MM: f64 = 2.5;
+const TICK_WIDTH_MM: f64 = 0.3;
+/// Leading between label lines, as a multiple of the font size.
+const LINE_SPACING: f64 = 1.2;
+/// Depth below the baseline kept for descenders, as a multiple of the font size.
+const DESCENT: f64 = 0.25;
+
+/// The geometry of one marker cell: footprint and label block.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Cell {
+    /// Radius of black disc plus white margin.
+    footprint: f64,
+    label_pt: f64,
+    two_lines: bool,
+    label_width: f64,
+    /// From the top of the footprint circle to the bottom of the label.
+    height: f64,
+    /// Horizontal pitch (cell width plus gap).
+    pitch_x: f64,
+}
+
+impl Cell {
+    fn label_height(&self) -> f64 {
+        let s = self.label_pt * MM_PER_PT;
+        let lines = if self.two_lines { 2.0 } else { 1.0 };
+        (lines - 1.0) * LINE_SPACING * s + (CAP_HEIGHT + DESCENT) * s
+    }
+}
+
+fn cell_for(markers: &[SheetMarker], diameter_mm: f64, template: &Template) -> Cell {
+    let footprint = diameter_mm / 2.0 * (1.0 + MIN_MARGIN_RATIO);
+    let room = 2.0 * footprint + template.gap_mm;
+    let widest = |f: &dyn Fn(&SheetMarker) -> f64| markers.iter().map(f).fold(0.0, f64::max);
+    let wanted = template.label_size_pt;
+    let one_line = widest(&|m| helvetica_width_mm(&m.label, wanted));
+    let (two_lines, label_pt, label_width) = if one_line <= room {
+        (false, wanted, one_line)
+    } else {
+        let two = widest(&|m| {
+            m.label_lines
+                .iter()
+                .map(|l| helvetica_width_mm(l, wanted))
+                .fold(0.0, f64::max)
+        });
+        let size = if two <= room {
+            wanted
+        } else {
+            (wanted * room / two).max(MIN_LABEL_PT)
+        };
+        (true, size, two * size / wanted)
+    };
+    let mut cell = Cell {
+        footprint,
+        label_pt,
+        two_lines,
+        label_width,
+        height: 0.0,
+        pitch_x: (2.0 * footprint).max(label_width) + template.gap_mm,
+    };
+    cell.height = 2.0 * footprint + LABEL_GAP_MM + cell.label_height();
+    cell
+}
+
+/// Where markers go on a page: centres relative to the layout area's
+/// top-left corner.
+#[derive(Debug, Clone, PartialEq)]
+struct Packing {
+    centres: Vec<(f64, f64)>,
+}
+
+fn grid_packing(cell: &Cell, width: f64, height: f64, gap: f64) -> Packing {
+    let cols = ((width + gap) / cell.pitch_x + 1e-9).floor() as usize;
+    let pitch_y = cell.height + gap;
+    let rows = ((height + gap) / pitch_y + 1e-9).floor() as usize;
+    let block = cols as f64 * cell.pitch_x - gap;
+    let x0 = (width - block) / 2.0 + (cell.pitch_x - gap) / 2.0;
+    let y0 = (height - (rows as f64 * pitch_y - gap)) / 2.0;
+    let mut centres = Vec::new();
+    for r in 0..rows {
+        for c in 0..cols {
+            centres.push((
+                x0 + c as f64 * cell.pitch_x,
+                y0 + cell.footprint + r as f64 * pitch_y,
+            ));
+        }
+    }
+    Packing { centres }
+}
+
+/// Distance from point (px, py) to the rectangle [x0, x1] x [y0, y1].
+fn point_rect_distance(px: f64, py: f64, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
+    let dx = (x0 - px).max(px - x1).max(0.0);
+    let dy = (y0 - py).max(py - y1).max(0.0);
+    dx.hypot(dy)
+}
+
+/// The least row pitch at which rows shifted by half a column keep every
+/// footprint and label clear of their neighbours by `gap`.
+fn hex_row_pitch(cell: &Cell, gap: f64) -> f64 {
+    let dx = cell.pitch_x / 2.0;
+    let f = cell.footprint;
+    let half_label = cell.label_width / 2.0;
+    let label_top = f + LABEL_GAP_MM;
+    let label_bottom = f + LABEL_GAP_MM + cell.label_height();
+    let fits = |p: f64| {
+        // Footprints of diagonal neighbours.
+        dx.hypot(p) >= 2.0 * f + gap
+            // The upper marker's label against the lower neighbour's footprint.
+            && point_rect_distance(dx, p, -half_label, half_label, label_top, label_bottom) >= f + gap
+            // Labels of diagonal neighbours.
+            && (dx >= 2.0 * half_label + gap || p >= label_bottom - label_top + gap)
+            // Same column two rows apart.
+            && 2.0 * p >= cell.height + gap
+    };
+    let mut p = f;
+    while !fits(p) {
+        p += 0.05;
+    }
+    p
+}
+
+fn hex_packing(cell: &Cell, width: f64, height: f64, gap: f64) -> Packing {
+    let full = ((width + gap) / cell.pitch_x + 1e-9).floor() as usize;
+    let shifted = ((width + gap - cell.pitch_x / 2.0) / cell.pitch_x + 1e-9).floor() as usize;
+    if full == 0 || height + 1e-9 < cell.height {
+        return Packing {
+            centres: Vec::new(),
+        };
+    }
+    let pitch_y = hex_row_pitch(cell, gap);
+    let rows = 1 + ((height - cell.height) / pitch_y + 1e-9).floor() as usize;
+    let block =
+        (full as f64 * cell.pitch_x).max(shifted as f64 * cell.pitch_x + cell.pitch_x / 2.0) - gap;
+    let x0 = (width - block) / 2.0 + (cell.pitch_x - gap) / 2.0;
+    let y0 = (height - ((rows - 1) as f64 * pitch_y + cell.height)) / 2.0;
+    let mut centres = Vec::new();
+    for r in 0..rows {
+        let (cols, offset) = if r % 2 == 0 {
+            (full, 0.0)
+        } else {
+            (shifted, cell.pitch_x / 2.0)
+        };
+        for c in 0..cols {
+            centres.push((
+                x0 + offset + c as f64 * cell.pitch_x,
+                y0 + cell.footprint + r as f64 * pitch_y,
+            ));
+        }
+    }
+    Packing { centres }
+}
+
+/// The layout area of a page: left, top, width, height (mm).
+fn layout_area(template: &Template) -> (f64, f64, f64, f64) {
+    let m = template.margin_mm;
+    (
+        m,
+        m,
+        template.page_width_mm - 2.0 * m,
+        template.page_height_mm - 2.0 * m - FOOTER_MM,
+    )
+}
+
+/// The packing fitting more markers on a page (grid on a tie).
+fn best_packing(markers: &[SheetMarker], diameter_mm: f64, template: &Template) -> (Cell, Packing) {
+    let cell = cell_for(markers, diameter_mm, template);
+    let (_, _, w, h) = layout_area(template);
+    let grid = grid_packing(&cell, w, h, template.gap_mm);
+    let hex = hex_packing(&cell, w, h, template.gap_mm);
+    if hex.centres.len() > grid.centres.len() {
+        (cell, hex)
+    } else {
+        (cell, grid)
+    }
+}
+
+/// The largest marker diameter (to 0.1 mm) of which one fits on a page.
+pub fn largest_fitting_diameter(markers: &[SheetMarker], template: &Template) -> f64 {
+    let fits = |d: f64| {
+        let resized: Vec<SheetMarker> = markers
+            .iter()
+            .take(1)
+            .map(|m| SheetMarker {
+                marker: Marker {
+                    diameter_mm: d,
+                    ..m.marker
+                },
+                ..m.clone()
+            })
+            .collect();
+        !best_packing(&resized, d, template).1.centres.is_empty()
+    };
+    let (mut lo, mut hi) = (0.0, template.page_width_mm.max(template.page_height_mm));
+    for _ in 0..60 {
+        let mid = (lo + hi) / 2.0;
+        if fits(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    (lo * 10.0).floor() / 10.0
+}
+
+/// Lays the markers out on as many pages as they need.
+pub fn layout(spec: &SheetSpec) -> Result<Sheet> {
+    let template = &spec.template;
+    if spec.markers.is_empty() {
+        bail!("no markers to print");
+    }
+    let diameter = spec.markers[0].marker.diameter_mm;
+    if spec
+        .markers
+        .iter()
+        .any(|m| (m.marker.diameter_mm - diameter).abs() > 1e-9)
+    {
+        bail!("all markers on a sheet must have the same diameter");
+    }
+    let (cell, packing) = best_packing(&spec.markers, diameter, template);
+    if packing.centres.is_empty() {
+        let largest = largest_fitting_diameter(&spec.markers, template);
+        bail!(
+            "a {} mm marker does not fit on the {} page ({} x {} mm, {} mm margins); the largest that fits is {} mm",
+            trim_float(diameter),
+            template.name,
+            trim_float(template.page_width_mm),
+            trim_float(template.page_height_mm),
+            trim_float(template.margin_mm),
+            trim_float(largest)
+        );
+    }
+    let (left, top, _, _) = layout_area(template);
+    let per_page = packing.centres.len();
+    let page_count = spec.markers.len().div_ceil(per_page);
+    let mut pages = Vec::with_capacity(page_count);
+    let mut printed = Vec::with_capacity(spec.markers.len());
+    for (k, chunk) in spec.markers.chunks(per_page).enumerate() {
+        let mut page = Page::new(template.page_width_mm, template.page_height_mm);
+        for (m, &(x, y)) in chunk.iter().zip(&packing.centres) {
+            let (cx, cy) = (left + x, top + y);
+            page.push(Item::Marker {
+                marker: m.marker,
+                cx,
+                cy,
+            });
+            if template.cut_guides {
+                page.push(cut_circle(cx, cy, cell.footprint));
+            }
+            push_label(&mut page, m, &cell, cx, cy);
+            printed.push(PrintedMarker {
+                id: m.id,
+                code: m.code,
+                page: k as u32 + 1,
+                x_mm: round_um(cx),
+                y_mm: round_um(cy),
+                diameter_mm: m.marker.diameter_mm,
+            });
+        }
+        push_footer(&mut page, template, &spec.name, k + 1, page_count);
+        pages.push(page);
+    }
+    let manifest = Manifest {
+        format: "whycode-sheet".to_string(),
+        version: super::manifest::MANIFEST_VERSION,
+        tool: format!("whycode {}", env!("CARGO_PKG_VERSION")),
+        family: spec.family,
+        legacy: spec.legacy,
+        template: template.name.clone(),
+        page_size_mm: [template.page_width_mm, template.page_height_mm],
+        pages: page_count as u32,
+        markers: printed,
+    };
+    Ok(Sheet { pages, manifest })
+}
+
+fn round_um(v: f64) -> f64 {
+    (v * 1000.0).round() / 1000.0
+}
+
+fn push_label(page: &mut Page, m: &SheetMarker, cell: &Cell, cx: f64, cy: f64) {
+    let s = cell.label_pt * MM_PER_PT;
+    let first_baseline = cy + cell.footprint + LABEL_GAP_MM + CAP_HEIGHT * s;
+    let lines: Vec<&str> = if cell.two_lines {
+        m.label_lines.iter().map(String::as_str).collect()
+    } else {
+        vec![m.label.as_str()]
+    };
+    for (i, line) in lines.into_iter().enumerate() {
+        page.push(Item::Text {
+            x: cx,
+            y: first_baseline + i as f64 * LINE_SPACING * s,
+            size_pt: cell.label_pt,
+            anchor: Anchor::Middle,
+            grey: 0,
+            text: line.to_string(),
+        });
+    }
+}
+
+/// The scale check bar and the page caption along the bottom margin.
+fn push_footer(page: &mut Page, template: &Template, name: &str, number: usize, count: usize) {
+    let left = template.margin_mm;
+    let right = template.page_width_mm - template.margin_mm;
+    let bottom = template.page_height_mm - template.margin_mm;
+    let room = right - left;
+    let bar = if template.scale_bar_mm <= room {
+        template.scale_bar_mm
+    } else {
+        // Whole centimetres when the page is too narrow for the asked length.
+        ((room / 10.0).floor() * 10.0).max(room.floor().min(10.0))
+    };
+    page.push(Item::Rect {
+        x: left,
+        y: bottom - BAR_MM,
+        width: bar,
+        height: BAR_MM,
+        grey: 0,
+    });
+    for x in [left, left + bar - TICK_WIDTH_MM] {
+        page.push(Item::Rect {
+            x,
+            y: bottom - TICK_MM,
+            width: TICK_WIDTH_MM,
+            height: TICK_MM,
+            grey: 0,
+        });
+    }
+    let size = template.label_size_pt;
+    let baseline = bottom - TICK_MM - 1.2;
+    let measure = format!("measure: this bar must be {} mm", trim_float(bar));
+    let caption = if name.is_empty() {
+        format!("page {number}/{count}")
+    } else {
+        format!("{name} · page {number}/{count}")
+    };
+    let caption_baseline =
+        if helvetica_width_mm(&measure, size) + helvetica_width_mm(&caption, size) + 5.0 <= room {
+            baseline
+        } else {
+            baseline - LINE_SPACING * size * MM_PER_PT
+        };
+    page.push(Item::Text {
+        x: left,
+        y: baseline,
+        size_pt: size,
+        anchor: Anchor::Start,
+        grey: 0,
+        text: measure,
+    });
+    page.push(Item::Text {
+        x: right,
+        y: caption_baseline,
+        size_pt: size,
+        anchor: Anchor::End,
+        grey: 80,
+        text: caption,
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(ids: std::ops::RangeInclusive<u32>, d: f64, template: &str) -> SheetSpec {
+        let family = Family::generate(8, 2).unwrap();
+        let ids: Vec<u32> = ids.collect();
+        SheetSpec {
+            markers: family_markers(&family, &ids, d).unwrap(),
+            template: Template::builtin(template).unwrap(),
+            name: "test".into(),
+            family: Some(FamilyRef {
+                bits: 8,
+                distance: 2,
+            }),
+            legacy: false,
+        }
+    }
+
+    #[test]
+    fn footprints_and_labels_never_overlap() {
+        for d in [8.0, 12.0, 15.0, 25.0, 30.0, 40.0, 63.0, 90.0] {
+            let sheet = layout(&spec(1..=16, d, "a4")).unwrap();
+            let f = d / 2.0 * 1.3;
+            for page in &sheet.pages {
+                let centres: Vec<(f64, f64)> = page.markers().map(|(_, x, y)| (x, y)).collect();
+                for (i, a) in centres.iter().enumerate() {
+                    assert!(a.0 - f >= 10.0 - 1e-9 && a.0 + f <= 200.0 + 1e-9, "d={d}");
+                    assert!(a.1 - f >= 10.0 - 1e-9, "d={d}");
+                    for b in &centres[i + 1..] {
+                        let dist = (a.0 - b.0).hypot(a.1 - b.1);
+                        assert!(dist >= 2.0 * f + 3.0 - 1e-6, "d={d} dist={dist}");
+                    }
+                }
+                // Every text box stays on the page inside the margins and
+                // clear of every marker's white margin.
+                for item in &page.items {
+                    let Item::Text {
+                        x,
+                        y,
+                        size_pt,
+                        anchor,
+                        text,
+                        ..
+                    } = item
+                    else {
+                        continue;
+                    };
+                    let w = helvetica_width_mm(text, *size_pt);
+                    let left = match anchor {
+                        Anchor::Start => *x,
+                        Anchor::Middle => x - w / 2.0,
+                        Anchor::End => x - w,
+                    };
+                    let s = size_pt * MM_PER_PT;
+                    let (top, bottom) = (y - CAP_HEIGHT * s, y + DESCENT * s);
+                    assert!(left >= 10.0 - 1e-9 && left + w <= 200.0 + 1e-9, "{text}");
+                    assert!(top >= 10.0 && bottom <= 287.0, "{text}");
+                    for c in &centres {
+                        let clear = point_rect_distance(c.0, c.1, left, left + w, top, bottom);
+                        assert!(clear >= f + 0.5, "d={d}: '{text}' {clear} from a marker");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn ids_outside_the_family_name_the_range() {
+        let family = Family::generate(8, 2).unwrap();
+        let err = family_markers(&family, &[40], 40.0)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "ID 40 is not in the 8-bit distance-2 family (IDs 1-16)"
+        );
+    }
+
+    #[test]
+    fn too_large_markers_name_the_largest_that_fits() {
+        let err = layout(&spec(1..=1, 300.0, "a4")).unwrap_err().to_string();
+        assert!(err.contains("the largest that fits is"), "{err}");
+        let largest: f64 = err.rsplit(' ').nth(1).unwrap().parse().unwrap();
+        assert!(layout(&spec(1..=1, largest, "a4")).is_ok());
+        assert!(layout(&spec(1..=1, largest + 0.2, "a4")).is_err());
+    }
+
+    #[test]
+    fn overflow_continues_on_new_pages() {
+        let sheet = layout(&spec(1..=16, 60.0, "a5")).unwrap();
+        assert!(sheet.pages.len() > 1);
+        assert_eq!(sheet.manifest.markers.len(), 16);
+        assert_eq!(sheet.manifest.pages as usize, sheet.pages.len());
+    }
+}
