@@ -126,3 +126,114 @@ fn close_up_with_paper_edges_out_of_frame_reports_scale_unknown_and_why() {
         }
     }
 }
+
+#[test]
+fn lens_distortion_is_removed_with_the_camera_calibration() {
+    use whycode::simulate::{layout, render, Background, Scene, SceneObject, SheetPage};
+    let manifest = a4_manifest();
+    let mut camera = whycode::camera::Camera::ideal(2000, 1500, 62.0);
+    camera.distortion = [-0.15, 0.06, 0.0004, -0.0002, 0.0];
+    let mut page = SheetPage::new(
+        manifest.clone(),
+        1,
+        layout::centred(
+            layout::distance_to_fill(&camera, 210.0, 297.0, 0.85),
+            0.35,
+            0.15,
+            0.1,
+        ),
+    );
+    page.print_scale = 0.98;
+    let mut scene = Scene::new(camera);
+    scene.objects.push(SceneObject::Page(page));
+    scene.background = Background::Table;
+    scene.noise = 2.0;
+    scene.focus_blur_px = 0.8;
+    let (image, truth) = render(&scene);
+    let obs = ideal_observations(&truth);
+    let report = check_photo("p.png", &manifest, &obs, &image, Some(&camera));
+    let scale = report.pages[0].scale.scale.unwrap();
+    assert!((scale - 0.98).abs() < 0.003, "scale {scale}");
+    assert!(
+        report.pages[0].rms_px < 0.5,
+        "rms {}",
+        report.pages[0].rms_px
+    );
+    assert!(report
+        .markers
+        .iter()
+        .all(|m| m.status == MarkerStatus::Found));
+}
+
+#[test]
+fn two_pages_in_two_photos_combine_into_one_verdict() {
+    let family = whycode::family::Family::generate(BITS, DISTANCE).unwrap();
+    let mut manifest = a4_manifest();
+    manifest.pages = 2;
+    for (k, id) in (13..=16u32).enumerate() {
+        manifest
+            .markers
+            .push(whycode::render::manifest::PrintedMarker {
+                id,
+                code: family.code(id).unwrap(),
+                page: 2,
+                x_mm: 60.0 + 90.0 * (k % 2) as f64,
+                y_mm: 70.0 + 150.0 * (k / 2) as f64,
+                diameter_mm: 60.0,
+            });
+    }
+    let mut reports = Vec::new();
+    for page in [1, 2] {
+        use whycode::simulate::{layout, render, Scene, SceneObject, SheetPage};
+        let camera = camera();
+        let mut scene = Scene::new(camera);
+        scene.objects.push(SceneObject::Page(SheetPage::new(
+            manifest.clone(),
+            page,
+            layout::centred(
+                layout::distance_to_fill(&camera, 210.0, 297.0, 0.8),
+                0.2,
+                0.0,
+                0.0,
+            ),
+        )));
+        let (image, truth) = render(&scene);
+        reports.push(check_photo(
+            &format!("page{page}.png"),
+            &manifest,
+            &ideal_observations(&truth),
+            &image,
+            None,
+        ));
+    }
+    assert_eq!(reports[1].pages.len(), 1);
+    assert_eq!(reports[1].pages[0].page, 2);
+    let one_photo = summarise(&manifest, vec![reports[0].clone()]);
+    assert!(!one_photo.ok);
+    assert_eq!(one_photo.counts.missing, 4);
+    let both = summarise(&manifest, reports);
+    assert!(both.ok, "{}", both.to_table());
+    assert_eq!(both.counts.found, 16);
+    assert!(both.pages.iter().all(|p| p.scale_status == ScaleStatus::Ok));
+}
+
+#[test]
+fn a_marker_printed_at_another_size_is_noted() {
+    let manifest = a4_manifest();
+    let mut printed = manifest.clone();
+    printed.markers[5].diameter_mm = 38.0; // ID 6, 45 mm in the manifest
+    let (image, truth) = photo(&printed, &Photo::default());
+    let report = check_photo(
+        "p.jpg",
+        &manifest,
+        &ideal_observations(&truth),
+        &image,
+        None,
+    );
+    let odd = &report.pages[0].odd_sizes;
+    assert_eq!(odd.len(), 1, "{odd:?}");
+    assert_eq!(odd[0].id, 6);
+    assert!((odd[0].relative_size - 38.0 / 45.0).abs() < 0.02, "{odd:?}");
+    let table = summarise(&manifest, vec![report]).to_table();
+    assert!(table.contains("marker 6 on page 1 is -16 %"), "{table}");
+}

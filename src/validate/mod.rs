@@ -121,8 +121,42 @@ pub struct PageCheck {
     /// Reprojection error of the inliers, pixels.
     pub rms_px: f64,
     pub scale: ScaleMeasurement,
+    /// Markers whose disc is a different size from their neighbours'
+    /// (detected/predicted size more than 8 % off the page's median): a
+    /// cross-check for markers printed at another size than the manifest
+    /// says, which the scale of the page would not show.
+    pub odd_sizes: Vec<OddSize>,
     #[serde(skip)]
     pub homography: Option<Homography>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct OddSize {
+    pub id: u32,
+    /// Its size relative to the page's median marker, 1 = as expected.
+    pub relative_size: f64,
+}
+
+/// Relative size deviation that makes a marker's size odd.
+const ODD_SIZE: f64 = 0.08;
+
+fn odd_sizes(checks: &[MarkerCheck]) -> Vec<OddSize> {
+    let mut ratios: Vec<f64> = checks.iter().filter_map(|c| c.size_ratio).collect();
+    if ratios.len() < 3 {
+        return Vec::new();
+    }
+    ratios.sort_by(f64::total_cmp);
+    let median = ratios[ratios.len() / 2];
+    checks
+        .iter()
+        .filter_map(|c| {
+            let relative_size = c.size_ratio? / median;
+            ((relative_size - 1.0).abs() > ODD_SIZE).then_some(OddSize {
+                id: c.id,
+                relative_size,
+            })
+        })
+        .collect()
 }
 
 /// A detection on a located page where no marker was printed.
@@ -203,6 +237,7 @@ pub fn check_photo(
             image,
             &mut claimed,
         );
+        let odd = odd_sizes(&checks);
         report.markers.extend(checks);
         report.stray.extend(strays);
         let discs: Vec<(f64, f64, f64)> = printed
@@ -216,6 +251,7 @@ pub fn check_photo(
             inliers: fit_inliers,
             rms_px: rms,
             scale,
+            odd_sizes: odd,
             homography: Some(h),
         });
     }
@@ -577,6 +613,27 @@ impl Report {
                 status,
                 note.trim()
             );
+        }
+        for photo in &self.photos {
+            for page in &photo.pages {
+                for odd in &page.odd_sizes {
+                    let _ = writeln!(
+                        out,
+                        "note: {}: marker {} on page {} is {:+.0} % the size of its neighbours",
+                        photo.photo,
+                        odd.id,
+                        page.page,
+                        (odd.relative_size - 1.0) * 100.0
+                    );
+                }
+            }
+            for stray in &photo.stray {
+                let _ = writeln!(
+                    out,
+                    "note: {}: a marker reading as ID {} at ({:.0}, {:.0}) on page {} is not in the manifest there",
+                    photo.photo, stray.id, stray.u, stray.v, stray.page
+                );
+            }
         }
         let problems: Vec<&MarkerVerdict> = self
             .markers
