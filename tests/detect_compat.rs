@@ -76,3 +76,50 @@ fn many_png_finds_every_legacy_marker_and_nothing_else() {
         assert!(d.axes[1] > 8.0, "{d:?}");
     }
 }
+
+#[test]
+fn tags_35_reads_every_id_the_original_reads() {
+    let Some(pdf) = compat("tags_35.pdf") else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let prefix = dir.path().join("page");
+    let status = std::process::Command::new("pdftoppm")
+        .args(["-r", "150", "-png", "-singlefile"])
+        .arg(&pdf)
+        .arg(&prefix)
+        .status();
+    let Ok(status) = status else {
+        eprintln!("skipping: pdftoppm is not installed");
+        return;
+    };
+    assert!(status.success());
+    let image = load_gray(&prefix.with_extension("png")).unwrap();
+    let family = whycode::family::Family::generate(8, 1).unwrap();
+    let mut detector = Detector::new(DetectorConfig {
+        family: Some(family),
+        ..DetectorConfig::default()
+    });
+    let found = detector.detect(&image);
+    annotate(&image, &found, "tags_35");
+    assert_eq!(found.len(), 35, "{found:?}");
+    // Column-major: columns left to right, top to bottom in each column.
+    let mut sorted = found.clone();
+    sorted.sort_by(|a, b| a.u.total_cmp(&b.u));
+    let mut ids = Vec::new();
+    for column in sorted.chunks(8) {
+        let mut column = column.to_vec();
+        column.sort_by(|a, b| a.v.total_cmp(&b.v));
+        ids.extend(column.iter().map(|d| d.id));
+    }
+    let expected = [
+        0, 1, 2, 3, 4, 5, 6, 7, 8, 0, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20, 0, 21, 22, 23,
+        24, 25, 0, 26, 27, 28, 29, 0, 30,
+    ];
+    assert_eq!(ids, expected);
+    for d in &found {
+        if d.id != 0 {
+            assert!(d.yaw.is_some(), "a read ID comes with a yaw: {d:?}");
+        }
+    }
+}

@@ -146,7 +146,8 @@ pub fn sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
 /// from the centre through the coarse ellipse: the 50 % crossing between
 /// the darkest value inside and the brightest outside, nearest to the
 /// coarse edge.
-pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>) {
+/// Returns the number of rays cast.
+pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>) -> usize {
     out.clear();
     let perimeter = std::f64::consts::PI * (coarse.a + coarse.b);
     let rays = ((perimeter / 4.0) as usize).clamp(24, 64);
@@ -208,6 +209,46 @@ pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>)
             out.push((coarse.u + ux * s, coarse.v + uy * s));
         }
     }
+    rays
+}
+
+/// Points where the grey level falls through `mid` going outwards within
+/// ±0.07 of `ratio` times the outer ellipse's radius: the edge of a white
+/// disc of that relative radius inside the black one. Under perspective the
+/// inner circle's image is not concentric with the outer ellipse, which is
+/// what tells the two candidate poses apart.
+pub fn inner_edge_points(
+    image: Gray<'_>,
+    outer: &Ellipse,
+    ratio: f64,
+    mid: f64,
+    out: &mut Vec<(f64, f64)>,
+) {
+    out.clear();
+    let rays = 48;
+    for k in 0..rays {
+        let t = std::f64::consts::TAU * (k as f64 + 0.5) / f64::from(rays);
+        let (px, py) = outer.point(t);
+        let (dx, dy) = (px - outer.u, py - outer.v);
+        let r = dx.hypot(dy);
+        let (s0, s1) = ((ratio - 0.07) * r, (ratio + 0.07) * r);
+        let steps = (((s1 - s0) * 2.0) as usize).max(4);
+        let at = |s: f64| sample(image, outer.u + dx / r * s, outer.v + dy / r * s);
+        let mut previous = at(s0);
+        for j in 1..=steps {
+            let s = s0 + (s1 - s0) * j as f64 / steps as f64;
+            let current = at(s);
+            if let (Some(p), Some(q)) = (previous, current) {
+                if p >= mid && q < mid {
+                    let step = (s1 - s0) / steps as f64;
+                    let hit = s - step + step * (p - mid) / (p - q);
+                    out.push((outer.u + dx / r * hit, outer.v + dy / r * hit));
+                    break;
+                }
+            }
+            previous = current;
+        }
+    }
 }
 
 /// Least-squares conic through the points, normalised by A + C = 1 (never
@@ -253,11 +294,21 @@ pub fn radial_distance(e: &Ellipse, x: f64, y: f64) -> f64 {
     (r - r / k).abs()
 }
 
+/// A refined outline and how well the edge fits it.
+#[derive(Debug, Clone, Copy)]
+pub struct Refined {
+    pub ellipse: Ellipse,
+    /// RMS distance of the kept edge points from the ellipse, pixels.
+    pub rms: f64,
+    /// Share of rays that gave an edge point kept in the fit.
+    pub support: f64,
+}
+
 /// The outer ellipse refined from edge points, with points farther than
 /// max(0.5 px, 3 × median) from a first fit dropped before a second fit.
 /// None when the edge does not support a consistent ellipse near `coarse`.
-pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) -> Option<Ellipse> {
-    edge_points(image, coarse, scratch);
+pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) -> Option<Refined> {
+    let rays = edge_points(image, coarse, scratch);
     let scale = coarse.a.max(1.0);
     let first = fit_conic(scratch, (coarse.u, coarse.v), scale)?;
     let mut residuals: Vec<f64> = scratch
@@ -278,7 +329,18 @@ pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) 
     let consistent = (fitted.u - coarse.u).hypot(fitted.v - coarse.v) < 0.25 * coarse.b + 1.0
         && (fitted.a / coarse.a - 1.0).abs() < 0.25
         && (fitted.b / coarse.b - 1.0).abs() < 0.25;
-    consistent.then_some(fitted)
+    if !consistent {
+        return None;
+    }
+    let sum_sq: f64 = scratch
+        .iter()
+        .map(|&(x, y)| radial_distance(&fitted, x, y).powi(2))
+        .sum();
+    Some(Refined {
+        ellipse: fitted,
+        rms: (sum_sq / scratch.len() as f64).sqrt(),
+        support: scratch.len() as f64 / rays as f64,
+    })
 }
 
 #[cfg(test)]

@@ -10,6 +10,8 @@
 //! again only touches the markers' own pixels.
 
 pub mod ellipse;
+pub mod idfilter;
+pub mod ring;
 pub mod segment;
 pub mod threshold;
 pub mod track;
@@ -20,9 +22,12 @@ use std::path::Path;
 use anyhow::{Context, Result};
 use image::GrayImage;
 
+use crate::camera::Camera;
 use crate::family::{Decoder, Family, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
+use crate::pose::{self, CirclePose, Pose};
 use ellipse::Ellipse;
+use ring::RingReader;
 use segment::{Fill, Filler, Gray, Labels, Stats};
 use threshold::{ThresholdMap, ThresholdSearch};
 use track::{Adaptive, Track};
@@ -37,6 +42,8 @@ pub struct DetectorConfig {
     pub max_markers: usize,
     /// Outer diameter of the black disc in metres (needed for pose).
     pub diameter_m: Option<f64>,
+    /// Calibrated camera (needed for pose).
+    pub camera: Option<Camera>,
     /// Keep state between frames: predicted search, slow adaptation.
     pub tracking: bool,
     /// Smallest outer diameter, pixels, worth reporting.
@@ -55,6 +62,7 @@ impl Default for DetectorConfig {
             family: None,
             max_markers: 1024,
             diameter_m: None,
+            camera: None,
             tracking: false,
             min_diameter_px: 7.0,
             roundness_tolerance: 0.4,
@@ -84,6 +92,10 @@ pub struct Detection {
     pub confidence: f64,
     /// How the ring decoded, with a family.
     pub status: Option<MatchStatus>,
+    /// Marker → camera pose, with a camera and a diameter. For legacy
+    /// markers (no yaw) the in-plane rotation is arbitrary: +x is the
+    /// image +u direction projected onto the marker plane.
+    pub pose: Option<Pose>,
 }
 
 /// The detector: configuration, tracking state and reusable buffers.
@@ -91,11 +103,11 @@ pub struct Detection {
 #[derive(Debug, Clone)]
 pub struct Detector {
     config: DetectorConfig,
-    #[allow(dead_code)]
-    decoder: Option<Decoder>,
+    reader: Option<RingReader>,
     labels: Labels,
     filler: Filler,
     edge_scratch: Vec<(f64, f64)>,
+    inner_scratch: Vec<(f64, f64)>,
     tracks: Vec<Track>,
     search: ThresholdSearch,
     ratio: Adaptive,
@@ -105,9 +117,11 @@ pub struct Detector {
 }
 
 /// A disc that passed every test.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 struct Candidate {
     outer: Ellipse,
+    /// Sub-pixel points of the outer edge (for pose under distortion).
+    edge: Vec<(f64, f64)>,
     black: f64,
     white: f64,
     /// Test values, for adaptation and confidence.
@@ -141,7 +155,10 @@ fn concentricity_tolerance(whycode: bool) -> f64 {
 
 impl Detector {
     pub fn new(config: DetectorConfig) -> Detector {
-        let decoder = config.family.as_ref().map(Decoder::new);
+        let reader = config
+            .family
+            .as_ref()
+            .map(|family| RingReader::new(Some(Decoder::new(family))));
         let whycode = config.family.is_some();
         let white = expected_white_fraction(whycode);
         Detector {
@@ -149,10 +166,11 @@ impl Detector {
             roundness: Adaptive::new(0.0, config.roundness_tolerance),
             area: Adaptive::new(0.0, config.area_tolerance),
             config,
-            decoder,
+            reader,
             labels: Labels::default(),
             filler: Filler::default(),
             edge_scratch: Vec::new(),
+            inner_scratch: Vec::new(),
             tracks: Vec::new(),
             search: ThresholdSearch::default(),
             frame: 0,
@@ -222,14 +240,25 @@ impl Detector {
                 self.area.learn(c.area_error);
             }
         }
-        let mut detections: Vec<Detection> = found.iter().map(|c| self.describe(c)).collect();
+        let mut detections: Vec<Detection> = Vec::with_capacity(found.len());
+        for c in &found {
+            let d = self.describe(image, gray, c);
+            detections.push(d);
+        }
         detections.sort_by(|a, b| a.v.total_cmp(&b.v).then(a.u.total_cmp(&b.u)));
         detections
     }
 
-    fn describe(&self, c: &Candidate) -> Detection {
+    fn describe(&mut self, image: &GrayImage, gray: Gray<'_>, c: &Candidate) -> Detection {
         let quality = 1.0 - (c.area_error / self.area.tolerance()).min(1.0);
-        Detection {
+        let outer = pose::ImageEllipse {
+            u: c.outer.u,
+            v: c.outer.v,
+            semi_major: c.outer.a,
+            semi_minor: c.outer.b,
+            angle: c.outer.angle,
+        };
+        let mut d = Detection {
             id: 0,
             code: None,
             u: c.outer.u,
@@ -239,7 +268,76 @@ impl Detector {
             angle: c.outer.angle,
             confidence: (0.5 + 0.5 * quality).clamp(0.0, 1.0),
             status: None,
+            pose: None,
+        };
+        let mut axis_point = None;
+        if let Some(reader) = &self.reader {
+            let ring_outer = ring::ImageEllipse {
+                u: outer.u,
+                v: outer.v,
+                semi_major: outer.semi_major,
+                semi_minor: outer.semi_minor,
+                angle: outer.angle,
+            };
+            let reading = reader.read(image, &ring_outer, c.black, c.white);
+            d.id = reading.id;
+            d.code = reading.decoded.filter(|x| x.is_member()).map(|x| x.code);
+            d.status = reading.decoded.map(|x| x.status);
+            d.yaw = reading.yaw;
+            d.confidence = reading.confidence;
+            axis_point = reading.axis_point;
         }
+        if let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) {
+            d.pose = self.pose(&camera, diameter / 2.0, gray, c, &outer, d.yaw, axis_point);
+        }
+        d
+    }
+
+    /// Position and normal from the outer edge, the two-fold ambiguity
+    /// decided by the inner white edges, the rotation from the yaw.
+    #[allow(clippy::too_many_arguments)]
+    fn pose(
+        &mut self,
+        camera: &Camera,
+        radius_m: f64,
+        gray: Gray<'_>,
+        c: &Candidate,
+        outer: &pose::ImageEllipse,
+        yaw: Option<f64>,
+        axis_point: Option<(f64, f64)>,
+    ) -> Option<Pose> {
+        let candidates = pose::circle_poses_from_points(camera, &c.edge, radius_m)
+            .or_else(|| pose::try_circle_poses(camera, outer, radius_m))?;
+        let mid = (c.black + c.white) / 2.0;
+        let whycode = self.config.family.is_some();
+        let inner_ratios: &[f64] = if whycode {
+            &[RING_INNER_RATIO, WHYCODE_WHITE_RATIO]
+        } else {
+            &[WHYCON_WHITE_RATIO]
+        };
+        let mut errors = [0.0f64; 2];
+        for &ratio in inner_ratios {
+            ellipse::inner_edge_points(gray, &c.outer, ratio, mid, &mut self.inner_scratch);
+            for (k, candidate) in candidates.iter().enumerate() {
+                let rms = pose::circle_point_rms(
+                    camera,
+                    candidate,
+                    &self.inner_scratch,
+                    ratio * radius_m,
+                );
+                errors[k] += rms.map_or(0.0, |r| r * r * self.inner_scratch.len() as f64);
+            }
+        }
+        let circle: &CirclePose = if errors[1] < errors[0] {
+            &candidates[1]
+        } else {
+            &candidates[0]
+        };
+        Some(match (axis_point, yaw) {
+            (Some(p), _) => pose::full_pose(camera, circle, p),
+            (None, Some(yaw)) => pose::full_pose_from_yaw(camera, circle, yaw),
+            (None, None) => pose::full_pose_from_yaw(camera, circle, 0.0),
+        })
     }
 
     /// Scans every row for dark pixels not yet visited and tests the
@@ -392,9 +490,20 @@ impl Detector {
         }
         let black = dark.mean_intensity();
         let white_level = white.mean_intensity();
-        let outer = ellipse::refine(gray, &coarse, &mut self.edge_scratch).unwrap_or(coarse);
+        if white_level - black < map.min_contrast() {
+            return None;
+        }
+        // The outline must be an ellipse along the whole edge: squares and
+        // blobs pass the moment tests (a square's area is within 5 % of its
+        // moment ellipse's) but not this.
+        let refined = ellipse::refine(gray, &coarse, &mut self.edge_scratch)?;
+        if refined.support < 0.75 || refined.rms > 0.35 + 0.015 * coarse.a {
+            return None;
+        }
+        let outer = refined.ellipse;
         Some(Candidate {
             outer,
+            edge: self.edge_scratch.clone(),
             black,
             white: white_level,
             ratio,

@@ -20,6 +20,8 @@ pub struct ThresholdMap {
     shift: u32,
     cols: usize,
     values: Vec<u8>,
+    /// Least black-to-white difference that noise cannot fake.
+    min_contrast: u8,
 }
 
 /// Shift of the adaptive map's tiles: 16 x 16 pixels.
@@ -40,6 +42,7 @@ impl ThresholdMap {
             shift: 31,
             cols: 1,
             values: vec![threshold],
+            min_contrast: MIN_CONTRAST,
         }
     }
 
@@ -48,6 +51,11 @@ impl ThresholdMap {
     pub fn row(&self, y: usize) -> &[u8] {
         let r = y >> self.shift;
         &self.values[r * self.cols..(r + 1) * self.cols]
+    }
+
+    /// Least black-to-white difference that counts as a real edge here.
+    pub fn min_contrast(&self) -> f64 {
+        f64::from(self.min_contrast)
     }
 
     #[inline]
@@ -102,6 +110,7 @@ impl ThresholdMap {
                 shift: TILE_SHIFT,
                 cols,
                 values: vec![0; cols * rows],
+                min_contrast: noise_floor,
             };
         }
         while let Some(i) = queue.pop_front() {
@@ -130,6 +139,7 @@ impl ThresholdMap {
             shift: TILE_SHIFT,
             cols,
             values: thresholds.into_iter().map(|t| t.min(255) as u8).collect(),
+            min_contrast: noise_floor,
         }
     }
 }
