@@ -332,6 +332,18 @@ pub fn run(
 
 // ---------------------------------------------------------------- items
 
+/// The scene of item 1 (and 2): 800x600, markers of `family` spread on a
+/// mid-grey background.
+pub fn yaw_scene(family: &Family, spread: Spread, seed: u64) -> Scene {
+    let cam = camera(800, 600);
+    let mut rng = Pcg32::new(seed, 1);
+    scene(
+        &cam,
+        spread_markers(&cam, Some(family), spread, &mut rng),
+        seed,
+    )
+}
+
 /// Item 1: yaw of markers with a correct ID against the true image
 /// direction of +x. Returns errors in degrees and the ID counts.
 pub fn yaw_errors(
@@ -369,14 +381,28 @@ pub fn yaw_errors(
 }
 
 /// Item 2: angle between the estimated and the true marker normal, in
-/// degrees, per tilt; and how many exceed `wrong_deg` (the wrong one of the
-/// two candidate normals picked).
+/// degrees, per 10° band of the true viewing angle (between the normal and
+/// the line of sight); and how many exceed `wrong_deg` (the wrong one of
+/// the two candidate normals picked). Also the in-plane rotation error of
+/// the full pose (its +x axis against the true one, degrees) and the centre
+/// errors (px) of `Detection::u, v` and of the pose's projected position.
 pub struct NormalResult {
-    pub per_tilt: Vec<(f64, Errors)>,
+    pub per_view: Vec<(f64, Errors)>,
     pub all: Errors,
     pub wrong_picks: usize,
     pub first_wrong: Option<(u64, usize, f64)>,
+    pub pose_roll: Errors,
+    pub centre: Errors,
+    pub pose_centre: Errors,
     pub counts: Counts,
+}
+
+/// View angle of a true marker: between its normal and the direction to
+/// the camera, degrees.
+pub fn view_angle(m: &simulate::TrueMarker) -> f64 {
+    let n = Vector3::from(m.normal);
+    let to_camera = -Vector3::from(m.position).normalize();
+    n.dot(&to_camera).clamp(-1.0, 1.0).acos() / DEG
 }
 
 pub fn normal_errors(
@@ -391,47 +417,71 @@ pub fn normal_errors(
     let cam = camera(800, 600);
     let family = families.get(8, 2);
     let mut det = detector(Some(&family), &cam, false);
+    let mut bands = vec![Errors::default(); 9];
     let mut result = NormalResult {
-        per_tilt: Vec::new(),
+        per_view: Vec::new(),
         all: Errors::default(),
         wrong_picks: 0,
         first_wrong: None,
+        pose_roll: Errors::default(),
+        centre: Errors::default(),
+        pose_centre: Errors::default(),
         counts: Counts::default(),
     };
     for (k, &tilt) in tilts_deg.iter().enumerate() {
-        let mut errors = Errors::default();
         for f in 0..frames_per_tilt {
             let seed = seed0 + 1000 * k as u64 + f as u64;
-            let mut rng = Pcg32::new(seed, 1);
             let spread = Spread {
                 count: markers_per_frame,
                 diameter_px,
                 max_tilt: 0.0,
                 fixed_tilt: Some(tilt * DEG),
             };
-            let s = scene(
-                &cam,
-                spread_markers(&cam, Some(&family), spread, &mut rng),
-                seed,
-            );
+            let s = yaw_scene(&family, spread, seed);
             let (_, truth, found) = run(&s, &mut det, &mut result.counts);
             for (t, d) in match_truth(&truth, &found).pairs {
-                let Some(pose) = d.and_then(|d| found[d].pose.as_ref()) else {
+                let Some(d) = d.map(|d| &found[d]) else {
                     continue;
                 };
+                let m = &truth.markers[t];
+                result.centre.add((d.u - m.u).hypot(d.v - m.v), (seed, t));
+                let Some(pose) = d.pose.as_ref() else {
+                    continue;
+                };
+                if let Some((pu, pv)) = cam.project(&pose.position) {
+                    result
+                        .pose_centre
+                        .add((pu - m.u).hypot(pv - m.v), (seed, t));
+                }
                 let n = pose.rotation.column(2).into_owned();
-                let want = Vector3::from(truth.markers[t].normal);
+                let want = Vector3::from(m.normal);
                 let angle = n.normalize().dot(&want).clamp(-1.0, 1.0).acos() / DEG;
-                errors.add(angle, (seed, t));
+                let band = ((view_angle(m) / 10.0) as usize).min(bands.len() - 1);
+                bands[band].add(angle, (seed, t));
                 result.all.add(angle, (seed, t));
                 if angle > wrong_deg {
                     result.wrong_picks += 1;
                     result.first_wrong.get_or_insert((seed, t, angle));
                 }
+                if d.id == m.id {
+                    // Rotation about the normal: the estimated +x axis
+                    // against the true one, both projected onto the true
+                    // marker plane.
+                    let rot = nalgebra::Matrix3::from_fn(|i, j| m.rotation[i][j]);
+                    let x_est = rot.transpose() * pose.rotation.column(0).into_owned();
+                    result
+                        .pose_roll
+                        .add(x_est.y.atan2(x_est.x) / DEG, (seed, t));
+                }
             }
         }
-        result.per_tilt.push((tilt, errors));
     }
+    result.per_view = bands
+        .into_iter()
+        .enumerate()
+        .filter(|(_, e)| e.n > 0)
+        .map(|(k, e)| (10.0 * k as f64, e))
+        .collect();
     result
 }
 
@@ -464,6 +514,32 @@ pub fn clutter(
     counts
 }
 
+/// One frame of item 4.
+pub fn dark_scene(
+    family: Option<&Family>,
+    markers_per_frame: usize,
+    exposure: (f64, f64),
+    worn_ink: bool,
+    seed: u64,
+) -> Scene {
+    let cam = camera(800, 600);
+    let mut rng = Pcg32::new(seed, 1);
+    let spread = Spread {
+        count: markers_per_frame,
+        diameter_px: (40.0, 90.0),
+        max_tilt: 30.0 * DEG,
+        fixed_tilt: None,
+    };
+    let mut s = scene(&cam, spread_markers(&cam, family, spread, &mut rng), seed);
+    s.background = Background::Table;
+    s.exposure = rng.range(exposure.0, exposure.1);
+    s.noise = rng.range(1.0, 2.5);
+    if worn_ink {
+        s.ink_reflectance = 0.15;
+    }
+    s
+}
+
 /// Item 4: dark frames on a dark table top with sensor noise; every other
 /// frame a worn, greyer ink. `exposure` 0.15-0.35 gives frames with a mean
 /// grey of 10-25 (white paper at 33-77); 0.065-0.13 gives means of 5-9
@@ -481,25 +557,42 @@ pub fn dark(
     let mut means = (f64::MAX, f64::MIN);
     for f in 0..frames {
         let seed = seed0 + f as u64;
-        let mut rng = Pcg32::new(seed, 1);
-        let spread = Spread {
-            count: markers_per_frame,
-            diameter_px: (40.0, 90.0),
-            max_tilt: 30.0 * DEG,
-            fixed_tilt: None,
-        };
-        let mut s = scene(&cam, spread_markers(&cam, family, spread, &mut rng), seed);
-        s.background = Background::Table;
-        s.exposure = rng.range(exposure.0, exposure.1);
-        s.noise = rng.range(1.0, 2.5);
-        if f % 2 == 1 {
-            s.ink_reflectance = 0.15;
-        }
+        let s = dark_scene(family, markers_per_frame, exposure, f % 2 == 1, seed);
         let (image, ..) = run(&s, &mut det, &mut counts);
         let mean = image.as_raw().iter().map(|&p| f64::from(p)).sum::<f64>() / image.len() as f64;
         means = (means.0.min(mean), means.1.max(mean));
     }
     (counts, means)
+}
+
+/// One frame of item 5, rendered (the shadow is applied to the image).
+pub fn gradient_frame(
+    family: Option<&Family>,
+    markers_per_frame: usize,
+    ratio: f64,
+    shadow: Option<f64>,
+    seed: u64,
+) -> (GrayImage, GroundTruth) {
+    let cam = camera(800, 600);
+    let mut rng = Pcg32::new(seed, 1);
+    let spread = Spread {
+        count: markers_per_frame,
+        diameter_px: (40.0, 90.0),
+        max_tilt: 30.0 * DEG,
+        fixed_tilt: None,
+    };
+    let mut s = scene(&cam, spread_markers(&cam, family, spread, &mut rng), seed);
+    s.background = Background::Table;
+    s.gradient = ratio;
+    s.gradient_angle = rng.range(0.0, 2.0 * PI);
+    s.exposure = 1.1;
+    s.noise = 1.5;
+    let (mut image, truth) = simulate::render(&s);
+    if let Some(factor) = shadow {
+        let through = (rng.range(200.0, 600.0), rng.range(150.0, 450.0));
+        cast_shadow(&mut image, through, rng.range(0.0, 2.0 * PI), factor, 12.0);
+    }
+    (image, truth)
 }
 
 /// Item 5: a light gradient of `ratio`:1 across the frame in a random
@@ -518,24 +611,7 @@ pub fn gradient(
     let mut counts = Counts::default();
     for f in 0..frames {
         let seed = seed0 + f as u64;
-        let mut rng = Pcg32::new(seed, 1);
-        let spread = Spread {
-            count: markers_per_frame,
-            diameter_px: (40.0, 90.0),
-            max_tilt: 30.0 * DEG,
-            fixed_tilt: None,
-        };
-        let mut s = scene(&cam, spread_markers(&cam, family, spread, &mut rng), seed);
-        s.background = Background::Table;
-        s.gradient = ratio;
-        s.gradient_angle = rng.range(0.0, 2.0 * PI);
-        s.exposure = 1.1;
-        s.noise = 1.5;
-        let (mut image, truth) = simulate::render(&s);
-        if let Some(factor) = shadow {
-            let through = (rng.range(200.0, 600.0), rng.range(150.0, 450.0));
-            cast_shadow(&mut image, through, rng.range(0.0, 2.0 * PI), factor, 12.0);
-        }
+        let (image, truth) = gradient_frame(family, markers_per_frame, ratio, shadow, seed);
         let found = det.detect(&image);
         counts.add(seed, &truth, &found);
     }
