@@ -7,6 +7,23 @@
 //! images), [`camera`] and [`pose`] (calibration and 6-DoF pose),
 //! [`simulate`] (synthetic camera views with ground truth) and [`validate`]
 //! (checking printed sheets from photos). [`cli`] is a thin layer over them.
+//!
+//! ```no_run
+//! use whycode::detect::{load_gray, Detector, DetectorConfig};
+//! use whycode::family::Family;
+//!
+//! # fn main() -> anyhow::Result<()> {
+//! let family = Family::generate(8, 2)?;
+//! let mut detector = Detector::new(DetectorConfig {
+//!     family: Some(family),
+//!     ..Default::default()
+//! });
+//! for d in detector.detect(&load_gray("photo.png".as_ref())?) {
+//!     println!("ID {} at ({:.1}, {:.1}), yaw {:?}", d.id, d.u, d.v, d.yaw);
+//! }
+//! # Ok(())
+//! # }
+//! ```
 
 pub mod camera;
 pub mod cli;

@@ -21,20 +21,21 @@ page is rendered at 300 dpi and at a coarse resolution and each marker must read
 own ID (--no-check skips this).\n\nExamples:\n  \
 whycode sheet --bits 8 --distance 2 --ids 1-16 --diameter 40mm --template a4 -o swarm.pdf\n  \
 whycode sheet --bits 12 --distance 3 --all --diameter 30mm --template letter -o set.svg\n  \
-whycode sheet --legacy --count 6 --diameter 80mm -o whycon.pdf"
+whycode sheet --legacy --count 6 --diameter 80mm -o whycon.pdf\n\n\
+Without options: every ID of the 8-bit distance-2 family, 40 mm, on A4, written to swarm.pdf."
 )]
 pub struct SheetArgs {
-    /// Code length of the family, in bits
-    #[arg(long, required_unless_present_any = ["legacy", "list_templates"])]
+    /// Code length of the family, in bits [default: 8]
+    #[arg(long)]
     bits: Option<u32>,
     /// Minimum Hamming distance of the family
     #[arg(long, default_value_t = 2)]
     distance: u32,
-    /// IDs to print: a list of IDs and ranges, e.g. 1-5,9,12-14
+    /// IDs to print: a list of IDs and ranges, e.g. 1-5,9,12-14 [default: every ID]
     #[arg(long, conflicts_with_all = ["all", "legacy"])]
     ids: Option<String>,
-    /// Print every ID of the family
-    #[arg(long, conflicts_with = "legacy")]
+    /// Print every ID of the family (what happens without --ids)
+    #[arg(long, conflicts_with_all = ["legacy", "ids"])]
     all: bool,
     /// Legacy WhyCon circles without IDs (with --count)
     #[arg(long, conflicts_with = "bits", requires = "count")]
@@ -43,8 +44,8 @@ pub struct SheetArgs {
     #[arg(long, requires = "legacy")]
     count: Option<usize>,
     /// Outer diameter of the black disc, with a unit (40mm, 4cm, 1.5in)
-    #[arg(long, required_unless_present = "list_templates")]
-    diameter: Option<Length>,
+    #[arg(long, default_value = "40mm")]
+    diameter: Length,
     /// Page template: a built-in name (see --list-templates) or a .toml file
     #[arg(long, default_value = "a4")]
     template: String,
@@ -58,8 +59,8 @@ pub struct SheetArgs {
     #[arg(long)]
     list_templates: bool,
     /// Output file: .pdf, .svg or .png
-    #[arg(short, long, required_unless_present = "list_templates")]
-    output: Option<PathBuf>,
+    #[arg(short, long, default_value = "swarm.pdf")]
+    output: PathBuf,
 }
 
 /// Parses "1-5,9,12-14" into IDs in the order given.
@@ -105,8 +106,8 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         }
         return Ok(ExitCode::SUCCESS);
     }
-    let output = args.output.expect("clap requires --output");
-    let diameter = args.diameter.expect("clap requires --diameter").mm();
+    let output = args.output;
+    let diameter = args.diameter.mm();
     let format = Format::from_path(&output)?;
     if format == Format::Png && !(args.dpi.is_finite() && (10.0..=1200.0).contains(&args.dpi)) {
         bail!("--dpi must be between 10 and 1200, got {}", args.dpi);
@@ -121,12 +122,11 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         }
         (legacy_markers(count, diameter), None)
     } else {
-        let bits = args.bits.expect("clap requires --bits without --legacy");
+        let bits = args.bits.unwrap_or(crate::family::DEFAULT_BITS);
         let family = Family::generate(bits, args.distance)?;
-        let ids: Vec<u32> = match (&args.ids, args.all) {
-            (Some(list), _) => parse_id_list(list)?,
-            (None, true) => (1..=family.len() as u32).collect(),
-            (None, false) => bail!("say which markers to print: --ids 1-16 or --all"),
+        let ids: Vec<u32> = match &args.ids {
+            Some(list) => parse_id_list(list)?,
+            None => (1..=family.len() as u32).collect(),
         };
         let markers = family_markers(&family, &ids, diameter)?;
         check_family = Some(family);
