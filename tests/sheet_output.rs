@@ -192,3 +192,17 @@ fn list_templates_names_the_built_in_pages() {
     }
     assert!(listing(dir.path()).is_empty());
 }
+
+#[test]
+fn without_options_the_whole_default_family_goes_to_swarm_pdf() {
+    let dir = tempfile::tempdir().unwrap();
+    whycode(dir.path(), &["sheet"]);
+    assert_eq!(listing(dir.path()), ["swarm.json", "swarm.pdf"]);
+    let m = manifest(&dir.path().join("swarm.json"));
+    assert_eq!(m["family"], serde_json::json!({"bits": 8, "distance": 2}));
+    let markers = m["markers"].as_array().unwrap();
+    let ids: Vec<u64> = markers.iter().map(|k| k["id"].as_u64().unwrap()).collect();
+    assert_eq!(ids, (1..=16).collect::<Vec<u64>>());
+    assert!(markers.iter().all(|k| k["diameter_mm"] == 40.0));
+    assert_eq!(m["page_size_mm"], serde_json::json!([210.0, 297.0]));
+}
