@@ -50,7 +50,7 @@ pub fn annotate(image: &GrayImage, report: &PhotoReport) -> RgbImage {
             }
             let t0 = k as f64 / steps as f64 * std::f64::consts::TAU;
             let t1 = (k + 1) as f64 / steps as f64 * std::f64::consts::TAU;
-            line(&mut out, e.point(t0), e.point(t1), thickness, colour);
+            line(&mut out, e.point_at(t0), e.point_at(t1), thickness, colour);
         }
         // Misread markers get a cross so they stand out in a crowd.
         if m.status == MarkerStatus::Misread {

@@ -2,8 +2,9 @@
 //! and the image of a circle (whose centre is not the image of the
 //! circle's centre under perspective).
 
+pub use crate::pose::ImageEllipse;
 use crate::simulate::rng::Pcg32;
-use nalgebra::{DMatrix, Matrix2, Matrix3, SymmetricEigen, Vector2, Vector3};
+use nalgebra::{DMatrix, Matrix2, Matrix3, SymmetricEigen, Vector3};
 
 /// A plane point and the image point it maps to.
 pub type PointPair = ((f64, f64), (f64, f64));
@@ -108,54 +109,6 @@ fn normalise(points: impl Iterator<Item = (f64, f64)>) -> (Matrix3<f64>, Vec<(f6
         .map(|p| (s * (p.0 - mx), s * (p.1 - my)))
         .collect();
     (t, out)
-}
-
-/// An ellipse in the image.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImageEllipse {
-    pub u: f64,
-    pub v: f64,
-    pub semi_major: f64,
-    pub semi_minor: f64,
-    /// Direction of the major axis, atan2(dv, du).
-    pub angle: f64,
-}
-
-impl ImageEllipse {
-    fn from_conic(c: &Matrix3<f64>) -> Option<ImageEllipse> {
-        let a2 = Matrix2::new(c[(0, 0)], c[(0, 1)], c[(1, 0)], c[(1, 1)]);
-        let centre = a2.try_inverse()? * -Vector2::new(c[(0, 2)], c[(1, 2)]);
-        let k = Vector3::new(centre.x, centre.y, 1.0);
-        let f = (k.transpose() * c * k)[(0, 0)];
-        let eig = SymmetricEigen::new(a2);
-        let (l0, l1) = (eig.eigenvalues[0], eig.eigenvalues[1]);
-        // Semi-axes: sqrt(-f / λ); both must be positive for an ellipse.
-        let ax0 = -f / l0;
-        let ax1 = -f / l1;
-        if !(ax0 > 0.0 && ax1 > 0.0) {
-            return None;
-        }
-        let (major, minor, col) = if ax0 >= ax1 {
-            (ax0.sqrt(), ax1.sqrt(), 0)
-        } else {
-            (ax1.sqrt(), ax0.sqrt(), 1)
-        };
-        let dir = eig.eigenvectors.column(col);
-        Some(ImageEllipse {
-            u: centre.x,
-            v: centre.y,
-            semi_major: major,
-            semi_minor: minor,
-            angle: dir[1].atan2(dir[0]),
-        })
-    }
-
-    /// A point of the outline at parameter t (radians).
-    pub fn point(&self, t: f64) -> (f64, f64) {
-        let (s, c) = self.angle.sin_cos();
-        let (x, y) = (self.semi_major * t.cos(), self.semi_minor * t.sin());
-        (self.u + x * c - y * s, self.v + x * s + y * c)
-    }
 }
 
 /// One plane ↔ image correspondence with its own inlier tolerance.

@@ -357,7 +357,7 @@ fn classify(
         }
         // Wholly inside the photo (with a little margin for the detector)?
         let inside = (0..16).all(|k| {
-            let (x, y) = e.point(k as f64 / 16.0 * std::f64::consts::TAU);
+            let (x, y) = e.point_at(k as f64 / 16.0 * std::f64::consts::TAU);
             let (u, v) = model.to_image(x, y);
             u >= 1.0 && v >= 1.0 && u <= w - 2.0 && v <= hgt - 2.0
         });
