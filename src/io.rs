@@ -1,8 +1,8 @@
 //! File output that is written whole or not at all.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Writes a file through a temporary file in the same folder and a rename,
 /// so that a failure never leaves a partial file under `path`.
@@ -11,24 +11,58 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 /// Like [`write_atomic`], with the content produced by a writer callback.
+///
+/// A symbolic link is followed, so the file it points at is replaced and the
+/// link kept. A FIFO, device or socket (`/dev/stdout`, `/dev/null`, a pipe)
+/// cannot be renamed over without destroying it, so the content is produced
+/// in memory first and then written to it in one go.
 pub fn write_atomic_with(
     path: &Path,
     produce: impl FnOnce(&mut dyn Write) -> Result<()>,
 ) -> Result<()> {
-    let dir = match path.parent() {
+    let fail = || format!("cannot write {}", path.display());
+    let target = resolve_links(path);
+    match std::fs::metadata(&target) {
+        Ok(meta) if meta.is_dir() => bail!("cannot write {}: it is a folder", path.display()),
+        Ok(meta) if !meta.is_file() => {
+            let mut bytes = Vec::new();
+            produce(&mut bytes).with_context(fail)?;
+            let mut file = std::fs::OpenOptions::new()
+                .write(true)
+                .open(&target)
+                .map_err(without_temp_path)
+                .with_context(fail)?;
+            return file
+                .write_all(&bytes)
+                .and_then(|()| file.flush())
+                .map_err(without_temp_path)
+                .with_context(fail);
+        }
+        _ => {}
+    }
+    let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
+    if !dir.is_dir() {
+        bail!(
+            "cannot write {}: folder {} does not exist",
+            path.display(),
+            dir.display()
+        );
+    }
     let mut tmp = tempfile::Builder::new()
         .prefix(".whycode-")
         .tempfile_in(dir)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+        .map_err(without_temp_path)
+        .with_context(fail)?;
     {
         let mut buffered = std::io::BufWriter::new(tmp.as_file_mut());
-        produce(&mut buffered).with_context(|| format!("cannot write {}", path.display()))?;
+        produce(&mut buffered).with_context(fail)?;
         buffered
             .flush()
-            .with_context(|| format!("cannot write {}", path.display()))?;
+            .map_err(without_temp_path)
+            .with_context(fail)?;
     }
     // Temporary files are private; the output should carry ordinary permissions.
     #[cfg(unix)]
@@ -36,10 +70,99 @@ pub fn write_atomic_with(
         use std::os::unix::fs::PermissionsExt;
         tmp.as_file()
             .set_permissions(std::fs::Permissions::from_mode(0o644))
-            .with_context(|| format!("cannot write {}", path.display()))?;
+            .map_err(without_temp_path)
+            .with_context(fail)?;
     }
-    tmp.persist(path)
-        .map_err(|e| e.error)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    tmp.persist(&target)
+        .map_err(|e| without_temp_path(e.error))
+        .with_context(fail)?;
     Ok(())
+}
+
+/// Follows a chain of symbolic links (also a dangling one, whose target is
+/// then created), so that the rename replaces the file and not the link.
+fn resolve_links(path: &Path) -> PathBuf {
+    let mut current = path.to_path_buf();
+    // A bound, because a link loop would otherwise never end.
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&current) {
+            Ok(meta) if meta.file_type().is_symlink() => match std::fs::read_link(&current) {
+                Ok(next) if next.is_absolute() => current = next,
+                Ok(next) => {
+                    current = current.parent().map(|p| p.join(&next)).unwrap_or(next);
+                }
+                Err(_) => return current,
+            },
+            _ => return current,
+        }
+    }
+    current
+}
+
+/// The temporary file's name means nothing to a user and would only make
+/// them look for a file that never appears, so it is cut from OS errors.
+fn without_temp_path(err: std::io::Error) -> std::io::Error {
+    let text = err.to_string();
+    match text.find(" at path ") {
+        Some(cut) => std::io::Error::new(err.kind(), text[..cut].to_string()),
+        None => err,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn symlink_is_followed_and_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("real.txt");
+        let link = dir.path().join("link.txt");
+        std::fs::write(&target, "old").unwrap();
+        #[cfg(unix)]
+        {
+            std::os::unix::fs::symlink("real.txt", &link).unwrap();
+            write_atomic(&link, b"new").unwrap();
+            assert!(std::fs::symlink_metadata(&link)
+                .unwrap()
+                .file_type()
+                .is_symlink());
+            assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
+        }
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn fifo_is_written_to_not_replaced() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("pipe");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if !matches!(made, Ok(s) if s.success()) {
+            eprintln!("skipped: mkfifo is not available");
+            return;
+        }
+        let reader = {
+            let fifo = fifo.clone();
+            std::thread::spawn(move || std::fs::read(fifo).unwrap())
+        };
+        write_atomic(&fifo, b"through the pipe").unwrap();
+        assert_eq!(reader.join().unwrap(), b"through the pipe");
+        let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+        assert!(!kind.is_file(), "the FIFO was replaced by a regular file");
+    }
+
+    #[test]
+    fn missing_folder_is_named_without_the_temporary_file() {
+        let err = write_atomic(Path::new("/nonexistent-whycode-dir/f.json"), b"x").unwrap_err();
+        let text = format!("{err:#}");
+        assert!(text.contains("/nonexistent-whycode-dir"), "{text}");
+        assert!(!text.contains(".whycode-"), "{text}");
+    }
+
+    #[test]
+    fn folder_as_output_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let err = write_atomic(dir.path(), b"x").unwrap_err();
+        assert!(format!("{err:#}").contains("is a folder"));
+    }
 }

@@ -97,6 +97,7 @@ proptest! {
                     id: k as u32 + 1,
                     code,
                     rotation: m,
+                    rotation_ambiguous: false,
                     distance: 0,
                 });
             }
@@ -133,15 +134,19 @@ proptest! {
             let status = if best == 0 { MatchStatus::Exact } else { MatchStatus::Corrected };
             prop_assert_eq!(got.status, status);
             prop_assert_eq!((got.id, got.rotation, got.distance), (expected_id, rotation, best));
+            prop_assert!(!got.rotation_ambiguous);
             if best == error.count_ones() {
                 // The misreading itself was undone: the right yaw too.
                 prop_assert_eq!(got.rotation, m);
             }
         } else {
-            // Two rotations of the same code equally close: the yaw cannot be
-            // told, so the decoder must not guess.
-            prop_assert_eq!(got.status, MatchStatus::Ambiguous);
-            prop_assert_eq!(got.id, 0);
+            // Two rotations of the same code equally close: the ID stands,
+            // the yaw cannot be told, and the decoder says so.
+            prop_assert_eq!(got.status, MatchStatus::Corrected);
+            prop_assert_eq!((got.id, got.distance), (id, best));
+            prop_assert!(got.rotation_ambiguous);
+            let smallest = matches.iter().map(|m| m.1).min().unwrap();
+            prop_assert_eq!(got.rotation, smallest);
         }
     }
 

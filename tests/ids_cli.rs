@@ -230,8 +230,16 @@ fn bad_input_gets_one_line_and_a_failure() {
         ),
         (
             &["ids", "--counts", "--bits", "20..30"],
-            "--bits: 25 is outside 2..24",
+            "--bits: range '20..30' goes past 24",
         ),
+        (
+            &["ids", "--counts", "--distance", "1..4294967295"],
+            "--distance: range '1..4294967295' goes past 24",
+        ),
+        (&["ids", "--bits", "4294967296"], "far above 24"),
+        (&["ids", "--bogus"], "unexpected argument '--bogus'"),
+        (&["ids", "--bits"], "a value is required for '--bits"),
+        (&["idz"], "unrecognized subcommand 'idz'"),
         (
             &["ids", "--counts", "--bits", "4..8", "--distance", "0..2"],
             "--distance: 0 is outside 1..8",

@@ -115,6 +115,9 @@ fn parse_single(text: Option<&str>, option: &str, default: u32) -> Result<u32> {
         Err(_) if text.contains("..") || text.contains(',') => {
             bail!("{option}: '{text}' is a list; lists need --counts")
         }
+        Err(_) if !text.trim().is_empty() && text.trim().bytes().all(|b| b.is_ascii_digit()) => {
+            bail!("{option}: {text} is far above {MAX_BITS}, the most bits a family can have")
+        }
         Err(_) => bail!("{option}: '{text}' is not a whole number"),
     }
 }
@@ -147,6 +150,11 @@ fn parse_list(text: &str, option: &str) -> Result<Vec<u32>> {
                 if start > end {
                     bail!("{option}: range '{item}' is empty (its start is above its end)");
                 }
+                // Neither bits nor distance can exceed MAX_BITS; refusing here
+                // keeps a range like 1..4294967295 from being expanded at all.
+                if end > MAX_BITS {
+                    bail!("{option}: range '{item}' goes past {MAX_BITS}, the most bits a family can have");
+                }
                 values.extend((start..=end).step_by(step as usize));
             }
         }
@@ -177,8 +185,9 @@ fn family_text(family: &Family, format: Format) -> String {
             let mut out = String::new();
             let _ = writeln!(
                 out,
-                "# {} IDs, {} bits, distance {}: min distance {min_distance}, worst self-distance {worst_self}",
+                "# {} {}, {} bits, distance {}: min distance {min_distance}, worst self-distance {worst_self}",
                 family.len(),
+                if family.len() == 1 { "ID" } else { "IDs" },
                 family.bits(),
                 family.distance()
             );

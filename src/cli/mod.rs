@@ -40,7 +40,10 @@ enum Command {
 
 /// Parses the command line and runs the subcommand.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(err) => return usage_error(err),
+    };
     let result = match cli.command {
         Command::Ids(args) => ids::run(args),
         Command::Marker(args) => marker::run(args),
@@ -55,6 +58,43 @@ pub fn main() -> ExitCode {
             eprintln!("whycode: error: {}", one_line(&err));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Help and version go out as clap writes them; a usage error becomes one
+/// line like every other error, since clap's own message spans a usage block
+/// and tips, which scripts and people scanning a log both read badly.
+fn usage_error(err: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(
+        err.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        err.exit();
+    }
+    let rendered = err.render().to_string();
+    let first = rendered.lines().next().unwrap_or("invalid arguments");
+    let message = first.strip_prefix("error: ").unwrap_or(first);
+    let subcommand = std::env::args()
+        .nth(1)
+        .filter(|a| Cli::command_names().iter().any(|name| name == a));
+    let help = match subcommand {
+        Some(name) => format!("whycode {name} --help"),
+        None => "whycode --help".to_string(),
+    };
+    eprintln!("whycode: error: {message} (see '{help}')");
+    ExitCode::from(2)
+}
+
+impl Cli {
+    fn command_names() -> Vec<String> {
+        use clap::CommandFactory;
+        Cli::command()
+            .get_subcommands()
+            .map(|c| c.get_name().to_string())
+            .collect()
     }
 }
 

@@ -98,7 +98,8 @@ pub struct Detection {
     /// off the true centre by up to a pixel or two on large tilted markers).
     pub u: f64,
     pub v: f64,
-    /// Direction of the marker's +x axis in the image, atan2(dv, du).
+    /// Direction of the marker's +x axis in the image, atan2(dv, du);
+    /// `None` when it could not be told (legacy markers, unreadable rings).
     pub yaw: Option<f64>,
     /// Semi-axes of the outer ellipse, major first, pixels.
     pub axes: [f64; 2],

@@ -83,7 +83,8 @@ pub struct RingReading {
     /// the candidate, for the ID filter to weigh).
     pub id: u32,
     /// Image direction of the marker's +x axis, atan2(dv, du), radians;
-    /// `None` unless the ID is known.
+    /// `None` unless the ID is known, and also when the error read lies
+    /// equally close to two of the code's rotations.
     pub yaw: Option<f64>,
     /// Probability that `id` is right. For ID 0 with `decoded` rejected, the
     /// probability that the ring really carries no member code.
@@ -336,6 +337,11 @@ impl RingReader {
                     return reading;
                 }
                 reading.id = decoded.id;
+                if decoded.rotation_ambiguous {
+                    // The ID is certain, but the error sits between two of
+                    // the code's own rotations: no yaw rather than a guess.
+                    return reading;
+                }
                 let x_axis_t = start + 2.0 * sector * f64::from(decoded.rotation);
                 // The rim point on the outer ellipse, seen from the
                 // estimated projection of the marker centre.

@@ -19,7 +19,7 @@ pub enum MatchStatus {
     Exact,
     /// The word is within the correction radius of exactly one member rotation.
     Corrected,
-    /// Two or more member rotations are equally close: no answer.
+    /// Two or more members are equally close: no answer.
     Ambiguous,
     /// No member rotation within the correction radius.
     Rejected,
@@ -33,8 +33,13 @@ pub struct Decoded {
     pub id: u32,
     /// The member's code, or 0 when `id` is 0.
     pub code: u32,
-    /// Left rotation that maps the word onto the member's code.
+    /// Left rotation that maps the word onto the member's code (the smallest
+    /// of the tied ones when `rotation_ambiguous`).
     pub rotation: u32,
+    /// The member is certain but two of its rotations are equally close to
+    /// the word (a code with a small self-distance, read with an error):
+    /// the ID stands, the yaw does not.
+    pub rotation_ambiguous: bool,
     /// Hamming distance between the rotated word and the code (for
     /// `Ambiguous`, the distance of the tied matches; for `Rejected`, 0).
     pub distance: u32,
@@ -47,6 +52,7 @@ impl Decoded {
             id: 0,
             code: 0,
             rotation: 0,
+            rotation_ambiguous: false,
             distance: 0,
         }
     }
@@ -89,10 +95,15 @@ pub struct Decoder {
     rotations: Vec<u64>,
 }
 
-// Dense entry layout: 0 means rejected; otherwise bits 0..21 hold the ID,
-// 21..26 the rotation, 26..31 the distance and bit 31 marks a tie.
-const ID_BITS: u32 = 21;
+// Dense entry layout: 0 means rejected; otherwise bits 0..20 hold the ID
+// (a 20-bit family has at most 2^20/20 members), bit 20 marks a tie between
+// rotations of that one member, 21..26 the rotation, 26..31 the distance and
+// bit 31 a tie between different members.
+const ID_BITS: u32 = 20;
+const ID_MASK: u32 = (1 << ID_BITS) - 1;
+const ROTATION_TIE_BIT: u32 = 1 << ID_BITS;
 const ROT_SHIFT: u32 = 21;
+const ROT_MASK: u32 = 31 << ROT_SHIFT;
 const DIST_SHIFT: u32 = 26;
 const TIE_BIT: u32 = 1 << 31;
 
@@ -160,8 +171,9 @@ impl Decoder {
                 if e & TIE_BIT != 0 {
                     return Decoded::ambiguous(distance);
                 }
-                let id = e & ((1 << ID_BITS) - 1);
-                self.member(id, (e >> ROT_SHIFT) & 31, distance)
+                let mut decoded = self.member(e & ID_MASK, (e >> ROT_SHIFT) & 31, distance);
+                decoded.rotation_ambiguous = e & ROTATION_TIE_BIT != 0;
+                decoded
             }
             None => self.search(word),
         }
@@ -177,6 +189,7 @@ impl Decoder {
             id,
             code: self.family.code(id).unwrap_or(0),
             rotation,
+            rotation_ambiguous: false,
             distance,
         }
     }
@@ -202,18 +215,27 @@ impl Decoder {
             for k in 1..=self.radius {
                 let mut found: Option<(u32, u32)> = None;
                 let mut tie = false;
+                let mut rotation_tie = false;
                 for_each_mask_with_ones(bits, k, |m| {
                     if let Some((id, r)) = self.member_rotation(word ^ m) {
                         match found {
                             None => found = Some((id, r)),
-                            Some(prev) if prev != (id, r) => tie = true,
+                            Some((prev, _)) if prev != id => tie = true,
+                            Some((prev_id, prev)) if prev != r => {
+                                rotation_tie = true;
+                                found = Some((prev_id, prev.min(r)));
+                            }
                             _ => {}
                         }
                     }
                 });
                 match (found, tie) {
                     (Some(_), true) => return Decoded::ambiguous(k),
-                    (Some((id, r)), false) => return self.member(id, r, k),
+                    (Some((id, r)), false) => {
+                        let mut decoded = self.member(id, r, k);
+                        decoded.rotation_ambiguous = rotation_tie;
+                        return decoded;
+                    }
                     _ => {}
                 }
             }
@@ -222,15 +244,22 @@ impl Decoder {
             let mut best = u32::MAX;
             let mut best_match = (0, 0);
             let mut tie = false;
+            let mut rotation_tie = false;
             for (k, &code) in self.family.codes().iter().enumerate() {
+                let id = k as u32 + 1;
                 for r in 0..bits {
                     let d = (rotl(word, bits, r) ^ code).count_ones();
                     if d < best {
                         best = d;
-                        best_match = (k as u32 + 1, r);
+                        best_match = (id, r);
                         tie = false;
+                        rotation_tie = false;
                     } else if d == best {
-                        tie = true;
+                        if id == best_match.0 {
+                            rotation_tie = true;
+                        } else {
+                            tie = true;
+                        }
                     }
                 }
             }
@@ -239,7 +268,9 @@ impl Decoder {
             } else if tie {
                 Decoded::ambiguous(best)
             } else {
-                self.member(best_match.0, best_match.1, best)
+                let mut decoded = self.member(best_match.0, best_match.1, best);
+                decoded.rotation_ambiguous = rotation_tie;
+                decoded
             }
         }
     }
@@ -265,7 +296,8 @@ fn dense_table_by_balls(family: &Family, radius: u32) -> Vec<u32> {
     let bits = family.bits();
     let mut table = vec![0u32; 1usize << bits];
     // Fill layer by layer so that every word keeps its nearest member; a
-    // second, different member rotation at the same distance marks a tie.
+    // second member at the same distance marks a tie, another rotation of
+    // the same member a rotation tie.
     for k in 0..=radius {
         for (index, &code) in family.codes().iter().enumerate() {
             let id = index as u32 + 1;
@@ -276,8 +308,8 @@ fn dense_table_by_balls(family: &Family, radius: u32) -> Vec<u32> {
                     let slot = &mut table[(base ^ m) as usize];
                     if *slot == 0 {
                         *slot = entry;
-                    } else if (*slot >> DIST_SHIFT) & 31 == k && (*slot & !TIE_BIT) != entry {
-                        *slot |= TIE_BIT;
+                    } else if (*slot >> DIST_SHIFT) & 31 == k {
+                        *slot = merge_tie(*slot, entry);
                     }
                 });
             }
@@ -290,7 +322,7 @@ fn dense_table_by_balls(family: &Family, radius: u32) -> Vec<u32> {
 /// are the unvisited neighbours of the words at distance k - 1, and their
 /// nearest matches are the union of those neighbours' matches.
 fn dense_table_by_sweep(family: &Family, radius: u32) -> Vec<u32> {
-    const MATCH_MASK: u32 = (1 << DIST_SHIFT) - 1;
+    const MATCH_MASK: u32 = ID_MASK | ROTATION_TIE_BIT | ROT_MASK;
     let bits = family.bits();
     let mut table = vec![0u32; 1usize << bits];
     let mut frontier = Vec::with_capacity(family.len() * bits as usize);
@@ -313,10 +345,8 @@ fn dense_table_by_sweep(family: &Family, radius: u32) -> Vec<u32> {
                 if *slot == 0 {
                     *slot = spread;
                     next.push(neighbour);
-                } else if (*slot >> DIST_SHIFT) & 31 == k
-                    && (from & TIE_BIT != 0 || (*slot & MATCH_MASK) != (from & MATCH_MASK))
-                {
-                    *slot |= TIE_BIT;
+                } else if (*slot >> DIST_SHIFT) & 31 == k {
+                    *slot = merge_tie(*slot, spread);
                 }
             }
         }
@@ -327,6 +357,23 @@ fn dense_table_by_sweep(family: &Family, radius: u32) -> Vec<u32> {
         }
     }
     table
+}
+
+/// A word's entry once `incoming` reaches it at the same distance as the
+/// match it already holds (`held`). Different members make a tie; two
+/// rotations of one member a rotation tie that keeps the smaller rotation, so
+/// that every way of building the table (and the search) gives one answer.
+fn merge_tie(held: u32, incoming: u32) -> u32 {
+    if (held | incoming) & TIE_BIT != 0 || held & ID_MASK != incoming & ID_MASK {
+        return held | TIE_BIT;
+    }
+    let rotation_tie =
+        (held | incoming) & ROTATION_TIE_BIT != 0 || held & ROT_MASK != incoming & ROT_MASK;
+    if !rotation_tie {
+        return held;
+    }
+    let rotation = (held & ROT_MASK).min(incoming & ROT_MASK);
+    (held & !ROT_MASK) | rotation | ROTATION_TIE_BIT
 }
 
 #[cfg(test)]
@@ -367,7 +414,7 @@ mod tests {
         }
         if best > radius {
             Decoded::rejected()
-        } else if matches.len() > 1 {
+        } else if matches.iter().any(|m| m.0 != matches[0].0) {
             Decoded::ambiguous(best)
         } else {
             Decoded {
@@ -378,7 +425,8 @@ mod tests {
                 },
                 id: matches[0].0,
                 code: family.code(matches[0].0).unwrap(),
-                rotation: matches[0].1,
+                rotation: matches.iter().map(|m| m.1).min().unwrap(),
+                rotation_ambiguous: matches.len() > 1,
                 distance: best,
             }
         }
@@ -391,8 +439,22 @@ mod tests {
                 let f = Family::generate(bits, d).unwrap();
                 let guaranteed = f.default_correction_radius();
                 for radius in [guaranteed, guaranteed + 1, bits] {
-                    let balls = dense_table_by_balls(&f, radius);
-                    let sweep = dense_table_by_sweep(&f, radius);
+                    // A tie between members names nobody: the rest of its entry is free.
+                    let settled = |table: Vec<u32>| -> Vec<u32> {
+                        let tie = |e: u32| e & TIE_BIT != 0;
+                        table
+                            .into_iter()
+                            .map(|e| {
+                                if tie(e) {
+                                    e & (TIE_BIT | (31 << DIST_SHIFT))
+                                } else {
+                                    e
+                                }
+                            })
+                            .collect()
+                    };
+                    let balls = settled(dense_table_by_balls(&f, radius));
+                    let sweep = settled(dense_table_by_sweep(&f, radius));
                     assert_eq!(balls, sweep, "n={bits} d={d} radius={radius}");
                     let dense = Decoder::with_radius(&f, radius);
                     let sparse = Decoder::searching(&f, radius);
@@ -437,6 +499,31 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_tie_between_rotations_of_one_member_keeps_the_id() {
+        // n = 8, d = 3: a single-bit error often lies as close to two
+        // rotations of the same code; the ID is certain, only the yaw is not.
+        let f = Family::generate(8, 3).unwrap();
+        let dense = Decoder::new(&f);
+        let sparse = Decoder::searching(&f, dense.radius());
+        let mut rotation_ties = 0;
+        for (k, &code) in f.codes().iter().enumerate() {
+            for b in 0..8 {
+                let word = code ^ (1 << b);
+                for dec in [&dense, &sparse] {
+                    let got = dec.decode(word);
+                    assert_eq!(got.status, MatchStatus::Corrected, "word {word:08b}");
+                    assert_eq!(got.id, k as u32 + 1, "word {word:08b}");
+                    rotation_ties += usize::from(got.rotation_ambiguous);
+                }
+            }
+        }
+        assert!(
+            rotation_ties > 0,
+            "the test no longer covers a rotation tie"
+        );
     }
 
     #[test]
