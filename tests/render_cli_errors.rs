@@ -190,3 +190,24 @@ fn unwritable_paths_and_unknown_formats_fail_cleanly() {
     );
     assert!(err.contains("too small"), "{err}");
 }
+
+#[test]
+fn id_lists_that_would_print_a_marker_twice_or_too_many_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let sheet = |ids: &[&str]| {
+        let mut args = vec!["sheet", "--diameter", "20mm", "-o", "s.pdf"];
+        args.extend_from_slice(ids);
+        fails(dir.path(), &args)
+    };
+    let err = sheet(&["--bits", "8", "--ids", "1-4,3"]);
+    assert!(err.contains("ID 3 is listed more than once"), "{err}");
+    let err = sheet(&["--bits", "8", "--ids", "0-3"]);
+    assert!(err.contains("IDs start at 1"), "{err}");
+    let err = sheet(&["--bits", "8", "--ids", "x"]);
+    assert!(
+        err.ends_with("--ids: 'x' is not an ID or a range like 3-7\n"),
+        "{err}"
+    );
+    let err = sheet(&["--bits", "24", "--distance", "1", "--all"]);
+    assert!(err.contains("too many to print at once"), "{err}");
+}

@@ -169,34 +169,6 @@ fn parse_size(text: &str) -> Result<(u32, u32)> {
     }
 }
 
-/// Parses "1-20", "3", "1,4,9-12" into a sorted, duplicate-free list.
-pub fn parse_id_list(text: &str) -> Result<Vec<u32>> {
-    let mut ids = Vec::new();
-    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-        let bad = || format!("--ids '{text}': '{part}' is not an ID or a range like 1-20");
-        match part.split_once('-') {
-            Some((a, b)) => {
-                let a: u32 = a.trim().parse().ok().with_context(bad)?;
-                let b: u32 = b.trim().parse().ok().with_context(bad)?;
-                if a == 0 || b < a || b - a > 100_000 {
-                    bail!(bad());
-                }
-                ids.extend(a..=b);
-            }
-            None => {
-                let id: u32 = part.parse().ok().filter(|&i| i > 0).with_context(bad)?;
-                ids.push(id);
-            }
-        }
-    }
-    if ids.is_empty() {
-        bail!("--ids '{text}' names no IDs");
-    }
-    ids.sort_unstable();
-    ids.dedup();
-    Ok(ids)
-}
-
 pub fn run(args: SimulateArgs) -> Result<ExitCode> {
     let args = *args.options;
     let camera = match &args.camera {
@@ -252,7 +224,7 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
         };
         let family = Family::generate(bits, args.hamming)
             .with_context(|| format!("--bits {bits} --hamming {}", args.hamming))?;
-        let ids = parse_id_list(ids)?;
+        let ids = super::parse_id_list(ids)?;
         let diameter = args.diameter.mm();
         let markers = ids
             .iter()

@@ -13,6 +13,9 @@ pub const DEFAULT_LABEL_PT: f64 = 7.0;
 pub const MIN_LABEL_PT: f64 = 3.0;
 /// White kept between a cut guide and the page edge, in mm.
 const CUT_GUIDE_PAD_MM: f64 = 1.5;
+/// How far outside the white margin a cut guide runs, in mm: scissors that
+/// stray a little inside the line must still leave the detector its margin.
+pub const CUT_CLEARANCE_MM: f64 = 1.0;
 /// Space between the white margin and the label's cap line, in mm.
 pub const LABEL_GAP_MM: f64 = 1.0;
 /// Light grey for guides: visible on paper, brighter than any detector threshold.
@@ -26,7 +29,7 @@ pub struct MarkerOptions {
     pub margin_mm: Option<f64>,
     /// Thin grey cross in the white centre, for aligning the marker.
     pub cross: bool,
-    /// Thin dashed circle at the edge of the white margin, to cut along.
+    /// Thin dashed circle just outside the white margin, to cut along.
     pub cut_guide: bool,
     /// A label line under the marker.
     pub label: Option<String>,
@@ -133,7 +136,7 @@ pub fn marker_page(marker: &Marker, options: &MarkerOptions) -> Result<Page> {
     }
     let margin = checked_margin(marker, options.margin_mm)?;
     let pad = if options.cut_guide {
-        CUT_GUIDE_PAD_MM
+        CUT_CLEARANCE_MM + CUT_GUIDE_PAD_MM
     } else {
         0.0
     };
@@ -159,7 +162,11 @@ pub fn marker_page(marker: &Marker, options: &MarkerOptions) -> Result<Page> {
         page.items.extend(centre_cross(marker, c, c));
     }
     if options.cut_guide {
-        page.push(cut_circle(c, c, marker.outer_radius() + margin));
+        page.push(cut_circle(
+            c,
+            c,
+            marker.outer_radius() + margin + CUT_CLEARANCE_MM,
+        ));
     }
     if let Some(text) = label {
         page.push(Item::Text {

@@ -240,10 +240,41 @@ pub fn pages_pdf(pages: &[Page], title: &str) -> Result<Vec<u8>> {
     let id_string = || lopdf::Object::String(id.clone().into_bytes(), lopdf::StringFormat::Literal);
     lo.trailer
         .set("ID", lopdf::Object::Array(vec![id_string(), id_string()]));
+    strip_info_noise(&mut lo);
     lo.compress();
     let mut bytes = Vec::new();
     lo.save_to(&mut bytes).context("cannot encode PDF")?;
     Ok(bytes)
+}
+
+/// printpdf fills the Info dictionary with an empty PDF/X version (viewers
+/// then claim PDF/X conformance, which these files, with fonts not
+/// embedded, do not have), 1970 dates (a real date would break same inputs,
+/// same bytes) and empty fields. Only what is true is kept.
+fn strip_info_noise(doc: &mut lopdf::Document) {
+    let Ok(info) = doc.trailer.get(b"Info").and_then(|o| o.as_reference()) else {
+        return;
+    };
+    let Ok(dict) = doc.get_object_mut(info).and_then(|o| o.as_dict_mut()) else {
+        return;
+    };
+    for key in [
+        &b"GTS_PDFXVersion"[..],
+        b"GTS_PDFXConformance",
+        b"Trapped",
+        b"CreationDate",
+        b"ModDate",
+    ] {
+        dict.remove(key);
+    }
+    let empty: Vec<Vec<u8>> = dict
+        .iter()
+        .filter(|(_, value)| matches!(value, lopdf::Object::String(text, _) if text.is_empty()))
+        .map(|(key, _)| key.clone())
+        .collect();
+    for key in empty {
+        dict.remove(&key);
+    }
 }
 
 #[cfg(test)]
@@ -263,5 +294,18 @@ mod tests {
         let second = pages_pdf(std::slice::from_ref(&page), "t").unwrap();
         assert!(first == second);
         assert!(first.starts_with(b"%PDF-"));
+    }
+
+    #[test]
+    fn info_claims_no_pdfx_and_no_made_up_dates() {
+        let page = Page::new(60.0, 60.0);
+        let bytes = pages_pdf(std::slice::from_ref(&page), "t").unwrap();
+        let doc = lopdf::Document::load_mem(&bytes).unwrap();
+        let info = doc.trailer.get(b"Info").unwrap().as_reference().unwrap();
+        let dict = doc.get_dictionary(info).unwrap();
+        for key in ["GTS_PDFXVersion", "CreationDate", "ModDate", "Author"] {
+            assert!(!dict.has(key.as_bytes()), "Info still has {key}");
+        }
+        assert!(dict.has(b"Producer"));
     }
 }

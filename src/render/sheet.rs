@@ -3,7 +3,7 @@
 
 use super::font::{helvetica_width_mm, CAP_HEIGHT};
 use super::manifest::{FamilyRef, Manifest, PrintedMarker};
-use super::marker::{cut_circle, marker_label, LABEL_GAP_MM, MIN_LABEL_PT};
+use super::marker::{cut_circle, marker_label, CUT_CLEARANCE_MM, LABEL_GAP_MM, MIN_LABEL_PT};
 use super::page::{Anchor, Item, Page, MM_PER_PT};
 use super::template::Template;
 use crate::family::Family;
@@ -114,7 +114,8 @@ const DESCENT: f64 = 0.25;
 /// The geometry of one marker cell: footprint and label block.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Cell {
-    /// Radius of black disc plus white margin.
+    /// Radius of black disc plus white margin, plus the clearance outside
+    /// it when a cut guide runs around the marker.
     footprint: f64,
     label_pt: f64,
     two_lines: bool,
@@ -134,7 +135,12 @@ impl Cell {
 }
 
 fn cell_for(markers: &[SheetMarker], diameter_mm: f64, template: &Template) -> Cell {
-    let footprint = diameter_mm / 2.0 * (1.0 + MIN_MARGIN_RATIO);
+    let clearance = if template.cut_guides {
+        CUT_CLEARANCE_MM
+    } else {
+        0.0
+    };
+    let footprint = diameter_mm / 2.0 * (1.0 + MIN_MARGIN_RATIO) + clearance;
     let room = 2.0 * footprint + template.gap_mm;
     let widest = |f: &dyn Fn(&SheetMarker) -> f64| markers.iter().map(f).fold(0.0, f64::max);
     let wanted = template.label_size_pt;
@@ -431,9 +437,25 @@ fn push_footer(page: &mut Page, template: &Template, name: &str, number: usize, 
             grey: 0,
         });
     }
+    // Centimetre ticks, so that a ruler can be checked against the bar
+    // piece by piece and a wrong scale shows without measuring the whole.
+    let mut tick = 10.0;
+    while tick < bar - 1.0 {
+        page.push(Item::Rect {
+            x: left + tick - TICK_WIDTH_MM / 2.0,
+            y: bottom - TICK_MM / 2.0,
+            width: TICK_WIDTH_MM,
+            height: TICK_MM / 2.0,
+            grey: 0,
+        });
+        tick += 10.0;
+    }
     let size = template.label_size_pt;
     let baseline = bottom - TICK_MM - 1.2;
-    let measure = format!("measure: this bar must be {} mm", trim_float(bar));
+    let measure = format!(
+        "Print at 100 % (actual size): this bar must measure {} mm",
+        trim_float(bar)
+    );
     let caption = if name.is_empty() {
         format!("page {number}/{count}")
     } else {
