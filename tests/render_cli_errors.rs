@@ -211,3 +211,34 @@ fn id_lists_that_would_print_a_marker_twice_or_too_many_are_refused() {
     let err = sheet(&["--bits", "24", "--distance", "1", "--all"]);
     assert!(err.contains("too many to print at once"), "{err}");
 }
+
+#[test]
+fn unreadable_markers_are_not_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let err = fails(
+        dir.path(),
+        &[
+            "marker",
+            "--bits",
+            "24",
+            "--id",
+            "3",
+            "--diameter",
+            "2mm",
+            "-o",
+            "tiny.pdf",
+        ],
+    );
+    assert!(err.contains("self-check failed: ID 3"), "{err}");
+    assert!(err.contains("could not be read"), "{err}");
+}
+
+#[test]
+fn usage_errors_are_one_line_with_exit_status_1() {
+    let dir = tempfile::tempdir().unwrap();
+    let err = fails(dir.path(), &["marker", "--bogus"]);
+    assert!(
+        err.contains("unexpected argument '--bogus'") && err.contains("whycode marker --help"),
+        "{err}"
+    );
+}

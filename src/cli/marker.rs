@@ -1,5 +1,6 @@
 use crate::family::Family;
 use crate::geometry::Marker;
+use crate::render::check::check_marker_page;
 use crate::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
 use crate::render::sheet::id_range_error;
 use crate::render::{encode_pages, write_all, Format};
@@ -42,9 +43,12 @@ pub struct MarkerArgs {
     /// Thin grey cross in the white centre, for aligning the marker
     #[arg(long)]
     cross: bool,
-    /// Thin dashed circle at the edge of the white margin, to cut along
+    /// Thin dashed circle just outside the white margin, to cut along
     #[arg(long)]
     cut_guide: bool,
+    /// Skip reading the marker back from a rendering before writing it
+    #[arg(long)]
+    no_check: bool,
     /// Print a label (ID, family, diameter) under the marker
     #[arg(long)]
     label: bool,
@@ -60,15 +64,17 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
     }
     crate::render::check_output_dir(&args.output)?;
     let diameter = args.diameter.mm();
+    let mut family = None;
     let (marker, title) = if args.legacy {
         (Marker::whycon(diameter), "WhyCon marker".to_string())
     } else {
         let bits = args.bits.expect("clap requires --bits without --legacy");
         let id = args.id.expect("clap requires --id without --legacy");
-        let family = Family::generate(bits, args.distance)?;
-        let Some(code) = family.code(id) else {
-            bail!("{}", id_range_error(&family, id));
+        let family_of_id = Family::generate(bits, args.distance)?;
+        let Some(code) = family_of_id.code(id) else {
+            bail!("{}", id_range_error(&family_of_id, id));
         };
+        family = Some(family_of_id);
         (
             Marker::whycode(bits, code, diameter),
             format!("WhyCode {bits}-bit d{} ID {id}", args.distance),
@@ -90,6 +96,11 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
         label_size_pt: (diameter / 8.0).clamp(DEFAULT_LABEL_PT, 14.0),
     };
     let page = marker_page(&marker, &options)?;
+    if args.no_check {
+        eprintln!("whycode: note: self-check skipped (--no-check): the marker was not read back before writing");
+    } else {
+        check_marker_page(&page, &marker, args.id.unwrap_or(0), family.as_ref())?;
+    }
     let files = encode_pages(std::slice::from_ref(&page), &args.output, &title, args.dpi)?;
     write_all(&files)?;
     Ok(ExitCode::SUCCESS)

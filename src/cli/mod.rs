@@ -85,7 +85,9 @@ fn usage_error(err: clap::Error) -> ExitCode {
         None => "whycode --help".to_string(),
     };
     eprintln!("whycode: error: {message} (see '{help}')");
-    ExitCode::from(2)
+    // Not clap's usual 2: `validate` exits 2 for "markers missing or
+    // misread", and a mistyped option must not read as a verdict.
+    ExitCode::FAILURE
 }
 
 impl Cli {

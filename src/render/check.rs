@@ -4,10 +4,12 @@
 //! its place, read as its own ID, with yaw 0 (markers are printed upright).
 
 use super::manifest::PrintedMarker;
+use super::page::Page;
 use super::raster;
 use super::sheet::Sheet;
 use crate::detect::{Detection, Detector, DetectorConfig};
 use crate::family::Family;
+use crate::geometry::{Marker, MarkerKind};
 use anyhow::{bail, Result};
 use rayon::prelude::*;
 
@@ -21,9 +23,11 @@ pub const MAX_YAW_ERROR_DEG: f64 = 4.0;
 /// The resolutions a sheet is checked at: print resolution, and the one at
 /// which its smallest marker is [`COARSE_DIAMETER_PX`] across (if lower).
 pub fn check_resolutions(sheet: &Sheet) -> Vec<f64> {
-    let smallest = sheet
-        .manifest
-        .markers
+    resolutions_for(&sheet.manifest.markers)
+}
+
+fn resolutions_for(markers: &[PrintedMarker]) -> Vec<f64> {
+    let smallest = markers
         .iter()
         .map(|m| m.diameter_mm)
         .fold(f64::INFINITY, f64::min);
@@ -105,17 +109,52 @@ fn check_marker(
 /// marker. `family` is the family of the sheet's IDs (None for legacy
 /// WhyCon sheets, where only presence and position are checked).
 pub fn check_sheet(sheet: &Sheet, family: Option<&Family>) -> Result<CheckReport> {
-    let resolutions = check_resolutions(sheet);
-    let jobs: Vec<(usize, f64)> = (0..sheet.pages.len())
+    check_pages(&sheet.pages, &sheet.manifest.markers, family)
+}
+
+/// The same check for one marker laid out alone (`whycode marker`): a
+/// marker file nobody can read is no better than a sheet of them. The file
+/// ends at the marker's white margin, but it is printed on paper, so it is
+/// checked lying on white.
+pub fn check_marker_page(
+    page: &Page,
+    marker: &Marker,
+    id: u32,
+    family: Option<&Family>,
+) -> Result<CheckReport> {
+    let on_paper = page.on_white(marker.outer_radius());
+    let Some((_, x_mm, y_mm)) = on_paper.markers().next() else {
+        bail!("self-check failed: the page holds no marker");
+    };
+    let code = match marker.kind {
+        MarkerKind::WhyCode { code, .. } => code,
+        MarkerKind::WhyCon => 0,
+    };
+    let expected = PrintedMarker {
+        id,
+        code,
+        page: 1,
+        x_mm,
+        y_mm,
+        diameter_mm: marker.diameter_mm,
+    };
+    check_pages(std::slice::from_ref(&on_paper), &[expected], family)
+}
+
+fn check_pages(
+    pages: &[Page],
+    markers: &[PrintedMarker],
+    family: Option<&Family>,
+) -> Result<CheckReport> {
+    let resolutions = resolutions_for(markers);
+    let jobs: Vec<(usize, f64)> = (0..pages.len())
         .flat_map(|p| resolutions.iter().map(move |&dpi| (p, dpi)))
         .collect();
     let failures: Vec<Result<usize, String>> = jobs
         .par_iter()
         .map(|&(p, dpi)| {
-            let page = &sheet.pages[p];
-            let expected: Vec<&PrintedMarker> = sheet
-                .manifest
-                .markers
+            let page = &pages[p];
+            let expected: Vec<&PrintedMarker> = markers
                 .iter()
                 .filter(|m| m.page as usize == p + 1)
                 .collect();
