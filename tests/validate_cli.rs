@@ -110,3 +110,95 @@ fn bad_input_is_one_line_error() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("not in the 8-bit family"));
 }
+
+/// The README's own flow: the default sheet (12 markers on page 1, 4 on
+/// page 2), photographed page by page. A page of four markers cannot be
+/// pinned by their centres alone (four points fit any homography exactly),
+/// so this also covers locating a page by the markers' rims and measuring
+/// its scale by the discs' size against the paper.
+#[test]
+fn default_sheet_validates_including_its_four_marker_page() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_whycode"))
+            .current_dir(dir.path())
+            .args(args)
+            .output()
+            .expect("whycode runs")
+    };
+    assert!(run(&["sheet"]).status.success());
+    for (page, name, scale) in [
+        ("1", "p1.png", "100%"),
+        ("2", "p2.png", "100%"),
+        ("2", "p2-97.png", "97%"),
+    ] {
+        let out = run(&[
+            "simulate",
+            "--manifest",
+            "swarm.json",
+            "--page",
+            page,
+            "--tilt",
+            "20deg",
+            "--pan",
+            "10deg",
+            "--noise",
+            "3",
+            "--blur",
+            "1px",
+            "--print-scale",
+            scale,
+            "-o",
+            name,
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    let out = run(&["validate", "--manifest", "swarm.json", "p1.png", "p2.png"]);
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{table}");
+    assert!(table.contains("16 printed: 16 found"), "{table}");
+
+    let out = run(&[
+        "validate",
+        "--manifest",
+        "swarm.json",
+        "--format",
+        "json",
+        "p2-97.png",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let page2 = report["pages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["page"] == 2)
+        .unwrap();
+    let scale = page2["scale"].as_f64().unwrap();
+    assert!((scale - 0.97).abs() < 0.005, "page 2 measured at {scale}");
+    assert_eq!(page2["scale_status"], "error", "{page2}");
+}
+
+#[test]
+fn simulate_refuses_to_overwrite_the_sheet_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    let manifest = dir.path().join("sheet.json");
+    validate_common::a4_manifest().save(&manifest).unwrap();
+    let before = std::fs::read(&manifest).unwrap();
+    let out = whycode(&[
+        "simulate",
+        "--manifest",
+        manifest.to_str().unwrap(),
+        "-o",
+        dir.path().join("sheet.png").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("is a sheet manifest"), "{stderr}");
+    assert_eq!(std::fs::read(&manifest).unwrap(), before);
+    assert!(!dir.path().join("sheet.png").exists());
+}

@@ -309,6 +309,14 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
             truth_path.display()
         );
     }
+    // `-o swarm.png` next to the sheet's own swarm.json is the natural thing
+    // to type, and would silently replace the record of what was printed.
+    if is_sheet_manifest(&truth_path) {
+        bail!(
+            "{}: is a sheet manifest, which the ground truth would overwrite; name the image differently or pass --truth FILE",
+            truth_path.display()
+        );
+    }
     simulate::save_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
     crate::io::write_atomic(&truth_path, truth.to_json().as_bytes())?;
     let visible = truth.markers.iter().filter(|m| m.visible).count();
@@ -326,4 +334,12 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
 
 fn display(path: &Path) -> String {
     path.display().to_string()
+}
+
+fn is_sheet_manifest(path: &std::path::Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return false;
+    };
+    serde_json::from_str::<serde_json::Value>(&text)
+        .is_ok_and(|v| v.get("format").and_then(|f| f.as_str()) == Some("whycode-sheet"))
 }

@@ -34,6 +34,21 @@ pub struct Observation {
     pub semi_minor: f64,
     /// Direction of the major axis, atan2(dv, du).
     pub angle: f64,
+    /// Image direction of the marker's +x axis, when the ring gave one.
+    pub yaw: Option<f64>,
+}
+
+impl Observation {
+    /// The detected outline of the black disc.
+    pub fn outline(&self) -> ImageEllipse {
+        ImageEllipse {
+            u: self.u,
+            v: self.v,
+            semi_major: self.semi_major,
+            semi_minor: self.semi_minor,
+            angle: self.angle,
+        }
+    }
 }
 
 impl From<&crate::detect::Detection> for Observation {
@@ -45,6 +60,7 @@ impl From<&crate::detect::Detection> for Observation {
             semi_major: d.axes[0],
             semi_minor: d.axes[1],
             angle: d.angle,
+            yaw: d.yaw,
         }
     }
 }
@@ -179,7 +195,8 @@ pub struct PhotoReport {
     pub stray: Vec<StrayDetection>,
 }
 
-/// Least ID matches that locate a page (a homography needs four).
+/// Least point pairs that locate a page (a homography needs four); below
+/// this many ID matches, markers' rim points are added to the centres.
 const MIN_PAGE_MATCHES: usize = 4;
 
 fn page_markers(manifest: &Manifest, page: u32) -> Vec<&PrintedMarker> {
@@ -244,7 +261,19 @@ pub fn check_photo(
             .iter()
             .map(|m| (m.x_mm, m.y_mm, m.diameter_mm / 2.0))
             .collect();
-        let scale = scale::measure(image, &model, &h, manifest.page_size_mm, &discs);
+        let mut scale = scale::measure(image, &model, &h, manifest.page_size_mm, &discs);
+        if matches.len() <= MIN_PAGE_MATCHES {
+            // A homography pinned by a few markers' rims is too loose to carry
+            // millimetres out to the paper's edges; the discs' size is not.
+            let views: Vec<scale::DiscView> = matches
+                .iter()
+                .map(|&(k, m)| scale::DiscView {
+                    outline: observations[k].outline(),
+                    radius_mm: m.diameter_mm / 2.0,
+                })
+                .collect();
+            scale = scale::measure_discs(&scale, &model, manifest.page_size_mm, &views);
+        }
         report.pages.push(PageCheck {
             page,
             id_matches: matches.len(),
@@ -265,7 +294,7 @@ fn locate_page(
     observations: &[Observation],
     ideal: &[(f64, f64)],
 ) -> Option<(Homography, usize, f64)> {
-    if matches.len() < MIN_PAGE_MATCHES {
+    if matches.is_empty() {
         return None;
     }
     let mut pairs: Vec<Correspondence> = matches
@@ -278,6 +307,16 @@ fn locate_page(
         })
         .collect();
     let observed: Vec<(f64, f64)> = pairs.iter().map(|p| p.image).collect();
+    if matches.len() <= MIN_PAGE_MATCHES {
+        // Too few centres to fit a homography with anything to spare (four
+        // fit exactly, whatever they are): each marker's own rim, placed by
+        // its ellipse and yaw, adds four more points.
+        pairs.extend(
+            matches
+                .iter()
+                .flat_map(|&(k, m)| rim_correspondences(m, &observations[k], ideal[k])),
+        );
+    }
     let mut fit = fit_robust(&pairs)?;
     for _ in 0..3 {
         // Under perspective a circle's image centre is not the image of its
@@ -295,6 +334,50 @@ fn locate_page(
     }
     let inliers = fit.inliers.iter().filter(|&&i| i).count();
     (inliers >= MIN_PAGE_MATCHES).then_some((fit.homography, inliers, fit.rms_px))
+}
+
+/// The four points where a marker's axes meet its rim, page ↔ photo.
+/// In the photo they lie on the outer ellipse: +x along the read yaw, +y on
+/// the conjugate diameter (where a circle's perpendicular diameter goes
+/// under an affine view), on the side that keeps the page's handedness
+/// (+y of the marker is up the page, -y in page coordinates).
+fn rim_correspondences(
+    m: &PrintedMarker,
+    o: &Observation,
+    centre: (f64, f64),
+) -> Vec<Correspondence> {
+    let Some(yaw) = o.yaw else {
+        return Vec::new();
+    };
+    let (a, b) = (o.semi_major, o.semi_minor);
+    if !(a > 0.0 && b > 0.0) {
+        return Vec::new();
+    }
+    // Ellipse parameter of the point in direction `yaw` from the centre.
+    let (s, c) = (yaw - o.angle).sin_cos();
+    let phi = (s / b).atan2(c / a);
+    let (sa, ca) = o.angle.sin_cos();
+    let to_image = |x: f64, y: f64| (x * ca - y * sa, x * sa + y * ca);
+    let x_axis = to_image(a * phi.cos(), b * phi.sin());
+    let mut y_axis = to_image(-a * phi.sin(), b * phi.cos());
+    if x_axis.0 * y_axis.1 - x_axis.1 * y_axis.0 > 0.0 {
+        y_axis = (-y_axis.0, -y_axis.1);
+    }
+    let r = m.diameter_mm / 2.0;
+    let tolerance = (a / 4.0).max(2.0);
+    [
+        ((r, 0.0), x_axis, 1.0),
+        ((r, 0.0), x_axis, -1.0),
+        ((0.0, -r), y_axis, 1.0),
+        ((0.0, -r), y_axis, -1.0),
+    ]
+    .into_iter()
+    .map(|((dx, dy), (du, dv), sign)| Correspondence {
+        plane: (m.x_mm + sign * dx, m.y_mm + sign * dy),
+        image: (centre.0 + sign * du, centre.1 + sign * dv),
+        tolerance,
+    })
+    .collect()
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -509,20 +592,45 @@ pub fn summarise(manifest: &Manifest, photos: Vec<PhotoReport>) -> Report {
             .flat_map(|p| p.pages.iter().map(move |c| (p, c)))
             .filter(|(_, c)| c.page == page)
             .collect();
-        let mut scales: Vec<f64> = checks.iter().filter_map(|(_, c)| c.scale.scale).collect();
-        scales.sort_by(f64::total_cmp);
-        let scale = (!scales.is_empty()).then(|| scales[scales.len() / 2]);
-        let worst_axis = checks
+        // The photo whose measurement decides the verdict speaks for the
+        // page: its status, its figure and its note stay together.
+        let severity = |status: ScaleStatus| match status {
+            ScaleStatus::Error => 2,
+            ScaleStatus::Warning => 1,
+            _ => 0,
+        };
+        let deciding = checks
             .iter()
-            .map(|(_, c)| c.scale.status)
-            .filter(|s| *s != ScaleStatus::Unknown)
-            .max_by_key(|s| match s {
-                ScaleStatus::Error => 2,
-                ScaleStatus::Warning => 1,
-                _ => 0,
+            .filter_map(|(p, c)| c.scale.scale.map(|s| (p, c, s)))
+            .max_by(|a, b| {
+                severity(a.1.scale.status)
+                    .cmp(&severity(b.1.scale.status))
+                    .then((a.2 - 1.0).abs().total_cmp(&(b.2 - 1.0).abs()))
             });
-        let (scale_status, note) = match (scale, worst_axis) {
-            (Some(_), Some(s)) => (s, checks.iter().find_map(|(_, c)| c.scale.note.clone())),
+        let scale = deciding.map(|(_, _, s)| s);
+        let (scale_status, note) = match deciding {
+            Some((p, c, s)) => {
+                let mut notes: Vec<String> = c.scale.note.iter().cloned().collect();
+                let others: Vec<String> = checks
+                    .iter()
+                    .filter(|(q, _)| q.photo != p.photo)
+                    .filter_map(|(q, c)| c.scale.scale.map(|t| (q, t)))
+                    .filter(|(_, t)| (t - s).abs() > scale::SCALE_WARNING)
+                    .map(|(q, t)| format!("{} measured {:.1} %", q.photo, t * 100.0))
+                    .collect();
+                if !others.is_empty() {
+                    notes.push(format!(
+                        "photos disagree: {} measured {:.1} %, {}",
+                        p.photo,
+                        s * 100.0,
+                        others.join(", ")
+                    ));
+                }
+                (
+                    c.scale.status,
+                    (!notes.is_empty()).then(|| notes.join("; ")),
+                )
+            }
             _ if checks.is_empty() => (
                 ScaleStatus::Unknown,
                 Some("page not located in any photo".to_string()),
@@ -644,9 +752,14 @@ impl Report {
             let _ = writeln!(out);
             let _ = writeln!(out, "id     page  status        detail");
             for m in problems {
+                let page_located = self
+                    .photos
+                    .iter()
+                    .any(|p| p.pages.iter().any(|c| c.page == m.page));
                 let detail = match (m.status, m.read_as, &m.photo) {
                     (MarkerStatus::Misread, Some(r), Some(p)) => format!("read as ID {r} in {p}"),
                     (_, _, Some(p)) => format!("in {p}"),
+                    _ if !page_located => format!("page {} was not found in any photo", m.page),
                     _ => "its place was not in any photo".to_string(),
                 };
                 let _ = writeln!(

@@ -7,7 +7,7 @@
 //! line to each edge in page coordinates, and compare the paper's size in
 //! manifest millimetres with the template's page size.
 
-use super::homography::Homography;
+use super::homography::{Homography, ImageEllipse};
 use crate::camera::Camera;
 use image::GrayImage;
 use serde::Serialize;
@@ -213,6 +213,94 @@ pub fn measure(
         note: (!notes.is_empty()).then(|| notes.join("; ")),
         corners,
     }
+}
+
+/// A printed disc as the photo shows it, for [`measure_discs`].
+#[derive(Debug, Clone, Copy)]
+pub struct DiscView {
+    /// The disc's outline in the photo (image pixels).
+    pub outline: ImageEllipse,
+    /// The radius it was meant to have, mm.
+    pub radius_mm: f64,
+}
+
+/// The printed scale from the discs' own size, for a page with too few
+/// markers to pin the layout: the paper's four corners, found by
+/// [`measure`], map the photo onto the paper exactly (it is the paper's own
+/// outline), and each disc's outline mapped there is a circle whose radius
+/// is the printed one.
+pub fn measure_discs(
+    paper: &ScaleMeasurement,
+    model: &PixelModel,
+    page_size_mm: [f64; 2],
+    discs: &[DiscView],
+) -> ScaleMeasurement {
+    let Some(corners) = paper.corners else {
+        return ScaleMeasurement {
+            edges: paper.edges.clone(),
+            ..ScaleMeasurement::unknown(
+                "a page with so few markers is measured by their size against the whole paper, and not all four paper edges were found",
+            )
+        };
+    };
+    let [w, h] = page_size_mm;
+    let pairs: Vec<_> = [(0.0, 0.0), (w, 0.0), (w, h), (0.0, h)]
+        .into_iter()
+        .zip(corners)
+        .map(|(page, (u, v))| (page, model.to_ideal(u, v)))
+        .collect();
+    let Some(to_paper) = Homography::fit(&pairs).and_then(|p| p.inverse()) else {
+        return ScaleMeasurement::unknown("the paper's corners are degenerate");
+    };
+    let ratios: Vec<f64> = discs
+        .iter()
+        .filter_map(|disc| {
+            let points: Option<Vec<(f64, f64)>> = disc
+                .outline
+                .boundary_points(24)
+                .into_iter()
+                .map(|(u, v)| {
+                    let (x, y) = model.to_ideal(u, v);
+                    to_paper.apply(x, y)
+                })
+                .collect();
+            let radius = fit_circle_radius(&points?)?;
+            Some(radius / disc.radius_mm)
+        })
+        .collect();
+    if ratios.is_empty() {
+        return ScaleMeasurement::unknown("no disc outline could be mapped onto the paper");
+    }
+    let scale = ratios.iter().sum::<f64>() / ratios.len() as f64;
+    ScaleMeasurement {
+        scale: Some(scale),
+        scale_x: None,
+        scale_y: None,
+        status: ScaleStatus::of(scale),
+        edges: paper.edges.clone(),
+        note: Some(format!(
+            "from the size of {} disc{} against the paper (too few markers to measure the layout)",
+            ratios.len(),
+            if ratios.len() == 1 { "" } else { "s" }
+        )),
+        corners: paper.corners,
+    }
+}
+
+/// Radius of the least-squares circle through the points (Kåsa's fit:
+/// linear in the centre and x²+y² offset, exact for points on a circle).
+fn fit_circle_radius(points: &[(f64, f64)]) -> Option<f64> {
+    let mut normal = nalgebra::Matrix3::<f64>::zeros();
+    let mut rhs = nalgebra::Vector3::<f64>::zeros();
+    for &(x, y) in points {
+        let row = nalgebra::Vector3::new(x, y, 1.0);
+        normal += row * row.transpose();
+        rhs += row * (x * x + y * y);
+    }
+    let solution = normal.lu().solve(&rhs)?;
+    let (cx, cy) = (solution[0] / 2.0, solution[1] / 2.0);
+    let r2 = solution[2] + cx * cx + cy * cy;
+    (r2 > 0.0).then(|| r2.sqrt())
 }
 
 /// Corners of the paper in manifest coordinates from its four edge lines.

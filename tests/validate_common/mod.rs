@@ -114,6 +114,7 @@ pub fn ideal_observations(truth: &GroundTruth) -> Vec<Observation> {
                 semi_major: e.semi_major,
                 semi_minor: e.semi_minor,
                 angle: e.angle,
+                yaw: (m.id != 0).then_some(m.yaw),
             }
         })
         .collect()
