@@ -74,6 +74,27 @@ impl Camera {
         }
     }
 
+    /// The calibration for an image of `width` x `height`: itself, or
+    /// rescaled when the image is the same sensor at another resolution. A
+    /// different aspect ratio means another camera or a crop, for which no
+    /// rescaling is right, and is refused.
+    pub fn for_image(&self, width: u32, height: u32) -> Result<Camera, String> {
+        if self.width == width && self.height == height {
+            return Ok(*self);
+        }
+        let aspect = |w: u32, h: u32| f64::from(w) / f64::from(h);
+        if height == 0
+            || self.height == 0
+            || (aspect(self.width, self.height) / aspect(width, height) - 1.0).abs() > 0.01
+        {
+            return Err(format!(
+                "image is {width}x{height} but the camera calibration is for {}x{}",
+                self.width, self.height
+            ));
+        }
+        Ok(self.with_resolution(width, height))
+    }
+
     /// Pixel position of a point in the camera frame, with distortion.
     /// `None` for points on or behind the camera plane.
     pub fn project(&self, p: &Vector3<f64>) -> Option<(f64, f64)> {

@@ -145,8 +145,14 @@ fn parse_scale(text: &str) -> Result<f64, String> {
 fn parse_pixels(text: &str) -> Result<f64, String> {
     let t = text.trim();
     let number = t.strip_suffix("px").unwrap_or(t).trim();
+    // Blur cost grows with its length; beyond a few hundred pixels nothing
+    // is left to see anyway, and an unbounded value runs for hours.
+    const MAX_BLUR_PX: f64 = 500.0;
     match number.parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        Ok(v) if v.is_finite() && (0.0..=MAX_BLUR_PX).contains(&v) => Ok(v),
+        Ok(v) if v.is_finite() && v > MAX_BLUR_PX => Err(format!(
+            "'{text}' is more blur than this simulates (at most {MAX_BLUR_PX}px)"
+        )),
         _ => Err(format!(
             "'{text}' is not a length in pixels (write e.g. 2px)"
         )),

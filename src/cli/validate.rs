@@ -3,7 +3,7 @@
 use crate::camera::Camera;
 use crate::render::manifest::Manifest;
 use crate::validate::{self, annotate};
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::ValueEnum;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -43,24 +43,6 @@ enum Format {
     Json,
 }
 
-/// The calibration at the photo's resolution (a calibration made at full
-/// resolution also serves a scaled-down photo of the same aspect).
-fn camera_for(camera: &Camera, path: &Path, width: u32, height: u32) -> Result<Camera> {
-    if camera.width == width && camera.height == height {
-        return Ok(*camera);
-    }
-    let aspect = |w: u32, h: u32| f64::from(w) / f64::from(h);
-    if (aspect(camera.width, camera.height) / aspect(width, height) - 1.0).abs() > 0.01 {
-        bail!(
-            "{}: photo is {width}x{height} but the camera calibration is for {}x{}",
-            path.display(),
-            camera.width,
-            camera.height
-        );
-    }
-    Ok(camera.with_resolution(width, height))
-}
-
 pub fn run(args: ValidateArgs) -> Result<ExitCode> {
     let manifest = Manifest::load(&args.manifest)?;
     let mut detector =
@@ -71,19 +53,28 @@ pub fn run(args: ValidateArgs) -> Result<ExitCode> {
             .with_context(|| format!("cannot create folder {}", dir.display()))?;
     }
     let mut photos = Vec::new();
+    // Photos from different folders may share a name (two phones' IMG_0001).
+    let mut used_names = std::collections::HashSet::new();
     for path in &args.photos {
         let image = crate::detect::load_gray(path)?;
         let cam = camera
             .as_ref()
-            .map(|c| camera_for(c, path, image.width(), image.height()))
-            .transpose()?;
+            .map(|c| c.for_image(image.width(), image.height()))
+            .transpose()
+            .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
         let name = path.display().to_string();
         let report = validate::check_image(&name, &manifest, &image, cam.as_ref(), &mut detector);
         if let Some(dir) = &args.annotate {
             let stem = path
                 .file_stem()
                 .map_or_else(|| "photo".into(), |s| s.to_string_lossy().into_owned());
-            let out = dir.join(format!("{stem}.annotated.png"));
+            let mut name = format!("{stem}.annotated.png");
+            let mut k = 2;
+            while !used_names.insert(name.clone()) {
+                name = format!("{stem}-{k}.annotated.png");
+                k += 1;
+            }
+            let out = dir.join(name);
             save_rgb(&out, &annotate::annotate(&image, &report))?;
         }
         photos.push(report);

@@ -73,7 +73,52 @@ impl Manifest {
                 manifest.version
             );
         }
+        manifest
+            .check()
+            .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
         Ok(manifest)
+    }
+
+    /// What validation relies on: a hand-edited or foreign file that breaks
+    /// it would otherwise give a verdict about nothing ("0 printed: OK") or
+    /// about the wrong marker.
+    fn check(&self) -> std::result::Result<(), String> {
+        if self.format != "whycode-sheet" {
+            return Err(format!(
+                "format is '{}', not a whycode sheet manifest",
+                self.format
+            ));
+        }
+        let [w, h] = self.page_size_mm;
+        if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
+            return Err(format!("page size {w} x {h} mm is not a page"));
+        }
+        if self.markers.is_empty() {
+            return Err("lists no markers".to_string());
+        }
+        let mut seen = std::collections::HashSet::new();
+        for m in &self.markers {
+            let inside = (0.0..=w).contains(&m.x_mm) && (0.0..=h).contains(&m.y_mm);
+            if !(m.diameter_mm.is_finite() && m.diameter_mm > 0.0 && inside) {
+                return Err(format!(
+                    "marker ID {} on page {} has an impossible place or size",
+                    m.id, m.page
+                ));
+            }
+            if m.page == 0 || m.page > self.pages {
+                return Err(format!(
+                    "marker ID {} is on page {}, but the sheet has pages 1-{}",
+                    m.id, m.page, self.pages
+                ));
+            }
+            if !self.legacy && !seen.insert(m.id) {
+                return Err(format!(
+                    "ID {} is listed more than once, so its markers cannot be told apart",
+                    m.id
+                ));
+            }
+        }
+        Ok(())
     }
 
     pub fn to_json(&self) -> String {
@@ -84,5 +129,68 @@ impl Manifest {
 
     pub fn save(&self, path: &Path) -> Result<()> {
         crate::io::write_atomic(path, self.to_json().as_bytes())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sheet() -> Manifest {
+        let marker = |id, x_mm| PrintedMarker {
+            id,
+            code: id,
+            page: 1,
+            x_mm,
+            y_mm: 50.0,
+            diameter_mm: 40.0,
+        };
+        Manifest {
+            format: format_name(),
+            version: MANIFEST_VERSION,
+            tool: String::new(),
+            family: Some(FamilyRef {
+                bits: 8,
+                distance: 2,
+            }),
+            legacy: false,
+            template: "a4".into(),
+            page_size_mm: [210.0, 297.0],
+            pages: 1,
+            markers: vec![marker(1, 40.0), marker(2, 100.0)],
+        }
+    }
+
+    fn load_error(manifest: &Manifest) -> String {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.json");
+        std::fs::write(&path, manifest.to_json()).unwrap();
+        match Manifest::load(&path) {
+            Ok(_) => String::new(),
+            Err(e) => format!("{e:#}"),
+        }
+    }
+
+    #[test]
+    fn sound_manifests_load_and_broken_ones_name_the_problem() {
+        assert_eq!(load_error(&sheet()), "");
+        let mut m = sheet();
+        m.markers[1].id = 1;
+        assert!(load_error(&m).contains("ID 1 is listed more than once"));
+        let mut m = sheet();
+        m.markers.clear();
+        assert!(load_error(&m).contains("lists no markers"));
+        let mut m = sheet();
+        m.page_size_mm = [0.0, 297.0];
+        assert!(load_error(&m).contains("is not a page"));
+        let mut m = sheet();
+        m.markers[0].diameter_mm = -4.0;
+        assert!(load_error(&m).contains("impossible place or size"));
+        let mut m = sheet();
+        m.markers[0].page = 3;
+        assert!(load_error(&m).contains("on page 3, but the sheet has pages 1-1"));
+        let mut m = sheet();
+        m.format = "other".into();
+        assert!(load_error(&m).contains("format is 'other'"));
     }
 }

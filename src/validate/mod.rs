@@ -774,15 +774,26 @@ impl Report {
         }
         let c = &self.counts;
         let _ = writeln!(out);
+        let unmeasured: Vec<String> = self
+            .pages
+            .iter()
+            .filter(|p| p.scale_status == ScaleStatus::Unknown)
+            .map(|p| p.page.to_string())
+            .collect();
+        // Every marker reading right is the verdict; an unmeasured scale is
+        // not a failure, but "OK" alone would read as "the size was checked".
+        let verdict = match (self.ok, unmeasured.is_empty()) {
+            (false, _) => "PROBLEMS".to_string(),
+            (true, true) => "OK".to_string(),
+            (true, false) => format!(
+                "OK, but the printed scale of page {} was not measured",
+                unmeasured.join(", ")
+            ),
+        };
         let _ = writeln!(
             out,
             "{} printed: {} found, {} misread, {} unidentified, {} missing -> {}",
-            c.printed,
-            c.found,
-            c.misread,
-            c.unidentified,
-            c.missing,
-            if self.ok { "OK" } else { "PROBLEMS" }
+            c.printed, c.found, c.misread, c.unidentified, c.missing, verdict
         );
         out
     }
