@@ -418,9 +418,8 @@ fn find_edge(
                 None => break,
             }
         }
-        // Windows of ~2.5 mm (at least 3 px): the paper edge is the
-        // strongest bright-to-dark step on that scale; thin printed strokes
-        // and small clutter score less.
+        // Windows of ~2.5 mm (at least 3 px) see bright-to-dark steps on
+        // the scale of a paper edge; thin printed strokes score less.
         let window = ((2.5 / step).round() as usize).clamp(6, 40);
         if profile.len() < 2 * window + 3 {
             out_of_view += 1;
@@ -431,18 +430,28 @@ fn find_edge(
             prefix[i + 1] = prefix[i] + g;
         }
         let mean = |a: usize, b: usize| (prefix[b] - prefix[a]) / (b - a) as f64;
-        let (mut best_i, mut best_step, mut best_inside) = (0, f64::MIN, 0.0);
-        for i in window..profile.len() - window {
-            let inside = mean(i - window, i);
-            let stepv = inside - mean(i, i + window);
-            if stepv > best_step {
-                (best_i, best_step, best_inside) = (i, stepv, inside);
-            }
-        }
-        if best_step < 12.0f64.max(0.25 * best_inside) {
+        let steps: Vec<(f64, f64)> = (window..profile.len() - window)
+            .map(|i| {
+                let inside = mean(i - window, i);
+                (inside - mean(i, i + window), inside)
+            })
+            .collect();
+        let strongest = steps.iter().map(|s| s.0).fold(f64::MIN, f64::max);
+        // The paper ends at the first strong step outward, not the
+        // strongest: a darker object lying beside the paper makes a bigger
+        // step further out than the paper's own edge against it.
+        let strong =
+            |(stepv, inside): (f64, f64)| stepv >= 12.0f64.max(0.25 * inside).max(0.5 * strongest);
+        let Some(first) = steps.iter().position(|&s| strong(s)) else {
             low_contrast += 1;
             continue;
-        }
+        };
+        // The peak of that step, not where it first clears the bar.
+        let best_i = window
+            + (first..steps.len())
+                .take_while(|&k| strong(steps[k]))
+                .max_by(|&a, &b| steps[a].0.total_cmp(&steps[b].0))
+                .unwrap_or(first);
         // Sub-sample location: the steepest descent near the step, refined
         // by a parabola through the gradient.
         let lo = best_i.saturating_sub(window / 2).max(1);
@@ -489,7 +498,40 @@ fn fit_edge_line(points: &[(f64, f64)]) -> Option<EdgeLine> {
         let b = sxy / sxx;
         Some(EdgeLine { a: mt - b * ms, b })
     };
-    let mut line = fit(points)?;
+    // Start from the line most points agree with, not the least-squares
+    // line of all: an object touching a stretch of the edge moves a third
+    // of the points together, which drags a plain fit and fools the
+    // median-based trimming that follows.
+    const AGREE_MM: f64 = 0.3;
+    let mut consensus: Option<(usize, Vec<(f64, f64)>)> = None;
+    for (i, p) in points.iter().enumerate() {
+        for q in &points[i + 1..] {
+            if (q.0 - p.0).abs() < 1e-9 {
+                continue;
+            }
+            let b = (q.1 - p.1) / (q.0 - p.0);
+            let through = EdgeLine {
+                a: p.1 - b * p.0,
+                b,
+            };
+            let agreeing: Vec<(f64, f64)> = points
+                .iter()
+                .filter(|r| (r.1 - through.offset(r.0)).abs() <= AGREE_MM)
+                .copied()
+                .collect();
+            if consensus
+                .as_ref()
+                .map_or(true, |(n, _)| agreeing.len() > *n)
+            {
+                consensus = Some((agreeing.len(), agreeing));
+            }
+        }
+    }
+    let start = match &consensus {
+        Some((n, agreeing)) if *n >= 6 => agreeing.as_slice(),
+        _ => points,
+    };
+    let mut line = fit(start)?;
     for _ in 0..3 {
         let mut residuals: Vec<f64> = points
             .iter()
