@@ -56,7 +56,7 @@ pub struct DetectArgs {
     legacy: bool,
 
     /// Outer diameter of the black disc, for pose: 0.122 (metres), 122mm, 4.8in
-    #[arg(long, value_name = "LENGTH", value_parser = parse_diameter)]
+    #[arg(long, value_name = "LENGTH", value_parser = parse_diameter, requires = "camera")]
     diameter: Option<Length>,
 
     /// Camera calibration (ROS camera_info or OpenCV YAML), for pose
@@ -229,7 +229,9 @@ fn collect_jobs(inputs: &[PathBuf], no_tracking: bool) -> Result<Vec<Job>> {
         if frames.is_empty() {
             bail!("{}: folder holds no images", input.display());
         }
-        frames.sort();
+        // Cameras and scripts number frames without zero padding as often
+        // as with it: frame2 comes before frame10.
+        frames.sort_by(|a, b| natural_order(a, b));
         if no_tracking {
             jobs.extend(frames.into_iter().map(Job::Image));
         } else {
@@ -237,6 +239,37 @@ fn collect_jobs(inputs: &[PathBuf], no_tracking: bool) -> Result<Vec<Job>> {
         }
     }
     Ok(jobs)
+}
+
+/// Compares paths with runs of digits taken as numbers ("f2" < "f10");
+/// equal numbers with different padding fall back to the plain order.
+fn natural_order(a: &Path, b: &Path) -> std::cmp::Ordering {
+    fn chunks(text: &str) -> Vec<(bool, &str)> {
+        let mut out = Vec::new();
+        let mut start = 0;
+        let bytes = text.as_bytes();
+        for i in 1..=bytes.len() {
+            if i == bytes.len() || bytes[i].is_ascii_digit() != bytes[start].is_ascii_digit() {
+                out.push((bytes[start].is_ascii_digit(), &text[start..i]));
+                start = i;
+            }
+        }
+        out
+    }
+    let (ta, tb) = (a.to_string_lossy(), b.to_string_lossy());
+    let (ca, cb) = (chunks(&ta), chunks(&tb));
+    for ((da, xa), (db, xb)) in ca.iter().zip(&cb) {
+        let order = if *da && *db {
+            let (na, nb) = (xa.trim_start_matches('0'), xb.trim_start_matches('0'));
+            na.len().cmp(&nb.len()).then_with(|| na.cmp(nb))
+        } else {
+            xa.cmp(xb)
+        };
+        if order.is_ne() {
+            return order;
+        }
+    }
+    ca.len().cmp(&cb.len()).then_with(|| ta.cmp(&tb))
 }
 
 /// Output file for every image: DIR/<name>.png, with -2, -3, ... appended
@@ -456,4 +489,38 @@ fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Resul
         writeln!(out)?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::natural_order;
+    use std::path::PathBuf;
+
+    #[test]
+    fn frames_sort_by_their_numbers() {
+        let mut frames: Vec<PathBuf> = [
+            "f10.png",
+            "f2.png",
+            "f1.png",
+            "f02b.png",
+            "g.png",
+            "f0010.png",
+        ]
+        .iter()
+        .map(PathBuf::from)
+        .collect();
+        frames.sort_by(|a, b| natural_order(a, b));
+        let names: Vec<_> = frames.iter().map(|p| p.to_str().unwrap()).collect();
+        assert_eq!(
+            names,
+            [
+                "f1.png",
+                "f2.png",
+                "f02b.png",
+                "f0010.png",
+                "f10.png",
+                "g.png"
+            ]
+        );
+    }
 }
