@@ -21,25 +21,89 @@ pub fn write_atomic_with(
     produce: impl FnOnce(&mut dyn Write) -> Result<()>,
 ) -> Result<()> {
     let fail = || format!("cannot write {}", path.display());
+    match destination(path)? {
+        Destination::Special(target) => {
+            let mut bytes = Vec::new();
+            produce(&mut bytes).with_context(fail)?;
+            write_in_place(path, &target, &bytes)
+        }
+        Destination::Regular(target) => {
+            let mut tmp = stage_beside(path, &target)?;
+            {
+                let mut buffered = std::io::BufWriter::new(tmp.as_file_mut());
+                produce(&mut buffered).with_context(fail)?;
+                buffered
+                    .flush()
+                    .map_err(without_temp_path)
+                    .with_context(fail)?;
+            }
+            commit(path, &target, tmp)
+        }
+    }
+}
+
+/// Writes several files as one: each is staged in a temporary file beside
+/// its target, and only when all are staged are they renamed into place. A
+/// failure while staging (a full disk, a missing folder) leaves every
+/// target as it was, old outputs included.
+pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
+    let mut staged = Vec::with_capacity(files.len());
+    let mut in_place = Vec::new();
+    for (path, bytes) in files {
+        match destination(path)? {
+            Destination::Special(target) => in_place.push((path, target, bytes)),
+            Destination::Regular(target) => {
+                let mut tmp = stage_beside(path, &target)?;
+                tmp.as_file_mut()
+                    .write_all(bytes)
+                    .and_then(|()| tmp.as_file_mut().flush())
+                    .map_err(without_temp_path)
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+                staged.push((path, target, tmp));
+            }
+        }
+    }
+    for (path, target, tmp) in staged {
+        commit(path, &target, tmp)?;
+    }
+    for (path, target, bytes) in in_place {
+        write_in_place(path, &target, bytes)?;
+    }
+    Ok(())
+}
+
+/// Where an output's bytes end up.
+enum Destination {
+    /// A FIFO, device or socket: written to, never replaced.
+    Special(PathBuf),
+    /// A regular file, existing or not: replaced by a rename.
+    Regular(PathBuf),
+}
+
+fn destination(path: &Path) -> Result<Destination> {
     let target = resolve_links(path);
     match std::fs::metadata(&target) {
         Ok(meta) if meta.is_dir() => bail!("cannot write {}: it is a folder", path.display()),
-        Ok(meta) if !meta.is_file() => {
-            let mut bytes = Vec::new();
-            produce(&mut bytes).with_context(fail)?;
-            let mut file = std::fs::OpenOptions::new()
-                .write(true)
-                .open(&target)
-                .map_err(without_temp_path)
-                .with_context(fail)?;
-            return file
-                .write_all(&bytes)
-                .and_then(|()| file.flush())
-                .map_err(without_temp_path)
-                .with_context(fail);
-        }
-        _ => {}
+        Ok(meta) if !meta.is_file() => Ok(Destination::Special(target)),
+        _ => Ok(Destination::Regular(target)),
     }
+}
+
+fn write_in_place(path: &Path, target: &Path, bytes: &[u8]) -> Result<()> {
+    let mut file = std::fs::OpenOptions::new()
+        .write(true)
+        .open(target)
+        .map_err(without_temp_path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    file.write_all(bytes)
+        .and_then(|()| file.flush())
+        .map_err(without_temp_path)
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// A temporary file in the target's folder, so that the final rename stays
+/// on one file system and is atomic.
+fn stage_beside(path: &Path, target: &Path) -> Result<tempfile::NamedTempFile> {
     let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -51,19 +115,15 @@ pub fn write_atomic_with(
             dir.display()
         );
     }
-    let mut tmp = tempfile::Builder::new()
+    tempfile::Builder::new()
         .prefix(".whycode-")
         .tempfile_in(dir)
         .map_err(without_temp_path)
-        .with_context(fail)?;
-    {
-        let mut buffered = std::io::BufWriter::new(tmp.as_file_mut());
-        produce(&mut buffered).with_context(fail)?;
-        buffered
-            .flush()
-            .map_err(without_temp_path)
-            .with_context(fail)?;
-    }
+        .with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn commit(path: &Path, target: &Path, tmp: tempfile::NamedTempFile) -> Result<()> {
+    let fail = || format!("cannot write {}", path.display());
     // Temporary files are private; the output should carry ordinary permissions.
     #[cfg(unix)]
     {
@@ -73,7 +133,7 @@ pub fn write_atomic_with(
             .map_err(without_temp_path)
             .with_context(fail)?;
     }
-    tmp.persist(&target)
+    tmp.persist(target)
         .map_err(|e| without_temp_path(e.error))
         .with_context(fail)?;
     Ok(())
@@ -157,6 +217,21 @@ mod tests {
         let text = format!("{err:#}");
         assert!(text.contains("/nonexistent-whycode-dir"), "{text}");
         assert!(!text.contains(".whycode-"), "{text}");
+    }
+
+    #[test]
+    fn a_failing_set_of_files_leaves_the_old_outputs_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let good = dir.path().join("sheet.pdf");
+        std::fs::write(&good, "old pdf").unwrap();
+        let files = vec![
+            (good.clone(), b"new pdf".to_vec()),
+            (dir.path().join("missing/sheet.json"), b"{}".to_vec()),
+        ];
+        assert!(write_all_atomic(&files).is_err());
+        assert_eq!(std::fs::read_to_string(&good).unwrap(), "old pdf");
+        let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(left.len(), 1, "temporary files left behind: {left:?}");
     }
 
     #[test]

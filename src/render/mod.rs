@@ -116,16 +116,8 @@ pub fn check_output_dir(path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Writes every file atomically; if one fails, the ones already written by
-/// this call are removed again, so a failed run leaves nothing behind.
+/// Writes a sheet's or marker's files together: all of them, or (when one
+/// cannot be written) none, with any earlier outputs left as they were.
 pub fn write_all(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
-    for (k, (path, bytes)) in files.iter().enumerate() {
-        if let Err(err) = crate::io::write_atomic(path, bytes) {
-            for (written, _) in &files[..k] {
-                let _ = std::fs::remove_file(written);
-            }
-            return Err(err);
-        }
-    }
-    Ok(())
+    crate::io::write_all_atomic(files)
 }
