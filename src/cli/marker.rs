@@ -99,7 +99,14 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
     if args.no_check {
         eprintln!("whycode: note: self-check skipped (--no-check): the marker was not read back before writing");
     } else {
-        check_marker_page(&page, &marker, args.id.unwrap_or(0), family.as_ref())?;
+        let png_dpi = (format == Format::Png).then_some(args.dpi);
+        check_marker_page(
+            &page,
+            &marker,
+            args.id.unwrap_or(0),
+            family.as_ref(),
+            png_dpi,
+        )?;
     }
     let files = encode_pages(std::slice::from_ref(&page), &args.output, &title, args.dpi)?;
     write_all(&files)?;

@@ -1,5 +1,5 @@
 use crate::family::Family;
-use crate::render::check::check_sheet;
+use crate::render::check::{check_sheet, check_sheet_png};
 use crate::render::manifest::FamilyRef;
 use crate::render::sheet::{family_markers, layout, legacy_markers, SheetSpec};
 use crate::render::template::Template;
@@ -130,7 +130,11 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
     if args.no_check {
         eprintln!("whycode: note: self-check skipped (--no-check): the markers were not read back before writing");
     } else {
-        let report = check_sheet(&sheet, check_family.as_ref())?;
+        let report = if format == Format::Png {
+            check_sheet_png(&sheet, check_family.as_ref(), args.dpi)?
+        } else {
+            check_sheet(&sheet, check_family.as_ref())?
+        };
         let dpis: Vec<String> = report.resolutions.iter().map(|d| format!("{d}")).collect();
         let what = if args.legacy {
             "found in place"
@@ -139,7 +143,10 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         };
         eprintln!(
             "whycode: self-check passed: every marker {what} at {} dpi",
-            dpis.join(" and ")
+            match dpis.split_last() {
+                Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+                _ => dpis.join(""),
+            }
         );
     }
     let mut files = encode_pages(&sheet.pages, &output, &name, args.dpi)?;

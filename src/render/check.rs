@@ -109,7 +109,23 @@ fn check_marker(
 /// marker. `family` is the family of the sheet's IDs (None for legacy
 /// WhyCon sheets, where only presence and position are checked).
 pub fn check_sheet(sheet: &Sheet, family: Option<&Family>) -> Result<CheckReport> {
-    check_pages(&sheet.pages, &sheet.manifest.markers, family)
+    check_pages(&sheet.pages, &sheet.manifest.markers, family, None)
+}
+
+/// [`check_sheet`] for a sheet written as PNG at `output_dpi`: that raster
+/// is what gets printed, so it is checked too when it is coarser than print
+/// resolution.
+pub fn check_sheet_png(
+    sheet: &Sheet,
+    family: Option<&Family>,
+    output_dpi: f64,
+) -> Result<CheckReport> {
+    check_pages(
+        &sheet.pages,
+        &sheet.manifest.markers,
+        family,
+        Some(output_dpi),
+    )
 }
 
 /// The same check for one marker laid out alone (`whycode marker`): a
@@ -121,6 +137,7 @@ pub fn check_marker_page(
     marker: &Marker,
     id: u32,
     family: Option<&Family>,
+    png_dpi: Option<f64>,
 ) -> Result<CheckReport> {
     let on_paper = page.on_white(marker.outer_radius());
     let Some((_, x_mm, y_mm)) = on_paper.markers().next() else {
@@ -138,15 +155,24 @@ pub fn check_marker_page(
         y_mm,
         diameter_mm: marker.diameter_mm,
     };
-    check_pages(std::slice::from_ref(&on_paper), &[expected], family)
+    check_pages(
+        std::slice::from_ref(&on_paper),
+        &[expected],
+        family,
+        png_dpi,
+    )
 }
 
 fn check_pages(
     pages: &[Page],
     markers: &[PrintedMarker],
     family: Option<&Family>,
+    png_dpi: Option<f64>,
 ) -> Result<CheckReport> {
-    let resolutions = resolutions_for(markers);
+    let mut resolutions = resolutions_for(markers);
+    if let Some(dpi) = png_dpi.filter(|&d| d < PRINT_DPI && !resolutions.contains(&d)) {
+        resolutions.push(dpi);
+    }
     let jobs: Vec<(usize, f64)> = (0..pages.len())
         .flat_map(|p| resolutions.iter().map(move |&dpi| (p, dpi)))
         .collect();
