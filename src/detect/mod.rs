@@ -331,6 +331,7 @@ impl Detector {
             pose: None,
         };
         let mut axis_point = None;
+        let mut centre_estimate = None;
         // A marker followed from the last frames whose ID has been read
         // the same several times: its known code's edges give the yaw at a
         // fraction of a full read, and confirm the code on the way.
@@ -362,12 +363,18 @@ impl Detector {
             d.yaw = reading.yaw;
             d.confidence = reading.confidence;
             axis_point = reading.axis_point;
+            centre_estimate = reading.centre_estimate;
         }
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed_yaw.is_some());
         }
         if let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) {
-            d.pose = self.pose(&camera, diameter / 2.0, gray, c, &outer, d.yaw, axis_point);
+            let hints = PoseHints {
+                yaw: d.yaw,
+                axis_point,
+                centre_estimate,
+            };
+            d.pose = self.pose(&camera, diameter / 2.0, gray, c, &outer, hints);
             if let (Some(pose), Some(code), Some(family)) = (&d.pose, d.code, &self.config.family) {
                 let bits = family.bits();
                 if let Some(better) =
@@ -430,8 +437,8 @@ impl Detector {
     }
 
     /// Position and normal from the outer edge, the two-fold ambiguity
-    /// decided by the inner white edges, the rotation from the yaw.
-    #[allow(clippy::too_many_arguments)]
+    /// decided by where the ring shows the marker's centre (or, failing
+    /// that, by the inner white edges), the rotation from the yaw.
     fn pose(
         &mut self,
         camera: &Camera,
@@ -439,11 +446,45 @@ impl Detector {
         gray: Gray<'_>,
         c: &Candidate,
         outer: &pose::ImageEllipse,
-        yaw: Option<f64>,
-        axis_point: Option<(f64, f64)>,
+        hints: PoseHints,
     ) -> Option<Pose> {
+        let PoseHints {
+            yaw,
+            axis_point,
+            centre_estimate,
+        } = hints;
         let candidates = pose::circle_poses_from_points(camera, &c.edge, radius_m)
             .or_else(|| pose::try_circle_poses(camera, outer, radius_m))?;
+        // Both candidates cast the same outer ellipse, but each puts the
+        // marker's centre at a different image point, and the ring's radial
+        // edges all run through the real one. Under blur and noise this
+        // is a far steadier witness than the inner edges' sub-pixel
+        // positions, as long as the two points are apart by more than the
+        // estimate's own scatter.
+        if let Some(measured) = centre_estimate {
+            let miss = |k: usize| {
+                camera
+                    .project(&candidates[k].center)
+                    .map(|(u, v)| (u - measured.0).hypot(v - measured.1))
+            };
+            let apart = match (
+                camera.project(&candidates[0].center),
+                camera.project(&candidates[1].center),
+            ) {
+                (Some(a), Some(b)) => (a.0 - b.0).hypot(a.1 - b.1),
+                _ => 0.0,
+            };
+            if let (Some(m0), Some(m1)) = (miss(0), miss(1)) {
+                if apart >= CENTRE_SEPARATION_PX && (m0 - m1).abs() >= CENTRE_MARGIN * apart {
+                    let circle = if m1 < m0 {
+                        &candidates[1]
+                    } else {
+                        &candidates[0]
+                    };
+                    return Some(full_pose(camera, circle, yaw, axis_point));
+                }
+            }
+        }
         let mid = (c.black + c.white) / 2.0;
         let whycode = self.config.family.is_some();
         let inner_ratios: &[f64] = if whycode {
@@ -469,11 +510,7 @@ impl Detector {
         } else {
             &candidates[0]
         };
-        Some(match (axis_point, yaw) {
-            (Some(p), _) => pose::full_pose(camera, circle, p),
-            (None, Some(yaw)) => pose::full_pose_from_yaw(camera, circle, yaw),
-            (None, None) => pose::full_pose_from_yaw(camera, circle, 0.0),
-        })
+        Some(full_pose(camera, circle, yaw, axis_point))
     }
 
     /// Marks the tiles that markers followed this frame cover, so that the
@@ -804,6 +841,42 @@ impl Detector {
             }
         }
         None
+    }
+}
+
+/// Least image distance between the two pose candidates' centres at which
+/// the ring's centre estimate decides between them; closer, the estimate's
+/// scatter under blur and noise could pick either.
+const CENTRE_SEPARATION_PX: f64 = 0.3;
+
+/// How much closer (as a fraction of the candidates' separation) the
+/// estimate must lie to one candidate's centre. Measured on simulated 12-bit
+/// markers at 8-60° tilt with blur and noise: the nearer candidate was right
+/// in every case at any margin from 0 to 0.3; 0.5 sent some to the weaker
+/// inner-edge test.
+const CENTRE_MARGIN: f64 = 0.2;
+
+/// What the ring reading tells the pose stage.
+#[derive(Debug, Clone, Copy)]
+struct PoseHints {
+    yaw: Option<f64>,
+    axis_point: Option<(f64, f64)>,
+    centre_estimate: Option<(f64, f64)>,
+}
+
+/// The full pose of a circle pose, its rotation about the normal from the
+/// ring: the image of the +x axis point, else the yaw, else (legacy
+/// markers) an arbitrary 0.
+fn full_pose(
+    camera: &Camera,
+    circle: &CirclePose,
+    yaw: Option<f64>,
+    axis_point: Option<(f64, f64)>,
+) -> Pose {
+    match (axis_point, yaw) {
+        (Some(p), _) => pose::full_pose(camera, circle, p),
+        (None, Some(yaw)) => pose::full_pose_from_yaw(camera, circle, yaw),
+        (None, None) => pose::full_pose_from_yaw(camera, circle, 0.0),
     }
 }
 

@@ -105,6 +105,10 @@ pub struct RingReading {
     /// perspective it differs from the outer ellipse's centre); `None`
     /// when the ring was not sampled.
     pub projected_centre: Option<(f64, f64)>,
+    /// Where the ring's radial edges meet (the image of the marker's
+    /// centre), even when too close to the ellipse centre to rectify by:
+    /// the pose stage tells its two candidate normals apart by it.
+    pub centre_estimate: Option<(f64, f64)>,
 }
 
 impl RingReading {
@@ -121,6 +125,7 @@ impl RingReading {
             pixels_per_sector,
             axis_point: None,
             projected_centre: None,
+            centre_estimate: None,
         }
     }
 }
@@ -220,10 +225,12 @@ impl RingReader {
         // by a tenth of a pixel on a face-on ring); once rectifying, refine
         // until it settles.
         let mut threshold = 0.25;
+        let mut centre_estimate = None;
         for _ in 0..3 {
             let Some(p) = refined_centre(image, &frame, phase, bits, mid_level) else {
                 break;
             };
+            centre_estimate = Some(p);
             let moved = (p.0 - frame.projected_centre.0).hypot(p.1 - frame.projected_centre.1);
             let offset = (p.0 - outer.u).hypot(p.1 - outer.v);
             if moved < threshold || offset > 0.3 * outer.semi_minor {
@@ -259,6 +266,7 @@ impl RingReader {
             edge_strength,
             pixels_per_sector,
             projected_centre: Some(frame.projected_centre),
+            centre_estimate,
             ..RingReading::unreadable(pixels_per_sector)
         };
         // Only a word with all bits equal reads alike under both pairings,
