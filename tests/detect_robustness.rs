@@ -252,3 +252,57 @@ fn absurd_dimensions_are_refused_before_decoding() {
         "{message}"
     );
 }
+
+/// A camera's 10-bit data in a 16-bit file: divided by 257 it would keep
+/// four grey levels; the marker must still be found and read.
+#[test]
+fn ten_bit_data_in_a_sixteen_bit_file_keeps_its_contrast() {
+    let dir = tempfile::tempdir().unwrap();
+    let family = Family::generate(8, 2).unwrap();
+    let marker = whycode::geometry::Marker::whycode(8, family.code(5).unwrap(), 30.0);
+    let page = whycode::render::marker::marker_page(&marker, &Default::default()).unwrap();
+    let page = page.on_white(15.0);
+    let rendered = whycode::render::raster::render_page(&page, 254.0).unwrap();
+    let ten_bit = image::ImageBuffer::<Luma<u16>, Vec<u16>>::from_fn(
+        rendered.width(),
+        rendered.height(),
+        |x, y| Luma([u16::from(rendered.get_pixel(x, y).0[0]) * 4]),
+    );
+    let path = dir.path().join("ten-bit.png");
+    image::DynamicImage::ImageLuma16(ten_bit)
+        .save(&path)
+        .unwrap();
+    let loaded = load_gray(&path).unwrap();
+    let brightest = loaded.pixels().map(|p| p.0[0]).max().unwrap();
+    assert_eq!(brightest, 255);
+    let mut detector = Detector::new(DetectorConfig {
+        family: Some(family),
+        ..DetectorConfig::default()
+    });
+    let found = detector.detect(&loaded);
+    assert_eq!(found.iter().map(|d| d.id).collect::<Vec<_>>(), [5]);
+}
+
+/// The JPEG decoder fills a cut-off file with grey and reports nothing; a
+/// photo cut short in transfer must be an error, not "no markers here".
+#[test]
+fn truncated_jpegs_are_errors_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = image::DynamicImage::ImageLuma8(GrayImage::from_fn(64, 48, |x, y| {
+        Luma([(x * 3 + y * 5) as u8])
+    }));
+    let full = dir.path().join("full.jpg");
+    img.save(&full).unwrap();
+    assert!(load_gray(&full).is_ok());
+    let bytes = std::fs::read(&full).unwrap();
+    for cut in [bytes.len() / 2, bytes.len() - 2] {
+        let path = dir.path().join(format!("cut{cut}.jpg"));
+        std::fs::write(&path, &bytes[..cut]).unwrap();
+        let err = format!(
+            "{:#}",
+            load_gray(&path).expect_err("a cut JPEG must not load")
+        );
+        assert!(err.contains(&format!("cut{cut}.jpg")), "{err}");
+        assert!(err.contains("truncated"), "{err}");
+    }
+}

@@ -907,9 +907,43 @@ pub fn load_gray(path: &Path) -> Result<GrayImage> {
     limits.max_image_width = Some(MAX_SIDE);
     limits.max_image_height = Some(MAX_SIDE);
     reader.limits(limits);
+    let format = reader.format();
     let decoded = reader.decode().with_context(name)?;
+    if format == Some(image::ImageFormat::Jpeg) {
+        check_jpeg_complete(path).with_context(name)?;
+    }
     Ok(match decoded {
         image::DynamicImage::ImageLuma8(g) => g,
+        image::DynamicImage::ImageLuma16(_)
+        | image::DynamicImage::ImageLumaA16(_)
+        | image::DynamicImage::ImageRgb16(_)
+        | image::DynamicImage::ImageRgba16(_) => stretched_to_8_bits(decoded.into_luma16()),
         other => other.into_luma8(),
     })
+}
+
+/// Many cameras write 10- or 12-bit data into 16-bit files, which a plain
+/// division by 257 squeezes into a handful of grey levels. The brightest
+/// value present becomes 255 instead (the detector's thresholds are local,
+/// so a linear stretch changes nothing else).
+fn stretched_to_8_bits(wide: image::ImageBuffer<image::Luma<u16>, Vec<u16>>) -> GrayImage {
+    let brightest = wide.pixels().map(|p| p.0[0]).max().unwrap_or(0).max(1);
+    let scale = 255.0 / f64::from(brightest);
+    GrayImage::from_fn(wide.width(), wide.height(), |x, y| {
+        image::Luma([(f64::from(wide.get_pixel(x, y).0[0]) * scale).round() as u8])
+    })
+}
+
+/// The JPEG decoder fills a truncated file's missing part with grey and
+/// reports no error, which would read as "no markers here". A complete
+/// file has an end-of-image marker after its last scan (a thumbnail's EOI
+/// comes before the main image's scans; entropy-coded data never holds FF D9).
+fn check_jpeg_complete(path: &Path) -> Result<()> {
+    let bytes = std::fs::read(path)?;
+    let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
+    let ends = last_scan.is_some_and(|k| bytes[k..].windows(2).any(|w| w == [0xFF, 0xD9]));
+    if !ends {
+        anyhow::bail!("JPEG file is truncated (no end-of-image marker after its image data)");
+    }
+    Ok(())
 }
