@@ -206,11 +206,16 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
             Some(d) => d.m(),
             None => layout::distance_to_fill(&camera, w, h, 0.8),
         };
+        let sheet_name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
         let mut page = SheetPage::new(
             manifest.clone(),
             args.page,
             layout::centred(distance, tilt, pan, roll),
-        );
+        )
+        .with_printed_text(&sheet_name);
         page.print_scale = args.print_scale;
         for &id in &args.blot {
             let entry = manifest

@@ -286,6 +286,46 @@ fn best_packing(markers: &[SheetMarker], diameter_mm: f64, template: &Template) 
     }
 }
 
+/// The sheet a manifest records, laid out again: for showing the printed
+/// page as it was (labels, scale bar, caption) where only the manifest is at
+/// hand. `None` unless the template is a built-in one and every marker
+/// lands exactly where the manifest says, so it never shows another page.
+pub fn relayout(manifest: &Manifest, name: &str) -> Option<Sheet> {
+    let template = Template::builtin(&manifest.template).ok()?;
+    let diameter = manifest.markers.first()?.diameter_mm;
+    let markers = if manifest.legacy {
+        legacy_markers(manifest.markers.len(), diameter)
+    } else {
+        let f = manifest.family?;
+        let family = Family::generate(f.bits, f.distance).ok()?;
+        let ids: Vec<u32> = manifest.markers.iter().map(|m| m.id).collect();
+        family_markers(&family, &ids, diameter).ok()?
+    };
+    let sheet = layout(&SheetSpec {
+        markers,
+        template,
+        name: name.to_string(),
+        family: manifest.family,
+        legacy: manifest.legacy,
+    })
+    .ok()?;
+    let same_place = |a: &PrintedMarker, b: &PrintedMarker| {
+        a.id == b.id
+            && a.page == b.page
+            && (a.x_mm - b.x_mm).abs() < 1e-3
+            && (a.y_mm - b.y_mm).abs() < 1e-3
+            && (a.diameter_mm - b.diameter_mm).abs() < 1e-3
+    };
+    let faithful = sheet.manifest.markers.len() == manifest.markers.len()
+        && sheet
+            .manifest
+            .markers
+            .iter()
+            .zip(&manifest.markers)
+            .all(|(a, b)| same_place(a, b));
+    faithful.then_some(sheet)
+}
+
 /// The largest marker diameter (to 0.1 mm) of which one fits on a page.
 pub fn largest_fitting_diameter(markers: &[SheetMarker], template: &Template) -> f64 {
     let fits = |d: f64| {
@@ -571,6 +611,20 @@ mod tests {
         let largest: f64 = err.rsplit(' ').nth(1).unwrap().parse().unwrap();
         assert!(layout(&spec(1..=1, largest, "a4")).is_ok());
         assert!(layout(&spec(1..=1, largest + 0.2, "a4")).is_err());
+    }
+
+    #[test]
+    fn a_manifest_is_laid_out_again_exactly_or_not_at_all() {
+        let spec = spec(1..=16, 60.0, "a5");
+        let sheet = layout(&spec).unwrap();
+        let again = relayout(&sheet.manifest, &spec.name).expect("a built-in layout reproduces");
+        assert_eq!(again.pages, sheet.pages);
+        let mut moved = sheet.manifest.clone();
+        moved.markers[3].x_mm += 0.5;
+        assert!(relayout(&moved, &spec.name).is_none());
+        let mut custom = sheet.manifest.clone();
+        custom.template = "my-layout.toml".into();
+        assert!(relayout(&custom, &spec.name).is_none());
     }
 
     #[test]

@@ -130,6 +130,9 @@ pub struct SheetPage {
     /// Pose of the page centre.
     pub placement: Placement,
     pub blots: Vec<Blot>,
+    /// What else is printed on the page (labels, scale bar, caption), in
+    /// page millimetres; see [`SheetPage::with_printed_text`].
+    pub decor: Option<crate::render::page::Page>,
 }
 
 impl SheetPage {
@@ -140,7 +143,24 @@ impl SheetPage {
             print_scale: 1.0,
             placement,
             blots: Vec::new(),
+            decor: None,
         }
+    }
+
+    /// Prints the page's labels, scale bar and caption too, as the sheet
+    /// named `sheet_name` had them, when the manifest can be laid out again
+    /// exactly (a built-in template); otherwise the page shows its markers
+    /// only. A validation photo should carry the same ink near the paper's
+    /// edges as the real print.
+    pub fn with_printed_text(mut self, sheet_name: &str) -> SheetPage {
+        self.decor = crate::render::sheet::relayout(&self.manifest, sheet_name)
+            .and_then(|sheet| sheet.pages.into_iter().nth(self.page as usize - 1))
+            .map(|mut page| {
+                page.items
+                    .retain(|item| !matches!(item, crate::render::page::Item::Marker { .. }));
+                page
+            });
+        self
     }
 
     /// The marker shape of one manifest entry (WhyCode when the manifest

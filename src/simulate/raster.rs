@@ -110,7 +110,13 @@ struct PageContent<'a> {
     rows: usize,
     buckets: Vec<Vec<usize>>,
     markers: Vec<(Marker, f64, f64)>,
+    /// The page's other printed items, rasterised at [`DECOR_PX_PER_MM`].
+    decor: Option<image::GrayImage>,
 }
+
+/// Resolution of the printed labels and scale bar: 7 pt capitals are 17 px
+/// tall, finer than any camera sees them.
+const DECOR_PX_PER_MM: f64 = 10.0;
 
 impl<'a> PageContent<'a> {
     fn new(page: &'a SheetPage) -> PageContent<'a> {
@@ -151,6 +157,10 @@ impl<'a> PageContent<'a> {
             rows,
             buckets,
             markers,
+            decor: page
+                .decor
+                .as_ref()
+                .and_then(|d| crate::render::raster::render_page(d, DECOR_PX_PER_MM * 25.4).ok()),
         }
     }
 
@@ -161,6 +171,12 @@ impl<'a> PageContent<'a> {
         }
         if qx < 0.0 || qy < 0.0 {
             return false;
+        }
+        if let Some(decor) = &self.decor {
+            let (px, py) = ((qx * DECOR_PX_PER_MM) as u32, (qy * DECOR_PX_PER_MM) as u32);
+            if px < decor.width() && py < decor.height() && decor.get_pixel(px, py).0[0] < 128 {
+                return true;
+            }
         }
         let col = (qx / self.cell) as usize;
         let row = (qy / self.cell) as usize;

@@ -442,7 +442,16 @@ fn find_edge(
         // step further out than the paper's own edge against it.
         let strong =
             |(stepv, inside): (f64, f64)| stepv >= 12.0f64.max(0.25 * inside).max(0.5 * strongest);
-        let Some(first) = steps.iter().position(|&s| strong(s)) else {
+        // Printed ink near the border (the scale bar, the caption) makes a
+        // step too, but the paper is bright again a few millimetres on;
+        // beyond the paper's own edge it is not.
+        let stays_dark = |k: usize| {
+            let i = window + k;
+            let (from, to) = (i + window, (i + 3 * window).min(profile.len()));
+            let (stepv, inside) = steps[k];
+            to <= from || mean(from, to) <= inside - 0.5 * stepv
+        };
+        let Some(first) = (0..steps.len()).find(|&k| strong(steps[k]) && stays_dark(k)) else {
             low_contrast += 1;
             continue;
         };
