@@ -127,6 +127,8 @@ pub struct Detector {
     inner_scratch: Vec<(f64, f64)>,
     /// Scan tiles covered by markers followed this frame.
     occupied: Vec<bool>,
+    /// A follow of this frame fell back to the flood fill.
+    follow_filled: bool,
     tracks: Vec<Track>,
     search: ThresholdSearch,
     ratio: Adaptive,
@@ -198,6 +200,7 @@ impl Detector {
             edge_scratch: Vec::new(),
             inner_scratch: Vec::new(),
             occupied: Vec::new(),
+            follow_filled: false,
             tracks: Vec::new(),
             search: ThresholdSearch::default(),
             frame: 0,
@@ -234,6 +237,7 @@ impl Detector {
         let limit = self.config.max_markers;
         let mut found: Vec<Candidate> = Vec::new();
         let tracking = self.config.tracking;
+        self.follow_filled = false;
         if tracking {
             for index in 0..self.tracks.len() {
                 if found.len() >= limit {
@@ -248,6 +252,14 @@ impl Detector {
         let all_followed = found.len() == self.tracks.len();
         let followed = found.len();
         self.mark_followed(&found, width, height);
+        if self.follow_filled {
+            // A follow that fell back to the flood fill labelled the
+            // pixels it reached with its own threshold, whether or not it
+            // found its marker; the scan would skip a marker it missed as
+            // already visited. Markers that were followed are kept out of
+            // the scan by the occupied tiles and the duplicate test below.
+            self.labels.begin(width, height);
+        }
         if tracking && all_followed && followed > 0 {
             if found.len() < limit {
                 // Every known marker is back: look for new ones in one band
@@ -566,6 +578,7 @@ impl Detector {
             return None;
         }
         let map = ThresholdMap::constant(track.threshold);
+        self.follow_filled = true;
         let c = self.evaluate(gray, &map, (seed as u32, y as u32))?;
         let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
         let same_size = (c.outer.a / track.a - 1.0).abs() < 0.3;
