@@ -250,3 +250,43 @@ fn tracking_a_rotating_board_finds_what_fresh_detection_finds() {
     }
     assert!(short.is_empty(), "tracked frames short of 12: {short:?}");
 }
+
+/// A single still image, dark (exposure 0.25), 3:1 light gradient and
+/// noise σ 6 (as `whycode simulate --dark --gradient 3 --noise 6`): the
+/// noise floor of the local map is above the markers' contrast, so only
+/// the global threshold walk sees them, and it must do so in one call.
+#[test]
+fn dark_noisy_uneven_still_image_is_read_in_one_call() {
+    let camera = Camera::ideal(1920, 1080, 60.0);
+    let family = Family::generate(8, 2).unwrap();
+    let markers: Vec<(Marker, u32)> = (1..=12)
+        .map(|id| (Marker::whycode(8, family.code(id).unwrap(), 60.0), id))
+        .collect();
+    let mut scene = Scene::new(camera);
+    scene.objects.extend(
+        layout::marker_grid(&markers, &layout::centred(1.0, 0.0, 0.0, 0.0))
+            .into_iter()
+            .map(SceneObject::Marker),
+    );
+    scene.background = Background::Table;
+    scene.exposure = 0.25;
+    scene.gradient = 3.0;
+    scene.noise = 6.0;
+    let (image, truth) = simulate::render(&scene);
+    let found = Detector::new(DetectorConfig {
+        family: Some(family.clone()),
+        ..DetectorConfig::default()
+    })
+    .detect(&image);
+    let right = truth
+        .markers
+        .iter()
+        .filter(|m| {
+            found
+                .iter()
+                .any(|d| d.id == m.id && (d.u - m.u).hypot(d.v - m.v) < 1.0)
+        })
+        .count();
+    assert_eq!(right, 12, "found {} ({right} right)", found.len());
+    assert_eq!(found.len(), 12, "false detections");
+}

@@ -275,17 +275,37 @@ impl Detector {
             let map = ThresholdMap::adaptive(gray.pixels, width, height);
             self.scan(gray, &map, 0..height, &mut found, limit);
             if found.is_empty() {
-                // The local map found nothing; the reference's global
-                // threshold walk gets one try per frame.
-                let t = self.search.next_after_miss();
-                self.labels.begin(width, height);
-                self.scan(
-                    gray,
-                    &ThresholdMap::constant(t),
-                    0..height,
-                    &mut found,
-                    limit,
-                );
+                // The local map found nothing (noise above the markers'
+                // contrast, say): a few levels of the reference's global
+                // threshold walk. Under a light gradient no one level suits
+                // the whole frame, so what each finds is pooled, and the
+                // level that found most is tried first next time.
+                let histogram = threshold::sampled_histogram(gray.pixels, width);
+                let mut best = 0;
+                for t in self.search.levels_after_miss(&histogram) {
+                    self.labels.begin(width, height);
+                    let mut level = Vec::new();
+                    self.scan(
+                        gray,
+                        &ThresholdMap::constant(t),
+                        0..height,
+                        &mut level,
+                        limit,
+                    );
+                    if level.len() > best {
+                        best = level.len();
+                        self.search.hit(t);
+                    }
+                    for c in level {
+                        if found.len() < limit
+                            && !found.iter().any(|o: &Candidate| {
+                                (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.b
+                            })
+                        {
+                            found.push(c);
+                        }
+                    }
+                }
             } else {
                 self.search.reset();
             }

@@ -232,7 +232,15 @@ fn box_filter(grid: &[u8], cols: usize, rows: usize, r: usize, op: fn(u8, u8) ->
 #[derive(Debug, Clone, Default)]
 pub struct ThresholdSearch {
     step: u32,
+    /// The level that last found markers, tried first after a miss.
+    last_hit: Option<u8>,
 }
+
+/// Most global levels scanned in one frame after the local map found
+/// nothing. One level per frame left a single still image with the first
+/// level only (128, hopeless in a dark frame), and a sequence blind for
+/// several frames; a handful keeps a frame without markers affordable.
+pub const LEVELS_PER_MISS: usize = 6;
 
 impl ThresholdSearch {
     /// The k-th threshold of the sequence (k = 0 gives 128).
@@ -250,10 +258,59 @@ impl ThresholdSearch {
         t
     }
 
+    /// Up to [`LEVELS_PER_MISS`] levels to scan in this frame: the last
+    /// level that found markers, then the walk's next levels that split the
+    /// image. A level with (almost) every pixel on one side of it cannot
+    /// outline a black disc on white, so it is passed over without a scan;
+    /// `histogram` counts the grey values of (a sample of) the image.
+    pub fn levels_after_miss(&mut self, histogram: &[u64; 256]) -> Vec<u8> {
+        let total: u64 = histogram.iter().sum();
+        let mut below = [0u64; 257];
+        for (i, &n) in histogram.iter().enumerate() {
+            below[i + 1] = below[i] + n;
+        }
+        // Some dark pixels (a small marker is a few dozen), and enough
+        // light ones to surround a disc.
+        let splits = |t: u8| {
+            let dark = below[usize::from(t)];
+            dark >= 4 && (total - dark) * 200 >= total
+        };
+        let mut levels: Vec<u8> = self.last_hit.filter(|&t| splits(t)).into_iter().collect();
+        for _ in 0..255 {
+            if levels.len() >= LEVELS_PER_MISS {
+                break;
+            }
+            let t = self.next_after_miss();
+            if splits(t) && !levels.contains(&t) {
+                levels.push(t);
+            }
+        }
+        levels
+    }
+
+    /// A global level found markers: the walk restarts from the top, and
+    /// this level is tried first after the next miss.
+    pub fn hit(&mut self, level: u8) {
+        self.step = 0;
+        self.last_hit = Some(level);
+    }
+
     /// After a hit the walk restarts from the top.
     pub fn reset(&mut self) {
         self.step = 0;
     }
+}
+
+/// Grey-level histogram of every fourth row: enough to tell which global
+/// levels split the image.
+pub fn sampled_histogram(pixels: &[u8], width: usize) -> [u64; 256] {
+    let mut histogram = [0u64; 256];
+    for row in pixels.chunks_exact(width.max(1)).step_by(4) {
+        for &p in row {
+            histogram[usize::from(p)] += 1;
+        }
+    }
+    histogram
 }
 
 #[cfg(test)]
@@ -268,6 +325,20 @@ mod tests {
         all.sort_unstable();
         all.dedup();
         assert_eq!(all.len(), 255, "every level 1..=255 is visited once");
+    }
+
+    #[test]
+    fn a_miss_walks_only_levels_that_split_the_image() {
+        // A dark frame: every pixel below 60.
+        let mut histogram = [0u64; 256];
+        histogram[3] = 1_000;
+        histogram[20] = 5_000;
+        histogram[55] = 4_000;
+        let mut search = ThresholdSearch::default();
+        let levels = search.levels_after_miss(&histogram);
+        assert_eq!(levels, [32, 16, 48, 8, 24, 40]);
+        search.hit(16);
+        assert_eq!(search.levels_after_miss(&histogram)[0], 16);
     }
 
     #[test]
