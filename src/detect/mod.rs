@@ -556,7 +556,7 @@ impl Detector {
                     continue;
                 }
                 let t = thresholds[x0 >> shift];
-                if chunk.iter().copied().min().unwrap_or(255) >= t {
+                if chunk.iter().copied().min().unwrap_or(255) >= t || map.is_floor(x0, y) {
                     continue;
                 }
                 for (j, &p) in chunk.iter().enumerate() {
@@ -732,8 +732,11 @@ impl Detector {
         let whycode = self.config.family.is_some();
         let dark = self
             .filler
-            .fill(gray, map, &mut self.labels, seed, Fill::Dark)
-            .stats;
+            .fill(gray, map, &mut self.labels, seed, Fill::Dark);
+        if dark.escaped {
+            return None;
+        }
+        let dark = dark.stats;
         let white_fraction = self.ratio.expected;
         let dark_fraction = 1.0 - white_fraction;
         let min_d = self.config.min_diameter_px;
