@@ -9,7 +9,7 @@ use whycode::detect::{Detection, Detector, DetectorConfig};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::simulate::{
-    self, Background, GroundTruth, LooseMarker, Placement, Scene, SceneObject,
+    self, layout, Background, GroundTruth, LooseMarker, Placement, Scene, SceneObject,
 };
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
@@ -209,4 +209,84 @@ fn blur_noise_gradient_and_dark_frames_keep_every_marker() {
         );
         assert!(e.centre_px < 0.2, "{name}: centre error {} px", e.centre_px);
     }
+}
+
+/// A board of 12 markers rolling 8° per frame and tilted 15° (as made by
+/// `whycode simulate --bits 8 --ids 1-12 --roll $((i*8))deg --tilt 15deg`):
+/// markers far from the centre move more than a follow can catch, and the
+/// tracked run must then find them as a fresh detection would, not lose
+/// them to what the failed follow left behind.
+#[test]
+fn tracking_a_rotating_board_finds_what_fresh_detection_finds() {
+    let camera = Camera::ideal(1920, 1080, 60.0);
+    let family = Family::generate(8, 2).unwrap();
+    let markers: Vec<(Marker, u32)> = (1..=12)
+        .map(|id| (Marker::whycode(8, family.code(id).unwrap(), 50.0), id))
+        .collect();
+    let config = DetectorConfig {
+        family: Some(family.clone()),
+        ..DetectorConfig::default()
+    };
+    let mut tracker = Detector::new(DetectorConfig {
+        tracking: true,
+        ..config.clone()
+    });
+    let mut short = Vec::new();
+    for i in 0..12 {
+        let board = layout::centred(1.0, 15.0 * DEG, 0.0, f64::from(i * 8) * DEG);
+        let mut scene = Scene::new(camera);
+        scene.objects.extend(
+            layout::marker_grid(&markers, &board)
+                .into_iter()
+                .map(SceneObject::Marker),
+        );
+        let (image, _) = simulate::render(&scene);
+        let fresh = Detector::new(config.clone()).detect(&image).len();
+        let tracked = tracker.detect(&image).len();
+        assert_eq!(fresh, 12, "frame {i}: fresh detection");
+        if tracked < fresh {
+            short.push((i, tracked));
+        }
+    }
+    assert!(short.is_empty(), "tracked frames short of 12: {short:?}");
+}
+
+/// A single still image, dark (exposure 0.25), 3:1 light gradient and
+/// noise σ 6 (as `whycode simulate --dark --gradient 3 --noise 6`): the
+/// noise floor of the local map is above the markers' contrast, so only
+/// the global threshold walk sees them, and it must do so in one call.
+#[test]
+fn dark_noisy_uneven_still_image_is_read_in_one_call() {
+    let camera = Camera::ideal(1920, 1080, 60.0);
+    let family = Family::generate(8, 2).unwrap();
+    let markers: Vec<(Marker, u32)> = (1..=12)
+        .map(|id| (Marker::whycode(8, family.code(id).unwrap(), 60.0), id))
+        .collect();
+    let mut scene = Scene::new(camera);
+    scene.objects.extend(
+        layout::marker_grid(&markers, &layout::centred(1.0, 0.0, 0.0, 0.0))
+            .into_iter()
+            .map(SceneObject::Marker),
+    );
+    scene.background = Background::Table;
+    scene.exposure = 0.25;
+    scene.gradient = 3.0;
+    scene.noise = 6.0;
+    let (image, truth) = simulate::render(&scene);
+    let found = Detector::new(DetectorConfig {
+        family: Some(family.clone()),
+        ..DetectorConfig::default()
+    })
+    .detect(&image);
+    let right = truth
+        .markers
+        .iter()
+        .filter(|m| {
+            found
+                .iter()
+                .any(|d| d.id == m.id && (d.u - m.u).hypot(d.v - m.v) < 1.0)
+        })
+        .count();
+    assert_eq!(right, 12, "found {} ({right} right)", found.len());
+    assert_eq!(found.len(), 12, "false detections");
 }

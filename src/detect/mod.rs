@@ -127,6 +127,8 @@ pub struct Detector {
     inner_scratch: Vec<(f64, f64)>,
     /// Scan tiles covered by markers followed this frame.
     occupied: Vec<bool>,
+    /// A follow of this frame fell back to the flood fill.
+    follow_filled: bool,
     tracks: Vec<Track>,
     search: ThresholdSearch,
     ratio: Adaptive,
@@ -198,6 +200,7 @@ impl Detector {
             edge_scratch: Vec::new(),
             inner_scratch: Vec::new(),
             occupied: Vec::new(),
+            follow_filled: false,
             tracks: Vec::new(),
             search: ThresholdSearch::default(),
             frame: 0,
@@ -234,6 +237,7 @@ impl Detector {
         let limit = self.config.max_markers;
         let mut found: Vec<Candidate> = Vec::new();
         let tracking = self.config.tracking;
+        self.follow_filled = false;
         if tracking {
             for index in 0..self.tracks.len() {
                 if found.len() >= limit {
@@ -248,6 +252,14 @@ impl Detector {
         let all_followed = found.len() == self.tracks.len();
         let followed = found.len();
         self.mark_followed(&found, width, height);
+        if self.follow_filled {
+            // A follow that fell back to the flood fill labelled the
+            // pixels it reached with its own threshold, whether or not it
+            // found its marker; the scan would skip a marker it missed as
+            // already visited. Markers that were followed are kept out of
+            // the scan by the occupied tiles and the duplicate test below.
+            self.labels.begin(width, height);
+        }
         if tracking && all_followed && followed > 0 {
             if found.len() < limit {
                 // Every known marker is back: look for new ones in one band
@@ -263,17 +275,37 @@ impl Detector {
             let map = ThresholdMap::adaptive(gray.pixels, width, height);
             self.scan(gray, &map, 0..height, &mut found, limit);
             if found.is_empty() {
-                // The local map found nothing; the reference's global
-                // threshold walk gets one try per frame.
-                let t = self.search.next_after_miss();
-                self.labels.begin(width, height);
-                self.scan(
-                    gray,
-                    &ThresholdMap::constant(t),
-                    0..height,
-                    &mut found,
-                    limit,
-                );
+                // The local map found nothing (noise above the markers'
+                // contrast, say): a few levels of the reference's global
+                // threshold walk. Under a light gradient no one level suits
+                // the whole frame, so what each finds is pooled, and the
+                // level that found most is tried first next time.
+                let histogram = threshold::sampled_histogram(gray.pixels, width);
+                let mut best = 0;
+                for t in self.search.levels_after_miss(&histogram) {
+                    self.labels.begin(width, height);
+                    let mut level = Vec::new();
+                    self.scan(
+                        gray,
+                        &ThresholdMap::constant(t),
+                        0..height,
+                        &mut level,
+                        limit,
+                    );
+                    if level.len() > best {
+                        best = level.len();
+                        self.search.hit(t);
+                    }
+                    for c in level {
+                        if found.len() < limit
+                            && !found.iter().any(|o: &Candidate| {
+                                (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.b
+                            })
+                        {
+                            found.push(c);
+                        }
+                    }
+                }
             } else {
                 self.search.reset();
             }
@@ -561,7 +593,7 @@ impl Detector {
                     continue;
                 }
                 let t = thresholds[x0 >> shift];
-                if chunk.iter().copied().min().unwrap_or(255) >= t {
+                if chunk.iter().copied().min().unwrap_or(255) >= t || map.is_floor(x0, y) {
                     continue;
                 }
                 for (j, &p) in chunk.iter().enumerate() {
@@ -603,6 +635,7 @@ impl Detector {
             return None;
         }
         let map = ThresholdMap::constant(track.threshold);
+        self.follow_filled = true;
         let c = self.evaluate(gray, &map, (seed as u32, y as u32))?;
         let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
         let same_size = (c.outer.a / track.a - 1.0).abs() < 0.3;
@@ -736,8 +769,11 @@ impl Detector {
         let whycode = self.config.family.is_some();
         let dark = self
             .filler
-            .fill(gray, map, &mut self.labels, seed, Fill::Dark)
-            .stats;
+            .fill(gray, map, &mut self.labels, seed, Fill::Dark);
+        if dark.escaped {
+            return None;
+        }
+        let dark = dark.stats;
         let white_fraction = self.ratio.expected;
         let dark_fraction = 1.0 - white_fraction;
         let min_d = self.config.min_diameter_px;

@@ -195,7 +195,8 @@ pub enum Fill {
 #[derive(Debug, Clone, Copy)]
 pub struct FillResult {
     pub stats: Stats,
-    /// The white fill gave up (not enclosed or too large).
+    /// The white fill gave up (not enclosed or too large), or the dark fill
+    /// reached the map's floor.
     pub escaped: bool,
 }
 
@@ -254,13 +255,20 @@ impl Filler {
                 (bounds[3] as usize).saturating_sub(1),
             )
         };
-        let fillable = |labels: &Labels, thresholds: &[u8], x: usize, y: usize| -> bool {
+        // The floor test only where there is floor: it sits in the inner loop.
+        let floor_row = |y: usize| if dark { map.floor_row(y) } else { None };
+        let fillable = |labels: &Labels,
+                        thresholds: &[u8],
+                        floor: Option<&[bool]>,
+                        x: usize,
+                        y: usize|
+         -> bool {
             let i = y * width + x;
             let p = image.pixels[i];
             let l = labels.data[i];
             let t = thresholds[x >> shift];
             if dark {
-                p < t && l != dark_label
+                p < t && l != dark_label && !floor.is_some_and(|f| f[x >> shift])
             } else {
                 p >= t && l != dark_label && l != white_label
             }
@@ -277,15 +285,16 @@ impl Filler {
         while let Some((x, y)) = self.stack.pop() {
             let (x, y) = (x as usize, y as usize);
             let thresholds = map.row(y);
-            if !fillable(labels, thresholds, x, y) {
+            let floor = floor_row(y);
+            if !fillable(labels, thresholds, floor, x, y) {
                 continue;
             }
             let mut left = x;
-            while left > x_lo && fillable(labels, thresholds, left - 1, y) {
+            while left > x_lo && fillable(labels, thresholds, floor, left - 1, y) {
                 left -= 1;
             }
             let mut right = x;
-            while right < x_hi && fillable(labels, thresholds, right + 1, y) {
+            while right < x_hi && fillable(labels, thresholds, floor, right + 1, y) {
                 right += 1;
             }
             let row = y * width;
@@ -296,6 +305,19 @@ impl Filler {
                 .sum();
             stats.add_run(y as u32, left as u32, right as u32, sum_i);
             self.runs.push((y as u32, left as u32, right as u32));
+            // Every pixel of a floor tile is dark, so a run touching one
+            // belongs to the background floor, not to a marker. Filling the
+            // rest of the segment first (to label it once) cost tracked
+            // frames, whose band scan reached the whole floor's fringe.
+            if dark
+                && (map.is_floor(left.saturating_sub(1), y)
+                    || map.is_floor((right + 1).min(width - 1), y)
+                    || (y > 0 && map.floor_between(y - 1, left, right))
+                    || (y + 1 < image.height && map.floor_between(y + 1, left, right)))
+            {
+                escaped = true;
+                break;
+            }
             if !dark
                 && (left == x_lo
                     || right == x_hi
@@ -311,9 +333,10 @@ impl Filler {
                     continue;
                 }
                 let thresholds = map.row(ny);
+                let floor = floor_row(ny);
                 let mut in_run = false;
                 for nx in left..=right {
-                    let f = fillable(labels, thresholds, nx, ny);
+                    let f = fillable(labels, thresholds, floor, nx, ny);
                     if f && !in_run {
                         self.stack.push((nx as u32, ny as u32));
                     }
@@ -356,6 +379,63 @@ mod tests {
             .chain((0..=4).map(|x| (x, 8)))
             .collect();
         assert_eq!(runs, brute_stats(&pixels));
+    }
+
+    /// A white card with a marker-like ring on a grey floor: the floor is
+    /// dark under the card's threshold, and a fill that starts in it must
+    /// give up at once instead of labelling the whole floor (which cost a
+    /// 5000x5000 frame most of its time), while the ring fills as before.
+    #[test]
+    fn a_fill_into_the_floor_gives_up_and_a_ring_does_not() {
+        let (w, h) = (480usize, 320usize);
+        let mut px = vec![112u8; w * h];
+        let (cx, cy) = (240i32, 160i32);
+        for y in 0..h {
+            for x in 0..w {
+                let (dx, dy) = (x as i32 - cx, y as i32 - cy);
+                if dx.abs() <= 50 && dy.abs() <= 50 {
+                    let d2 = dx * dx + dy * dy;
+                    px[y * w + x] = if (100..=900).contains(&d2) { 12 } else { 220 };
+                }
+            }
+        }
+        let image = Gray {
+            pixels: &px,
+            width: w,
+            height: h,
+        };
+        let map = ThresholdMap::adaptive(&px, w, h);
+        assert!(map.is_floor(5, 5) && map.is_floor(w - 1, h - 1));
+        assert!(!map.is_floor(cx as usize - 20, cy as usize));
+        let mut labels = Labels::default();
+        labels.begin(w, h);
+        let mut filler = Filler::default();
+        let floor = filler.fill(
+            image,
+            &map,
+            &mut labels,
+            (cx as u32 - 60, cy as u32),
+            Fill::Dark,
+        );
+        assert!(floor.escaped);
+        let floor_pixels = px.iter().filter(|&&p| p == 112).count() as u64;
+        assert!(
+            floor.stats.count * 10 < floor_pixels,
+            "{} of {floor_pixels} floor pixels filled",
+            floor.stats.count
+        );
+        let ring = filler.fill(
+            image,
+            &map,
+            &mut labels,
+            (cx as u32 - 20, cy as u32),
+            Fill::Dark,
+        );
+        assert!(!ring.escaped);
+        assert_eq!(
+            ring.stats.count,
+            px.iter().filter(|&&p| p == 12).count() as u64
+        );
     }
 
     #[test]

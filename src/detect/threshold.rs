@@ -24,6 +24,9 @@ pub struct ThresholdMap {
     row0: usize,
     rows: usize,
     values: Vec<u8>,
+    /// Tiles of a large dark background (see [`ThresholdMap::is_floor`]),
+    /// laid out as `values`; empty when there are none.
+    floor: Vec<bool>,
     /// Least black-to-white difference that noise cannot fake.
     min_contrast: u8,
 }
@@ -38,6 +41,11 @@ pub const NEIGHBOURHOOD_TILES: usize = 2;
 /// Least difference between black and white, in grey levels, that counts as
 /// contrast at all. Low enough for dark frames (white ~25).
 pub const MIN_CONTRAST: u8 = 8;
+/// Fewest tiles of a wholly dark, featureless region reaching the edge of
+/// the map for it to count as background floor: 48 tiles are 12 000
+/// pixels, the whole black annulus of a marker 150 px across, so only a
+/// large marker cut by the image edge could be taken for floor.
+pub const MIN_FLOOR_TILES: usize = 48;
 
 impl ThresholdMap {
     /// The same threshold everywhere.
@@ -48,6 +56,7 @@ impl ThresholdMap {
             row0: 0,
             rows: 1,
             values: vec![threshold],
+            floor: Vec::new(),
             min_contrast: MIN_CONTRAST,
         }
     }
@@ -64,6 +73,49 @@ impl ThresholdMap {
     /// Least black-to-white difference that counts as a real edge here.
     pub fn min_contrast(&self) -> f64 {
         f64::from(self.min_contrast)
+    }
+
+    /// True when the pixel lies in a tile of dark background floor: a
+    /// featureless region, dark in every pixel, that reaches the edge of
+    /// the image and is larger than a marker's annulus. A grey floor next to
+    /// white cards is such a region; flood-filling it as a candidate cost
+    /// more than the rest of the frame. A marker's dark segment is ringed
+    /// by white, so it never reaches the floor: a segment that does is not a
+    /// marker. Rows outside the map have no floor.
+    #[inline]
+    pub fn is_floor(&self, x: usize, y: usize) -> bool {
+        if self.floor.is_empty() {
+            return false;
+        }
+        let r = y >> self.shift;
+        r >= self.row0
+            && r < self.row0 + self.rows
+            && self.floor[(r - self.row0) * self.cols + (x >> self.shift)]
+    }
+
+    /// The floor flags of one image row, indexed by `x >> shift()`; None
+    /// when the row has no floor tile.
+    #[inline]
+    pub fn floor_row(&self, y: usize) -> Option<&[bool]> {
+        if self.floor.is_empty() {
+            return None;
+        }
+        let r = (y >> self.shift).checked_sub(self.row0)?;
+        (r < self.rows).then(|| &self.floor[r * self.cols..(r + 1) * self.cols])
+    }
+
+    /// Whether any tile of row `y` from column `x0` to `x1` is floor.
+    #[inline]
+    pub fn floor_between(&self, y: usize, x0: usize, x1: usize) -> bool {
+        if self.floor.is_empty() {
+            return false;
+        }
+        let r = y >> self.shift;
+        if r < self.row0 || r >= self.row0 + self.rows {
+            return false;
+        }
+        let row = &self.floor[(r - self.row0) * self.cols..(r - self.row0 + 1) * self.cols];
+        row[x0 >> self.shift..=x1 >> self.shift].iter().any(|&f| f)
     }
 
     #[inline]
@@ -111,8 +163,9 @@ impl ThresholdMap {
         }
         let noise_floor = MIN_CONTRAST.max(noise_contrast(band_pixels, width, y_end - y_start));
 
+        let own_hi = hi;
         let lo = box_filter(&lo, cols, rows, NEIGHBOURHOOD_TILES, u8::min);
-        let hi = box_filter(&hi, cols, rows, NEIGHBOURHOOD_TILES, u8::max);
+        let hi = box_filter(&own_hi, cols, rows, NEIGHBOURHOOD_TILES, u8::max);
         const UNSET: u16 = u16::MAX;
         let mut thresholds: Vec<u16> = lo
             .iter()
@@ -137,6 +190,7 @@ impl ThresholdMap {
                 row0: first,
                 rows,
                 values: vec![0; cols * rows],
+                floor: Vec::new(),
                 min_contrast: noise_floor,
             };
         }
@@ -162,12 +216,59 @@ impl ThresholdMap {
                 visit(i + cols);
             }
         }
+        let values: Vec<u8> = thresholds.into_iter().map(|t| t.min(255) as u8).collect();
+        // Featureless tiles dark in every pixel; those connected to the
+        // edge of the image (left, right, and top or bottom where the map
+        // reaches them) in a large enough region are floor.
+        let solid: Vec<bool> = (0..values.len()).map(|i| own_hi[i] < values[i]).collect();
+        let last_row = height.div_ceil(tile) - 1;
+        let on_edge = |i: usize| {
+            let (c, r) = (i % cols, first + i / cols);
+            c == 0 || c + 1 == cols || r == 0 || r == last_row
+        };
+        let mut floor = vec![false; values.len()];
+        let mut seen = vec![false; values.len()];
+        let mut any_floor = false;
+        let mut component = Vec::new();
+        for start in 0..values.len() {
+            if !solid[start] || seen[start] || !on_edge(start) {
+                continue;
+            }
+            component.clear();
+            component.push(start);
+            seen[start] = true;
+            let mut k = 0;
+            while k < component.len() {
+                let i = component[k];
+                k += 1;
+                let (c, r) = (i % cols, i / cols);
+                let neighbours = [
+                    (c > 0).then(|| i - 1),
+                    (c + 1 < cols).then(|| i + 1),
+                    (r > 0).then(|| i - cols),
+                    (r + 1 < rows).then(|| i + cols),
+                ];
+                for j in neighbours.into_iter().flatten() {
+                    if solid[j] && !seen[j] {
+                        seen[j] = true;
+                        component.push(j);
+                    }
+                }
+            }
+            if component.len() >= MIN_FLOOR_TILES {
+                any_floor = true;
+                for &i in &component {
+                    floor[i] = true;
+                }
+            }
+        }
         ThresholdMap {
             shift: TILE_SHIFT,
             cols,
             row0: first,
             rows,
-            values: thresholds.into_iter().map(|t| t.min(255) as u8).collect(),
+            values,
+            floor: if any_floor { floor } else { Vec::new() },
             min_contrast: noise_floor,
         }
     }
@@ -232,7 +333,15 @@ fn box_filter(grid: &[u8], cols: usize, rows: usize, r: usize, op: fn(u8, u8) ->
 #[derive(Debug, Clone, Default)]
 pub struct ThresholdSearch {
     step: u32,
+    /// The level that last found markers, tried first after a miss.
+    last_hit: Option<u8>,
 }
+
+/// Most global levels scanned in one frame after the local map found
+/// nothing. One level per frame left a single still image with the first
+/// level only (128, hopeless in a dark frame), and a sequence blind for
+/// several frames; a handful keeps a frame without markers affordable.
+pub const LEVELS_PER_MISS: usize = 6;
 
 impl ThresholdSearch {
     /// The k-th threshold of the sequence (k = 0 gives 128).
@@ -250,10 +359,59 @@ impl ThresholdSearch {
         t
     }
 
+    /// Up to [`LEVELS_PER_MISS`] levels to scan in this frame: the last
+    /// level that found markers, then the walk's next levels that split the
+    /// image. A level with (almost) every pixel on one side of it cannot
+    /// outline a black disc on white, so it is passed over without a scan;
+    /// `histogram` counts the grey values of (a sample of) the image.
+    pub fn levels_after_miss(&mut self, histogram: &[u64; 256]) -> Vec<u8> {
+        let total: u64 = histogram.iter().sum();
+        let mut below = [0u64; 257];
+        for (i, &n) in histogram.iter().enumerate() {
+            below[i + 1] = below[i] + n;
+        }
+        // Some dark pixels (a small marker is a few dozen), and enough
+        // light ones to surround a disc.
+        let splits = |t: u8| {
+            let dark = below[usize::from(t)];
+            dark >= 4 && (total - dark) * 200 >= total
+        };
+        let mut levels: Vec<u8> = self.last_hit.filter(|&t| splits(t)).into_iter().collect();
+        for _ in 0..255 {
+            if levels.len() >= LEVELS_PER_MISS {
+                break;
+            }
+            let t = self.next_after_miss();
+            if splits(t) && !levels.contains(&t) {
+                levels.push(t);
+            }
+        }
+        levels
+    }
+
+    /// A global level found markers: the walk restarts from the top, and
+    /// this level is tried first after the next miss.
+    pub fn hit(&mut self, level: u8) {
+        self.step = 0;
+        self.last_hit = Some(level);
+    }
+
     /// After a hit the walk restarts from the top.
     pub fn reset(&mut self) {
         self.step = 0;
     }
+}
+
+/// Grey-level histogram of every fourth row: enough to tell which global
+/// levels split the image.
+pub fn sampled_histogram(pixels: &[u8], width: usize) -> [u64; 256] {
+    let mut histogram = [0u64; 256];
+    for row in pixels.chunks_exact(width.max(1)).step_by(4) {
+        for &p in row {
+            histogram[usize::from(p)] += 1;
+        }
+    }
+    histogram
 }
 
 #[cfg(test)]
@@ -268,6 +426,20 @@ mod tests {
         all.sort_unstable();
         all.dedup();
         assert_eq!(all.len(), 255, "every level 1..=255 is visited once");
+    }
+
+    #[test]
+    fn a_miss_walks_only_levels_that_split_the_image() {
+        // A dark frame: every pixel below 60.
+        let mut histogram = [0u64; 256];
+        histogram[3] = 1_000;
+        histogram[20] = 5_000;
+        histogram[55] = 4_000;
+        let mut search = ThresholdSearch::default();
+        let levels = search.levels_after_miss(&histogram);
+        assert_eq!(levels, [32, 16, 48, 8, 24, 40]);
+        search.hit(16);
+        assert_eq!(search.levels_after_miss(&histogram)[0], 16);
     }
 
     #[test]
