@@ -40,6 +40,7 @@ use crate::family::{Decoder, Family, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
 use crate::pose::{self, CirclePose, Pose};
 use ellipse::Ellipse;
+use nalgebra::Vector3;
 use ring::RingReader;
 use segment::{Fill, Filler, Gray, Labels, Stats};
 use threshold::{ThresholdMap, ThresholdSearch};
@@ -325,12 +326,14 @@ impl Detector {
         found.extend(fresh);
         found.truncate(limit);
         let mut detections: Vec<Detection> = Vec::with_capacity(found.len());
+        let mut settled_normals = Vec::with_capacity(found.len());
         for c in &found {
-            let d = self.describe(image, gray, c);
+            let (d, settled) = self.describe(image, gray, c);
             detections.push(d);
+            settled_normals.push(settled);
         }
         if tracking {
-            self.update_tracks(&found, &detections);
+            self.update_tracks(&found, &detections, &settled_normals);
             for c in found.iter().filter(|c| c.tested) {
                 self.ratio.learn(c.ratio);
                 self.roundness.learn(c.roundness);
@@ -341,7 +344,14 @@ impl Detector {
         detections
     }
 
-    fn describe(&mut self, image: &GrayImage, gray: Gray<'_>, c: &Candidate) -> Detection {
+    /// The detection of a candidate, and its normal when that was told
+    /// apart from the other pose candidate with confidence (for the track).
+    fn describe(
+        &mut self,
+        image: &GrayImage,
+        gray: Gray<'_>,
+        c: &Candidate,
+    ) -> (Detection, Option<Vector3<f64>>) {
         let quality = 1.0 - (c.area_error / self.area.tolerance()).min(1.0);
         let outer = pose::ImageEllipse {
             u: c.outer.u,
@@ -364,6 +374,7 @@ impl Detector {
         };
         let mut axis_point = None;
         let mut centre_estimate = None;
+        let mut settled_normal = None;
         // A marker followed from the last frames whose ID has been read
         // the same several times: its known code's edges give the yaw at a
         // fraction of a full read, and confirm the code on the way.
@@ -405,8 +416,17 @@ impl Detector {
                 yaw: d.yaw,
                 axis_point,
                 centre_estimate,
+                settled_normal: c.track.and_then(|i| self.tracks[i].normal),
             };
-            d.pose = self.pose(&camera, diameter / 2.0, gray, c, &outer, hints);
+            let (pose, settled) = match self.pose(&camera, diameter / 2.0, gray, c, &outer, hints) {
+                Some((pose, settled)) => (Some(pose), settled),
+                None => (None, false),
+            };
+            d.pose = pose;
+            settled_normal = d
+                .pose
+                .filter(|_| settled)
+                .map(|p| p.rotation.column(2).into_owned());
             if let (Some(pose), Some(code), Some(family)) = (&d.pose, d.code, &self.config.family) {
                 let bits = family.bits();
                 if let Some(better) =
@@ -428,7 +448,7 @@ impl Detector {
                 }
             }
         }
-        d
+        (d, settled_normal)
     }
 
     /// Tracked markers report what the ID filter believes after this
@@ -469,8 +489,10 @@ impl Detector {
     }
 
     /// Position and normal from the outer edge, the two-fold ambiguity
-    /// decided by where the ring shows the marker's centre (or, failing
-    /// that, by the inner white edges), the rotation from the yaw.
+    /// decided by where the ring shows the marker's centre, else by the
+    /// normal this marker's track settled on, else by the inner white
+    /// edges; the rotation from the yaw. The flag says whether the normal
+    /// was settled (not left to the inner edges).
     fn pose(
         &mut self,
         camera: &Camera,
@@ -479,11 +501,12 @@ impl Detector {
         c: &Candidate,
         outer: &pose::ImageEllipse,
         hints: PoseHints,
-    ) -> Option<Pose> {
+    ) -> Option<(Pose, bool)> {
         let PoseHints {
             yaw,
             axis_point,
             centre_estimate,
+            settled_normal,
         } = hints;
         let candidates = pose::circle_poses_from_points(camera, &c.edge, radius_m)
             .or_else(|| pose::try_circle_poses(camera, outer, radius_m))?;
@@ -513,8 +536,23 @@ impl Detector {
                     } else {
                         &candidates[0]
                     };
-                    return Some(full_pose(camera, circle, yaw, axis_point));
+                    return Some((full_pose(camera, circle, yaw, axis_point), true));
                 }
+            }
+        }
+        // A followed marker turns little between frames, while the two
+        // candidates lie twice its tilt apart: the one nearer the normal
+        // settled earlier is the same solution, and no edge needs sampling.
+        if let Some(previous) = settled_normal {
+            let turn = |k: usize| candidates[k].normal.angle(&previous);
+            let (t0, t1) = (turn(0), turn(1));
+            if (t0 - t1).abs() >= SETTLED_NORMAL_MARGIN {
+                let circle = if t1 < t0 {
+                    &candidates[1]
+                } else {
+                    &candidates[0]
+                };
+                return Some((full_pose(camera, circle, yaw, axis_point), true));
             }
         }
         let mid = (c.black + c.white) / 2.0;
@@ -542,7 +580,7 @@ impl Detector {
         } else {
             &candidates[0]
         };
-        Some(full_pose(camera, circle, yaw, axis_point))
+        Some((full_pose(camera, circle, yaw, axis_point), false))
     }
 
     /// Marks the tiles that markers followed this frame cover, so that the
@@ -713,7 +751,12 @@ impl Detector {
         })
     }
 
-    fn update_tracks(&mut self, found: &[Candidate], detections: &[Detection]) {
+    fn update_tracks(
+        &mut self,
+        found: &[Candidate],
+        detections: &[Detection],
+        settled_normals: &[Option<Vector3<f64>>],
+    ) {
         let mut next: Vec<Track> = Vec::with_capacity(found.len());
         let mut taken = vec![false; self.tracks.len()];
         for c in found {
@@ -721,7 +764,7 @@ impl Detector {
                 taken[i] = true;
             }
         }
-        for (c, d) in found.iter().zip(detections) {
+        for ((c, d), settled) in found.iter().zip(detections).zip(settled_normals) {
             let threshold = ((c.black + c.white) / 2.0).round().clamp(1.0, 255.0) as u8;
             let (u, v, a, b) = (c.outer.u, c.outer.v, c.outer.a, c.outer.b);
             let index = c.track.or_else(|| {
@@ -743,6 +786,7 @@ impl Detector {
                     t.update(u, v, a, b, threshold);
                     t.observe_appearance(c.outer.angle, c.black, c.white);
                     t.observe_identity(d);
+                    t.normal = settled.or(t.normal);
                     next.push(t);
                 }
                 None => {
@@ -752,6 +796,7 @@ impl Detector {
                         t.observe_reading(family.len(), d);
                     }
                     t.observe_identity(d);
+                    t.normal = *settled;
                     next.push(t);
                 }
             }
@@ -892,12 +937,17 @@ const CENTRE_SEPARATION_PX: f64 = 0.3;
 /// inner-edge test.
 const CENTRE_MARGIN: f64 = 0.2;
 
-/// What the ring reading tells the pose stage.
+/// How much nearer (radians) one pose candidate's normal must be to the
+/// normal a track settled on than the other's, for the track to decide.
+const SETTLED_NORMAL_MARGIN: f64 = 0.1;
+
+/// What the ring reading and the marker's track tell the pose stage.
 #[derive(Debug, Clone, Copy)]
 struct PoseHints {
     yaw: Option<f64>,
     axis_point: Option<(f64, f64)>,
     centre_estimate: Option<(f64, f64)>,
+    settled_normal: Option<Vector3<f64>>,
 }
 
 /// The full pose of a circle pose, its rotation about the normal from the

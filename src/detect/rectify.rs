@@ -15,7 +15,7 @@ use crate::geometry::{sector_is_black, sector_width, RING_INNER_RATIO, WHYCODE_W
 use crate::pose::Pose;
 
 /// Samples per ring sector along the rectified circle.
-const SAMPLES_PER_SECTOR: usize = 24;
+const SAMPLES_PER_SECTOR: usize = 12;
 
 /// The pose with its +x axis turned in the marker plane so that the sector
 /// edges of `code` fall where the image shows them. None when the edges

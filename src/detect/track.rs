@@ -35,6 +35,9 @@ pub struct Track {
     /// Belief over the marker's ID from all its ring readings so far
     /// (paper 5.1), with a family.
     pub ids: Option<super::idfilter::IdFilter>,
+    /// The marker's normal (camera frame) once the pose stage told it apart
+    /// from the other candidate with confidence; later frames keep to it.
+    pub normal: Option<nalgebra::Vector3<f64>>,
 }
 
 impl Track {
@@ -58,6 +61,7 @@ impl Track {
             status: None,
             id_streak: 0,
             ids: None,
+            normal: None,
         }
     }
 
