@@ -82,75 +82,25 @@ impl Page {
     /// This page on a larger white sheet, `pad` mm of white added on every
     /// side: how a marker file cut to its margin looks once it lies on paper.
     pub fn on_white(&self, pad: f64) -> Page {
-        let shift = |(x, y): (f64, f64)| (x + pad, y + pad);
-        let items = self
-            .items
-            .iter()
-            .cloned()
-            .map(|item| match item {
-                Item::Marker { marker, cx, cy } => Item::Marker {
-                    marker,
-                    cx: cx + pad,
-                    cy: cy + pad,
-                },
-                Item::Rect {
-                    x,
-                    y,
-                    width,
-                    height,
-                    grey,
-                } => Item::Rect {
-                    x: x + pad,
-                    y: y + pad,
-                    width,
-                    height,
-                    grey,
-                },
-                Item::Line {
-                    from,
-                    to,
-                    width,
-                    grey,
-                    dash,
-                } => Item::Line {
-                    from: shift(from),
-                    to: shift(to),
-                    width,
-                    grey,
-                    dash,
-                },
-                Item::CircleOutline {
-                    cx,
-                    cy,
-                    radius,
-                    width,
-                    grey,
-                    dash,
-                } => Item::CircleOutline {
-                    cx: cx + pad,
-                    cy: cy + pad,
-                    radius,
-                    width,
-                    grey,
-                    dash,
-                },
-                Item::Text {
-                    x,
-                    y,
-                    size_pt,
-                    anchor,
-                    grey,
-                    text,
-                } => Item::Text {
-                    x: x + pad,
-                    y: y + pad,
-                    size_pt,
-                    anchor,
-                    grey,
-                    text,
-                },
-            })
-            .collect();
+        let mut items = self.items.clone();
+        for item in &mut items {
+            match item {
+                Item::Marker { cx, cy, .. } | Item::CircleOutline { cx, cy, .. } => {
+                    *cx += pad;
+                    *cy += pad;
+                }
+                Item::Rect { x, y, .. } | Item::Text { x, y, .. } => {
+                    *x += pad;
+                    *y += pad;
+                }
+                Item::Line { from, to, .. } => {
+                    for point in [from, to] {
+                        point.0 += pad;
+                        point.1 += pad;
+                    }
+                }
+            }
+        }
         Page {
             width_mm: self.width_mm + 2.0 * pad,
             height_mm: self.height_mm + 2.0 * pad,
