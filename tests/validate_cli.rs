@@ -264,3 +264,53 @@ fn clutter_beside_the_paper_does_not_bend_the_scale() {
         }
     }
 }
+
+/// A page holding one large marker: its rim locates the page, the paper
+/// corners found near it pin the rest, and the disc's printed size gives the
+/// scale (it read "unknown" when only the marker pinned the page).
+#[test]
+fn a_page_with_one_marker_is_located_and_measured() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_whycode"))
+            .current_dir(dir.path())
+            .args(args)
+            .output()
+            .expect("whycode runs")
+    };
+    assert!(
+        run(&["sheet", "--ids", "7", "--diameter", "60mm", "-o", "one.pdf"])
+            .status
+            .success()
+    );
+    let out = run(&[
+        "simulate",
+        "--manifest",
+        "one.json",
+        "--tilt",
+        "30deg",
+        "--pan",
+        "10deg",
+        "--noise",
+        "4",
+        "-o",
+        "view.png",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = run(&[
+        "validate",
+        "--manifest",
+        "one.json",
+        "--format",
+        "json",
+        "view.png",
+    ]);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(out.status.code(), Some(0), "{report}");
+    let scale = report["pages"][0]["scale"].as_f64().unwrap();
+    assert!((scale - 1.0).abs() < 0.005, "measured {scale}");
+}

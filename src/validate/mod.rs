@@ -262,6 +262,42 @@ pub fn check_photo(
             .map(|m| (m.x_mm, m.y_mm, m.diameter_mm / 2.0))
             .collect();
         let mut scale = scale::measure(image, &model, &h, manifest.page_size_mm, &discs);
+        if matches.len() <= MIN_PAGE_MATCHES
+            && scale.corners.is_none()
+            && scale.found_corners.len() >= 2
+        {
+            // One marker's rim pins the page well near the marker and loosely
+            // far from it, so the far edges can fall outside their search.
+            // The corners that were found are exact: with them the page is
+            // pinned across its whole extent, and the search runs again.
+            let [w, hgt] = manifest.page_size_mm;
+            let page_corners = [(0.0, 0.0), (w, 0.0), (w, hgt), (0.0, hgt)];
+            let mut pairs: Vec<((f64, f64), (f64, f64))> = matches
+                .iter()
+                .flat_map(|&(k, m)| {
+                    let centre = Correspondence {
+                        plane: (m.x_mm, m.y_mm),
+                        image: ideal[k],
+                        tolerance: 0.0,
+                    };
+                    std::iter::once(centre).chain(rim_correspondences(
+                        m,
+                        &observations[k],
+                        ideal[k],
+                    ))
+                })
+                .map(|c| (c.plane, c.image))
+                .collect();
+            pairs.extend(
+                scale
+                    .found_corners
+                    .iter()
+                    .map(|&(k, (u, v))| (page_corners[k], model.to_ideal(u, v))),
+            );
+            if let Some(pinned) = Homography::fit(&pairs) {
+                scale = scale::measure(image, &model, &pinned, manifest.page_size_mm, &discs);
+            }
+        }
         if matches.len() <= MIN_PAGE_MATCHES {
             // A homography pinned by a few markers' rims is too loose to carry
             // millimetres out to the paper's edges; the discs' size is not.

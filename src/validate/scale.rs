@@ -88,6 +88,11 @@ pub struct ScaleMeasurement {
     /// bottom-left) when all four edges were found.
     #[serde(skip)]
     pub corners: Option<[(f64, f64); 4]>,
+    /// Each paper corner whose two edges were found: its index (0
+    /// top-left, 1 top-right, 2 bottom-right, 3 bottom-left) and place in
+    /// the image. Two of them can pin a page that has too few markers.
+    #[serde(skip)]
+    pub found_corners: Vec<(usize, (f64, f64))>,
 }
 
 impl ScaleMeasurement {
@@ -100,6 +105,7 @@ impl ScaleMeasurement {
             edges: Vec::new(),
             note: Some(note.into()),
             corners: None,
+            found_corners: Vec::new(),
         }
     }
 }
@@ -141,6 +147,16 @@ pub fn measure(
             Err(why) => failures.push(format!("{} edge {why}", SIDE_NAMES[side])),
         }
     }
+    let found_corners: Vec<(usize, (f64, f64))> = paper_corners([w, h], lines)
+        .into_iter()
+        .enumerate()
+        .filter_map(|(k, corner)| {
+            let (x, y) = corner?;
+            let (iu, iv) = homography.apply(x, y)?;
+            Some((k, model.to_image(iu, iv)))
+        })
+        .collect();
+    let corners = (found_corners.len() == 4).then(|| four_corners(&found_corners));
     let [top, right, bottom, left] = lines;
     // Paper width in manifest units at mid-height, height at mid-width.
     let scale_x = match (left, right) {
@@ -164,6 +180,7 @@ pub fn measure(
     let Some(s) = scale else {
         return ScaleMeasurement {
             edges,
+            found_corners,
             ..ScaleMeasurement::unknown(format!(
                 "needs two opposite paper edges: {}",
                 failures.join(", ")
@@ -186,17 +203,6 @@ pub fn measure(
             failures.join(", ")
         ));
     }
-    let corners = match lines {
-        [Some(t), Some(r), Some(b), Some(l)] => paper_corners([w, h], t, r, b, l).and_then(|c| {
-            let mut out = [(0.0, 0.0); 4];
-            for (o, (x, y)) in out.iter_mut().zip(c) {
-                let (iu, iv) = homography.apply(x, y)?;
-                *o = model.to_image(iu, iv);
-            }
-            Some(out)
-        }),
-        _ => None,
-    };
     // The worse of the two axes decides the status.
     let worst = [scale_x, scale_y]
         .iter()
@@ -212,7 +218,17 @@ pub fn measure(
         edges,
         note: (!notes.is_empty()).then(|| notes.join("; ")),
         corners,
+        found_corners,
     }
+}
+
+/// The four corners in order, from a list holding each of them.
+fn four_corners(found: &[(usize, (f64, f64))]) -> [(f64, f64); 4] {
+    let mut out = [(0.0, 0.0); 4];
+    for &(k, p) in found {
+        out[k] = p;
+    }
+    out
 }
 
 /// A printed disc as the photo shows it, for [`measure_discs`].
@@ -236,11 +252,15 @@ pub fn measure_discs(
     discs: &[DiscView],
 ) -> ScaleMeasurement {
     let Some(corners) = paper.corners else {
+        let why = paper
+            .note
+            .as_deref()
+            .map_or(String::new(), |n| format!(" ({n})"));
         return ScaleMeasurement {
             edges: paper.edges.clone(),
-            ..ScaleMeasurement::unknown(
-                "a page with so few markers is measured by their size against the whole paper, and not all four paper edges were found",
-            )
+            ..ScaleMeasurement::unknown(format!(
+                "a page with so few markers is measured by their size against the whole paper, and not all four paper edges were found{why}"
+            ))
         };
     };
     let [w, h] = page_size_mm;
@@ -284,6 +304,7 @@ pub fn measure_discs(
             if ratios.len() == 1 { "" } else { "s" }
         )),
         corners: paper.corners,
+        found_corners: paper.found_corners.clone(),
     }
 }
 
@@ -303,14 +324,9 @@ fn fit_circle_radius(points: &[(f64, f64)]) -> Option<f64> {
     (r2 > 0.0).then(|| r2.sqrt())
 }
 
-/// Corners of the paper in manifest coordinates from its four edge lines.
-fn paper_corners(
-    [w, h]: [f64; 2],
-    top: EdgeLine,
-    right: EdgeLine,
-    bottom: EdgeLine,
-    left: EdgeLine,
-) -> Option<[(f64, f64); 4]> {
+/// Corners of the paper in manifest coordinates (top-left, top-right,
+/// bottom-right, bottom-left), each where both of its edges were found.
+fn paper_corners([w, h]: [f64; 2], lines: [Option<EdgeLine>; 4]) -> [Option<(f64, f64)>; 4] {
     // top: y = -(a + b x); bottom: y = h + a + b x;
     // left: x = -(a + b y); right: x = w + a + b y.
     let solve = |hy: (f64, f64, f64), vx: (f64, f64, f64)| -> Option<(f64, f64)> {
@@ -322,11 +338,13 @@ fn paper_corners(
         let x = (vx.0 + vx.1 * hy.0) / det;
         Some((x, hy.0 + hy.1 * x))
     };
-    let t = (-top.a, -top.b, 0.0);
-    let b = (h + bottom.a, bottom.b, 0.0);
-    let l = (-left.a, -left.b, 0.0);
-    let r = (w + right.a, right.b, 0.0);
-    Some([solve(t, l)?, solve(t, r)?, solve(b, r)?, solve(b, l)?])
+    let [top, right, bottom, left] = lines;
+    let t = top.map(|e| (-e.a, -e.b, 0.0));
+    let b = bottom.map(|e| (h + e.a, e.b, 0.0));
+    let l = left.map(|e| (-e.a, -e.b, 0.0));
+    let r = right.map(|e| (w + e.a, e.b, 0.0));
+    let corner = |hy: Option<(f64, f64, f64)>, vx: Option<(f64, f64, f64)>| solve(hy?, vx?);
+    [corner(t, l), corner(t, r), corner(b, r), corner(b, l)]
 }
 
 /// Bilinear grey value, `None` outside the image.
