@@ -617,6 +617,7 @@ impl Detector {
     ) {
         const CHUNK: usize = SCAN_CHUNK;
         let shift = map.shift();
+        let margin = map.seed_margin();
         let cols = gray.width.div_ceil(CHUNK);
         for y in rows {
             if found.len() >= limit {
@@ -630,7 +631,7 @@ impl Detector {
                 if !self.occupied.is_empty() && self.occupied[(y / CHUNK) * cols + k] {
                     continue;
                 }
-                let t = thresholds[x0 >> shift];
+                let t = thresholds[x0 >> shift].saturating_sub(margin);
                 if chunk.iter().copied().min().unwrap_or(255) >= t || map.is_floor(x0, y) {
                     continue;
                 }

@@ -75,6 +75,15 @@ impl ThresholdMap {
         f64::from(self.min_contrast)
     }
 
+    /// How far below its threshold a pixel must lie to start a search. A
+    /// marker's black lies at least half the local contrast (itself at least
+    /// the noise floor) below the threshold; a grey floor whose texture only
+    /// grazes it, next to a marker, would otherwise start thousands of
+    /// one-pixel searches a frame.
+    pub fn seed_margin(&self) -> u8 {
+        self.min_contrast / 2
+    }
+
     /// True when the pixel lies in a tile of dark background floor: a
     /// featureless region, dark in every pixel, that reaches the edge of
     /// the image and is larger than a marker's annulus. A grey floor next to
