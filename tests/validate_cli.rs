@@ -13,6 +13,16 @@ fn whycode(args: &[&str]) -> std::process::Output {
         .expect("whycode runs")
 }
 
+/// Runs whycode with `dir` as its working folder, where outputs named
+/// without a folder (a sheet's default swarm.pdf) land.
+fn whycode_in(dir: &Path, args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_whycode"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("whycode runs")
+}
+
 fn simulate_photo(dir: &Path, name: &str, extra: &[&str]) -> String {
     let manifest = dir.join("sheet.json");
     validate_common::a4_manifest().save(&manifest).unwrap();
@@ -119,13 +129,7 @@ fn bad_input_is_one_line_error() {
 #[test]
 fn default_sheet_validates_including_its_four_marker_page() {
     let dir = tempfile::tempdir().unwrap();
-    let run = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_whycode"))
-            .current_dir(dir.path())
-            .args(args)
-            .output()
-            .expect("whycode runs")
-    };
+    let run = |args: &[&str]| whycode_in(dir.path(), args);
     assert!(run(&["sheet"]).status.success());
     for (page, name, scale) in [
         ("1", "p1.png", "100%"),
@@ -211,11 +215,7 @@ fn simulate_refuses_to_overwrite_the_sheet_manifest() {
 #[test]
 fn clutter_beside_the_paper_does_not_bend_the_scale() {
     let dir = tempfile::tempdir().unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_whycode"))
-        .current_dir(dir.path())
-        .args(["sheet", "--ids", "1-12", "-o", "sheet.pdf"])
-        .output()
-        .unwrap();
+    let out = whycode_in(dir.path(), &["sheet", "--ids", "1-12", "-o", "sheet.pdf"]);
     assert!(
         out.status.success(),
         "{}",
@@ -271,13 +271,7 @@ fn clutter_beside_the_paper_does_not_bend_the_scale() {
 #[test]
 fn a_page_with_one_marker_is_located_and_measured() {
     let dir = tempfile::tempdir().unwrap();
-    let run = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_whycode"))
-            .current_dir(dir.path())
-            .args(args)
-            .output()
-            .expect("whycode runs")
-    };
+    let run = |args: &[&str]| whycode_in(dir.path(), args);
     assert!(
         run(&["sheet", "--ids", "7", "--diameter", "60mm", "-o", "one.pdf"])
             .status

@@ -516,44 +516,26 @@ impl Detector {
         // is a far steadier witness than the inner edges' sub-pixel
         // positions, as long as the two points are apart by more than the
         // estimate's own scatter.
-        if let Some(measured) = centre_estimate {
-            let miss = |k: usize| {
-                camera
-                    .project(&candidates[k].center)
-                    .map(|(u, v)| (u - measured.0).hypot(v - measured.1))
-            };
-            let apart = match (
-                camera.project(&candidates[0].center),
-                camera.project(&candidates[1].center),
-            ) {
-                (Some(a), Some(b)) => (a.0 - b.0).hypot(a.1 - b.1),
-                _ => 0.0,
-            };
-            if let (Some(m0), Some(m1)) = (miss(0), miss(1)) {
-                if apart >= CENTRE_SEPARATION_PX && (m0 - m1).abs() >= CENTRE_MARGIN * apart {
-                    let circle = if m1 < m0 {
-                        &candidates[1]
-                    } else {
-                        &candidates[0]
-                    };
-                    return Some((full_pose(camera, circle, yaw, axis_point), true));
-                }
-            }
-        }
+        let by_centre = centre_estimate.and_then(|measured| {
+            let distance = |p: (f64, f64), q: (f64, f64)| (p.0 - q.0).hypot(p.1 - q.1);
+            let first = camera.project(&candidates[0].center)?;
+            let second = camera.project(&candidates[1].center)?;
+            let apart = distance(first, second);
+            let (m0, m1) = (distance(first, measured), distance(second, measured));
+            (apart >= CENTRE_SEPARATION_PX && (m0 - m1).abs() >= CENTRE_MARGIN * apart)
+                .then_some(usize::from(m1 < m0))
+        });
         // A followed marker turns little between frames, while the two
         // candidates lie twice its tilt apart: the one nearer the normal
         // settled earlier is the same solution, and no edge needs sampling.
-        if let Some(previous) = settled_normal {
+        let by_track = || {
+            let previous = settled_normal?;
             let turn = |k: usize| candidates[k].normal.angle(&previous);
             let (t0, t1) = (turn(0), turn(1));
-            if (t0 - t1).abs() >= SETTLED_NORMAL_MARGIN {
-                let circle = if t1 < t0 {
-                    &candidates[1]
-                } else {
-                    &candidates[0]
-                };
-                return Some((full_pose(camera, circle, yaw, axis_point), true));
-            }
+            ((t0 - t1).abs() >= SETTLED_NORMAL_MARGIN).then_some(usize::from(t1 < t0))
+        };
+        if let Some(k) = by_centre.or_else(by_track) {
+            return Some((full_pose(camera, &candidates[k], yaw, axis_point), true));
         }
         let mid = (c.black + c.white) / 2.0;
         let whycode = self.config.family.is_some();

@@ -171,15 +171,14 @@ impl Decoder {
                 if e & TIE_BIT != 0 {
                     return Decoded::ambiguous(distance);
                 }
-                let mut decoded = self.member(e & ID_MASK, (e >> ROT_SHIFT) & 31, distance);
-                decoded.rotation_ambiguous = e & ROTATION_TIE_BIT != 0;
-                decoded
+                let rotation_tie = e & ROTATION_TIE_BIT != 0;
+                self.member(e & ID_MASK, (e >> ROT_SHIFT) & 31, distance, rotation_tie)
             }
             None => self.search(word),
         }
     }
 
-    fn member(&self, id: u32, rotation: u32, distance: u32) -> Decoded {
+    fn member(&self, id: u32, rotation: u32, distance: u32, rotation_ambiguous: bool) -> Decoded {
         Decoded {
             status: if distance == 0 {
                 MatchStatus::Exact
@@ -189,7 +188,7 @@ impl Decoder {
             id,
             code: self.family.code(id).unwrap_or(0),
             rotation,
-            rotation_ambiguous: false,
+            rotation_ambiguous,
             distance,
         }
     }
@@ -206,7 +205,7 @@ impl Decoder {
     fn search(&self, word: u32) -> Decoded {
         let bits = self.family.bits();
         if let Some((id, r)) = self.member_rotation(word) {
-            return self.member(id, r, 0);
+            return self.member(id, r, 0, false);
         }
         // A bitset probe costs about as much as two XOR-popcount comparisons.
         let ball_cost = ball_size(bits, self.radius).saturating_mul(2);
@@ -231,11 +230,7 @@ impl Decoder {
                 });
                 match (found, tie) {
                     (Some(_), true) => return Decoded::ambiguous(k),
-                    (Some((id, r)), false) => {
-                        let mut decoded = self.member(id, r, k);
-                        decoded.rotation_ambiguous = rotation_tie;
-                        return decoded;
-                    }
+                    (Some((id, r)), false) => return self.member(id, r, k, rotation_tie),
                     _ => {}
                 }
             }
@@ -268,9 +263,7 @@ impl Decoder {
             } else if tie {
                 Decoded::ambiguous(best)
             } else {
-                let mut decoded = self.member(best_match.0, best_match.1, best);
-                decoded.rotation_ambiguous = rotation_tie;
-                decoded
+                self.member(best_match.0, best_match.1, best, rotation_tie)
             }
         }
     }

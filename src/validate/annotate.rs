@@ -28,7 +28,7 @@ pub fn annotate(image: &GrayImage, report: &PhotoReport) -> RgbImage {
     });
     let thickness = (f64::from(image.width().max(image.height())) / 800.0).clamp(1.0, 6.0);
     for page in &report.pages {
-        if let Some(c) = page.scale.corners {
+        if let Some(c) = page.scale.corners() {
             for k in 0..4 {
                 line(&mut out, c[k], c[(k + 1) % 4], thickness, CYAN);
             }

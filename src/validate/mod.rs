@@ -262,39 +262,19 @@ pub fn check_photo(
             .map(|m| (m.x_mm, m.y_mm, m.diameter_mm / 2.0))
             .collect();
         let mut scale = scale::measure(image, &model, &h, manifest.page_size_mm, &discs);
-        if matches.len() <= MIN_PAGE_MATCHES
-            && scale.corners.is_none()
-            && scale.found_corners.len() >= 2
-        {
+        if matches.len() <= MIN_PAGE_MATCHES && scale.corners().is_none() {
             // One marker's rim pins the page well near the marker and loosely
             // far from it, so the far edges can fall outside their search.
             // The corners that were found are exact: with them the page is
             // pinned across its whole extent, and the search runs again.
-            let [w, hgt] = manifest.page_size_mm;
-            let page_corners = [(0.0, 0.0), (w, 0.0), (w, hgt), (0.0, hgt)];
-            let mut pairs: Vec<((f64, f64), (f64, f64))> = matches
-                .iter()
-                .flat_map(|&(k, m)| {
-                    let centre = Correspondence {
-                        plane: (m.x_mm, m.y_mm),
-                        image: ideal[k],
-                        tolerance: 0.0,
-                    };
-                    std::iter::once(centre).chain(rim_correspondences(
-                        m,
-                        &observations[k],
-                        ideal[k],
-                    ))
-                })
-                .map(|c| (c.plane, c.image))
-                .collect();
-            pairs.extend(
-                scale
-                    .found_corners
-                    .iter()
-                    .map(|&(k, (u, v))| (page_corners[k], model.to_ideal(u, v))),
-            );
-            if let Some(pinned) = Homography::fit(&pairs) {
+            if let Some(pinned) = pin_with_corners(
+                &matches,
+                observations,
+                &ideal,
+                &scale,
+                &model,
+                manifest.page_size_mm,
+            ) {
                 scale = scale::measure(image, &model, &pinned, manifest.page_size_mm, &discs);
             }
         }
@@ -333,26 +313,8 @@ fn locate_page(
     if matches.is_empty() {
         return None;
     }
-    let mut pairs: Vec<Correspondence> = matches
-        .iter()
-        .map(|&(k, m)| Correspondence {
-            plane: (m.x_mm, m.y_mm),
-            image: ideal[k],
-            // A detection more than a third of a radius off is not this marker.
-            tolerance: (observations[k].semi_major / 3.0).max(2.0),
-        })
-        .collect();
-    let observed: Vec<(f64, f64)> = pairs.iter().map(|p| p.image).collect();
-    if matches.len() <= MIN_PAGE_MATCHES {
-        // Too few centres to fit a homography with anything to spare (four
-        // fit exactly, whatever they are): each marker's own rim, placed by
-        // its ellipse and yaw, adds four more points.
-        pairs.extend(
-            matches
-                .iter()
-                .flat_map(|&(k, m)| rim_correspondences(m, &observations[k], ideal[k])),
-        );
-    }
+    let mut pairs = marker_correspondences(matches, observations, ideal);
+    let observed: Vec<(f64, f64)> = pairs[..matches.len()].iter().map(|p| p.image).collect();
     let mut fit = fit_robust(&pairs)?;
     for _ in 0..3 {
         // Under perspective a circle's image centre is not the image of its
@@ -370,6 +332,62 @@ fn locate_page(
     }
     let inliers = fit.inliers.iter().filter(|&&i| i).count();
     (inliers >= MIN_PAGE_MATCHES).then_some((fit.homography, inliers, fit.rms_px))
+}
+
+/// Page ↔ photo pairs of a page's ID-matched markers: their centres, in
+/// `matches` order, then, for a page with too few centres to fit a
+/// homography with anything to spare (four fit exactly, whatever they are),
+/// each marker's own rim, placed by its ellipse and yaw.
+fn marker_correspondences(
+    matches: &[(usize, &PrintedMarker)],
+    observations: &[Observation],
+    ideal: &[(f64, f64)],
+) -> Vec<Correspondence> {
+    let mut pairs: Vec<Correspondence> = matches
+        .iter()
+        .map(|&(k, m)| Correspondence {
+            plane: (m.x_mm, m.y_mm),
+            image: ideal[k],
+            // A detection more than a third of a radius off is not this marker.
+            tolerance: (observations[k].semi_major / 3.0).max(2.0),
+        })
+        .collect();
+    if matches.len() <= MIN_PAGE_MATCHES {
+        pairs.extend(
+            matches
+                .iter()
+                .flat_map(|&(k, m)| rim_correspondences(m, &observations[k], ideal[k])),
+        );
+    }
+    pairs
+}
+
+/// The page's homography from its markers and the paper corners the scale
+/// measurement found (at least two), or None with fewer corners.
+fn pin_with_corners(
+    matches: &[(usize, &PrintedMarker)],
+    observations: &[Observation],
+    ideal: &[(f64, f64)],
+    paper: &ScaleMeasurement,
+    model: &PixelModel,
+    [w, h]: [f64; 2],
+) -> Option<Homography> {
+    if paper.found_corners.len() < 2 {
+        return None;
+    }
+    let page_corners = [(0.0, 0.0), (w, 0.0), (w, h), (0.0, h)];
+    let mut pairs: Vec<((f64, f64), (f64, f64))> =
+        marker_correspondences(matches, observations, ideal)
+            .into_iter()
+            .map(|c| (c.plane, c.image))
+            .collect();
+    pairs.extend(
+        paper
+            .found_corners
+            .iter()
+            .map(|&(k, (u, v))| (page_corners[k], model.to_ideal(u, v))),
+    );
+    Homography::fit(&pairs)
 }
 
 /// The four points where a marker's axes meet its rim, page ↔ photo.

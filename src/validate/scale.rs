@@ -84,10 +84,6 @@ pub struct ScaleMeasurement {
     /// Why the scale is unknown, or a remark on it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
-    /// The paper's corners in the image (top-left, top-right, bottom-right,
-    /// bottom-left) when all four edges were found.
-    #[serde(skip)]
-    pub corners: Option<[(f64, f64); 4]>,
     /// Each paper corner whose two edges were found: its index (0
     /// top-left, 1 top-right, 2 bottom-right, 3 bottom-left) and place in
     /// the image. Two of them can pin a page that has too few markers.
@@ -104,7 +100,6 @@ impl ScaleMeasurement {
             status: ScaleStatus::Unknown,
             edges: Vec::new(),
             note: Some(note.into()),
-            corners: None,
             found_corners: Vec::new(),
         }
     }
@@ -156,7 +151,6 @@ pub fn measure(
             Some((k, model.to_image(iu, iv)))
         })
         .collect();
-    let corners = (found_corners.len() == 4).then(|| four_corners(&found_corners));
     let [top, right, bottom, left] = lines;
     // Paper width in manifest units at mid-height, height at mid-width.
     let scale_x = match (left, right) {
@@ -217,18 +211,23 @@ pub fn measure(
         status: ScaleStatus::of(worst),
         edges,
         note: (!notes.is_empty()).then(|| notes.join("; ")),
-        corners,
         found_corners,
     }
 }
 
-/// The four corners in order, from a list holding each of them.
-fn four_corners(found: &[(usize, (f64, f64))]) -> [(f64, f64); 4] {
-    let mut out = [(0.0, 0.0); 4];
-    for &(k, p) in found {
-        out[k] = p;
+impl ScaleMeasurement {
+    /// The paper's corners in the image (top-left, top-right, bottom-right,
+    /// bottom-left) when all four edges were found.
+    pub fn corners(&self) -> Option<[(f64, f64); 4]> {
+        if self.found_corners.len() < 4 {
+            return None;
+        }
+        let mut out = [(0.0, 0.0); 4];
+        for &(k, p) in &self.found_corners {
+            out[k] = p;
+        }
+        Some(out)
     }
-    out
 }
 
 /// A printed disc as the photo shows it, for [`measure_discs`].
@@ -251,7 +250,7 @@ pub fn measure_discs(
     page_size_mm: [f64; 2],
     discs: &[DiscView],
 ) -> ScaleMeasurement {
-    let Some(corners) = paper.corners else {
+    let Some(corners) = paper.corners() else {
         let why = paper
             .note
             .as_deref()
@@ -303,7 +302,6 @@ pub fn measure_discs(
             ratios.len(),
             if ratios.len() == 1 { "" } else { "s" }
         )),
-        corners: paper.corners,
         found_corners: paper.found_corners.clone(),
     }
 }
