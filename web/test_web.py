@@ -83,6 +83,44 @@ def read_pgm(path):
     return width, height, data[fields.end():fields.end() + width * height]
 
 
+# Floats in a report may differ from the CLI's in their last digits: the
+# browser's WebAssembly uses Rust's own sin/cos/atan2 where the CLI uses the
+# system's C library, and each rounds its last bit its own way. Everything
+# else (IDs, verdicts, counts, notes, structure) must be identical.
+FLOAT_TOLERANCE = 1e-9
+
+
+def report_differences(got, want, path="$"):
+    if isinstance(got, float) or isinstance(want, float):
+        if not (isinstance(got, (int, float)) and isinstance(want, (int, float))):
+            return [f"{path}: {got!r} vs {want!r}"]
+        if abs(got - want) > FLOAT_TOLERANCE * max(1.0, abs(want)):
+            return [f"{path}: {got!r} vs {want!r}"]
+        return []
+    if type(got) is not type(want):
+        return [f"{path}: {got!r} vs {want!r}"]
+    if isinstance(got, dict):
+        if set(got) != set(want):
+            return [f"{path}: keys {sorted(got)} vs {sorted(want)}"]
+        return [d for k in got for d in report_differences(got[k], want[k], f"{path}.{k}")]
+    if isinstance(got, list):
+        if len(got) != len(want):
+            return [f"{path}: {len(got)} items vs {len(want)}"]
+        return [d for k, (g, w) in enumerate(zip(got, want)) for d in report_differences(g, w, f"{path}[{k}]")]
+    return [] if got == want else [f"{path}: {got!r} vs {want!r}"]
+
+
+def float_gap(got, want):
+    if isinstance(got, float) and isinstance(want, (int, float)):
+        yield abs(got - want) / max(1.0, abs(want))
+    elif isinstance(got, dict):
+        for k in got:
+            yield from float_gap(got[k], want.get(k))
+    elif isinstance(got, list) and isinstance(want, list):
+        for g, w in zip(got, want):
+            yield from float_gap(g, w)
+
+
 class Tests:
     def __init__(self, args):
         self.args = args
@@ -103,13 +141,17 @@ class Tests:
 
     def open(self, panel, width=1280, height=900):
         self.page.set_viewport_size({"width": width, "height": height})
+        self.page.goto("about:blank")
         self.page.goto(f"{self.base}/#{panel}")
         self.page.wait_for_selector("#engine-status.ready", state="attached", timeout=30000)
 
     def downloads(self, click, count, timeout=120):
         """Clicks, then waits for `count` downloads; returns {name: bytes}."""
         got = []
-        handler = got.append
+
+        def handler(download):
+            got.append(download)
+
         self.page.on("download", handler)
         try:
             click()
@@ -154,10 +196,10 @@ class Tests:
         assert len(cells) >= 20
         self.shot("ids")
 
-    def print_form(self, kind="sheet", ids="1-16", diameter="40", template="a4", name="swarm"):
+    def print_form(self, kind="sheet", ids="1-12", diameter="40", template="a4", name="swarm"):
         self.open("print")
-        self.page.check(f"input[name=print-kind][value={kind}]")
-        self.page.check("input[name=print-style][value=whycode]")
+        self.page.click(f"label:has(> input[name=print-kind][value={kind}])")
+        self.page.click("label:has(> input[name=print-style][value=whycode])")
         self.page.fill("#p-bits", "8")
         self.page.fill("#p-distance", "2")
         if kind == "sheet":
@@ -175,7 +217,7 @@ class Tests:
         png = self.downloads(lambda: self.page.click("#print-form button[data-format=png]"), 1)
         manifest = self.downloads(lambda: self.page.click("#p-manifest"), 1)
         self.shot("print")
-        base = ["sheet", "--bits", 8, "--distance", 2, "--ids", "1-16", "--diameter", "40mm", "--template", "a4"]
+        base = ["sheet", "--bits", 8, "--distance", 2, "--ids", "1-12", "--diameter", "40mm", "--template", "a4"]
         for got, ext in ((pdf, "pdf"), (svg, "svg"), (png, "png")):
             self.cli(*base, "-o", f"swarm.{ext}")
             name = f"swarm.{ext}"
@@ -185,7 +227,7 @@ class Tests:
         self.figures["sheet bytes checked"] = "PDF, SVG, PNG, manifest"
 
     def test_print_multi_page_svg_and_custom_layout_match_cli(self):
-        self.print_form(ids="1-30", diameter="45", template="a5", name="big")
+        self.print_form(ids="1-16", diameter="45", template="a5", name="big")
         self.page.click("#p-layout summary")
         self.page.check("#p-cut-guides")
         self.page.fill("#p-label-pt", "9")
@@ -199,7 +241,7 @@ class Tests:
         extra = self.downloads(lambda: self.page.click("#p-manifest"), 2)
         template = extra["a5-custom.toml"]
         (self.work / "a5-custom.toml").write_bytes(template)
-        self.cli("sheet", "--bits", 8, "--distance", 2, "--ids", "1-30", "--diameter", "45mm",
+        self.cli("sheet", "--bits", 8, "--distance", 2, "--ids", "1-16", "--diameter", "45mm",
                  "--template", "a5-custom.toml", "-o", "big.svg")
         for k in range(1, pages + 1):
             name = f"big-{k}.svg"
@@ -224,14 +266,13 @@ class Tests:
         self.page.click("#c-clear")
         self.page.set_input_files("#c-manifest", str(self.work / manifest))
         self.page.set_input_files("#c-photos", [str(self.work / p) for p in photos])
-        reports = self.downloads(lambda: self.page.click("#c-run"), 0, timeout=1)
-        del reports
+        self.page.click("#c-run")
         self.page.wait_for_selector("#c-download:not([disabled])", timeout=180000)
         got = self.downloads(lambda: self.page.click("#c-download"), 1)
         return got["report.json"]
 
     def test_check_matches_cli_validate(self):
-        self.cli("sheet", "--bits", 8, "--distance", 2, "--ids", "1-16", "--diameter", "40mm", "--template", "a4",
+        self.cli("sheet", "--bits", 8, "--distance", 2, "--ids", "1-12", "--diameter", "40mm", "--template", "a4",
                  "-o", "swarm.pdf")
         self.cli("simulate", "--manifest", "swarm.json", "-o", "photo.png")
         self.cli("simulate", "--manifest", "swarm.json", "--blot", 5, "-o", "blot.png")
@@ -242,8 +283,13 @@ class Tests:
             t0 = time.time()
             got = self.check_photos("swarm.json", photos)
             seconds = time.time() - t0
-            assert got == want, f"report for {photos} differs from whycode validate:\n{got.decode()}\n---\n{want.decode()}"
             report = json.loads(got)
+            differences = report_differences(report, json.loads(want))
+            assert not differences, f"report for {photos} differs from whycode validate: {differences[:5]}"
+            worst = max(float_gap(report, json.loads(want)), default=0.0)
+            self.figures[f"check {'+'.join(photos)}: largest relative float difference"] = f"{worst:.1e}"
+            if got == want:
+                self.figures[f"check {'+'.join(photos)}: report bytes"] = "identical"
             assert report["ok"] == expect_ok, f"{photos}: ok is {report['ok']}"
             self.figures[f"check {'+'.join(photos)}"] = f"{seconds:.1f} s in the page, ok={report['ok']}"
             if photos == ["blot.png"]:

@@ -150,7 +150,7 @@ async function idsUpdate() {
     $("ids-table-title").textContent = `IDs of the ${bits}-bit, distance-${distance} family`;
     const rows = family.rows.map(([id, code, binary, sd]) =>
       `<tr><td>${id}</td><td>${code}</td><td class="text mono">${binary}</td><td>${sd}</td></tr>`).join("");
-    $("ids-table").innerHTML = `<thead><tr><th>ID</th><th>Code</th><th class="text">Binary (ring, bit 0 last)</th><th>Self-distance</th></tr></thead><tbody>${rows}</tbody>`;
+    $("ids-table").innerHTML = `<thead><tr><th>ID</th><th>Code</th><th class="text">Binary</th><th>Self-distance</th></tr></thead><tbody>${rows}</tbody>`;
     $("ids-more").textContent = family.len > family.rows.length
       ? `Showing the first ${family.rows.length.toLocaleString("en")} of ${family.len.toLocaleString("en")} IDs; the JSON file has them all.`
       : "";
@@ -262,7 +262,7 @@ function customTemplate() {
     `page_height = "${fmt(t.height_mm)}mm"`,
     `margin = "${fmt(fields.margin)}mm"`,
     `gap = "${fmt(fields.gap)}mm"`,
-    `label_size_pt = ${fields.label.toFixed(Number.isInteger(fields.label) ? 1 : 2).replace(/0$/, "")}`,
+    `label_size_pt = ${Number.isInteger(fields.label) ? fields.label.toFixed(1) : String(fields.label)}`,
     `cut_guides = ${fields.cut}`,
     `scale_bar = "${fmt(fields.bar)}mm"`,
     "",
@@ -279,6 +279,13 @@ function printOptions(format, check) {
   const output = `${name}.${format}`;
   const bits = intOf($("p-bits"));
   const distance = intOf($("p-distance"));
+  const whole = (el, what) => {
+    if (!Number.isInteger(Number(el.value)) || el.value.trim() === "") throw new Error(`${what} must be a whole number.`);
+  };
+  if (!legacy) { whole($("p-bits"), "Bits"); whole($("p-distance"), "Distance"); }
+  if (!legacy && kind === "marker") whole($("p-id"), "The ID");
+  if (legacy && kind === "sheet") whole($("p-count"), "The number of circles");
+  if (format === "png" && !Number.isFinite(dpi)) throw new Error("PNG dpi must be a number.");
   const cli = [`whycode ${kind}`];
   const extra = { custom: null };
   let options;
@@ -369,13 +376,17 @@ async function printPreview() {
     const last = out.notes.split("\n").pop();
     $("print-info").textContent = request.kind === "sheet" ? last : "";
   } catch (err) {
-    if (mine === previewRequest) showMsg(msg, "error", err.message);
+    if (mine === previewRequest) {
+      showMsg(msg, "error", err.message);
+      $("print-preview").classList.add("stale");
+    }
   }
 }
 
 function showPreviewPage() {
   const box = $("print-preview");
   box.classList.toggle("marker", printKind() === "marker");
+  box.classList.remove("stale");
   box.innerHTML = "";
   const img = document.createElement("img");
   img.alt = `Preview of page ${previewPage + 1}`;
