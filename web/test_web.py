@@ -37,6 +37,9 @@ CHROMIUM_FLAGS = [
 ]
 
 SEQUENCE_IDS = [3, 7, 12, 16]
+# The fake camera runs at this rate, above the 30 fps target, so the rate
+# the page measures shows whether detection keeps up.
+FAKE_CAMERA_FPS = 60
 
 
 class Quiet(http.server.SimpleHTTPRequestHandler):
@@ -344,15 +347,15 @@ class Tests:
         for k in range(60):
             name = f"seq-{k:03}.pgm"
             self.cli("simulate", "--bits", 8, "--hamming", 2, "--ids", ",".join(map(str, SEQUENCE_IDS)),
-                     "--diameter", "60mm", "--size", "640x480", "--distance", f"{0.75 + 0.004 * k:.3f}m",
-                     "--roll", f"{3 * k}deg", "--pan", f"{10 - k / 3:.2f}deg", "--noise", 2, "--seed", k + 1,
+                     "--diameter", "60mm", "--size", "640x480", "--distance", f"{0.7 + 0.002 * k:.3f}m",
+                     "--roll", f"{k}deg", "--pan", f"{10 - k / 4:.2f}deg", "--noise", 2, "--seed", k + 1,
                      "-o", name)
             frames.append(read_pgm(self.work / name))
         width, height = frames[0][0], frames[0][1]
         chroma = b"\x80" * ((width // 2) * (height // 2))
         path = self.work / "sequence.y4m"
         with open(path, "wb") as f:
-            f.write(f"YUV4MPEG2 W{width} H{height} F30:1 Ip A1:1 C420jpeg\n".encode())
+            f.write(f"YUV4MPEG2 W{width} H{height} F{FAKE_CAMERA_FPS}:1 Ip A1:1 C420jpeg\n".encode())
             for _, _, luma in frames:
                 f.write(b"FRAME\n" + luma + chroma + chroma)
         return path
@@ -374,6 +377,7 @@ class Tests:
             seen = set()
             fps = []
             ms = []
+            camera = []
             deadline = time.time() + 12
             while time.time() < deadline:
                 page.wait_for_timeout(250)
@@ -383,6 +387,7 @@ class Tests:
                 if rate:
                     fps.append(float(rate))
                     ms.append(float(page.inner_text("#l-ms").split()[0]))
+                    camera.append(float(page.eval_on_selector("#l-camera", "e => e.dataset.fps || 'nan'")))
             page.screenshot(path=str(self.shots / "live.png"), full_page=True)
             page.set_viewport_size({"width": 390, "height": 844})
             page.wait_for_timeout(500)
@@ -395,9 +400,12 @@ class Tests:
         settled = sorted(fps[2:] or fps)
         median = settled[len(settled) // 2]
         median_ms = sorted(ms)[len(ms) // 2]
-        self.figures["live frame rate (fake camera at 30 fps, 640x480)"] = f"median {median:.1f} fps, min {min(settled):.1f}"
+        self.figures[f"live frame rate (fake camera at {FAKE_CAMERA_FPS} fps, 640x480)"] = f"median {median:.1f} fps, min {min(settled):.1f}"
         self.figures["live detection time per frame"] = f"median {median_ms:.1f} ms"
-        print(f"live: {median:.1f} fps measured (median over {len(settled)} one-second windows), "
+        camera_rate = sorted(camera[2:] or camera)[len(camera[2:] or camera) // 2]
+        self.figures["live camera frames presented"] = f"median {camera_rate:.1f} fps"
+        print(f"live: {median:.1f} fps detected of {camera_rate:.1f} fps presented "
+              f"(median over {len(settled)} one-second windows), "
               f"{median_ms:.1f} ms per frame in the worker; IDs seen {sorted(seen)}")
         assert set(SEQUENCE_IDS) <= seen, f"overlay showed IDs {sorted(seen)}, sequence has {SEQUENCE_IDS}"
         assert seen <= set(SEQUENCE_IDS), f"overlay showed IDs not in the sequence: {sorted(seen - set(SEQUENCE_IDS))}"

@@ -615,8 +615,18 @@ function liveStop() {
   overlay.getContext("2d").clearRect(0, 0, overlay.width, overlay.height);
 }
 
-// One frame in flight at a time: grab, detect in the worker, draw, repeat.
-// The rate shown is frames detected per second, over the last second.
+// One frame in flight at a time: wait for a new camera frame, detect in
+// the worker, then draw that very frame with its markers (so the outlines
+// never lag behind a moving picture). The rate shown is camera frames
+// detected per second over the last second; the time per frame is the
+// detector's own, which says how much faster a faster camera could go.
+function nextVideoFrame(video) {
+  return new Promise((resolve) => {
+    if (video.requestVideoFrameCallback) video.requestVideoFrameCallback(() => resolve());
+    else requestAnimationFrame(() => resolve());
+  });
+}
+
 async function liveLoop() {
   const video = $("l-video");
   const grab = document.createElement("canvas");
@@ -626,13 +636,18 @@ async function liveLoop() {
   let windowStart = performance.now();
   let windowFrames = 0;
   let lastFrameTime = -1;
+  // Every frame the browser presents, detected or not: the camera's own rate.
+  let cameraFrames = 0;
+  if (video.requestVideoFrameCallback) {
+    const count = () => { cameraFrames++; if (live.running) video.requestVideoFrameCallback(count); };
+    video.requestVideoFrameCallback(count);
+  }
   while (live.running) {
+    await nextVideoFrame(video);
+    if (!live.running) return;
     const w = video.videoWidth;
     const h = video.videoHeight;
-    if (!w || !h || video.currentTime === lastFrameTime) {
-      await new Promise((r) => requestAnimationFrame(r));
-      continue;
-    }
+    if (!w || !h || (!video.requestVideoFrameCallback && video.currentTime === lastFrameTime)) continue;
     lastFrameTime = video.currentTime;
     if (grab.width !== w || grab.height !== h) {
       grab.width = w; grab.height = h;
@@ -650,6 +665,7 @@ async function liveLoop() {
       return;
     }
     if (!live.running) return;
+    octx.drawImage(grab, 0, 0);
     drawDetections(octx, w, h, result.detections);
     windowFrames++;
     live.ms = live.ms ? live.ms * 0.9 + result.ms * 0.1 : result.ms;
@@ -659,19 +675,36 @@ async function liveLoop() {
       $("l-fps").textContent = `${fps.toFixed(1)} fps`;
       $("l-fps").dataset.fps = fps.toFixed(2);
       $("l-ms").textContent = `${live.ms.toFixed(1)} ms`;
+      if (cameraFrames) {
+        const camera = (cameraFrames * 1000) / (now - windowStart);
+        $("l-camera").textContent = `${camera.toFixed(1)} fps`;
+        $("l-camera").dataset.fps = camera.toFixed(2);
+      }
       windowStart = now;
       windowFrames = 0;
+      cameraFrames = 0;
     }
   }
 }
 
 function drawDetections(ctx, w, h, d) {
-  ctx.clearRect(0, 0, w, h);
   const stride = live.stride;
   const ids = [];
   const line = Math.max(2, w / 320);
-  ctx.font = `600 ${Math.round(Math.max(14, w / 40))}px system-ui, sans-serif`;
+  const big = Math.round(Math.max(13, w / 48));
+  const small = Math.round(big * 0.8);
   ctx.textBaseline = "bottom";
+  ctx.lineJoin = "round";
+  const legacy = document.querySelector("input[name=live-style]:checked").value === "legacy";
+  const label = (text, size, x, y) => {
+    ctx.font = `600 ${size}px system-ui, sans-serif`;
+    const tx = x - ctx.measureText(text).width / 2;
+    ctx.lineWidth = 4;
+    ctx.strokeStyle = "rgba(0,0,0,.8)";
+    ctx.strokeText(text, tx, y);
+    ctx.fillStyle = "#fff";
+    ctx.fillText(text, tx, y);
+  };
   for (let k = 0; k + stride <= d.length; k += stride) {
     const [id, u, v, a, b, angle, yaw] = d.subarray(k, k + 8);
     // Detector coordinates put the first pixel's centre at 0; the canvas at 0.5.
@@ -690,16 +723,13 @@ function drawDetections(ctx, w, h, d) {
       ctx.lineTo(x + Math.cos(yaw) * a, y + Math.sin(yaw) * a);
       ctx.stroke();
     }
-    const label = known
-      ? `ID ${id}${Number.isNaN(yaw) ? "" : ` · ${Math.round((yaw * 180) / Math.PI)}°`}`
-      : (document.querySelector("input[name=live-style]:checked").value === "legacy" ? "WhyCon" : "unknown");
-    const tx = x - ctx.measureText(label).width / 2;
-    const ty = y - b - line * 2;
-    ctx.lineWidth = 4;
-    ctx.strokeStyle = "rgba(0,0,0,.75)";
-    ctx.strokeText(label, tx, ty);
-    ctx.fillStyle = "#fff";
-    ctx.fillText(label, tx, ty);
+    const top = y - Math.max(a, b) - line;
+    if (known && !Number.isNaN(yaw)) {
+      label(`${Math.round((yaw * 180) / Math.PI)}°`, small, x, top);
+      label(`ID ${id}`, big, x, top - small - 4);
+    } else {
+      label(known ? `ID ${id}` : legacy ? "WhyCon" : "unknown", big, x, top);
+    }
     if (known) ids.push(id);
   }
   ids.sort((p, q) => p - q);
