@@ -1,9 +1,9 @@
 //! `whycode detect`: find markers in images and print IDs, yaw and pose.
 
-use crate::camera::Camera;
-use crate::detect::{load_gray, Detection, Detector, DetectorConfig};
-use crate::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
-use crate::units::Length;
+use whycode::camera::Camera;
+use whycode::detect::{load_gray, Detection, Detector, DetectorConfig};
+use whycode::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
+use whycode::units::Length;
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
 use std::collections::HashSet;
@@ -311,8 +311,8 @@ fn detect_one(detector: &mut Detector, path: &Path, annotate: Option<&Path>) -> 
     let markers = detector.detect(&image);
     let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;
     if let Some(out) = annotate {
-        let png = crate::detect::annotate::annotated_png(&image, &markers)?;
-        crate::io::write_atomic(out, &png)?;
+        let png = whycode::detect::annotate::annotated_png(&image, &markers)?;
+        whycode::io::write_atomic(out, &png)?;
     }
     Ok(Frame {
         image: path.to_path_buf(),

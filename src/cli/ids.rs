@@ -1,6 +1,6 @@
 //! `whycode ids`: a family's IDs and codes, or the count matrix.
 
-use crate::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MIN_BITS};
+use whycode::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MIN_BITS};
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -89,7 +89,7 @@ pub fn run(args: IdsArgs) -> Result<ExitCode> {
         family_text(&family, format)
     };
     match &args.output {
-        Some(path) => crate::io::write_atomic(path, text.as_bytes())?,
+        Some(path) => whycode::io::write_atomic(path, text.as_bytes())?,
         None => {
             let mut stdout = std::io::stdout().lock();
             if let Err(err) = stdout

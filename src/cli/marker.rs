@@ -1,10 +1,10 @@
-use crate::family::Family;
-use crate::geometry::Marker;
-use crate::render::check::check_marker_page;
-use crate::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
-use crate::render::sheet::id_range_error;
-use crate::render::{encode_pages, write_all, Format};
-use crate::units::Length;
+use whycode::family::Family;
+use whycode::geometry::Marker;
+use whycode::render::check::check_marker_page;
+use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
+use whycode::render::sheet::id_range_error;
+use whycode::render::{encode_pages, write_all, Format};
+use whycode::units::Length;
 use anyhow::{bail, Result};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -62,7 +62,7 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
     if format == Format::Png && !(args.dpi.is_finite() && (10.0..=4800.0).contains(&args.dpi)) {
         bail!("--dpi must be between 10 and 4800, got {}", args.dpi);
     }
-    crate::render::check_output_dir(&args.output)?;
+    whycode::render::check_output_dir(&args.output)?;
     let diameter = args.diameter.mm();
     let mut family = None;
     let (marker, title) = if args.legacy {

@@ -1,11 +1,11 @@
-use crate::family::Family;
-use crate::render::check::{check_sheet, check_sheet_png};
-use crate::render::manifest::FamilyRef;
-use crate::render::sheet::{family_markers, layout, legacy_markers, SheetSpec};
-use crate::render::template::Template;
-use crate::render::{encode_pages, write_all, Format};
-use crate::units::Length;
-use anyhow::{bail, Result};
+use whycode::family::{parse_id_list, Family, MAX_LISTED_IDS};
+use whycode::render::check::{check_sheet, check_sheet_png};
+use whycode::render::manifest::FamilyRef;
+use whycode::render::sheet::{family_markers, layout, legacy_markers, SheetSpec};
+use whycode::render::template::Template;
+use whycode::render::{encode_pages, write_all, Format};
+use whycode::units::Length;
+use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -69,9 +69,9 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
             println!(
                 "{:<8} {:>6} x {:<6} mm  margin {} mm  {}",
                 t.name,
-                crate::units::trim_float(t.page_width_mm),
-                crate::units::trim_float(t.page_height_mm),
-                crate::units::trim_float(t.margin_mm),
+                whycode::units::trim_float(t.page_width_mm),
+                whycode::units::trim_float(t.page_height_mm),
+                whycode::units::trim_float(t.margin_mm),
                 t.description
             );
         }
@@ -83,7 +83,7 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
     if format == Format::Png && !(args.dpi.is_finite() && (10.0..=1200.0).contains(&args.dpi)) {
         bail!("--dpi must be between 10 and 1200, got {}", args.dpi);
     }
-    crate::render::check_output_dir(&output)?;
+    whycode::render::check_output_dir(&output)?;
     let template = Template::resolve(&args.template)?;
     let mut check_family = None;
     let (markers, family) = if args.legacy {
@@ -93,15 +93,15 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         }
         (legacy_markers(count, diameter), None)
     } else {
-        let bits = args.bits.unwrap_or(crate::family::DEFAULT_BITS);
+        let bits = args.bits.unwrap_or(whycode::family::DEFAULT_BITS);
         let family = Family::generate(bits, args.distance)?;
         let ids: Vec<u32> = match &args.ids {
-            Some(list) => super::parse_id_list(list)?,
-            None if family.len() > super::MAX_LISTED_IDS => bail!(
+            Some(list) => parse_id_list(list).context("--ids")?,
+            None if family.len() > MAX_LISTED_IDS => bail!(
                 "the {bits}-bit family with distance {} has {} IDs, too many to print at once; choose some with --ids (at most {})",
                 args.distance,
                 family.len(),
-                super::MAX_LISTED_IDS
+                MAX_LISTED_IDS
             ),
             None => (1..=family.len() as u32).collect(),
         };

@@ -1,11 +1,11 @@
 //! `whycode simulate`: render a synthetic camera view with ground truth.
 
-use crate::camera::Camera;
-use crate::family::Family;
-use crate::geometry::Marker;
-use crate::render::manifest::Manifest;
-use crate::simulate::{self, layout, Background, MotionBlur, Scene, SceneObject, SheetPage};
-use crate::units::{Angle, Length};
+use whycode::camera::Camera;
+use whycode::family::{parse_id_list, Family};
+use whycode::geometry::Marker;
+use whycode::render::manifest::Manifest;
+use whycode::simulate::{self, layout, Background, MotionBlur, Scene, SceneObject, SheetPage};
+use whycode::units::{Angle, Length};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use std::path::{Path, PathBuf};
@@ -235,7 +235,7 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
         };
         let family = Family::generate(bits, args.hamming)
             .with_context(|| format!("--bits {bits} --hamming {}", args.hamming))?;
-        let ids = super::parse_id_list(ids)?;
+        let ids = parse_id_list(ids).context("--ids")?;
         let diameter = args.diameter.mm();
         let markers = ids
             .iter()
@@ -329,7 +329,7 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
         );
     }
     simulate::save_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
-    crate::io::write_atomic(&truth_path, truth.to_json().as_bytes())?;
+    whycode::io::write_atomic(&truth_path, truth.to_json().as_bytes())?;
     let visible = truth.markers.iter().filter(|m| m.visible).count();
     println!(
         "wrote {} ({}x{}) and {}: {} markers, {} wholly in view",
