@@ -30,7 +30,9 @@ pub mod camera;
 pub mod detect;
 pub mod family;
 pub mod geometry;
+#[cfg(feature = "files")]
 pub mod io;
+mod parallel;
 pub mod pose;
 pub mod render;
 pub mod simulate;

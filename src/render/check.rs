@@ -11,7 +11,7 @@ use crate::detect::{Detection, Detector, DetectorConfig};
 use crate::family::Family;
 use crate::geometry::{Marker, MarkerKind};
 use anyhow::{bail, Result};
-use rayon::prelude::*;
+use crate::parallel::prelude::*;
 
 /// The resolution a sheet is usually printed at.
 pub const PRINT_DPI: f64 = 300.0;

@@ -4,7 +4,7 @@
 use super::rng::Pcg32;
 use super::Scene;
 use image::GrayImage;
-use rayon::prelude::*;
+use crate::parallel::prelude::*;
 
 /// Grey level of a perfectly white surface at exposure 1.
 const FULL_SCALE: f64 = 255.0;

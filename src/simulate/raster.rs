@@ -4,7 +4,7 @@ use super::{background, Blot, LooseMarker, Placement, Scene, SceneObject, SheetP
 use crate::camera::Camera;
 use crate::geometry::Marker;
 use nalgebra::{Matrix3, Vector3};
-use rayon::prelude::*;
+use crate::parallel::prelude::*;
 
 /// Viewing rays of pixel positions: exact for a distortion-free camera,
 /// otherwise bilinear between undistorted rays on a coarse grid (the lens
