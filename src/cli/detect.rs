@@ -1,10 +1,6 @@
 //! `whycode detect`: find markers in images and print IDs, yaw and pose.
 
-use whycode::camera::Camera;
-use whycode::detect::report::{FrameReport, CSV_HEADER};
-use whycode::detect::{load_gray, Detector, DetectorConfig};
-use whycode::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
-use whycode::units::Length;
+use super::args::{Format, FormatArg, MarkerKindArgs};
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
 use std::collections::HashSet;
@@ -12,6 +8,10 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
+use whycode::camera::Camera;
+use whycode::detect::report::{FrameReport, CSV_HEADER};
+use whycode::detect::{load_gray, Detector, DetectorConfig};
+use whycode::units::Length;
 
 const EXAMPLES: &str = "\
 Examples:
@@ -19,6 +19,9 @@ Examples:
   whycode detect --bits 8 --distance 1 --format json sheet.png
   whycode detect --family family.json --diameter 122mm --camera cam.yaml --format json frames/
   whycode detect --legacy --annotate out/ many.png
+
+Formats: table (for reading), csv (one row per marker) or json (one object
+per image and line).
 
 Folders are sequences: their images are read in name order and markers are
 tracked from frame to frame. Files named on the command line are independent
@@ -40,34 +43,25 @@ pub struct DetectArgs {
     #[arg(required = true, value_name = "IMAGE|FOLDER")]
     inputs: Vec<PathBuf>,
 
-    /// Code length of the markers' ID family [default: 8]
-    #[arg(long, short = 'b', conflicts_with_all = ["family", "legacy"])]
-    bits: Option<u32>,
-
-    /// Minimum cyclic Hamming distance of the ID family [default: 2]
-    #[arg(long, short = 'd', conflicts_with_all = ["family", "legacy"])]
-    distance: Option<u32>,
-
-    /// ID family from a family file (written by `whycode ids --format json`)
-    #[arg(long, value_name = "FILE", conflicts_with = "legacy")]
-    family: Option<PathBuf>,
-
-    /// Legacy WhyCon markers (black and white discs, no ID ring)
-    #[arg(long)]
-    legacy: bool,
+    #[command(flatten)]
+    kind: MarkerKindArgs,
 
     /// Outer diameter of the black disc, for pose: 0.122 (metres), 122mm, 4.8in
-    #[arg(long, value_name = "LENGTH", value_parser = parse_diameter, requires = "camera")]
+    #[arg(
+        long,
+        value_name = "LENGTH",
+        value_parser = parse_diameter,
+        requires = "camera",
+        allow_hyphen_values = true
+    )]
     diameter: Option<Length>,
 
     /// Camera calibration (ROS camera_info or OpenCV YAML), for pose
     #[arg(long, value_name = "FILE", requires = "diameter")]
     camera: Option<PathBuf>,
 
-    /// Output: table (for reading), csv (one row per marker) or json (one
-    /// object per image and line)
-    #[arg(long, short = 'f', value_enum, default_value_t = Format::Table)]
-    format: Format,
+    #[command(flatten)]
+    format: FormatArg,
 
     /// Write each image with the markers' ellipses, IDs and +x axes drawn
     /// into DIR (PNG, named after the image)
@@ -84,13 +78,6 @@ pub struct DetectArgs {
     no_tracking: bool,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum Format {
-    Table,
-    Csv,
-    Json,
-}
-
 fn parse_diameter(text: &str) -> Result<Length, String> {
     Length::parse_with_default_unit(text, "m")
 }
@@ -102,15 +89,7 @@ enum Job {
 }
 
 pub fn run(args: DetectArgs) -> Result<ExitCode> {
-    let family = if args.legacy {
-        None
-    } else if let Some(path) = &args.family {
-        Some(Family::load(path)?)
-    } else {
-        let bits = args.bits.unwrap_or(DEFAULT_BITS);
-        let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
-        Some(Family::generate(bits, distance).context("--bits/--distance")?)
-    };
+    let family = args.kind.resolve()?;
     let camera = args.camera.as_deref().map(Camera::load).transpose()?;
     let mut config = DetectorConfig {
         family,
@@ -173,12 +152,12 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     let mut out = std::io::BufWriter::new(stdout.lock());
     let mut failures = 0;
     let several = total > 1;
-    if args.format == Format::Csv {
+    if args.format.format == Format::Csv {
         writeln!(out, "{CSV_HEADER}")?;
     }
     for result in results.into_iter().flatten() {
         match result {
-            Ok(frame) => match args.format {
+            Ok(frame) => match args.format.format {
                 Format::Json => writeln!(out, "{}", frame.to_json())?,
                 Format::Csv => out.write_all(frame.to_csv_rows().as_bytes())?,
                 Format::Table => out.write_all(frame.to_table(several).as_bytes())?,
@@ -297,7 +276,11 @@ fn annotation_names(
     names
 }
 
-fn detect_one(detector: &mut Detector, path: &Path, annotate: Option<&Path>) -> Result<FrameReport> {
+fn detect_one(
+    detector: &mut Detector,
+    path: &Path,
+    annotate: Option<&Path>,
+) -> Result<FrameReport> {
     let image = load_gray(path)?;
     let start = Instant::now();
     let markers = detector.detect(&image);

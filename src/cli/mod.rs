@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod args;
 mod detect;
 mod ids;
 mod marker;
@@ -66,17 +67,17 @@ pub fn main() -> ExitCode {
 /// and tips, which scripts and people scanning a log both read badly.
 fn usage_error(err: clap::Error) -> ExitCode {
     use clap::error::ErrorKind;
-    if matches!(
-        err.kind(),
-        ErrorKind::DisplayHelp
-            | ErrorKind::DisplayVersion
-            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
-    ) {
-        err.exit();
+    match err.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => err.exit(),
+        // `whycode` alone: the help, as a failure. Not clap's usual 2:
+        // `validate` exits 2 for "markers missing or misread", and a
+        // mistyped command line must not read as a verdict.
+        ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            let _ = err.print();
+            return ExitCode::FAILURE;
+        }
+        _ => {}
     }
-    let rendered = err.render().to_string();
-    let first = rendered.lines().next().unwrap_or("invalid arguments");
-    let message = first.strip_prefix("error: ").unwrap_or(first);
     let subcommand = std::env::args()
         .nth(1)
         .filter(|a| Cli::command_names().iter().any(|name| name == a));
@@ -84,10 +85,54 @@ fn usage_error(err: clap::Error) -> ExitCode {
         Some(name) => format!("whycode {name} --help"),
         None => "whycode --help".to_string(),
     };
-    eprintln!("whycode: error: {message} (see '{help}')");
-    // Not clap's usual 2: `validate` exits 2 for "markers missing or
-    // misread", and a mistyped option must not read as a verdict.
+    eprintln!(
+        "whycode: error: {} (see '{help}')",
+        one_line_usage(&err.render().to_string())
+    );
     ExitCode::FAILURE
+}
+
+/// Clap's message on one line: its first paragraph (the problem and the
+/// arguments it names: missing, conflicting, or the possible values), joined
+/// with ", ", plus a "did you mean" tip if there is one. The usage block and
+/// the pointer to --help are left out.
+fn one_line_usage(rendered: &str) -> String {
+    let mut paragraphs = rendered.split("\n\n");
+    let first: Vec<&str> = paragraphs
+        .next()
+        .unwrap_or_default()
+        .lines()
+        .map(str::trim)
+        .filter(|line| !line.is_empty())
+        .collect();
+    let mut message = match first.split_first() {
+        Some((head, rest)) => {
+            let head = head.strip_prefix("error: ").unwrap_or(head);
+            let rest = rest.join(", ");
+            if rest.is_empty() {
+                head.to_string()
+            } else if rest.starts_with('[') {
+                format!("{head} {rest}")
+            } else if head.ends_with(':') {
+                format!("{head} {rest}")
+            } else {
+                format!("{head}: {rest}")
+            }
+        }
+        None => "invalid arguments".to_string(),
+    };
+    // Clap suggests "-- -5" for values that look like flags; every option
+    // that takes a number already accepts a leading '-', so that tip only
+    // misleads. "a similar argument exists" is worth keeping.
+    for line in paragraphs.flat_map(str::lines).map(str::trim) {
+        if let Some(tip) = line.strip_prefix("tip: ") {
+            if tip.contains("similar") {
+                message.push_str("; ");
+                message.push_str(tip);
+            }
+        }
+    }
+    message
 }
 
 impl Cli {

@@ -1,12 +1,12 @@
 //! `whycode validate`: check photos of printed sheets against the manifest.
 
-use whycode::camera::Camera;
-use whycode::render::manifest::Manifest;
-use whycode::validate::{self, annotate};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use whycode::camera::Camera;
+use whycode::render::manifest::Manifest;
+use whycode::validate::{self, annotate};
 
 /// Exit status when the check ran but the sheet has problems.
 const PROBLEMS: u8 = 2;
@@ -33,7 +33,7 @@ pub struct ValidateArgs {
     #[arg(long, value_name = "DIR")]
     annotate: Option<PathBuf>,
     /// Report format on standard output
-    #[arg(long, value_enum, default_value_t = Format::Table)]
+    #[arg(long, short = 'f', value_enum, default_value_t = Format::Table)]
     format: Format,
 }
 
