@@ -266,22 +266,15 @@ fn usage_errors_name_the_arguments_and_the_valid_values() {
         err.contains("required arguments were not provided: --diameter <DIAMETER>, --id <ID>"),
         "{err}"
     );
-    // Conflicts name both sides.
+    // Conflicts name both sides, however many there are.
     let err = fails(
         dir.path(),
         &[
-            "marker",
-            "--legacy",
-            "--bits",
-            "8",
-            "--diameter",
-            "50mm",
-            "-o",
-            "x.pdf",
+            "sheet", "--legacy", "--count", "3", "--bits", "8", "--ids", "1", "-o", "x.pdf",
         ],
     );
     assert!(
-        err.contains("'--legacy' cannot be used with '--bits <BITS>'"),
+        err.contains("'--legacy' cannot be used with: --bits <BITS>, --ids <IDS>"),
         "{err}"
     );
     // An unknown value lists the known ones.
