@@ -111,9 +111,7 @@ fn one_line_usage(rendered: &str) -> String {
             let rest = rest.join(", ");
             if rest.is_empty() {
                 head.to_string()
-            } else if rest.starts_with('[') {
-                format!("{head} {rest}")
-            } else if head.ends_with(':') {
+            } else if rest.starts_with('[') || head.ends_with(':') {
                 format!("{head} {rest}")
             } else {
                 format!("{head}: {rest}")
@@ -161,4 +159,34 @@ pub fn one_line(err: &anyhow::Error) -> String {
         parts.push(text);
     }
     parts.join(": ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_subcommand_is_a_consistent_clap_definition() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn clap_messages_keep_their_names_on_one_line() {
+        let missing = "error: the following required arguments were not provided:\n  \
+--diameter <DIAMETER>\n  --id <ID>\n\nUsage: whycode marker --diameter <DIAMETER>\n\n\
+For more information, try '--help'.\n";
+        assert_eq!(
+            one_line_usage(missing),
+            "the following required arguments were not provided: --diameter <DIAMETER>, --id <ID>"
+        );
+        let value = "error: invalid value 'xml' for '--format <FORMAT>'\n  \
+[possible values: table, csv, json]\n\n  tip: a similar value exists: 'csv'\n\n\
+For more information, try '--help'.\n";
+        assert_eq!(
+            one_line_usage(value),
+            "invalid value 'xml' for '--format <FORMAT>' [possible values: table, csv, json]; \
+a similar value exists: 'csv'"
+        );
+    }
 }

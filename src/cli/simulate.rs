@@ -17,7 +17,13 @@ use whycode::units::{Angle, Length};
     after_help = "Without --camera the camera is ideal (no distortion): --size (default \
 1920x1080) and --fov (default 60deg, horizontal). Writes the image (format from the \
 extension: .png, .jpg, .pgm, .bmp) and the ground truth as JSON next to it (view.png -> \
-view.json): every marker's ID, code, pixel centre, yaw, size and pose."
+view.json): every marker's ID, code, pixel centre, yaw, size and pose.\n\n\
+Lengths need a unit (mm, cm, m, in) and angles one too (deg, rad). --distance is the \
+family's Hamming distance, as in every command; the camera's distance is --camera-distance. \
+For one more release the old spellings still work, with a note: --hamming N, and \
+--distance with a length (0.8m) for the camera distance.\n\nExamples:\n  \
+whycode simulate --manifest swarm.json --camera-distance 0.8m --tilt 30deg -o view.png\n  \
+whycode simulate --bits 12 --distance 2 --ids 1-20 --diameter 50mm -o scene.png"
 )]
 pub struct SimulateArgs {
     // Boxed: the options are many, and the CLI's subcommand enum stays small.
