@@ -79,9 +79,28 @@ fn parse_distance(text: &str) -> Result<DistanceArg, String> {
 /// A whole number, refused with one message whatever the typo (a sign, a
 /// fraction, a huge value).
 pub fn whole_number(text: &str) -> Result<u32, String> {
-    text.trim()
-        .parse::<u32>()
-        .map_err(|_| format!("'{text}' is not a whole number"))
+    let t = text.trim();
+    t.parse::<u32>().map_err(|_| {
+        if !t.is_empty() && t.bytes().all(|b| b.is_ascii_digit()) {
+            format!("{} is far too large", shorten_digits(t))
+        } else {
+            format!("'{text}' is not a whole number")
+        }
+    })
+}
+
+/// A long run of digits shortened for a message ("123...789, 40 digits").
+fn shorten_digits(digits: &str) -> String {
+    if digits.len() <= 20 {
+        digits.to_string()
+    } else {
+        format!(
+            "{}...{} ({} digits)",
+            &digits[..3],
+            &digits[digits.len() - 3..],
+            digits.len()
+        )
+    }
 }
 
 impl FamilyArgs {
