@@ -51,7 +51,7 @@ pub struct MarkerArgs {
     #[arg(long)]
     label: bool,
     /// Output file: .svg, .pdf or .png
-    #[arg(short, long)]
+    #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
 }
 

@@ -58,7 +58,7 @@ pub struct SheetArgs {
     #[arg(long)]
     list_templates: bool,
     /// Output file: .pdf, .svg or .png
-    #[arg(short, long, default_value = "swarm.pdf")]
+    #[arg(short, long, value_name = "FILE", default_value = "swarm.pdf")]
     output: PathBuf,
 }
 
