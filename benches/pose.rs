@@ -3,9 +3,8 @@
 use divan::black_box;
 use nalgebra::{Matrix3, Vector3};
 use whycode::camera::Camera;
-use whycode::pose::{
-    choose_by_inner_circle, circle_poses, full_pose, project_marker_point, ImageEllipse, Pose,
-};
+use whycode::math::Ellipse;
+use whycode::pose::{choose_by_inner_circle, circle_poses, full_pose, project_marker_point, Pose};
 
 fn main() {
     divan::main();
@@ -29,14 +28,14 @@ fn tilted_marker() -> Pose {
     Pose::new(Vector3::new(0.2, -0.1, 1.2), rotation)
 }
 
-fn ellipse(camera: &Camera, pose: &Pose, radius: f64) -> ImageEllipse {
+fn ellipse(camera: &Camera, pose: &Pose, radius: f64) -> Ellipse {
     let points: Vec<_> = (0..64)
         .map(|i| {
             let t = std::f64::consts::TAU * i as f64 / 64.0;
             project_marker_point(camera, pose, radius * t.cos(), radius * t.sin()).unwrap()
         })
         .collect();
-    ImageEllipse::fit(&points).unwrap()
+    Ellipse::fit(&points).unwrap()
 }
 
 #[divan::bench(args = [false, true])]
@@ -79,7 +78,7 @@ fn ellipse_fit_64_points(bencher: divan::Bencher) {
             project_marker_point(&camera, &truth, RADIUS * t.cos(), RADIUS * t.sin()).unwrap()
         })
         .collect();
-    bencher.bench(|| ImageEllipse::fit(black_box(&points)));
+    bencher.bench(|| Ellipse::fit(black_box(&points)));
 }
 
 #[divan::bench]

@@ -14,217 +14,10 @@
 //! the printed face. A [`CirclePose`] normal is the marker's +z axis and
 //! points towards the camera (`normal · center < 0`).
 
-use nalgebra::{Matrix2, Matrix3, Rotation3, SymmetricEigen, UnitQuaternion, Vector2, Vector3};
+use nalgebra::{Matrix3, Rotation3, SymmetricEigen, UnitQuaternion, Vector3};
 
 use crate::camera::Camera;
-
-/// An ellipse in pixel coordinates (origin at the top-left pixel's centre,
-/// v down).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImageEllipse {
-    pub u: f64,
-    pub v: f64,
-    pub semi_major: f64,
-    pub semi_minor: f64,
-    /// Direction of the major axis, atan2(dv, du), in (-π/2, π/2].
-    pub angle: f64,
-}
-
-impl ImageEllipse {
-    /// Ellipse of a uniformly filled elliptical region from the covariance
-    /// of its pixel coordinates (paper eq. 2-3: semi-axis = 2·sqrt(λ)).
-    pub fn from_covariance(u: f64, v: f64, covariance: &Matrix2<f64>) -> ImageEllipse {
-        let (cuu, cuv, cvv) = (
-            covariance[(0, 0)],
-            0.5 * (covariance[(0, 1)] + covariance[(1, 0)]),
-            covariance[(1, 1)],
-        );
-        let mean = 0.5 * (cuu + cvv);
-        let spread = (0.25 * (cuu - cvv).powi(2) + cuv * cuv).sqrt();
-        let major = mean + spread;
-        let minor = (mean - spread).max(0.0);
-        ImageEllipse {
-            u,
-            v,
-            semi_major: 2.0 * major.max(0.0).sqrt(),
-            semi_minor: 2.0 * minor.sqrt(),
-            angle: normalize_axis_angle(0.5 * (2.0 * cuv).atan2(cuu - cvv)),
-        }
-    }
-
-    /// Least-squares ellipse through boundary points (direct ellipse-specific
-    /// fit of Fitzgibbon et al. in the numerically stable form of Halíř and
-    /// Flusser, on centred and scaled coordinates). `None` for fewer than 5
-    /// points, degenerate configurations or data that fit no ellipse.
-    pub fn fit(points: &[(f64, f64)]) -> Option<ImageEllipse> {
-        ImageEllipse::from_conic(&fit_conic(points)?)
-    }
-
-    /// The ellipse described by a conic matrix C (points p = (u, v, 1) with
-    /// pᵀ C p = 0), if it is a real ellipse.
-    pub fn from_conic(conic: &Matrix3<f64>) -> Option<ImageEllipse> {
-        let c = 0.5 * (conic + conic.transpose());
-        let quadratic = Matrix2::new(c[(0, 0)], c[(0, 1)], c[(1, 0)], c[(1, 1)]);
-        let linear = Vector2::new(c[(0, 2)], c[(1, 2)]);
-        let centre = -quadratic.try_inverse()? * linear;
-        let value_at_centre = linear.dot(&centre) + c[(2, 2)];
-        if !(value_at_centre.is_finite() && value_at_centre != 0.0) {
-            return None;
-        }
-        let shape = quadratic / -value_at_centre;
-        let (a, b, d) = (shape[(0, 0)], shape[(0, 1)], shape[(1, 1)]);
-        let mean = 0.5 * (a + d);
-        let spread = (0.25 * (a - d).powi(2) + b * b).sqrt();
-        let (small, large) = (mean - spread, mean + spread);
-        if !(small > 0.0 && large.is_finite()) {
-            return None;
-        }
-        // The major axis belongs to the smaller eigenvalue of the shape matrix.
-        let minor_direction = 0.5 * (2.0 * b).atan2(a - d);
-        let ellipse = ImageEllipse {
-            u: centre.x,
-            v: centre.y,
-            semi_major: 1.0 / small.sqrt(),
-            semi_minor: 1.0 / large.sqrt(),
-            angle: normalize_axis_angle(minor_direction + std::f64::consts::FRAC_PI_2),
-        };
-        ellipse.is_valid().then_some(ellipse)
-    }
-
-    /// Conic matrix C with pᵀ C p = 0 on the ellipse (p = (u, v, 1)), scaled
-    /// so that it is negative at the centre.
-    pub fn conic(&self) -> Matrix3<f64> {
-        let (s, c) = self.angle.sin_cos();
-        let (ia, ib) = (
-            1.0 / (self.semi_major * self.semi_major),
-            1.0 / (self.semi_minor * self.semi_minor),
-        );
-        let m00 = c * c * ia + s * s * ib;
-        let m01 = c * s * (ia - ib);
-        let m11 = s * s * ia + c * c * ib;
-        let (u, v) = (self.u, self.v);
-        let l0 = -(m00 * u + m01 * v);
-        let l1 = -(m01 * u + m11 * v);
-        let k = m00 * u * u + 2.0 * m01 * u * v + m11 * v * v - 1.0;
-        Matrix3::new(m00, m01, l0, m01, m11, l1, l0, l1, k)
-    }
-
-    /// Boundary point at parameter t (t = 0 is the end of the major axis in
-    /// the `angle` direction).
-    pub fn point_at(&self, t: f64) -> (f64, f64) {
-        let (s, c) = self.angle.sin_cos();
-        let (a, b) = (self.semi_major * t.cos(), self.semi_minor * t.sin());
-        (self.u + a * c - b * s, self.v + a * s + b * c)
-    }
-
-    /// `n` boundary points evenly spaced in the parameter.
-    pub fn boundary_points(&self, n: usize) -> Vec<(f64, f64)> {
-        (0..n)
-            .map(|i| self.point_at(std::f64::consts::TAU * i as f64 / n as f64))
-            .collect()
-    }
-
-    /// Finite centre and angle, 0 < semi_minor <= semi_major < ∞.
-    pub fn is_valid(&self) -> bool {
-        self.u.is_finite()
-            && self.v.is_finite()
-            && self.angle.is_finite()
-            && self.semi_minor > 0.0
-            && self.semi_major >= self.semi_minor
-            && self.semi_major.is_finite()
-    }
-}
-
-fn normalize_axis_angle(angle: f64) -> f64 {
-    let pi = std::f64::consts::PI;
-    let mut a = angle.rem_euclid(pi);
-    if a > 0.5 * pi {
-        a -= pi;
-    }
-    a
-}
-
-/// Least-squares conic through points (Fitzgibbon's ellipse-specific fit,
-/// Halíř–Flusser formulation), as a symmetric matrix C with pᵀ C p = 0 for
-/// p = (x, y, 1), scaled to unit Frobenius norm. `None` if the points are
-/// too few, not finite or degenerate.
-pub fn fit_conic(points: &[(f64, f64)]) -> Option<Matrix3<f64>> {
-    if points.len() < 5 || points.iter().any(|p| !p.0.is_finite() || !p.1.is_finite()) {
-        return None;
-    }
-    let n = points.len() as f64;
-    let (mx, my) = points
-        .iter()
-        .fold((0.0, 0.0), |(sx, sy), p| (sx + p.0 / n, sy + p.1 / n));
-    let rms = (points
-        .iter()
-        .map(|p| (p.0 - mx).powi(2) + (p.1 - my).powi(2))
-        .sum::<f64>()
-        / n)
-        .sqrt();
-    if rms.is_nan() || rms <= 0.0 {
-        return None;
-    }
-    // Centre and scale so the scatter matrix is well conditioned whatever
-    // the units (pixels or normalised camera coordinates).
-    let scale = std::f64::consts::SQRT_2 / rms;
-    let mut s1 = Matrix3::zeros();
-    let mut s2 = Matrix3::zeros();
-    let mut s3 = Matrix3::zeros();
-    for p in points {
-        let (x, y) = ((p.0 - mx) * scale, (p.1 - my) * scale);
-        let quadratic = Vector3::new(x * x, x * y, y * y);
-        let linear = Vector3::new(x, y, 1.0);
-        s1 += quadratic * quadratic.transpose();
-        s2 += quadratic * linear.transpose();
-        s3 += linear * linear.transpose();
-    }
-    let linear_from_quadratic = -s3.try_inverse()? * s2.transpose();
-    let reduced = s1 + s2 * linear_from_quadratic;
-    let reduced = 0.5 * (reduced + reduced.transpose());
-    // Minimise aᵀ M a subject to 4ac - b² = 1: with M = L Lᵀ this is the
-    // largest eigenvalue of the symmetric L⁻¹ C L⁻ᵀ. The tiny ridge keeps
-    // Cholesky alive for noise-free points, where M is singular and its
-    // null vector is the exact answer.
-    let ridge = 1e-13 * reduced.trace().max(f64::MIN_POSITIVE);
-    let cholesky = (reduced + Matrix3::identity() * ridge).cholesky()?;
-    let l_inv = cholesky.l().try_inverse()?;
-    let constraint = Matrix3::new(0.0, 0.0, 2.0, 0.0, -1.0, 0.0, 2.0, 0.0, 0.0);
-    let eigen = SymmetricEigen::new(l_inv * constraint * l_inv.transpose());
-    let best = eigen.eigenvalues.imax();
-    if eigen.eigenvalues[best].is_nan() || eigen.eigenvalues[best] <= 0.0 {
-        return None;
-    }
-    let quadratic = l_inv.transpose() * eigen.eigenvectors.column(best);
-    let linear = linear_from_quadratic * quadratic;
-    let (a, b, c) = (quadratic[0], quadratic[1], quadratic[2]);
-    let (d, e, f) = (linear[0], linear[1], linear[2]);
-    let normalized = Matrix3::new(
-        a,
-        0.5 * b,
-        0.5 * d,
-        0.5 * b,
-        c,
-        0.5 * e,
-        0.5 * d,
-        0.5 * e,
-        f,
-    );
-    let to_normalized = Matrix3::new(
-        scale,
-        0.0,
-        -scale * mx,
-        0.0,
-        scale,
-        -scale * my,
-        0.0,
-        0.0,
-        1.0,
-    );
-    let conic = to_normalized.transpose() * normalized * to_normalized;
-    let norm = conic.norm();
-    (norm > 0.0 && norm.is_finite()).then(|| conic / norm)
-}
+use crate::math::ellipse::{fit_conic, Ellipse};
 
 /// One solution for a circle in space: its centre (camera frame, metres)
 /// and unit plane normal pointing towards the camera.
@@ -250,9 +43,9 @@ impl CirclePose {
 /// The two circle poses consistent with an image ellipse of a circle of
 /// radius `radius_m` (paper eq. 6-8). Both candidates are always returned;
 /// near face-on they coincide. For an invalid ellipse (see
-/// [`ImageEllipse::is_valid`]) the result has NaN fields; use
+/// [`Ellipse::is_valid`]) the result has NaN fields; use
 /// [`try_circle_poses`] to get `None` instead.
-pub fn circle_poses(camera: &Camera, ellipse: &ImageEllipse, radius_m: f64) -> [CirclePose; 2] {
+pub fn circle_poses(camera: &Camera, ellipse: &Ellipse, radius_m: f64) -> [CirclePose; 2] {
     try_circle_poses(camera, ellipse, radius_m).unwrap_or(
         [CirclePose {
             center: Vector3::repeat(f64::NAN),
@@ -269,7 +62,7 @@ pub fn circle_poses(camera: &Camera, ellipse: &ImageEllipse, radius_m: f64) -> [
 /// undistorting only the (co-)vertices as the reference does.
 pub fn try_circle_poses(
     camera: &Camera,
-    ellipse: &ImageEllipse,
+    ellipse: &Ellipse,
     radius_m: f64,
 ) -> Option<[CirclePose; 2]> {
     if !ellipse.is_valid() {
@@ -385,7 +178,7 @@ fn plane_basis(normal: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
 /// it is the ellipse best fitting 32 projected points of the (then not
 /// exactly elliptical) image curve. `None` if part of the circle is behind
 /// the camera.
-pub fn project_circle(camera: &Camera, circle: &CirclePose, radius_m: f64) -> Option<ImageEllipse> {
+pub fn project_circle(camera: &Camera, circle: &CirclePose, radius_m: f64) -> Option<Ellipse> {
     let normal = circle.normal.normalize();
     let (e1, e2) = plane_basis(&normal);
     let nearest_z = circle.center.z - radius_m * normal.xy().norm();
@@ -399,14 +192,14 @@ pub fn project_circle(camera: &Camera, circle: &CirclePose, radius_m: f64) -> Op
                 camera.project(&(circle.center + radius_m * (t.cos() * e1 + t.sin() * e2)))
             })
             .collect::<Option<Vec<_>>>()?;
-        return ImageEllipse::fit(&points);
+        return Ellipse::fit(&points);
     }
     // The plane-to-image homography H = K [e1 e2 c] maps the plane conic
     // diag(1, 1, -r²) to H⁻ᵀ diag(1, 1, -r²) H⁻¹.
     let homography = intrinsic_matrix(camera) * Matrix3::from_columns(&[e1, e2, circle.center]);
     let inverse = homography.try_inverse()?;
     let plane_conic = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -radius_m * radius_m));
-    ImageEllipse::from_conic(&(inverse.transpose() * plane_conic * inverse))
+    Ellipse::from_conic(&(inverse.transpose() * plane_conic * inverse))
 }
 
 /// Resolve the two-fold ambiguity with a concentric inner circle (radius
@@ -431,7 +224,7 @@ pub fn project_circle(camera: &Camera, circle: &CirclePose, radius_m: f64) -> Op
 pub fn choose_by_inner_circle(
     camera: &Camera,
     candidates: &[CirclePose; 2],
-    inner: &ImageEllipse,
+    inner: &Ellipse,
     inner_ratio: f64,
     radius_m: f64,
 ) -> (usize, f64) {
@@ -702,9 +495,9 @@ pub struct PoseEstimate {
 /// ellipse.
 pub fn estimate_pose(
     camera: &Camera,
-    outer: &ImageEllipse,
+    outer: &Ellipse,
     radius_m: f64,
-    inner: Option<(&ImageEllipse, f64)>,
+    inner: Option<(&Ellipse, f64)>,
     image_yaw: Option<f64>,
 ) -> Option<PoseEstimate> {
     let candidates = try_circle_poses(camera, outer, radius_m)?;
@@ -755,51 +548,4 @@ pub fn reprojection_rms(
         sum += (pu - u).powi(2) + (pv - v).powi(2);
     }
     Some((sum / correspondences.len() as f64).sqrt())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn ellipse_conic_round_trip() {
-        let e = ImageEllipse {
-            u: 120.5,
-            v: -33.0,
-            semi_major: 40.0,
-            semi_minor: 12.5,
-            angle: 2.0,
-        };
-        let back = ImageEllipse::from_conic(&(e.conic() * -3.0)).unwrap();
-        assert!((back.u - e.u).abs() < 1e-9 && (back.v - e.v).abs() < 1e-9);
-        assert!((back.semi_major - 40.0).abs() < 1e-9 && (back.semi_minor - 12.5).abs() < 1e-9);
-        assert!((back.angle - normalize_axis_angle(2.0)).abs() < 1e-12);
-        for (u, v) in e.boundary_points(7) {
-            let p = Vector3::new(u, v, 1.0);
-            assert!((p.transpose() * e.conic() * p)[0].abs() < 1e-12);
-        }
-    }
-
-    #[test]
-    fn covariance_of_filled_ellipse() {
-        // A filled ellipse with semi-axes a, b has variances a²/4, b²/4.
-        let (a, b, angle) = (30.0f64, 10.0f64, 0.4f64);
-        let (s, c) = angle.sin_cos();
-        let r = Matrix2::new(c, -s, s, c);
-        let cov = r * Matrix2::new(a * a / 4.0, 0.0, 0.0, b * b / 4.0) * r.transpose();
-        let e = ImageEllipse::from_covariance(5.0, 6.0, &cov);
-        assert!((e.semi_major - a).abs() < 1e-9 && (e.semi_minor - b).abs() < 1e-9);
-        assert!((e.angle - angle).abs() < 1e-12);
-        let round = ImageEllipse::from_covariance(0.0, 0.0, &Matrix2::identity());
-        assert_eq!((round.semi_major, round.semi_minor), (2.0, 2.0));
-        assert!(round.angle.is_finite());
-    }
-
-    #[test]
-    fn fit_rejects_degenerate_input() {
-        assert!(ImageEllipse::fit(&[(0.0, 0.0), (1.0, 1.0), (2.0, 2.0), (3.0, 3.0)]).is_none());
-        let line: Vec<_> = (0..20).map(|i| (i as f64, 2.0 * i as f64)).collect();
-        assert!(ImageEllipse::fit(&line).is_none());
-        assert!(ImageEllipse::fit(&[(1.0, 1.0); 10]).is_none());
-    }
 }

@@ -4,10 +4,10 @@
 mod detect_common;
 
 use detect_common::{match_detections, render, scatter, Look, Pinhole, Placement, Rng};
-use whycode::detect::ellipse::{fit_conic, Ellipse};
 use whycode::detect::{Detection, Detector, DetectorConfig};
 use whycode::family::Family;
 use whycode::geometry::Marker;
+use whycode::math::Ellipse;
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 
@@ -26,7 +26,7 @@ fn true_outline(camera: &Pinhole, p: &Placement) -> Ellipse {
         })
         .collect();
     let (u, v) = p.centre(camera);
-    fit_conic(&points, (u, v), 50.0).unwrap()
+    Ellipse::fit_near(&points, (u, v), 50.0).unwrap()
 }
 
 fn axis_angle_diff(a: f64, b: f64) -> f64 {
@@ -85,21 +85,23 @@ fn face_on_legacy_markers_from_10_px_up_are_found_with_sub_pixel_centres() {
     for (p, d) in placements.iter().zip(matched) {
         let truth = true_outline(&camera, p);
         let centre_error = (d.u - truth.u).hypot(d.v - truth.v);
-        let size_error = (d.axes[0] - truth.a).abs().max((d.axes[1] - truth.b).abs());
+        let size_error = (d.axes[0] - truth.semi_major)
+            .abs()
+            .max((d.axes[1] - truth.semi_minor).abs());
         eprintln!(
             "d={:5.1}: centre error {centre_error:.3} px, axis error {size_error:.3} px",
-            2.0 * truth.a
+            2.0 * truth.semi_major
         );
         // Sub-pixel at every size: centres within 0.06 px, axes 0.15 px.
         assert!(
             centre_error < 0.06,
             "centre error {centre_error} at d={}",
-            2.0 * truth.a
+            2.0 * truth.semi_major
         );
         assert!(
             size_error < 0.15,
             "axis error {size_error} at d={}",
-            2.0 * truth.a
+            2.0 * truth.semi_major
         );
     }
 }
@@ -132,17 +134,19 @@ fn tilted_markers_up_to_60_degrees_keep_their_outline() {
     for (p, d) in placements.iter().zip(matched) {
         let truth = true_outline(&camera, p);
         let centre_error = (d.u - truth.u).hypot(d.v - truth.v);
-        let size_error = (d.axes[0] - truth.a).abs().max((d.axes[1] - truth.b).abs());
+        let size_error = (d.axes[0] - truth.semi_major)
+            .abs()
+            .max((d.axes[1] - truth.semi_minor).abs());
         let angle_error = axis_angle_diff(d.angle, truth.angle);
         eprintln!(
             "axes {:.1}/{:.1}: centre {centre_error:.3} px, axes {size_error:.3} px, angle {:.2}°",
-            truth.a,
-            truth.b,
+            truth.semi_major,
+            truth.semi_minor,
             angle_error / DEG
         );
         assert!(centre_error < 0.1, "centre error {centre_error}");
         assert!(size_error < 0.15, "axis error {size_error}");
-        if truth.a / truth.b > 1.05 {
+        if truth.semi_major / truth.semi_minor > 1.05 {
             assert!(
                 angle_error < 0.5 * DEG,
                 "axis direction off by {}°",

@@ -300,7 +300,8 @@ impl Detector {
                     for c in level {
                         if found.len() < limit
                             && !found.iter().any(|o: &Candidate| {
-                                (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.b
+                                (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v)
+                                    < o.outer.semi_minor
                             })
                         {
                             found.push(c);
@@ -317,8 +318,9 @@ impl Detector {
         let fresh: Vec<Candidate> = new
             .iter()
             .filter(|c| {
-                !old.iter()
-                    .any(|o| (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.b)
+                !old.iter().any(|o| {
+                    (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.semi_minor
+                })
             })
             .cloned()
             .collect();
@@ -353,20 +355,14 @@ impl Detector {
         c: &Candidate,
     ) -> (Detection, Option<Vector3<f64>>) {
         let quality = 1.0 - (c.area_error / self.area.tolerance()).min(1.0);
-        let outer = pose::ImageEllipse {
-            u: c.outer.u,
-            v: c.outer.v,
-            semi_major: c.outer.a,
-            semi_minor: c.outer.b,
-            angle: c.outer.angle,
-        };
+        let outer = c.outer;
         let mut d = Detection {
             id: 0,
             code: None,
             u: c.outer.u,
             v: c.outer.v,
             yaw: None,
-            axes: [c.outer.a, c.outer.b],
+            axes: [c.outer.semi_major, c.outer.semi_minor],
             angle: c.outer.angle,
             confidence: (0.5 + 0.5 * quality).clamp(0.0, 1.0),
             status: None,
@@ -499,7 +495,7 @@ impl Detector {
         radius_m: f64,
         gray: Gray<'_>,
         c: &Candidate,
-        outer: &pose::ImageEllipse,
+        outer: &Ellipse,
         hints: PoseHints,
     ) -> Option<(Pose, bool)> {
         let PoseHints {
@@ -576,7 +572,7 @@ impl Detector {
         }
         self.occupied.resize(cols * rows, false);
         for c in found {
-            let reach = c.outer.a + 2.0;
+            let reach = c.outer.semi_major + 2.0;
             let x0 = ((c.outer.u - reach).max(0.0) as usize) / SCAN_CHUNK;
             let x1 = ((c.outer.u + reach).max(0.0) as usize / SCAN_CHUNK).min(cols - 1);
             let y0 = ((c.outer.v - reach).max(0.0) as usize) / SCAN_CHUNK;
@@ -659,7 +655,7 @@ impl Detector {
         self.follow_filled = true;
         let c = self.evaluate(gray, &map, (seed as u32, y as u32))?;
         let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
-        let same_size = (c.outer.a / track.a - 1.0).abs() < 0.3;
+        let same_size = (c.outer.semi_major / track.a - 1.0).abs() < 0.3;
         (moved < track.a.max(4.0) && same_size).then_some(c)
     }
 
@@ -668,8 +664,8 @@ impl Detector {
         let guess = Ellipse {
             u: pu,
             v: pv,
-            a: track.a,
-            b: track.b,
+            semi_major: track.a,
+            semi_minor: track.b,
             angle: track.angle,
         };
         let mid = (track.black + track.white) / 2.0;
@@ -685,17 +681,17 @@ impl Detector {
         if self.edge_scratch.len() * 5 < rays * 4 {
             return None;
         }
-        let fitted = ellipse::fit_conic(&self.edge_scratch, (pu, pv), track.a)?;
+        let fitted = Ellipse::fit_near(&self.edge_scratch, (pu, pv), track.a)?;
         let rms = (self
             .edge_scratch
             .iter()
-            .map(|&(x, y)| ellipse::radial_distance(&fitted, x, y).powi(2))
+            .map(|&(x, y)| fitted.radial_distance(x, y).powi(2))
             .sum::<f64>()
             / self.edge_scratch.len() as f64)
             .sqrt();
         let consistent = rms < 0.3 + 0.01 * track.a
-            && (fitted.a / track.a - 1.0).abs() < 0.1
-            && (fitted.b / track.b - 1.0).abs() < 0.1
+            && (fitted.semi_major / track.a - 1.0).abs() < 0.1
+            && (fitted.semi_minor / track.b - 1.0).abs() < 0.1
             && (fitted.u - pu).hypot(fitted.v - pv) < window;
         if !consistent {
             return None;
@@ -710,8 +706,8 @@ impl Detector {
         const PROBES: usize = 8;
         for k in 0..PROBES {
             let t = std::f64::consts::TAU * k as f64 / PROBES as f64;
-            let inner = fitted.scaled(0.6 * white_ratio).point(t);
-            let annulus = fitted.scaled(0.8).point(t);
+            let inner = fitted.scaled(0.6 * white_ratio).point_at(t);
+            let annulus = fitted.scaled(0.8).point_at(t);
             let w = ellipse::sample(gray, inner.0, inner.1)?;
             let b = ellipse::sample(gray, annulus.0, annulus.1)?;
             if w < mid || b >= mid {
@@ -749,7 +745,7 @@ impl Detector {
         }
         for ((c, d), settled) in found.iter().zip(detections).zip(settled_normals) {
             let threshold = ((c.black + c.white) / 2.0).round().clamp(1.0, 255.0) as u8;
-            let (u, v, a, b) = (c.outer.u, c.outer.v, c.outer.a, c.outer.b);
+            let (u, v, a, b) = (c.outer.u, c.outer.v, c.outer.semi_major, c.outer.semi_minor);
             let index = c.track.or_else(|| {
                 let i =
                     (0..self.tracks.len()).find(|&i| !taken[i] && self.tracks[i].matches(u, v))?;
@@ -825,13 +821,13 @@ impl Detector {
         let white = self.fill_inside(gray, map, (cu, cv), bounds, max_count)?;
         let total = dark.merged(&white);
         let ratio = white.count as f64 / total.count as f64;
-        let coarse = Ellipse::from_moments(&total);
+        let coarse = ellipse::from_moments(&total);
         let accepted = self.ratio.accepts(ratio)
             && coarse.is_some_and(|e| {
                 let (wu, wv) = white.centroid();
-                let radius = (e.a * e.b).sqrt();
+                let radius = (e.semi_major * e.semi_minor).sqrt();
                 (wu - e.u).hypot(wv - e.v) < concentricity_tolerance(whycode) * radius + 1.0
-                    && 2.0 * e.b >= min_d
+                    && 2.0 * e.semi_minor >= min_d
             });
         let coarse = match coarse {
             Some(e) if accepted => e,
@@ -843,7 +839,7 @@ impl Detector {
         // Eq. 4 on the whole disc. Pixel counts of small discs carry a
         // boundary quantisation error of about 1/(2b) of the area.
         let area_error = coarse.area() / total.count as f64 - 1.0;
-        if area_error.abs() >= self.area.tolerance() + 0.5 / coarse.b {
+        if area_error.abs() >= self.area.tolerance() + 0.5 / coarse.semi_minor {
             return None;
         }
         let black = dark.mean_intensity();
@@ -855,7 +851,7 @@ impl Detector {
         // blobs pass the moment tests (a square's area is within 5 % of its
         // moment ellipse's) but not this.
         let refined = ellipse::refine(gray, &coarse, &mut self.edge_scratch)?;
-        if refined.support < 0.75 || refined.rms > 0.35 + 0.015 * coarse.a {
+        if refined.support < 0.75 || refined.rms > 0.35 + 0.015 * coarse.semi_major {
             return None;
         }
         let outer = refined.ellipse;

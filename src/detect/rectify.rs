@@ -156,7 +156,7 @@ pub fn follow_ring(
     let (sa, ca) = outer.angle.sin_cos();
     let (dy, dx) = previous_yaw.sin_cos();
     let (ex, ey) = (dx * ca + dy * sa, -dx * sa + dy * ca);
-    let t0 = (ey / outer.b).atan2(ex / outer.a);
+    let t0 = (ey / outer.semi_minor).atan2(ex / outer.semi_major);
     let scales = [0.42, 0.52];
     // Walk t by a fixed rotation instead of evaluating sines per sample.
     let (step_sin, step_cos) = (-std::f64::consts::TAU / n as f64).sin_cos();
@@ -165,7 +165,7 @@ pub fn follow_ring(
     for _ in 0..n {
         let mut sum = 0.0;
         for k in scales {
-            let (x, y) = (k * outer.a * ct, k * outer.b * st);
+            let (x, y) = (k * outer.semi_major * ct, k * outer.semi_minor * st);
             sum += sample(image, outer.u + x * ca - y * sa, outer.v + x * sa + y * ca)?;
         }
         profile.push(sum / scales.len() as f64);
@@ -175,7 +175,7 @@ pub fn follow_ring(
     if phi.abs() > w / 2.0 {
         return None;
     }
-    let (x, y) = outer.point(t0 - phi);
+    let (x, y) = outer.point_at(t0 - phi);
     Some((y - outer.v).atan2(x - outer.u))
 }
 

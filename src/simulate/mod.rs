@@ -21,10 +21,9 @@ mod background;
 mod effects;
 pub mod layout;
 mod raster;
-pub mod rng;
 mod truth;
 
-pub use truth::{GroundTruth, TrueEllipse, TrueMarker, TruePage};
+pub use truth::{GroundTruth, TrueMarker, TruePage};
 
 use crate::camera::Camera;
 use crate::geometry::Marker;

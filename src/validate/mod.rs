@@ -11,12 +11,12 @@
 //! the best observation of each marker counts.
 
 pub mod annotate;
-pub mod homography;
 pub mod scale;
 
 use crate::camera::Camera;
+use crate::math::homography::{fit_robust, Correspondence, Homography};
+use crate::math::Ellipse;
 use crate::render::manifest::{Manifest, PrintedMarker};
-use homography::{fit_robust, Correspondence, Homography, ImageEllipse};
 use image::GrayImage;
 use scale::{PixelModel, ScaleMeasurement, ScaleStatus};
 use serde::Serialize;
@@ -40,8 +40,8 @@ pub struct Observation {
 
 impl Observation {
     /// The detected outline of the black disc.
-    pub fn outline(&self) -> ImageEllipse {
-        ImageEllipse {
+    pub fn outline(&self) -> Ellipse {
+        Ellipse {
             u: self.u,
             v: self.v,
             semi_major: self.semi_major,
@@ -123,7 +123,7 @@ pub struct MarkerCheck {
     pub size_ratio: Option<f64>,
     /// The outline to draw: the detected ellipse, or the predicted one.
     #[serde(skip)]
-    pub outline: Option<ImageEllipse>,
+    pub outline: Option<Ellipse>,
 }
 
 /// A page located in a photo.
@@ -482,7 +482,7 @@ fn classify(
                 size_ratio: Some(
                     (o.semi_major * o.semi_minor).sqrt() / (e.semi_major * e.semi_minor).sqrt(),
                 ),
-                outline: Some(ImageEllipse {
+                outline: Some(Ellipse {
                     u: o.u,
                     v: o.v,
                     semi_major: o.semi_major,
@@ -498,7 +498,7 @@ fn classify(
             let (u, v) = model.to_image(x, y);
             u >= 1.0 && v >= 1.0 && u <= w - 2.0 && v <= hgt - 2.0
         });
-        let outline = Some(ImageEllipse {
+        let outline = Some(Ellipse {
             u: centre.0,
             v: centre.1,
             ..e

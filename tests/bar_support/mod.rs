@@ -18,7 +18,7 @@ use whycode::camera::Camera;
 use whycode::detect::{Detection, Detector, DetectorConfig};
 use whycode::family::Family;
 use whycode::geometry::Marker;
-use whycode::simulate::rng::Pcg32;
+use whycode::math::Pcg32;
 use whycode::simulate::{
     self, Background, GroundTruth, LooseMarker, MotionBlur, Placement, Scene, SceneObject,
 };
