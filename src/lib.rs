@@ -31,6 +31,7 @@ pub mod detect;
 pub mod family;
 pub mod geometry;
 pub mod io;
+pub mod manifest;
 pub mod math;
 pub mod pose;
 pub mod render;

@@ -5,8 +5,8 @@
 use std::process::Command;
 use whycode::family::necklace::rotr;
 use whycode::family::Family;
+use whycode::manifest::FamilyRef;
 use whycode::render::check::check_sheet;
-use whycode::render::manifest::FamilyRef;
 use whycode::render::sheet::{family_markers, layout, Sheet, SheetSpec};
 use whycode::render::{Item, Template};
 

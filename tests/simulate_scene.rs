@@ -3,7 +3,7 @@
 use nalgebra::Vector3;
 use whycode::camera::Camera;
 use whycode::geometry::Marker;
-use whycode::render::manifest::{FamilyRef, Manifest, PrintedMarker};
+use whycode::manifest::{FamilyRef, Manifest, PrintedMarker};
 use whycode::simulate::{
     render, Background, Blot, LooseMarker, MotionBlur, Placement, Scene, SceneObject, SheetPage,
 };

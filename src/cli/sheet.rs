@@ -1,6 +1,6 @@
 use crate::family::Family;
+use crate::manifest::FamilyRef;
 use crate::render::check::{check_sheet, check_sheet_png};
-use crate::render::manifest::FamilyRef;
 use crate::render::sheet::{family_markers, layout, legacy_markers, SheetSpec};
 use crate::render::template::Template;
 use crate::render::{encode_pages, write_all, Format};

@@ -3,7 +3,7 @@
 use crate::camera::Camera;
 use crate::family::Family;
 use crate::geometry::Marker;
-use crate::render::manifest::Manifest;
+use crate::manifest::Manifest;
 use crate::simulate::{self, layout, Background, MotionBlur, Scene, SceneObject, SheetPage};
 use crate::units::{Angle, Length};
 use anyhow::{bail, Context, Result};

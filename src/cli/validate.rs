@@ -1,7 +1,7 @@
 //! `whycode validate`: check photos of printed sheets against the manifest.
 
 use crate::camera::Camera;
-use crate::render::manifest::Manifest;
+use crate::manifest::Manifest;
 use crate::validate::{self, annotate};
 use anyhow::{Context, Result};
 use clap::ValueEnum;

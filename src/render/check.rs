@@ -3,13 +3,13 @@
 //! one, the detector runs on each raster, and every marker must be found at
 //! its place, read as its own ID, with yaw 0 (markers are printed upright).
 
-use super::manifest::PrintedMarker;
 use super::page::Page;
 use super::raster;
 use super::sheet::Sheet;
 use crate::detect::{Detection, Detector, DetectorConfig};
 use crate::family::Family;
 use crate::geometry::{Marker, MarkerKind};
+use crate::manifest::PrintedMarker;
 use anyhow::{bail, Result};
 use rayon::prelude::*;
 

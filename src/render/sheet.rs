@@ -2,12 +2,12 @@
 //! with a scale check bar, plus the manifest recording where each marker is.
 
 use super::font::{helvetica_width_mm, CAP_HEIGHT};
-use super::manifest::{FamilyRef, Manifest, PrintedMarker};
 use super::marker::{cut_circle, marker_label, CUT_CLEARANCE_MM, LABEL_GAP_MM, MIN_LABEL_PT};
 use super::page::{Anchor, Item, Page, MM_PER_PT};
 use super::template::Template;
 use crate::family::Family;
 use crate::geometry::{Marker, MIN_MARGIN_RATIO};
+use crate::manifest::{FamilyRef, Manifest, PrintedMarker};
 use crate::units::trim_float;
 use anyhow::{bail, Result};
 
@@ -413,7 +413,7 @@ pub fn layout(spec: &SheetSpec) -> Result<Sheet> {
     }
     let manifest = Manifest {
         format: "whycode-sheet".to_string(),
-        version: super::manifest::MANIFEST_VERSION,
+        version: crate::manifest::MANIFEST_VERSION,
         tool: format!("whycode {}", env!("CARGO_PKG_VERSION")),
         family: spec.family,
         legacy: spec.legacy,

@@ -27,7 +27,7 @@ pub use truth::{GroundTruth, TrueMarker, TruePage};
 
 use crate::camera::Camera;
 use crate::geometry::Marker;
-use crate::render::manifest::Manifest;
+use crate::manifest::Manifest;
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 /// Where an object sits: object frame (metres) → camera frame.
@@ -164,10 +164,7 @@ impl SheetPage {
 
     /// The marker shape of one manifest entry (WhyCode when the manifest
     /// names a family, WhyCon otherwise), at the intended size.
-    pub fn marker_of(
-        manifest: &Manifest,
-        entry: &crate::render::manifest::PrintedMarker,
-    ) -> Marker {
+    pub fn marker_of(manifest: &Manifest, entry: &crate::manifest::PrintedMarker) -> Marker {
         match manifest.family {
             Some(f) if !manifest.legacy => Marker::whycode(f.bits, entry.code, entry.diameter_mm),
             _ => Marker::whycon(entry.diameter_mm),

@@ -14,9 +14,9 @@ pub mod annotate;
 pub mod scale;
 
 use crate::camera::Camera;
+use crate::manifest::{Manifest, PrintedMarker};
 use crate::math::homography::{fit_robust, Correspondence, Homography};
 use crate::math::Ellipse;
-use crate::render::manifest::{Manifest, PrintedMarker};
 use image::GrayImage;
 use scale::{PixelModel, ScaleMeasurement, ScaleStatus};
 use serde::Serialize;
@@ -894,7 +894,7 @@ pub fn check_image(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::manifest::FamilyRef;
+    use crate::manifest::FamilyRef;
 
     #[test]
     fn best_observation_over_photos_wins() {
