@@ -9,7 +9,8 @@
 //! (checking printed sheets from photos). [`cli`] is a thin layer over them.
 //!
 //! ```no_run
-//! use whycode::detect::{load_gray, Detector, DetectorConfig};
+//! use whycode::detect::{Detector, DetectorConfig};
+//! use whycode::image_io::load_gray;
 //! use whycode::family::Family;
 //!
 //! # fn main() -> anyhow::Result<()> {
@@ -30,6 +31,7 @@ pub mod cli;
 pub mod detect;
 pub mod family;
 pub mod geometry;
+pub mod image_io;
 pub mod io;
 pub mod manifest;
 pub mod math;

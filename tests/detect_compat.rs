@@ -3,7 +3,8 @@
 
 use std::path::PathBuf;
 
-use whycode::detect::{load_gray, Detection, Detector, DetectorConfig};
+use whycode::detect::{Detection, Detector, DetectorConfig};
+use whycode::image_io::load_gray;
 
 fn compat(name: &str) -> Option<PathBuf> {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -7,8 +7,9 @@ use std::path::Path;
 
 use detect_common::Rng;
 use image::{GrayImage, Luma};
-use whycode::detect::{load_gray, Detector, DetectorConfig};
+use whycode::detect::{Detector, DetectorConfig};
 use whycode::family::Family;
+use whycode::image_io::load_gray;
 
 fn detectors() -> Vec<Detector> {
     let family = Family::generate(8, 2).unwrap();

@@ -1,8 +1,9 @@
 //! `whycode detect`: find markers in images and print IDs, yaw and pose.
 
 use crate::camera::Camera;
-use crate::detect::{load_gray, Detection, Detector, DetectorConfig};
+use crate::detect::{Detection, Detector, DetectorConfig};
 use crate::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
+use crate::image_io::load_gray;
 use crate::units::Length;
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;

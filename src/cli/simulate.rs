@@ -301,9 +301,9 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
     }
     scene.noise = args.noise;
     scene.seed = args.seed;
-    let format = simulate::ImageFormat::from_path(&args.output)?;
+    let format = crate::image_io::ImageFormat::from_path(&args.output)?;
     // A JPEG output file is itself the compression step: do it once.
-    scene.jpeg_quality = if format == simulate::ImageFormat::Jpeg {
+    scene.jpeg_quality = if format == crate::image_io::ImageFormat::Jpeg {
         None
     } else {
         args.jpeg
@@ -328,7 +328,7 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
             truth_path.display()
         );
     }
-    simulate::save_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
+    crate::image_io::save_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
     crate::io::write_atomic(&truth_path, truth.to_json().as_bytes())?;
     let visible = truth.markers.iter().filter(|m| m.visible).count();
     println!(

@@ -56,7 +56,7 @@ pub fn run(args: ValidateArgs) -> Result<ExitCode> {
     // Photos from different folders may share a name (two phones' IMG_0001).
     let mut used_names = std::collections::HashSet::new();
     for path in &args.photos {
-        let image = crate::detect::load_gray(path)?;
+        let image = crate::image_io::load_gray(path)?;
         let cam = camera
             .as_ref()
             .map(|c| c.for_image(image.width(), image.height()))
