@@ -3,6 +3,7 @@
 use divan::black_box;
 use nalgebra::{Matrix3, Vector3};
 use whycode::camera::Camera;
+use whycode::geometry::WHYCON_WHITE_RATIO;
 use whycode::math::Ellipse;
 use whycode::pose::{choose_by_inner_circle, circle_poses, full_pose, project_marker_point, Pose};
 
@@ -11,7 +12,7 @@ fn main() {
 }
 
 const RADIUS: f64 = 0.061;
-const INNER_RATIO: f64 = 50.0 / 122.0;
+const INNER_RATIO: f64 = WHYCON_WHITE_RATIO;
 
 fn distorted() -> Camera {
     Camera {

@@ -9,14 +9,14 @@
 //! (checking printed sheets from photos). [`cli`] is a thin layer over them.
 //!
 //! ```no_run
-//! use whycode::detect::{Detector, DetectorConfig};
+//! use whycode::detect::{Detector, DetectorConfig, Target};
 //! use whycode::image_io::load_gray;
 //! use whycode::family::Family;
 //!
 //! # fn main() -> anyhow::Result<()> {
 //! let family = Family::generate(8, 2)?;
 //! let mut detector = Detector::new(DetectorConfig {
-//!     family: Some(family),
+//!     target: Target::WhyCode(family),
 //!     ..Default::default()
 //! });
 //! for d in detector.detect(&load_gray("photo.png".as_ref())?) {

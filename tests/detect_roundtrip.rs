@@ -4,9 +4,9 @@
 mod detect_common;
 
 use detect_common::{match_detections, render, scatter, Look, Pinhole, Placement, Rng};
-use whycode::detect::{Detection, Detector, DetectorConfig};
+use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
-use whycode::geometry::Marker;
+use whycode::geometry::{Marker, WHYCON_WHITE_RATIO};
 use whycode::math::Ellipse;
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
@@ -233,7 +233,7 @@ fn whycode_markers_pass_the_disc_tests() {
     });
     let image = render(1200, 800, &camera, &placements, Look::default());
     let mut detector = Detector::new(DetectorConfig {
-        family: Some(family),
+        target: Target::WhyCode(family),
         ..DetectorConfig::default()
     });
     let found = detector.detect(&image);
@@ -281,7 +281,7 @@ fn clutter_without_markers_gives_no_detection() {
                 &mut img,
                 &|x, y| {
                     let m = (x - cx).abs().max((y - cy).abs());
-                    m < r && m > 0.41 * r
+                    m < r && m > WHYCON_WHITE_RATIO * r
                 },
                 shade,
             ),
@@ -406,7 +406,7 @@ fn tracked_whycode_markers_keep_ids_and_yaw_while_turning() {
         cy: 300.0,
     };
     let config = DetectorConfig {
-        family: Some(family.clone()),
+        target: Target::WhyCode(family.clone()),
         ..DetectorConfig::default()
     };
     let mut tracked = Detector::new(DetectorConfig {
@@ -475,7 +475,7 @@ fn the_id_filter_outvotes_a_single_misread() {
         cy: 200.0,
     };
     let config = DetectorConfig {
-        family: Some(family.clone()),
+        target: Target::WhyCode(family.clone()),
         ..DetectorConfig::default()
     };
     let mut tracked = Detector::new(DetectorConfig {
@@ -551,7 +551,7 @@ fn small_whycode_markers_read_right_or_unknown() {
         },
     );
     let config = DetectorConfig {
-        family: Some(family),
+        target: Target::WhyCode(family),
         ..DetectorConfig::default()
     };
     let found = Detector::new(config).detect(&image);

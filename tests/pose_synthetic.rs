@@ -5,6 +5,7 @@
 
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use whycode::camera::Camera;
+use whycode::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
 use whycode::math::Ellipse;
 use whycode::pose::{
     choose_by_circle_points, choose_by_inner_circle, choose_by_radial_points, circle_poses,
@@ -15,7 +16,7 @@ use whycode::pose::{
 /// Default marker of the reference ROS tools: 122 mm outer diameter.
 const RADIUS: f64 = 0.061;
 /// Legacy WhyCon inner white disc, relative to the outer radius.
-const INNER_RATIO: f64 = 50.0 / 122.0;
+const INNER_RATIO: f64 = WHYCON_WHITE_RATIO;
 
 fn distorted_640() -> Camera {
     Camera {
@@ -93,7 +94,8 @@ fn recover(camera: &Camera, truth: &Pose) -> Outcome {
     // When both candidates agree to within the accuracy asked for, either
     // choice is right.
     let both_fine = errors.iter().all(|e| e.0 < 0.5);
-    let x_axis_pixel = project_marker_point(camera, truth, 0.6 * RADIUS, 0.0).unwrap();
+    let x_axis_pixel =
+        project_marker_point(camera, truth, WHYCODE_WHITE_RATIO * RADIUS, 0.0).unwrap();
     let pose = full_pose(camera, &candidates[best], x_axis_pixel);
     Outcome {
         normal_error_deg: errors[best].0,
@@ -301,9 +303,9 @@ fn ambiguity_resolved_from_points_on_the_inner_circle() {
             1
         };
         // Edge points of the code ring's inner border (0.343 R), 24 of them.
-        let ring_edge = circle_pixels(&camera, &truth, 0.343 * RADIUS, 24);
+        let ring_edge = circle_pixels(&camera, &truth, RING_INNER_RATIO * RADIUS, 24);
         let (chosen, margin) =
-            choose_by_circle_points(&camera, &candidates, &ring_edge, 0.343 * RADIUS);
+            choose_by_circle_points(&camera, &candidates, &ring_edge, RING_INNER_RATIO * RADIUS);
         assert_eq!(chosen, right, "tilt {tilt}");
         assert!(margin > 0.0);
     }
@@ -451,7 +453,11 @@ fn ambiguity_resolved_from_partial_ring_borders() {
         .map(|i| {
             let theta = std::f64::consts::TAU * i as f64 / (sectors * 4) as f64;
             let white = (i / 4) % 2 == 0;
-            let radius = if white { 0.6 } else { 0.343 } * RADIUS;
+            let radius = if white {
+                WHYCODE_WHITE_RATIO
+            } else {
+                RING_INNER_RATIO
+            } * RADIUS;
             let pixel =
                 project_marker_point(&camera, &truth, radius * theta.cos(), radius * theta.sin())
                     .unwrap();

@@ -1,7 +1,7 @@
 //! `whycode detect`: find markers in images and print IDs, yaw and pose.
 
 use crate::camera::Camera;
-use crate::detect::{Detection, Detector, DetectorConfig};
+use crate::detect::{Detection, Detector, DetectorConfig, Target};
 use crate::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
 use crate::image_io::load_gray;
 use crate::units::Length;
@@ -111,18 +111,18 @@ enum Job {
 }
 
 pub fn run(args: DetectArgs) -> Result<ExitCode> {
-    let family = if args.legacy {
-        None
+    let target = if args.legacy {
+        Target::WhyCon
     } else if let Some(path) = &args.family {
-        Some(Family::load(path)?)
+        Target::WhyCode(Family::load(path)?)
     } else {
         let bits = args.bits.unwrap_or(DEFAULT_BITS);
         let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
-        Some(Family::generate(bits, distance).context("--bits/--distance")?)
+        Target::WhyCode(Family::generate(bits, distance).context("--bits/--distance")?)
     };
     let camera = args.camera.as_deref().map(Camera::load).transpose()?;
     let mut config = DetectorConfig {
-        family,
+        target,
         diameter_m: args.diameter.map(Length::m),
         camera,
         ..DetectorConfig::default()

@@ -1,3 +1,4 @@
+use crate::detect::Target;
 use crate::family::Family;
 use crate::geometry::Marker;
 use crate::render::check::check_marker_page;
@@ -64,7 +65,7 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
     }
     crate::render::check_output_dir(&args.output)?;
     let diameter = args.diameter.mm();
-    let mut family = None;
+    let mut target = Target::WhyCon;
     let (marker, title) = if args.legacy {
         (Marker::whycon(diameter), "WhyCon marker".to_string())
     } else {
@@ -74,7 +75,7 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
         let Some(code) = family_of_id.code(id) else {
             bail!("{}", id_range_error(&family_of_id, id));
         };
-        family = Some(family_of_id);
+        target = Target::WhyCode(family_of_id);
         (
             Marker::whycode(bits, code, diameter),
             format!("WhyCode {bits}-bit d{} ID {id}", args.distance),
@@ -100,13 +101,7 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
         eprintln!("whycode: note: self-check skipped (--no-check): the marker was not read back before writing");
     } else {
         let png_dpi = (format == Format::Png).then_some(args.dpi);
-        check_marker_page(
-            &page,
-            &marker,
-            args.id.unwrap_or(0),
-            family.as_ref(),
-            png_dpi,
-        )?;
+        check_marker_page(&page, &marker, args.id.unwrap_or(0), &target, png_dpi)?;
     }
     let files = encode_pages(std::slice::from_ref(&page), &args.output, &title, args.dpi)?;
     write_all(&files)?;

@@ -1,3 +1,4 @@
+use crate::detect::Target;
 use crate::family::Family;
 use crate::manifest::FamilyRef;
 use crate::render::check::{check_sheet, check_sheet_png};
@@ -85,7 +86,7 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
     }
     crate::render::check_output_dir(&output)?;
     let template = Template::resolve(&args.template)?;
-    let mut check_family = None;
+    let mut target = Target::WhyCon;
     let (markers, family) = if args.legacy {
         let count = args.count.expect("clap requires --count with --legacy");
         if count == 0 || count > 100_000 {
@@ -106,7 +107,7 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
             None => (1..=family.len() as u32).collect(),
         };
         let markers = family_markers(&family, &ids, diameter)?;
-        check_family = Some(family);
+        target = Target::WhyCode(family);
         (
             markers,
             Some(FamilyRef {
@@ -131,9 +132,9 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         eprintln!("whycode: note: self-check skipped (--no-check): the markers were not read back before writing");
     } else {
         let report = if format == Format::Png {
-            check_sheet_png(&sheet, check_family.as_ref(), args.dpi)?
+            check_sheet_png(&sheet, &target, args.dpi)?
         } else {
-            check_sheet(&sheet, check_family.as_ref())?
+            check_sheet(&sheet, &target)?
         };
         let dpis: Vec<String> = report.resolutions.iter().map(|d| format!("{d}")).collect();
         let what = if args.legacy {

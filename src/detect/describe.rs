@@ -8,7 +8,6 @@ use nalgebra::Vector3;
 use super::segment::Gray;
 use super::{ellipse, rectify, Candidate, Detection, Detector};
 use crate::camera::Camera;
-use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
 use crate::math::Ellipse;
 use crate::pose::{self, CirclePose, Pose};
 
@@ -54,7 +53,7 @@ impl Detector {
             .track
             .map(|i| self.tracks[i].clone())
             .filter(|t| t.id_streak >= 3);
-        let followed_yaw = match (known, &self.config.family) {
+        let followed_yaw = match (known, self.config.target.family()) {
             (Some(t), Some(family)) => match (t.code, t.yaw) {
                 (Some(code), Some(yaw)) => {
                     rectify::follow_ring(gray, &c.outer, family.bits(), code, yaw).map(|y| (t, y))
@@ -99,7 +98,9 @@ impl Detector {
                 .pose
                 .filter(|_| settled)
                 .map(|p| p.rotation.column(2).into_owned());
-            if let (Some(pose), Some(code), Some(family)) = (&d.pose, d.code, &self.config.family) {
+            if let (Some(pose), Some(code), Some(family)) =
+                (&d.pose, d.code, self.config.target.family())
+            {
                 let bits = family.bits();
                 if let Some(better) =
                     rectify::refine_rotation(gray, &camera, pose, diameter / 2.0, bits, code)
@@ -135,7 +136,7 @@ impl Detector {
         d: &mut Detection,
         followed: bool,
     ) {
-        let Some(family) = &self.config.family else {
+        let Some(family) = self.config.target.family() else {
             return;
         };
         let track = &mut self.tracks[index];
@@ -190,12 +191,7 @@ impl Detector {
             return Some((pose, true));
         }
         let mid = (c.black + c.white) / 2.0;
-        let whycode = self.config.family.is_some();
-        let inner_ratios: &[f64] = if whycode {
-            &[RING_INNER_RATIO, WHYCODE_WHITE_RATIO]
-        } else {
-            &[WHYCON_WHITE_RATIO]
-        };
+        let inner_ratios = self.config.target.design().inner_edge_ratios();
         let mut errors = [0.0f64; 2];
         for &ratio in inner_ratios {
             ellipse::inner_edge_points(gray, &c.outer, ratio, mid, &mut self.inner_scratch);

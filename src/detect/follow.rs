@@ -8,7 +8,6 @@ use super::segment::Gray;
 use super::threshold::ThresholdMap;
 use super::track::Track;
 use super::{ellipse, Candidate, Detection, Detector};
-use crate::geometry::{RING_INNER_RATIO, WHYCON_WHITE_RATIO};
 use crate::math::Ellipse;
 
 impl Detector {
@@ -82,11 +81,7 @@ impl Detector {
             return None;
         }
         // Inside: white at the centre, black across the annulus.
-        let white_ratio = if self.config.family.is_some() {
-            RING_INNER_RATIO
-        } else {
-            WHYCON_WHITE_RATIO
-        };
+        let white_ratio = self.config.target.design().centre_white_ratio();
         let (mut white_sum, mut black_sum) = (0.0, 0.0);
         const PROBES: usize = 8;
         for k in 0..PROBES {
@@ -143,7 +138,7 @@ impl Detector {
                     if c.track.is_none() {
                         // Found again by the scan rather than followed: its
                         // reading has not been filtered yet.
-                        if let Some(family) = &self.config.family {
+                        if let Some(family) = self.config.target.family() {
                             t.observe_reading(family.len(), d);
                         }
                     }
@@ -156,7 +151,7 @@ impl Detector {
                 None => {
                     let mut t = Track::new(u, v, a, b, threshold);
                     t.observe_appearance(c.outer.angle, c.black, c.white);
-                    if let Some(family) = &self.config.family {
+                    if let Some(family) = self.config.target.family() {
                         t.observe_reading(family.len(), d);
                     }
                     t.observe_identity(d);

@@ -36,6 +36,7 @@ use image::GrayImage;
 
 use crate::camera::Camera;
 use crate::family::{Decoder, Family, MatchStatus};
+use crate::geometry::Design;
 use crate::math::Ellipse;
 use crate::pose::Pose;
 use ring::RingReader;
@@ -46,9 +47,8 @@ use track::{Adaptive, Track};
 /// What to look for and how strictly.
 #[derive(Debug, Clone)]
 pub struct DetectorConfig {
-    /// The ID family of WhyCode markers; None looks for legacy WhyCon
-    /// markers (black disc, white disc at 0.41 R, no ID).
-    pub family: Option<Family>,
+    /// Which markers to look for.
+    pub target: Target,
     /// Stop after this many markers in a frame.
     pub max_markers: usize,
     /// Outer diameter of the black disc in metres (needed for pose).
@@ -70,7 +70,7 @@ pub struct DetectorConfig {
 impl Default for DetectorConfig {
     fn default() -> DetectorConfig {
         DetectorConfig {
-            family: None,
+            target: Target::WhyCon,
             max_markers: 1024,
             diameter_m: None,
             camera: None,
@@ -79,6 +79,32 @@ impl Default for DetectorConfig {
             roundness_tolerance: 0.4,
             area_tolerance: 0.12,
             ratio_tolerance: 0.5,
+        }
+    }
+}
+
+/// The markers a detector looks for.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Target {
+    /// Legacy WhyCon circles: black disc, white disc, no ID.
+    WhyCon,
+    /// WhyCode markers of one family: the ring is read and decoded to its IDs.
+    WhyCode(Family),
+}
+
+impl Target {
+    pub fn design(&self) -> Design {
+        match self {
+            Target::WhyCon => Design::WhyCon,
+            Target::WhyCode(_) => Design::WhyCode,
+        }
+    }
+
+    /// The family whose codes the rings carry.
+    pub fn family(&self) -> Option<&Family> {
+        match self {
+            Target::WhyCon => None,
+            Target::WhyCode(family) => Some(family),
         }
     }
 }
@@ -160,11 +186,10 @@ const DISCOVERY_BANDS: u64 = 8;
 impl Detector {
     pub fn new(config: DetectorConfig) -> Detector {
         let reader = config
-            .family
-            .as_ref()
+            .target
+            .family()
             .map(|family| RingReader::new(Some(Decoder::new(family))));
-        let whycode = config.family.is_some();
-        let white = scan::expected_white_fraction(whycode);
+        let white = config.target.design().white_fraction();
         Detector {
             ratio: Adaptive::new(white, config.ratio_tolerance),
             roundness: Adaptive::new(0.0, config.roundness_tolerance),

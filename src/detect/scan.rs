@@ -8,27 +8,14 @@ use std::f64::consts::PI;
 use super::segment::{Fill, Gray, Stats};
 use super::threshold::ThresholdMap;
 use super::{ellipse, Candidate, Detector, SCAN_CHUNK};
-use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
-
-/// Fraction of the full disc that is white inside the black annulus.
-pub(super) fn expected_white_fraction(whycode: bool) -> f64 {
-    if whycode {
-        // Centre disc plus the white half of the ring's 2n sectors (Manchester
-        // coding makes exactly half of them black, whatever the code).
-        let ring = WHYCODE_WHITE_RATIO.powi(2) - RING_INNER_RATIO.powi(2);
-        RING_INNER_RATIO.powi(2) + ring / 2.0
-    } else {
-        WHYCON_WHITE_RATIO.powi(2)
-    }
-}
+use crate::geometry::Design;
 
 /// Slack of the concentricity test, in outer radii: WhyCode's white region
 /// has its ring sectors on one side or the other, so its centroid wanders.
-fn concentricity_tolerance(whycode: bool) -> f64 {
-    if whycode {
-        0.2
-    } else {
-        0.08
+fn concentricity_tolerance(design: Design) -> f64 {
+    match design {
+        Design::WhyCode => 0.2,
+        Design::WhyCon => 0.08,
     }
 }
 
@@ -106,7 +93,7 @@ impl Detector {
         map: &ThresholdMap,
         seed: (u32, u32),
     ) -> Option<Candidate> {
-        let whycode = self.config.family.is_some();
+        let design = self.config.target.design();
         let dark = self
             .filler
             .fill(gray, map, &mut self.labels, seed, Fill::Dark);
@@ -142,7 +129,7 @@ impl Detector {
             && coarse.is_some_and(|e| {
                 let (wu, wv) = white.centroid();
                 let radius = (e.semi_major * e.semi_minor).sqrt();
-                (wu - e.u).hypot(wv - e.v) < concentricity_tolerance(whycode) * radius + 1.0
+                (wu - e.u).hypot(wv - e.v) < concentricity_tolerance(design) * radius + 1.0
                     && 2.0 * e.semi_minor >= min_d
             });
         let coarse = match coarse {

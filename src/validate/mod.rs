@@ -866,7 +866,7 @@ pub fn detector_for(manifest: &Manifest) -> anyhow::Result<crate::detect::Detect
         .map_err(|e| anyhow::anyhow!("the manifest's family: {e}"))?;
     Ok(crate::detect::Detector::new(
         crate::detect::DetectorConfig {
-            family: Some(family),
+            target: crate::detect::Target::WhyCode(family),
             max_markers: manifest.markers.len() * 2 + 64,
             tracking: false,
             ..Default::default()
