@@ -6,7 +6,10 @@
 //! PNG and print sheets), [`detect`] (finding and decoding markers in
 //! images), [`camera`] and [`pose`] (calibration and 6-DoF pose),
 //! [`simulate`] (synthetic camera views with ground truth) and [`validate`]
-//! (checking printed sheets from photos). [`cli`] is a thin layer over them.
+//! (checking printed sheets from photos). Shared by the stages: [`math`]
+//! (the one ellipse, sampler, homography, RNG), [`manifest`] (what a sheet
+//! printed where) and [`image_io`] (grey image files in and out). [`cli`] is
+//! a thin layer over them.
 //!
 //! ```no_run
 //! use whycode::detect::{Detector, DetectorConfig, Target};

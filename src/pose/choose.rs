@@ -23,9 +23,8 @@ use crate::math::Ellipse;
 /// measured on exact projections it is about
 /// `(1 - inner_ratio²) · a² / f · sin(2·tilt)` pixels (a = outer semi-major
 /// axis in pixels, f = focal length in pixels, tilt = angle between the
-/// normal and the line of sight): for a 122 mm marker with a 640×480, 60°
-/// camera, 1.7 px at 1 m, 0.44 px at 2 m, 0.19 px at 3 m for a 40° tilt.
-/// The wrong candidate's normal is off by twice the tilt. The cue vanishes
+/// normal and the line of sight); `ambiguity_margin_follows_the_documented_rule_of_thumb`
+/// (tests/pose_synthetic.rs) checks it. The wrong candidate's normal is off by twice the tilt. The cue vanishes
 /// for small tilts (where the candidates converge to one) and for
 /// markers far away (where the image is nearly affine and the two normals
 /// are mirror images about the viewing ray that no image of concentric
@@ -135,11 +134,11 @@ fn pick_smaller(first: Option<f64>, second: Option<f64>) -> (usize, f64) {
 const CENTRE_SEPARATION_PX: f64 = 0.3;
 
 /// How much closer (as a fraction of the candidates' separation) the
-/// estimate must lie to one candidate's centre. Chosen on simulated 12-bit
-/// markers at 8-60° tilt with blur and noise (the tests in
-/// tests/pose_synthetic.rs and tests/detect_simulated.rs guard it): the
-/// nearer candidate was right at any margin up to 0.3, while 0.5 sent some
-/// markers to the weaker inner-edge test.
+/// estimate must lie to one candidate's centre: small enough that blurred,
+/// noisy tilted markers are still decided here rather than by the weaker
+/// inner-edge test. Chosen on simulated 12-bit markers at 8-60° tilt;
+/// `tilted_markers_of_8_to_16_bits_give_ids_yaw_and_pose`
+/// (tests/detect_simulated.rs) guards it.
 const CENTRE_MARGIN: f64 = 0.2;
 
 /// How much nearer (radians) one candidate's normal must be to the normal a
