@@ -9,6 +9,7 @@ use super::sheet::Sheet;
 use crate::detect::{Detection, Detector, DetectorConfig, Target};
 use crate::geometry::{Design, Marker, MarkerKind};
 use crate::manifest::PrintedMarker;
+use crate::math::angle::wrap_signed;
 use anyhow::{bail, Result};
 use rayon::prelude::*;
 
@@ -59,8 +60,7 @@ fn describe(m: &PrintedMarker) -> String {
 }
 
 fn wrap_degrees(rad: f64) -> f64 {
-    let deg = rad.to_degrees();
-    (deg + 180.0).rem_euclid(360.0) - 180.0
+    wrap_signed(rad.to_degrees(), 360.0)
 }
 
 /// Checks one expected marker against a page's detections.
