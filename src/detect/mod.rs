@@ -19,6 +19,11 @@
 //! looks for newcomers). IDs of tracked markers go through a Bayesian
 //! filter ([`idfilter`], paper 5.1); the test tolerances adapt slowly to
 //! what is measured (paper 4.2).
+//!
+//! This file holds the types and the per-frame flow ([`Detector::detect`]);
+//! `scan.rs` the scan and candidate tests, `describe.rs` what a candidate
+//! reads as (ID, yaw, pose: the choice between the two pose candidates is
+//! [`crate::pose`]'s), `follow.rs` the following of tracked markers.
 
 pub mod annotate;
 mod describe;
