@@ -8,13 +8,13 @@
 //! point does not move with symmetric blur) and fits a conic to those points.
 
 use super::segment::{Gray, Stats};
-use crate::math::sample::{Border, Plane};
+use crate::math::sample::Border;
 pub use crate::math::Ellipse;
 
 /// Bilinear grey level; None unless the 2×2 neighbourhood is in the image.
 #[inline]
 pub(crate) fn sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
-    Plane::new(image.pixels, image.width, image.height).at(x, y, Border::Interior)
+    image.at(x, y, Border::Interior)
 }
 
 /// The coarse outline of a segment: the ellipse of its pixel moments.
