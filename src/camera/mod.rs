@@ -1,5 +1,6 @@
 //! Pinhole camera with OpenCV "plumb bob" lens distortion. Reading and
-//! writing calibration files lives in [`calibration`].
+//! writing calibration files ([`Camera::load`], [`Camera::to_ros_yaml`])
+//! lives in `calibration.rs`.
 //!
 //! Conventions: camera frame is the OpenCV optical frame (x right, y down,
 //! z forward); pixel coordinates have their origin at the *centre* of the
