@@ -9,7 +9,7 @@
 
 use super::segment::{Gray, Stats};
 use crate::math::sample::Border;
-pub use crate::math::Ellipse;
+use crate::math::Ellipse;
 
 /// Bilinear grey level; None unless the 2×2 neighbourhood is in the image.
 #[inline]

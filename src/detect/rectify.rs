@@ -8,10 +8,11 @@
 
 use nalgebra::Vector3;
 
-use super::ellipse::{sample, Ellipse};
+use super::ellipse::sample;
 use super::segment::Gray;
 use crate::camera::Camera;
 use crate::geometry::{sector_is_black, sector_width, RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
+use crate::math::Ellipse;
 use crate::pose::Pose;
 
 /// Samples per ring sector along the rectified circle.
