@@ -106,6 +106,7 @@ impl ImageFormat {
 
 /// Writes a grey image whole or not at all, in the format of the path's
 /// extension (JPEG at `jpeg_quality`).
+#[cfg(feature = "files")]
 pub fn save_image(path: &Path, image: &GrayImage, jpeg_quality: u8) -> Result<()> {
     use image::ImageEncoder;
     let format = ImageFormat::from_path(path)?;

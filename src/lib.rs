@@ -8,8 +8,9 @@
 //! [`simulate`] (synthetic camera views with ground truth) and [`validate`]
 //! (checking printed sheets from photos). Shared by the stages: [`math`]
 //! (the one ellipse, sampler, homography, RNG), [`manifest`] (what a sheet
-//! printed where) and [`image_io`] (grey image files in and out). [`cli`] is
-//! a thin layer over them.
+//! printed where) and [`image_io`] (grey image files in and out). The
+//! `whycode` command line (src/cli/, compiled into the binary only) is a
+//! thin layer over them.
 //!
 //! ```no_run
 //! use whycode::detect::{Detector, DetectorConfig, Target};
@@ -30,14 +31,15 @@
 //! ```
 
 pub mod camera;
-pub mod cli;
 pub mod detect;
 pub mod family;
 pub mod geometry;
 pub mod image_io;
+#[cfg(feature = "files")]
 pub mod io;
 pub mod manifest;
 pub mod math;
+mod parallel;
 pub mod pose;
 pub mod render;
 pub mod simulate;

@@ -31,6 +31,7 @@ pub mod ellipse;
 mod follow;
 pub mod idfilter;
 pub mod rectify;
+pub mod report;
 pub mod ring;
 mod scan;
 pub mod segment;

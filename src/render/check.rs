@@ -10,8 +10,8 @@ use crate::detect::{Detection, Detector, DetectorConfig, Target};
 use crate::geometry::{Design, Marker, MarkerKind};
 use crate::manifest::PrintedMarker;
 use crate::math::angle::wrap_signed;
+use crate::parallel::prelude::*;
 use anyhow::{bail, Result};
-use rayon::prelude::*;
 
 /// The resolution a sheet is usually printed at.
 pub const PRINT_DPI: f64 = 300.0;

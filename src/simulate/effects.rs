@@ -4,8 +4,8 @@
 use super::Scene;
 use crate::math::sample::{Border, Plane};
 use crate::math::Pcg32;
+use crate::parallel::prelude::*;
 use image::GrayImage;
-use rayon::prelude::*;
 
 /// Grey level of a perfectly white surface at exposure 1.
 const FULL_SCALE: f64 = 255.0;
