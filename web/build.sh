@@ -30,12 +30,21 @@ if ! command -v wasm-bindgen >/dev/null 2>&1 || [ "$(wasm-bindgen --version | aw
         cargo install wasm-bindgen-cli --version "$version"
 fi
 
-cargo build -p whycode-web --release --target wasm32-unknown-unknown
+# Built for size (the page's whole download) except the whycode crate
+# itself, whose detector runs on every camera frame; one codegen unit and
+# LTO let unused code of the PDF and image stacks fall away.
+cargo build -p whycode-web --release --target wasm32-unknown-unknown \
+    --config 'profile.release.debug=false' \
+    --config 'profile.release.lto=true' \
+    --config 'profile.release.codegen-units=1' \
+    --config 'profile.release.opt-level="z"' \
+    --config 'profile.release.package.whycode.opt-level=3'
 
 staging="$here/dist.tmp"
 rm -rf "$staging"
 mkdir -p "$staging/pkg"
-wasm-bindgen --target web --no-typescript --out-dir "$staging/pkg" \
+wasm-bindgen --target web --no-typescript --remove-name-section --remove-producers-section \
+    --out-dir "$staging/pkg" \
     "$target_dir/wasm32-unknown-unknown/release/whycode_web.wasm"
 cp "$here/site/index.html" "$here/site/style.css" "$here/site/app.js" "$here/site/worker.js" "$staging/"
 
@@ -49,4 +58,5 @@ sed -e "s|__VERSION__|$hash|" -e "s|__FILES__|[${list%,}]|" "$here/site/sw.js" >
 rm -rf "$here/dist"
 mv "$staging" "$here/dist"
 total=$(cd "$here/dist" && cat pkg/*.wasm pkg/*.js *.js *.css | wc -c)
-echo "web/build.sh: built web/dist ($(du -sh "$here/dist" | cut -f1); wasm + JS + CSS $((total / 1024)) KiB)" >&2
+packed=$(cd "$here/dist" && cat pkg/*.wasm pkg/*.js *.js *.css | gzip -9 | wc -c)
+echo "web/build.sh: built web/dist: wasm + JS + CSS $((total / 1024)) KiB, $((packed / 1024)) KiB gzipped" >&2

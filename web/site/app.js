@@ -33,6 +33,7 @@ class Engine {
 
   call(op, args, transfer = []) {
     const id = this.next++;
+    if (this.broken) return Promise.reject(new Error(this.broken));
     return new Promise((resolve, reject) => {
       this.pending.set(id, { resolve, reject });
       this.worker.postMessage({ id, op, args }, transfer);
@@ -45,6 +46,13 @@ class Engine {
     this.worker.terminate();
     for (const job of this.pending.values()) job.reject(new Error(reason));
     this.pending.clear();
+    // A worker that cannot even load would otherwise be restarted forever.
+    const now = performance.now();
+    this.restarts = (this.restarts || []).filter((t) => now - t < 10000).concat(now);
+    if (this.restarts.length > 3) {
+      this.broken = `the whycode engine keeps failing (${reason})`;
+      return;
+    }
     this.spawn();
   }
 }

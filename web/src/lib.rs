@@ -10,11 +10,13 @@ use anyhow::{bail, Context, Result};
 use image::GrayImage;
 use serde::Deserialize;
 use wasm_bindgen::prelude::*;
-use whycode::detect::{Detector, DetectorConfig};
-use whycode::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MIN_BITS};
+use whycode::detect::{Detector, DetectorConfig, Target};
+use whycode::family::{
+    parse_id_list, Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MAX_LISTED_IDS, MIN_BITS,
+};
 use whycode::geometry::Marker;
+use whycode::manifest::{FamilyRef, Manifest};
 use whycode::render::check::{check_marker_page, check_sheet, check_sheet_png};
-use whycode::render::manifest::{FamilyRef, Manifest};
 use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
 use whycode::render::sheet::{family_markers, id_range_error, layout, legacy_markers, SheetSpec};
 use whycode::render::template::{builtin_names, Template};
@@ -22,9 +24,8 @@ use whycode::render::{encode_pages, Format};
 use whycode::units::{trim_float, Length};
 use whycode::validate::{self, annotate, PhotoReport};
 
-/// Most IDs one list may name (the CLI's bound: a sheet of this many is
-/// already far beyond any swarm).
-const MAX_LISTED_IDS: usize = 100_000;
+/// PNG resolutions the CLI accepts (`--dpi`), for pages and single markers.
+const DPI_RANGE: std::ops::RangeInclusive<f64> = 10.0..=1200.0;
 
 /// Largest photo the page decodes, pixels: a phone's 50 MP still fits, and
 /// the decoded copies stay well inside a tab's memory.
@@ -189,6 +190,17 @@ fn file_name(path: &Path) -> String {
         .unwrap_or_default()
 }
 
+fn check_dpi(dpi: f64) -> Result<()> {
+    if !(dpi.is_finite() && DPI_RANGE.contains(&dpi)) {
+        bail!(
+            "--dpi: {dpi} dpi is outside {} to {} dpi",
+            DPI_RANGE.start(),
+            DPI_RANGE.end()
+        );
+    }
+    Ok(())
+}
+
 fn length(option: &str, text: &str) -> Result<f64> {
     text.parse::<Length>()
         .map(Length::mm)
@@ -229,9 +241,7 @@ fn sheet_files(options: &str) -> Result<Files> {
     let output = Path::new(&args.output);
     let format = Format::from_path(output)?;
     let dpi = args.dpi.unwrap_or(300.0);
-    if format == Format::Png && !(dpi.is_finite() && (10.0..=1200.0).contains(&dpi)) {
-        bail!("--dpi must be between 10 and 1200, got {dpi}");
-    }
+    check_dpi(dpi)?;
     let diameter = length("--diameter", &args.diameter)?;
     let template = match &args.template_toml {
         Some(text) => Template::parse(&args.template, text)
@@ -239,27 +249,35 @@ fn sheet_files(options: &str) -> Result<Files> {
         None => Template::builtin(&args.template)?,
     };
     let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
-    let mut check_family = None;
-    let (markers, family) = if args.legacy {
-        let count = args.count.unwrap_or(0);
-        if count == 0 || count > MAX_LISTED_IDS {
-            bail!("--count must be between 1 and 100000, got {count}");
-        }
-        (legacy_markers(count, diameter), None)
+    let target = if args.legacy {
+        Target::WhyCon
     } else {
-        let bits = args.bits.unwrap_or(DEFAULT_BITS);
-        let family = Family::generate(bits, distance)?;
-        let ids: Vec<u32> = match args.ids.as_deref().map(str::trim) {
-            Some(list) if !list.is_empty() => parse_id_list(list)?,
-            _ if family.len() > MAX_LISTED_IDS => bail!(
-                "the {bits}-bit family with distance {distance} has {} IDs, too many to print at once; choose some with --ids (at most {MAX_LISTED_IDS})",
-                family.len(),
-            ),
-            _ => (1..=family.len() as u32).collect(),
-        };
-        let markers = family_markers(&family, &ids, diameter)?;
-        check_family = Some(family);
-        (markers, Some(FamilyRef { bits, distance }))
+        Target::WhyCode(Family::generate(
+            args.bits.unwrap_or(DEFAULT_BITS),
+            distance,
+        )?)
+    };
+    let (markers, family) = match target.family() {
+        None => {
+            let count = args.count.unwrap_or(0);
+            if count == 0 || count > MAX_LISTED_IDS {
+                bail!("--count must be between 1 and 100000, got {count}");
+            }
+            (legacy_markers(count, diameter), None)
+        }
+        Some(family) => {
+            let bits = family.bits();
+            let ids: Vec<u32> = match args.ids.as_deref().map(str::trim) {
+                Some(list) if !list.is_empty() => parse_id_list(list).context("--ids")?,
+                _ if family.len() > MAX_LISTED_IDS => bail!(
+                    "the {bits}-bit family with distance {distance} has {} IDs, too many to print at once; choose some with --ids (at most {MAX_LISTED_IDS})",
+                    family.len(),
+                ),
+                _ => (1..=family.len() as u32).collect(),
+            };
+            let markers = family_markers(family, &ids, diameter)?;
+            (markers, Some(FamilyRef { bits, distance }))
+        }
     };
     let name = output
         .file_stem()
@@ -278,9 +296,9 @@ fn sheet_files(options: &str) -> Result<Files> {
         notes.push("self-check skipped: the markers were not read back".to_string());
     } else {
         let report = if format == Format::Png {
-            check_sheet_png(&sheet, check_family.as_ref(), dpi)?
+            check_sheet_png(&sheet, &target, dpi)?
         } else {
-            check_sheet(&sheet, check_family.as_ref())?
+            check_sheet(&sheet, &target)?
         };
         let dpis: Vec<String> = report.resolutions.iter().map(|d| format!("{d}")).collect();
         let what = if args.legacy {
@@ -288,9 +306,12 @@ fn sheet_files(options: &str) -> Result<Files> {
         } else {
             "read back as its own ID, upright,"
         };
+        let dpis = match dpis.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+            _ => dpis.join(""),
+        };
         notes.push(format!(
-            "self-check passed: every marker {what} at {} dpi",
-            dpis.join(" and ")
+            "self-check passed: every marker {what} at {dpis} dpi"
         ));
     }
     let mut files: Vec<(String, Vec<u8>)> = encode_pages(&sheet.pages, output, &name, dpi)?
@@ -344,28 +365,31 @@ fn marker_files(options: &str) -> Result<Files> {
     let output = Path::new(&args.output);
     let format = Format::from_path(output)?;
     let dpi = args.dpi.unwrap_or(300.0);
-    if format == Format::Png && !(dpi.is_finite() && (10.0..=4800.0).contains(&dpi)) {
-        bail!("--dpi must be between 10 and 4800, got {dpi}");
-    }
+    check_dpi(dpi)?;
     let diameter = length("--diameter", &args.diameter)?;
     let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
-    let mut family = None;
-    let (marker, title) = if args.legacy {
-        (Marker::whycon(diameter), "WhyCon marker".to_string())
+    let target = if args.legacy {
+        Target::WhyCon
     } else {
-        let bits = args.bits.unwrap_or(DEFAULT_BITS);
-        let Some(id) = args.id else {
-            bail!("--id: choose the marker's ID");
-        };
-        let family_of_id = Family::generate(bits, distance)?;
-        let Some(code) = family_of_id.code(id) else {
-            bail!("{}", id_range_error(&family_of_id, id));
-        };
-        family = Some(family_of_id);
-        (
-            Marker::whycode(bits, code, diameter),
-            format!("WhyCode {bits}-bit d{distance} ID {id}"),
-        )
+        Target::WhyCode(Family::generate(
+            args.bits.unwrap_or(DEFAULT_BITS),
+            distance,
+        )?)
+    };
+    let (marker, title) = match target.family() {
+        None => (Marker::whycon(diameter), "WhyCon marker".to_string()),
+        Some(family) => {
+            let Some(id) = args.id else {
+                bail!("--id: choose the marker's ID");
+            };
+            let Some(code) = family.code(id) else {
+                bail!("{}", id_range_error(family, id));
+            };
+            (
+                Marker::whycode(family.bits(), code, diameter),
+                format!("WhyCode {}-bit d{distance} ID {id}", family.bits()),
+            )
+        }
     };
     let label = args.label.then(|| {
         if args.legacy {
@@ -391,13 +415,7 @@ fn marker_files(options: &str) -> Result<Files> {
         notes.push("self-check skipped: the marker was not read back".to_string());
     } else {
         let png_dpi = (format == Format::Png).then_some(dpi);
-        check_marker_page(
-            &page,
-            &marker,
-            args.id.unwrap_or(0),
-            family.as_ref(),
-            png_dpi,
-        )?;
+        check_marker_page(&page, &marker, args.id.unwrap_or(0), &target, png_dpi)?;
         notes.push("self-check passed: the marker reads back as itself".to_string());
     }
     let files = encode_pages(std::slice::from_ref(&page), output, &title, dpi)?
@@ -405,47 +423,6 @@ fn marker_files(options: &str) -> Result<Files> {
         .map(|(path, bytes)| (file_name(&path), bytes))
         .collect();
     Ok(Files { files, notes })
-}
-
-/// Parses ID lists like "1-5,9, 12-14" in the order written, as `--ids` does.
-fn parse_id_list(text: &str) -> Result<Vec<u32>> {
-    let mut ids = Vec::new();
-    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-        let parse = |s: &str| -> Result<u32> {
-            match s.trim().parse::<u32>() {
-                Ok(0) => {
-                    bail!("--ids: '{part}' names ID 0, which means \"unknown\"; IDs start at 1")
-                }
-                Ok(id) => Ok(id),
-                Err(_) => bail!("--ids: '{part}' is not an ID or a range like 3-7"),
-            }
-        };
-        match part.split_once('-') {
-            Some((a, b)) => {
-                let (a, b) = (parse(a)?, parse(b)?);
-                if a > b {
-                    bail!("--ids: range '{part}' runs backwards");
-                }
-                if (b - a) as usize >= MAX_LISTED_IDS {
-                    bail!("--ids: range '{part}' names more than {MAX_LISTED_IDS} IDs");
-                }
-                ids.extend(a..=b);
-            }
-            None => ids.push(parse(part)?),
-        }
-        if ids.len() > MAX_LISTED_IDS {
-            bail!("--ids: the list names more than {MAX_LISTED_IDS} IDs");
-        }
-    }
-    if ids.is_empty() {
-        bail!("--ids: no IDs given");
-    }
-    let mut sorted = ids.clone();
-    sorted.sort_unstable();
-    if let Some(pair) = sorted.windows(2).find(|w| w[0] == w[1]) {
-        bail!("--ids: ID {} is listed more than once", pair[0]);
-    }
-    Ok(ids)
 }
 
 /// Decodes a photo's bytes to 8-bit grey the way `whycode validate` reads
@@ -582,14 +559,14 @@ impl Live {
     /// A detector for a family (`legacy` for WhyCon circles without IDs).
     #[wasm_bindgen(constructor)]
     pub fn new(bits: u32, distance: u32, legacy: bool) -> Result<Live, JsError> {
-        let family = if legacy {
-            None
+        let target = if legacy {
+            Target::WhyCon
         } else {
-            Some(generate(bits, distance).map_err(js_error)?)
+            Target::WhyCode(generate(bits, distance).map_err(js_error)?)
         };
         Ok(Live {
             detector: Detector::new(DetectorConfig {
-                family,
+                target,
                 tracking: true,
                 ..Default::default()
             }),
@@ -663,13 +640,6 @@ pub fn length_mm(text: &str) -> Result<String, JsError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn id_lists_match_the_cli() {
-        assert_eq!(parse_id_list("1-3, 7").unwrap(), [1, 2, 3, 7]);
-        assert!(parse_id_list("3-1").is_err());
-        assert!(parse_id_list("1,1").is_err());
-    }
 
     #[test]
     fn a_text_file_is_not_a_photo() {
