@@ -1,6 +1,7 @@
 //! `whycode detect`: find markers in images and print IDs, yaw and pose.
 
 use crate::camera::Camera;
+use crate::detect::record::{round, FrameRecord};
 use crate::detect::{load_gray, Detection, Detector, DetectorConfig};
 use crate::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
 use crate::units::Length;
@@ -323,71 +324,15 @@ fn detect_one(detector: &mut Detector, path: &Path, annotate: Option<&Path>) -> 
     })
 }
 
-fn round(x: f64, decimals: i32) -> f64 {
-    let k = 10f64.powi(decimals);
-    (x * k).round() / k
-}
-
-/// JSON records, fields in the documented order.
-#[derive(serde::Serialize)]
-struct FrameRecord {
-    image: String,
-    width: u32,
-    height: u32,
-    elapsed_ms: f64,
-    markers: Vec<MarkerRecord>,
-}
-
-#[derive(serde::Serialize)]
-struct MarkerRecord {
-    id: u32,
-    code: Option<u32>,
-    u: f64,
-    v: f64,
-    yaw: Option<f64>,
-    axes: [f64; 2],
-    confidence: f64,
-    position: Option<[f64; 3]>,
-    rotation: Option<[[f64; 3]; 3]>,
-    quaternion: Option<[f64; 4]>,
-}
-
 fn frame_json(frame: &Frame) -> String {
-    let markers = frame
-        .markers
-        .iter()
-        .map(|m| {
-            let pose = m.pose.as_ref();
-            MarkerRecord {
-                id: m.id,
-                code: m.code,
-                u: round(m.u, 3),
-                v: round(m.v, 3),
-                yaw: m.yaw.map(|y| round(y, 5)),
-                axes: [round(m.axes[0], 3), round(m.axes[1], 3)],
-                confidence: round(m.confidence, 3),
-                position: pose.map(|p| {
-                    [
-                        round(p.position.x, 5),
-                        round(p.position.y, 5),
-                        round(p.position.z, 5),
-                    ]
-                }),
-                rotation: pose.map(|p| {
-                    std::array::from_fn(|r| std::array::from_fn(|c| round(p.rotation[(r, c)], 6)))
-                }),
-                quaternion: pose.map(|p| p.quaternion.map(|q| round(q, 6))),
-            }
-        })
-        .collect();
-    let record = FrameRecord {
-        image: frame.image.display().to_string(),
-        width: frame.width,
-        height: frame.height,
-        elapsed_ms: round(frame.elapsed_ms, 3),
-        markers,
-    };
-    serde_json::to_string(&record).expect("plain records serialise")
+    FrameRecord::new(
+        frame.image.display().to_string(),
+        frame.width,
+        frame.height,
+        frame.elapsed_ms,
+        &frame.markers,
+    )
+    .to_json()
 }
 
 const CSV_HEADER: &str = "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw";

@@ -23,6 +23,8 @@
 pub mod annotate;
 pub mod ellipse;
 pub mod idfilter;
+pub mod pixels;
+pub mod record;
 pub mod rectify;
 pub mod ring;
 pub mod segment;
@@ -33,7 +35,8 @@ use std::f64::consts::PI;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use image::GrayImage;
+use image::{GrayImage, ImageBuffer, Luma};
+use std::ops::Deref;
 
 use crate::camera::Camera;
 use crate::family::{Decoder, Family, MatchStatus};
@@ -222,7 +225,14 @@ impl Detector {
 
     /// Finds the markers in one frame. With tracking on, state carries over
     /// to the next call.
-    pub fn detect(&mut self, image: &GrayImage) -> Vec<Detection> {
+    ///
+    /// Takes any 8-bit grey buffer: an owned [`GrayImage`] or a view of
+    /// borrowed pixels (`ImageBuffer<Luma<u8>, &[u8]>`), so callers that
+    /// hold frames in their own memory (Python's numpy arrays) need no copy.
+    pub fn detect<C: Deref<Target = [u8]>>(
+        &mut self,
+        image: &ImageBuffer<Luma<u8>, C>,
+    ) -> Vec<Detection> {
         let (width, height) = (image.width() as usize, image.height() as usize);
         if width < 3 || height < 3 {
             self.tracks.clear();
@@ -346,9 +356,9 @@ impl Detector {
 
     /// The detection of a candidate, and its normal when that was told
     /// apart from the other pose candidate with confidence (for the track).
-    fn describe(
+    fn describe<C: Deref<Target = [u8]>>(
         &mut self,
-        image: &GrayImage,
+        image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,
     ) -> (Detection, Option<Vector3<f64>>) {
@@ -981,26 +991,7 @@ pub fn load_gray(path: &Path) -> Result<GrayImage> {
     if format == Some(image::ImageFormat::Jpeg) {
         check_jpeg_complete(path).with_context(name)?;
     }
-    Ok(match decoded {
-        image::DynamicImage::ImageLuma8(g) => g,
-        image::DynamicImage::ImageLuma16(_)
-        | image::DynamicImage::ImageLumaA16(_)
-        | image::DynamicImage::ImageRgb16(_)
-        | image::DynamicImage::ImageRgba16(_) => stretched_to_8_bits(decoded.into_luma16()),
-        other => other.into_luma8(),
-    })
-}
-
-/// Many cameras write 10- or 12-bit data into 16-bit files, which a plain
-/// division by 257 squeezes into a handful of grey levels. The brightest
-/// value present becomes 255 instead (the detector's thresholds are local,
-/// so a linear stretch changes nothing else).
-fn stretched_to_8_bits(wide: image::ImageBuffer<image::Luma<u16>, Vec<u16>>) -> GrayImage {
-    let brightest = wide.pixels().map(|p| p.0[0]).max().unwrap_or(0).max(1);
-    let scale = 255.0 / f64::from(brightest);
-    GrayImage::from_fn(wide.width(), wide.height(), |x, y| {
-        image::Luma([(f64::from(wide.get_pixel(x, y).0[0]) * scale).round() as u8])
-    })
+    Ok(pixels::to_gray(decoded))
 }
 
 /// The JPEG decoder fills a truncated file's missing part with grey and

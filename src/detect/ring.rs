@@ -38,7 +38,8 @@
 
 use crate::family::{Decoded, Decoder, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
-use image::GrayImage;
+use image::{ImageBuffer, Luma};
+use std::ops::Deref;
 
 pub use crate::pose::ImageEllipse;
 use std::f64::consts::PI;
@@ -166,9 +167,9 @@ impl RingReader {
     /// Reads the ring inside the outer ellipse `outer`. `black_level` and
     /// `white_level` are the grey levels of the marker's black disc and white
     /// disc as the detector measured them.
-    pub fn read(
+    pub fn read<C: Deref<Target = [u8]>>(
         &self,
-        image: &GrayImage,
+        image: &ImageBuffer<Luma<u8>, C>,
         outer: &ImageEllipse,
         black_level: f64,
         white_level: f64,
@@ -624,8 +625,8 @@ impl EllipseFrame {
 
 /// Mean grey level over the given radii at `count` equally spaced
 /// parameters; `None` when the ring leaves the image.
-fn sample_profile(
-    image: &GrayImage,
+fn sample_profile<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
     frame: &EllipseFrame,
     radii: &[f64],
     count: usize,
@@ -652,8 +653,8 @@ fn sample_profile(
 /// way perspective shifts concentric circles), so it is crossed at
 /// ρ + (1 - ρ²)·D·u(t); a scale and a constant term absorb ellipse size
 /// errors and blur. `None` when the rays do not show the ring's structure.
-fn refined_centre(
-    image: &GrayImage,
+fn refined_centre<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
     frame: &EllipseFrame,
     phase: f64,
     bits: u32,
@@ -757,7 +758,7 @@ struct Sampler<'a> {
 }
 
 impl<'a> Sampler<'a> {
-    fn new(image: &'a GrayImage) -> Sampler<'a> {
+    fn new<C: Deref<Target = [u8]>>(image: &'a ImageBuffer<Luma<u8>, C>) -> Sampler<'a> {
         let (w, h) = image.dimensions();
         Sampler {
             raw: image.as_raw(),
