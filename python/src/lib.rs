@@ -34,6 +34,12 @@ impl Error {
     pub(crate) fn value(message: impl Into<String>) -> Error {
         Error::Value(message.into())
     }
+
+    /// A file-system problem the library reports without an `io::Error`
+    /// (a missing output folder).
+    pub(crate) fn os(err: anyhow::Error) -> Error {
+        Error::Os(one_line(&err))
+    }
 }
 
 impl From<anyhow::Error> for Error {

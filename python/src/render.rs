@@ -126,7 +126,7 @@ fn render_marker<'py>(
     let bytes = py.detach(|| {
         guard(|| {
             if let Some(path) = &output {
-                whycode::render::check_output_dir(path)?;
+                whycode::render::check_output_dir(path).map_err(crate::Error::os)?;
             }
             let (marker, title) = match (&family, id) {
                 (Some(family), Some(id)) => {
@@ -224,7 +224,7 @@ fn render_sheet<'py>(
     let (files, manifest) = py.detach(|| {
         guard(|| {
             if let Some(path) = &output {
-                whycode::render::check_output_dir(path)?;
+                whycode::render::check_output_dir(path).map_err(crate::Error::os)?;
             }
             let template = Template::resolve(&template)?;
             let (markers, family_ref) = match &family {
