@@ -121,6 +121,23 @@ impl PyDetector {
         Ok(found.into_iter().map(PyMarker::from).collect())
     }
 
+    /// Benchmark baseline: median nanoseconds of the Rust `detect` alone on
+    /// this frame over `repeats` calls (no conversion, no Python objects).
+    fn _rust_detect_ns(&self, py: Python<'_>, image: &Bound<'_, PyAny>, repeats: usize) -> PyResult<f64> {
+        crate::pixels::with_gray(py, image, |view| {
+            let mut detector = self.fresh.clone();
+            let mut times: Vec<f64> = (0..repeats.max(1))
+                .map(|_| {
+                    let start = std::time::Instant::now();
+                    std::hint::black_box(detector.detect(view));
+                    start.elapsed().as_nanos() as f64
+                })
+                .collect();
+            times.sort_by(f64::total_cmp);
+            Ok(times[times.len() / 2])
+        })
+    }
+
     /// Forgets tracks and adapted tolerances.
     fn reset(&self) {
         *self

@@ -7,7 +7,7 @@
 
 use crate::Error;
 use image::{DynamicImage, ImageBuffer, Luma};
-use numpy::{PyArrayDescrMethods, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{PyArrayDescrMethods, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use whycode::detect::{pixels, MAX_PIXELS, MAX_SIDE};
 
@@ -73,9 +73,10 @@ fn layout(array: &Bound<'_, PyUntypedArray>) -> PyResult<Layout> {
 /// Grey pixels of a layout gathered in row-major order (BGR(A) reordered to
 /// RGB(A)), converted as the image loader converts a decoded file.
 fn to_gray<T: Copy>(
+
     values: impl Iterator<Item = T>,
     layout: &Layout,
-    build: impl Fn(u32, u32, Vec<T>, usize) -> Option<DynamicImage>,
+    build: fn(u32, u32, Vec<T>, usize) -> Option<DynamicImage>,
 ) -> image::GrayImage {
     let mut data: Vec<T> = values.collect();
     if layout.channels >= 3 {
@@ -131,25 +132,41 @@ pub(crate) fn with_gray<R: Send>(
             })
         })
     } else if layout.depth == Depth::U8 {
-        let values: PyReadonlyArrayDyn<'_, u8> = array.extract()?;
+        gathered::<u8, R>(py, array, &layout, build_u8, work)
+    } else {
+        gathered::<u16, R>(py, array, &layout, build_u16, work)
+    };
+    Ok(result?)
+}
+
+/// Non-contiguous or converted input: the pixels gathered in logical order
+/// (typed 2-D and 3-D views iterate far faster than dynamic ones).
+fn gathered<T: numpy::Element + Copy + Send + Sync, R: Send>(
+    py: Python<'_>,
+    array: &Bound<'_, PyUntypedArray>,
+    layout: &Layout,
+    build: fn(u32, u32, Vec<T>, usize) -> Option<DynamicImage>,
+    work: impl FnOnce(&GrayView<'_>) -> crate::Result<R> + Send,
+) -> crate::Result<R> {
+    if array.ndim() == 2 {
+        let values: PyReadonlyArray2<'_, T> = array.extract().map_err(|e| Error::value(PyErr::from(e).to_string()))?;
         let view = values.as_array();
         py.detach(|| {
             crate::guard(|| {
-                let gray = to_gray(view.iter().copied(), &layout, build_u8);
+                let gray = to_gray(view.iter().copied(), layout, build);
                 work(&as_view(&gray))
             })
         })
     } else {
-        let values: PyReadonlyArrayDyn<'_, u16> = array.extract()?;
+        let values: PyReadonlyArray3<'_, T> = array.extract().map_err(|e| Error::value(PyErr::from(e).to_string()))?;
         let view = values.as_array();
         py.detach(|| {
             crate::guard(|| {
-                let gray = to_gray(view.iter().copied(), &layout, build_u16);
+                let gray = to_gray(view.iter().copied(), layout, build);
                 work(&as_view(&gray))
             })
         })
-    };
-    Ok(result?)
+    }
 }
 
 fn as_view(gray: &image::GrayImage) -> GrayView<'_> {

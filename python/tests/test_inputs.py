@@ -73,9 +73,9 @@ def test_16_bit_arrays_are_stretched_like_16_bit_files(grey: np.ndarray) -> None
 
 @pytest.mark.parametrize("shape", [(0, 0), (0, 10), (10, 0), (1, 1), (2, 2), (1, 500), (0, 0, 3)])
 def test_tiny_and_empty_images_find_nothing(shape: tuple[int, ...]) -> None:
-    for dtype in (np.uint8, np.uint16):
-        assert whycode.Detector().detect(np.zeros(shape, dtype)) == []
-        assert whycode.Detector(tracking=True).detect(np.full(shape, 200, dtype)) == []
+    for image in (np.zeros(shape, np.uint8), np.full(shape, 200, np.uint16)):
+        assert whycode.Detector().detect(image) == []
+        assert whycode.Detector(tracking=True).detect(image) == []
 
 
 @pytest.mark.parametrize("dtype", [np.float32, np.float64, np.int16, np.int32, np.uint32,

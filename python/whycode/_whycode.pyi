@@ -1,7 +1,7 @@
 """Type stubs of the compiled whycode module."""
 
 import os
-from typing import Iterator, Literal, Optional, Sequence, Union, overload
+from typing import Any, Iterator, Literal, Optional, Sequence, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -133,7 +133,7 @@ class Marker:
     def rotation(self) -> Optional[npt.NDArray[np.float64]]: ...
     @property
     def quaternion(self) -> Optional[tuple[float, float, float, float]]: ...
-    def as_dict(self) -> dict[str, object]:
+    def as_dict(self) -> dict[str, Any]:
         """The object ``whycode detect --format json`` prints for this marker."""
 
 class Detector:
@@ -165,7 +165,7 @@ def render_marker(
     diameter: Length,
     family: Optional[Family] = None,
     legacy: bool = False,
-    format: Optional[Literal["svg", "pdf", "png"]] = None,
+    format: Optional[str] = None,
     output: Optional[StrPath] = None,
     margin: Optional[Length] = None,
     dpi: float = 300.0,
@@ -182,12 +182,12 @@ def render_sheet(
     count: Optional[int] = None,
     diameter: Optional[Length] = None,
     template: str = "a4",
-    format: Optional[Literal["svg", "pdf", "png"]] = None,
+    format: Optional[str] = None,
     output: Optional[StrPath] = None,
     name: Optional[str] = None,
     dpi: float = 300.0,
     check: bool = True,
-) -> tuple[list[bytes], dict[str, object]]: ...
+) -> tuple[list[bytes], dict[str, Any]]: ...
 def render_marker_image(
     id: Optional[int] = None,
     *,
@@ -204,7 +204,7 @@ def validate(
     camera: Optional[Camera] = None,
     *,
     annotate: Literal[False] = False,
-) -> dict[str, object]: ...
+) -> dict[str, Any]: ...
 @overload
 def validate(
     manifest: StrPath,
@@ -212,7 +212,7 @@ def validate(
     camera: Optional[Camera] = None,
     *,
     annotate: Literal[True],
-) -> tuple[dict[str, object], list[npt.NDArray[np.uint8]]]: ...
+) -> tuple[dict[str, Any], list[npt.NDArray[np.uint8]]]: ...
 def simulate(
     *,
     manifest: Optional[StrPath] = None,
@@ -241,4 +241,4 @@ def simulate(
     jpeg: Optional[int] = None,
     blot: Sequence[int] = (),
     seed: int = 1,
-) -> tuple[npt.NDArray[np.uint8], dict[str, object]]: ...
+) -> tuple[npt.NDArray[np.uint8], dict[str, Any]]: ...
