@@ -168,6 +168,7 @@ def main() -> None:
     seeds = [1, 2] if not args.quick else [1]
     runners = detectors()
     tallies = {name: Tally() for name in runners}
+    by_size = {(name, size): Tally() for name in runners for size in sizes_px}
     scene = 0
     for size in sizes_px:
         distance = camera.fx * DIAMETER_M / size
@@ -188,6 +189,7 @@ def main() -> None:
                         expected = ((lambda k, m: int(m["id"])) if dictionary is None
                                     else (lambda k, m: k))
                         score(tallies[name], found, truth, expected)
+                        score(by_size[(name, size)], found, truth, expected)
     # Empty clutter: the scene's one marker is 5 km away (sub-pixel).
     for seed in range(1, 21 if not args.quick else 6):
         clutter, _ = whycode.simulate(ids=[1], camera=camera, camera_distance=5000.0,
@@ -209,6 +211,13 @@ def main() -> None:
         print(f"| {name} | {100 * t.found / max(t.visible, 1):.1f} % ({t.found}/{t.visible}) "
               f"| {t.id_errors} | {t.false_reports} in {t.clutter_frames} frames "
               f"| {statistics.median(t.times_ms):.1f} | {statistics.median(t.clutter_ms):.1f} |")
+    print()
+    print("| detection rate by marker size | " + " | ".join(f"{s} px" for s in sizes_px) + " |")
+    print("|---|" + "---:|" * len(sizes_px))
+    for name in runners:
+        cells = [by_size[(name, s)] for s in sizes_px]
+        print(f"| {name} | " + " | ".join(f"{100 * t.found / max(t.visible, 1):.0f} %" for t in cells)
+              + " |")
     sys.stdout.flush()
 
 
