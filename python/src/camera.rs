@@ -33,7 +33,11 @@ impl PyCamera {
     /// Reads a calibration: ROS camera_info YAML, OpenCV YAML/XML or Kalibr.
     #[staticmethod]
     fn load(path: PathBuf) -> PyResult<PyCamera> {
-        Ok(guard(|| Ok(PyCamera { camera: Camera::load(&path)? }))?)
+        Ok(guard(|| {
+            Ok(PyCamera {
+                camera: Camera::load(&path)?,
+            })
+        })?)
     }
 
     /// From OpenCV's calibration results: the 3x3 camera matrix, the
@@ -69,7 +73,11 @@ impl PyCamera {
             format_list(&k),
             format_list(&d)
         );
-        Ok(guard(|| Ok(PyCamera { camera: Camera::parse(&text)? }))?)
+        Ok(guard(|| {
+            Ok(PyCamera {
+                camera: Camera::parse(&text)?,
+            })
+        })?)
     }
 
     /// An ideal camera (no distortion) with a horizontal field of view.

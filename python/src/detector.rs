@@ -5,7 +5,7 @@ use crate::family::PyFamily;
 use crate::{guard, Error};
 use pyo3::prelude::*;
 use std::sync::Mutex;
-use whycode::detect::record::MarkerRecord;
+use whycode::detect::report::FrameReport;
 use whycode::detect::{Detection, Detector, DetectorConfig};
 use whycode::family::Family;
 
@@ -38,11 +38,7 @@ impl PyDetector {
             *detector = taken;
             found
         } else {
-            let worker = self
-                .idle
-                .lock()
-                .unwrap_or_else(|p| p.into_inner())
-                .pop();
+            let worker = self.idle.lock().unwrap_or_else(|p| p.into_inner()).pop();
             let mut worker = worker.unwrap_or_else(|| self.fresh.clone());
             let found = worker.detect(view);
             self.idle
@@ -71,16 +67,17 @@ impl PyDetector {
         max_markers: Option<usize>,
     ) -> PyResult<PyDetector> {
         if legacy && family.is_some() {
-            return Err(Error::value("legacy markers have no family: pass one or the other").into());
+            return Err(
+                Error::value("legacy markers have no family: pass one or the other").into(),
+            );
         }
         let diameter_m = diameter
             .map(|d| crate::length(d, "diameter").map(|l| l.m()))
             .transpose()?;
         if diameter_m.is_some() != camera.is_some() {
-            return Err(Error::value(
-                "pose needs both diameter and camera (pass both or neither)",
-            )
-            .into());
+            return Err(
+                Error::value("pose needs both diameter and camera (pass both or neither)").into(),
+            );
         }
         let family = if legacy {
             None
@@ -123,7 +120,12 @@ impl PyDetector {
 
     /// Benchmark baseline: median nanoseconds of the Rust `detect` alone on
     /// this frame over `repeats` calls (no conversion, no Python objects).
-    fn _rust_detect_ns(&self, py: Python<'_>, image: &Bound<'_, PyAny>, repeats: usize) -> PyResult<f64> {
+    fn _rust_detect_ns(
+        &self,
+        py: Python<'_>,
+        image: &Bound<'_, PyAny>,
+        repeats: usize,
+    ) -> PyResult<f64> {
         crate::pixels::with_gray(py, image, |view| {
             let mut detector = self.fresh.clone();
             let mut times: Vec<f64> = (0..repeats.max(1))
@@ -165,8 +167,16 @@ impl PyDetector {
         format!(
             "Detector(family={family}, diameter={:?}, camera={}, tracking={})",
             self.config.diameter_m,
-            if self.config.camera.is_some() { "..." } else { "None" },
-            if self.config.tracking { "True" } else { "False" }
+            if self.config.camera.is_some() {
+                "..."
+            } else {
+                "None"
+            },
+            if self.config.tracking {
+                "True"
+            } else {
+                "False"
+            }
         )
     }
 }
@@ -223,9 +233,10 @@ impl PyMarker {
     /// Marker centre in the camera frame, metres (None without a pose).
     #[getter]
     fn position<'py>(&self, py: Python<'py>) -> Option<Bound<'py, numpy::PyArray1<f64>>> {
-        self.detection.pose.as_ref().map(|p| {
-            numpy::PyArray1::from_slice(py, &[p.position.x, p.position.y, p.position.z])
-        })
+        self.detection
+            .pose
+            .as_ref()
+            .map(|p| numpy::PyArray1::from_slice(py, &[p.position.x, p.position.y, p.position.z]))
     }
     /// Rotation from marker to camera frame, 3x3 (None without a pose).
     #[getter]
@@ -240,15 +251,30 @@ impl PyMarker {
     /// The rotation as a quaternion (x, y, z, w) (None without a pose).
     #[getter]
     fn quaternion(&self) -> Option<(f64, f64, f64, f64)> {
-        self.detection
-            .pose
-            .as_ref()
-            .map(|p| (p.quaternion[0], p.quaternion[1], p.quaternion[2], p.quaternion[3]))
+        self.detection.pose.as_ref().map(|p| {
+            (
+                p.quaternion[0],
+                p.quaternion[1],
+                p.quaternion[2],
+                p.quaternion[3],
+            )
+        })
     }
 
     /// The marker as `whycode detect --format json` prints it.
     fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        crate::json_to_py(py, &MarkerRecord::of(&self.detection).to_json())
+        // Through detect's own report writer: one source for fields,
+        // order and rounding.
+        let frame = FrameReport {
+            image: String::new(),
+            width: 0,
+            height: 0,
+            elapsed_ms: 0.0,
+            markers: vec![self.detection.clone()],
+        };
+        crate::json_to_py(py, &frame.to_json())?
+            .get_item("markers")?
+            .get_item(0)
     }
 
     fn __repr__(&self) -> String {

@@ -38,7 +38,9 @@ impl PyFamily {
     #[new]
     #[pyo3(signature = (bits = 8, distance = 2))]
     fn new(bits: u32, distance: u32) -> PyResult<PyFamily> {
-        Ok(guard(|| Ok(PyFamily::wrap(Family::generate(bits, distance)?)))?)
+        Ok(guard(|| {
+            Ok(PyFamily::wrap(Family::generate(bits, distance)?))
+        })?)
     }
 
     /// Reads a family file (as written by `whycode ids --format json` or `to_json()`).
@@ -133,7 +135,12 @@ impl PyFamily {
     fn __hash__(&self) -> u64 {
         use std::hash::{Hash, Hasher};
         let mut h = std::collections::hash_map::DefaultHasher::new();
-        (self.family.bits(), self.family.distance(), self.family.codes()).hash(&mut h);
+        (
+            self.family.bits(),
+            self.family.distance(),
+            self.family.codes(),
+        )
+            .hash(&mut h);
         h.finish()
     }
 

@@ -149,10 +149,11 @@ fn exception_type<'py>(
     let namespace = PyDict::new(py);
     namespace.set_item("__module__", "whycode")?;
     namespace.set_item("__doc__", doc)?;
-    let ty = py
-        .import("builtins")?
-        .getattr("type")?
-        .call1((name, PyTuple::new(py, bases)?, namespace))?;
+    let ty = py.import("builtins")?.getattr("type")?.call1((
+        name,
+        PyTuple::new(py, bases)?,
+        namespace,
+    ))?;
     Ok(ty.cast_into::<PyType>()?)
 }
 

@@ -7,7 +7,10 @@
 
 use crate::Error;
 use image::{DynamicImage, ImageBuffer, Luma};
-use numpy::{PyArrayDescrMethods, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{
+    PyArrayDescrMethods, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn,
+    PyUntypedArray, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
 use whycode::detect::{pixels, MAX_PIXELS, MAX_SIDE};
 
@@ -73,7 +76,6 @@ fn layout(array: &Bound<'_, PyUntypedArray>) -> PyResult<Layout> {
 /// Grey pixels of a layout gathered in row-major order (BGR(A) reordered to
 /// RGB(A)), converted as the image loader converts a decoded file.
 fn to_gray<T: Copy>(
-
     values: impl Iterator<Item = T>,
     layout: &Layout,
     build: fn(u32, u32, Vec<T>, usize) -> Option<DynamicImage>,
@@ -149,7 +151,9 @@ fn gathered<T: numpy::Element + Copy + Send + Sync, R: Send>(
     work: impl FnOnce(&GrayView<'_>) -> crate::Result<R> + Send,
 ) -> crate::Result<R> {
     if array.ndim() == 2 {
-        let values: PyReadonlyArray2<'_, T> = array.extract().map_err(|e| Error::value(PyErr::from(e).to_string()))?;
+        let values: PyReadonlyArray2<'_, T> = array
+            .extract()
+            .map_err(|e| Error::value(PyErr::from(e).to_string()))?;
         let view = values.as_array();
         py.detach(|| {
             crate::guard(|| {
@@ -158,7 +162,9 @@ fn gathered<T: numpy::Element + Copy + Send + Sync, R: Send>(
             })
         })
     } else {
-        let values: PyReadonlyArray3<'_, T> = array.extract().map_err(|e| Error::value(PyErr::from(e).to_string()))?;
+        let values: PyReadonlyArray3<'_, T> = array
+            .extract()
+            .map_err(|e| Error::value(PyErr::from(e).to_string()))?;
         let view = values.as_array();
         py.detach(|| {
             crate::guard(|| {
@@ -170,15 +176,16 @@ fn gathered<T: numpy::Element + Copy + Send + Sync, R: Send>(
 }
 
 fn as_view(gray: &image::GrayImage) -> GrayView<'_> {
-    ImageBuffer::from_raw(gray.width(), gray.height(), gray.as_raw().as_slice())
-        .expect("same size")
+    ImageBuffer::from_raw(gray.width(), gray.height(), gray.as_raw().as_slice()).expect("same size")
 }
 
 /// An owned grey frame of `image` (for work that keeps it, like validation).
 pub(crate) fn gray_image(py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<image::GrayImage> {
     with_gray(py, image, |view| {
-        Ok(image::GrayImage::from_raw(view.width(), view.height(), view.as_raw().to_vec())
-            .expect("same size"))
+        Ok(
+            image::GrayImage::from_raw(view.width(), view.height(), view.as_raw().to_vec())
+                .expect("same size"),
+        )
     })
 }
 

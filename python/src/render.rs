@@ -303,9 +303,7 @@ fn check_ids(ids: &[u32]) -> crate::Result<()> {
         return Err(Error::value("ids: no IDs given"));
     }
     if ids.contains(&0) {
-        return Err(Error::value(
-            "ids: ID 0 means \"unknown\"; IDs start at 1",
-        ));
+        return Err(Error::value("ids: ID 0 means \"unknown\"; IDs start at 1"));
     }
     if ids.len() > 100_000 {
         return Err(Error::value("ids: the list names more than 100000 IDs"));
@@ -347,7 +345,8 @@ fn render_marker_image<'py>(
         Marker::whycon(diameter_px / 10.0)
     } else {
         let family = default_family(family)?;
-        let id = id.ok_or_else(|| Error::value("render_marker_image needs an id (or legacy=True)"))?;
+        let id =
+            id.ok_or_else(|| Error::value("render_marker_image needs an id (or legacy=True)"))?;
         let code = family
             .code(id)
             .ok_or_else(|| Error::value(id_range_error(&family, id)))?;

@@ -90,7 +90,10 @@ fn simulate_scene<'py>(
         return Err(Error::value("noise must be a grey-level sigma of at least 0").into());
     }
     if !(print_scale > 0.1 && print_scale < 10.0) {
-        return Err(Error::value(format!("print_scale {print_scale} is not a plausible print scale")).into());
+        return Err(Error::value(format!(
+            "print_scale {print_scale} is not a plausible print scale"
+        ))
+        .into());
     }
     if jpeg.is_some_and(|q| !(1..=100).contains(&q)) {
         return Err(Error::value("jpeg quality must be between 1 and 100").into());
@@ -110,7 +113,9 @@ fn simulate_scene<'py>(
     let scatter = match layout {
         "grid" => false,
         "scatter" => true,
-        other => return Err(Error::value(format!("layout '{other}' is not 'grid' or 'scatter'")).into()),
+        other => {
+            return Err(Error::value(format!("layout '{other}' is not 'grid' or 'scatter'")).into())
+        }
     };
     let background = match background {
         None => None,
@@ -238,7 +243,10 @@ fn simulate_scene<'py>(
             Ok((image, truth.to_json()))
         })
     })?;
-    Ok((crate::pixels::to_array(py, image)?, crate::json_to_py(py, &truth)?))
+    Ok((
+        crate::pixels::to_array(py, image)?,
+        crate::json_to_py(py, &truth)?,
+    ))
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

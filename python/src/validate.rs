@@ -27,9 +27,8 @@ fn validate_photos<'py>(
     let (manifest_data, mut detector) = py.detach(|| {
         guard(|| {
             let data = Manifest::load(&manifest)?;
-            let detector = whycode::validate::detector_for(&data).map_err(|e| {
-                Error::from(e.context(manifest.display().to_string()))
-            })?;
+            let detector = whycode::validate::detector_for(&data)
+                .map_err(|e| Error::from(e.context(manifest.display().to_string())))?;
             Ok((data, detector))
         })
     })?;
@@ -40,7 +39,10 @@ fn validate_photos<'py>(
             let image = py.detach(|| guard(|| Ok(whycode::detect::load_gray(&path)?)))?;
             (path.display().to_string(), image)
         } else {
-            (format!("image{}", k + 1), crate::pixels::gray_image(py, item)?)
+            (
+                format!("image{}", k + 1),
+                crate::pixels::gray_image(py, item)?,
+            )
         };
         let report = py.detach(|| {
             guard(|| {
@@ -49,9 +51,15 @@ fn validate_photos<'py>(
                     .map(|c| c.for_image(image.width(), image.height()))
                     .transpose()
                     .map_err(|problem| Error::value(format!("{name}: {problem}")))?;
-                let report =
-                    whycode::validate::check_image(&name, &manifest_data, &image, cam.as_ref(), &mut detector);
-                let picture = annotate.then(|| whycode::validate::annotate::annotate(&image, &report));
+                let report = whycode::validate::check_image(
+                    &name,
+                    &manifest_data,
+                    &image,
+                    cam.as_ref(),
+                    &mut detector,
+                );
+                let picture =
+                    annotate.then(|| whycode::validate::annotate::annotate(&image, &report));
                 Ok((report, picture))
             })
         })?;
@@ -60,7 +68,8 @@ fn validate_photos<'py>(
             pictures.push(p);
         }
     }
-    let json = py.detach(|| guard(|| Ok(whycode::validate::summarise(&manifest_data, photos).to_json())))?;
+    let json =
+        py.detach(|| guard(|| Ok(whycode::validate::summarise(&manifest_data, photos).to_json())))?;
     let report = crate::json_to_py(py, &json)?;
     if annotate {
         let arrays = pictures

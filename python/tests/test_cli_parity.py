@@ -98,8 +98,8 @@ def test_pose_matches_the_cli(tmp_path: Path, cli: Callable[..., Any],
     image, truth = whycode.simulate(family=whycode.Family(12, 2), ids=range(1, 10),
                                     diameter=0.05, camera=camera, camera_distance=0.7,
                                     tilt=30, noise=2, seed=3)
-    cli("simulate", "--bits", "12", "--hamming", "2", "--ids", "1-9", "--diameter", "50mm",
-        "--camera", "cam.yaml", "--distance", "0.7m", "--tilt", "30deg", "--noise", "2",
+    cli("simulate", "--bits", "12", "--distance", "2", "--ids", "1-9", "--diameter", "50mm",
+        "--camera", "cam.yaml", "--camera-distance", "0.7m", "--tilt", "30deg", "--noise", "2",
         "--seed", "3", "-o", "loose.png")
     assert np.array_equal(image, whycode.load_image(tmp_path / "loose.png"))
     [frame] = cli_json("detect", "--bits", "12", "--distance", "2", "--camera", "cam.yaml",
