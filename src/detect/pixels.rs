@@ -24,9 +24,26 @@ pub fn to_gray(decoded: DynamicImage) -> GrayImage {
 /// value present becomes 255 instead (the detector's thresholds are local,
 /// so a linear stretch changes nothing else).
 pub fn stretched_to_8_bits(wide: image::ImageBuffer<image::Luma<u16>, Vec<u16>>) -> GrayImage {
-    let brightest = wide.pixels().map(|p| p.0[0]).max().unwrap_or(0).max(1);
+    let (width, height) = wide.dimensions();
+    GrayImage::from_raw(width, height, stretched_values(wide.as_raw())).expect("same size")
+}
+
+/// [`stretched_to_8_bits`] on bare values.
+pub fn stretched_values(wide: &[u16]) -> Vec<u8> {
+    let brightest = wide.iter().copied().max().unwrap_or(0).max(1);
     let scale = 255.0 / f64::from(brightest);
-    GrayImage::from_fn(wide.width(), wide.height(), |x, y| {
-        image::Luma([(f64::from(wide.get_pixel(x, y).0[0]) * scale).round() as u8])
-    })
+    wide.iter()
+        .map(|&v| (f64::from(v) * scale).round() as u8)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sixteen_bit_data_is_stretched_to_the_brightest_value() {
+        let wide = image::ImageBuffer::from_raw(4, 1, vec![0u16, 1, 511, 1023]).unwrap();
+        assert_eq!(stretched_to_8_bits(wide).into_raw(), [0, 0, 127, 255]);
+    }
 }
