@@ -6,7 +6,7 @@ use crate::{guard, Error};
 use pyo3::prelude::*;
 use std::sync::Mutex;
 use whycode::detect::report::FrameReport;
-use whycode::detect::{Detection, Detector, DetectorConfig};
+use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 
 /// Finds WhyCode markers (or legacy WhyCon circles) in frames.
@@ -79,10 +79,10 @@ impl PyDetector {
                 Error::value("pose needs both diameter and camera (pass both or neither)").into(),
             );
         }
-        let family = if legacy {
-            None
+        let target = if legacy {
+            Target::WhyCon
         } else {
-            Some(match family {
+            Target::WhyCode(match family {
                 Some(f) => f.family.clone(),
                 None => guard(|| {
                     Ok(Family::generate(
@@ -93,7 +93,7 @@ impl PyDetector {
             })
         };
         let mut config = DetectorConfig {
-            family,
+            target,
             diameter_m,
             camera: camera.map(|c| c.camera),
             tracking,
@@ -156,13 +156,16 @@ impl PyDetector {
 
     #[getter]
     fn family(&self) -> Option<PyFamily> {
-        self.config.family.clone().map(PyFamily::wrap)
+        match &self.config.target {
+            Target::WhyCode(family) => Some(PyFamily::wrap(family.clone())),
+            Target::WhyCon => None,
+        }
     }
 
     fn __repr__(&self) -> String {
-        let family = match &self.config.family {
-            Some(f) => format!("Family(bits={}, distance={})", f.bits(), f.distance()),
-            None => "None (legacy)".to_string(),
+        let family = match &self.config.target {
+            Target::WhyCode(f) => format!("Family(bits={}, distance={})", f.bits(), f.distance()),
+            Target::WhyCon => "None (legacy)".to_string(),
         };
         format!(
             "Detector(family={family}, diameter={:?}, camera={}, tracking={})",

@@ -12,7 +12,7 @@ use numpy::{
     PyUntypedArray, PyUntypedArrayMethods,
 };
 use pyo3::prelude::*;
-use whycode::detect::{pixels, MAX_PIXELS, MAX_SIDE};
+use whycode::image_io::{to_gray as loader_gray, MAX_PIXELS, MAX_SIDE};
 
 pub(crate) type GrayView<'a> = ImageBuffer<Luma<u8>, &'a [u8]>;
 
@@ -88,7 +88,7 @@ fn to_gray<T: Copy>(
     }
     let decoded = build(layout.width, layout.height, data, layout.channels)
         .expect("buffer length matches the checked shape");
-    pixels::to_gray(decoded)
+    loader_gray(decoded)
 }
 
 fn build_u8(w: u32, h: u32, data: Vec<u8>, channels: usize) -> Option<DynamicImage> {
@@ -215,6 +215,6 @@ pub(crate) fn load_image(
     py: Python<'_>,
     path: std::path::PathBuf,
 ) -> PyResult<Bound<'_, numpy::PyArray2<u8>>> {
-    let gray = py.detach(|| crate::guard(|| Ok(whycode::detect::load_gray(&path)?)))?;
+    let gray = py.detach(|| crate::guard(|| Ok(whycode::image_io::load_gray(&path)?)))?;
     to_array(py, gray)
 }

@@ -5,10 +5,11 @@ use crate::{guard, Error};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use std::path::{Path, PathBuf};
+use whycode::detect::Target;
 use whycode::family::Family;
 use whycode::geometry::Marker;
+use whycode::manifest::FamilyRef;
 use whycode::render::check::{check_marker_page, check_sheet, check_sheet_png};
-use whycode::render::manifest::FamilyRef;
 use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
 use whycode::render::sheet::{family_markers, id_range_error, layout, legacy_markers, SheetSpec};
 use whycode::render::{encode_pages, write_all, Format, Template};
@@ -40,6 +41,13 @@ fn output_format(format: Option<&str>, output: Option<&Path>) -> crate::Result<F
             }
             Ok(by_path)
         }
+    }
+}
+
+fn target_of(family: &Option<Family>) -> Target {
+    match family {
+        Some(f) => Target::WhyCode(f.clone()),
+        None => Target::WhyCon,
     }
 }
 
@@ -159,7 +167,13 @@ fn render_marker<'py>(
             let page = marker_page(&marker, &options)?;
             if check {
                 let png_dpi = (format == Format::Png).then_some(dpi);
-                check_marker_page(&page, &marker, id.unwrap_or(0), family.as_ref(), png_dpi)?;
+                check_marker_page(
+                    &page,
+                    &marker,
+                    id.unwrap_or(0),
+                    &target_of(&family),
+                    png_dpi,
+                )?;
             }
             let path = output
                 .clone()
@@ -273,9 +287,9 @@ fn render_sheet<'py>(
             let sheet = layout(&spec)?;
             if check {
                 if format == Format::Png {
-                    check_sheet_png(&sheet, family.as_ref(), dpi)?;
+                    check_sheet_png(&sheet, &target_of(&family), dpi)?;
                 } else {
-                    check_sheet(&sheet, family.as_ref())?;
+                    check_sheet(&sheet, &target_of(&family))?;
                 }
             }
             let path = output

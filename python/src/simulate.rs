@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use whycode::camera::Camera;
 use whycode::family::Family;
 use whycode::geometry::Marker;
-use whycode::render::manifest::Manifest;
+use whycode::manifest::Manifest;
 use whycode::simulate::{layout, Background, MotionBlur, Scene, SceneObject, SheetPage};
 use whycode::units::Angle;
 

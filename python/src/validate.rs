@@ -4,7 +4,7 @@ use crate::camera::PyCamera;
 use crate::{guard, Error};
 use pyo3::prelude::*;
 use std::path::PathBuf;
-use whycode::render::manifest::Manifest;
+use whycode::manifest::Manifest;
 
 /// Checks photos of a printed sheet against the manifest written with it.
 /// `images` holds paths (read by the CLI's loader) or numpy arrays (named
@@ -36,7 +36,7 @@ fn validate_photos<'py>(
     let mut pictures = Vec::new();
     for (k, item) in images.iter().enumerate() {
         let (name, image) = if let Ok(path) = item.extract::<PathBuf>() {
-            let image = py.detach(|| guard(|| Ok(whycode::detect::load_gray(&path)?)))?;
+            let image = py.detach(|| guard(|| Ok(whycode::image_io::load_gray(&path)?)))?;
             (path.display().to_string(), image)
         } else {
             (
