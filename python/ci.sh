@@ -14,6 +14,9 @@ trap 'rm -rf "$VENV"' EXIT
 "$VENV/bin/python" -m pip install --quiet maturin pytest numpy mypy
 "$VENV/bin/python" -m pip install --quiet ./python
 
+# The binding crate is not a default workspace member: lint it here.
+cargo clippy --quiet -p whycode-python --all-targets -- -D warnings
+
 # The tests compare with the CLI built from this checkout.
 cargo build --release --quiet --bin whycode
 export WHYCODE_BIN="${CARGO_TARGET_DIR:-$PWD/target}/release/whycode"

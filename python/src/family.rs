@@ -75,9 +75,8 @@ impl PyFamily {
         self.family.len()
     }
 
-    fn __iter__(slf: Py<Self>, py: Python<'_>) -> PyCodeIter {
+    fn __iter__(slf: Py<Self>) -> PyCodeIter {
         let len = slf.get().family.len();
-        let _ = py;
         PyCodeIter {
             family: slf,
             next: 0,
