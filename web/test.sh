@@ -19,6 +19,8 @@ if ! python3 -c "import playwright" 2>/dev/null; then
     python3 -m pip install --quiet --disable-pip-version-check "playwright==1.65.2"
 fi
 
+# The binding crate is not a default member, so the workspace lint skips it.
+cargo clippy -p whycode-web --all-targets -- -D warnings
 "$here/build.sh"
 cargo build --release --bin whycode
 python3 "$here/test_web.py" --dist "$here/dist" --whycode "$target_dir/release/whycode" \
