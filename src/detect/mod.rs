@@ -23,12 +23,14 @@
 pub mod annotate;
 pub mod ellipse;
 pub mod idfilter;
+pub mod manchester;
 pub mod rectify;
 pub mod ring;
 pub mod segment;
 pub mod threshold;
 pub mod track;
 
+use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::path::Path;
 
@@ -40,6 +42,7 @@ use crate::family::{Decoder, Family, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
 use crate::pose::{self, CirclePose, Pose};
 use ellipse::Ellipse;
+use manchester::RingEvidence;
 use nalgebra::Vector3;
 use ring::RingReader;
 use segment::{Fill, Filler, Gray, Labels, Stats};
@@ -68,6 +71,16 @@ pub struct DetectorConfig {
     pub area_tolerance: f64,
     /// Relative tolerance on the white-to-disc pixel ratio.
     pub ratio_tolerance: f64,
+    /// Without a family: look for WhyCode markers of any bit count (4-24)
+    /// and read the count from each ring, reporting `bits` and `code`
+    /// (legacy WhyCon markers are not looked for then).
+    pub auto_bits: bool,
+    /// With `auto_bits`: the family distance, which turns each ring's code
+    /// into an ID of the family of its own bit count.
+    pub auto_distance: Option<u32>,
+    /// Also report round candidates whose ring shows no Manchester code
+    /// structure (flagged `unreadable`); by default they are not markers.
+    pub report_unreadable: bool,
 }
 
 impl Default for DetectorConfig {
@@ -82,6 +95,9 @@ impl Default for DetectorConfig {
             roundness_tolerance: 0.4,
             area_tolerance: 0.12,
             ratio_tolerance: 0.5,
+            auto_bits: false,
+            auto_distance: None,
+            report_unreadable: false,
         }
     }
 }
@@ -114,6 +130,13 @@ pub struct Detection {
     /// markers (no yaw) the in-plane rotation is arbitrary: +x is the
     /// image +u direction projected onto the marker plane.
     pub pose: Option<Pose>,
+    /// Bit count of the code ring as the ring itself shows it (WhyCode
+    /// markers whose sectors are wide enough to count); a count other than
+    /// the family's means the marker is not of this family (ID 0).
+    pub bits: Option<u32>,
+    /// A round candidate whose ring shows no Manchester code structure:
+    /// reported only with [`DetectorConfig::report_unreadable`].
+    pub unreadable: bool,
 }
 
 /// The detector: configuration, tracking state and reusable buffers.
@@ -131,6 +154,8 @@ pub struct Detector {
     /// A follow of this frame fell back to the flood fill.
     follow_filled: bool,
     tracks: Vec<Track>,
+    /// Readers for rings of each bit count, in auto mode with a distance.
+    auto_readers: BTreeMap<u32, Option<RingReader>>,
     search: ThresholdSearch,
     ratio: Adaptive,
     roundness: Adaptive,
@@ -188,7 +213,7 @@ impl Detector {
             .family
             .as_ref()
             .map(|family| RingReader::new(Some(Decoder::new(family))));
-        let whycode = config.family.is_some();
+        let whycode = config.family.is_some() || config.auto_bits;
         let white = expected_white_fraction(whycode);
         Detector {
             ratio: Adaptive::new(white, config.ratio_tolerance),
@@ -203,6 +228,7 @@ impl Detector {
             occupied: Vec::new(),
             follow_filled: false,
             tracks: Vec::new(),
+            auto_readers: BTreeMap::new(),
             search: ThresholdSearch::default(),
             frame: 0,
         }
@@ -210,6 +236,27 @@ impl Detector {
 
     pub fn config(&self) -> &DetectorConfig {
         &self.config
+    }
+
+    /// Looking for WhyCode markers (with a family or any bit count), not
+    /// legacy WhyCon ones.
+    fn whycode(&self) -> bool {
+        self.config.family.is_some() || self.config.auto_bits
+    }
+
+    /// The reader for rings of `bits` bits in auto mode with a distance
+    /// (families are generated on first use); None without.
+    fn auto_reader(&mut self, bits: u32) -> Option<&RingReader> {
+        let distance = self
+            .config
+            .auto_distance
+            .filter(|_| self.config.auto_bits)?;
+        let reader = self.auto_readers.entry(bits).or_insert_with(|| {
+            Family::generate(bits, distance)
+                .ok()
+                .map(|family| RingReader::new(Some(Decoder::new(&family))))
+        });
+        reader.as_ref()
     }
 
     /// Forgets tracks and adapted tolerances.
@@ -332,6 +379,16 @@ impl Detector {
             detections.push(d);
             settled_normals.push(settled);
         }
+        if !self.config.report_unreadable {
+            // Round things without a code ring are not markers (and get no
+            // track either).
+            let keep: Vec<bool> = detections.iter().map(|d| !d.unreadable).collect();
+            let mut k = 0;
+            found.retain(|_| (keep[k], k += 1).0);
+            let mut k = 0;
+            settled_normals.retain(|_| (keep[k], k += 1).0);
+            detections.retain(|d| !d.unreadable);
+        }
         if tracking {
             self.update_tracks(&found, &detections, &settled_normals);
             for c in found.iter().filter(|c| c.tested) {
@@ -371,6 +428,8 @@ impl Detector {
             confidence: (0.5 + 0.5 * quality).clamp(0.0, 1.0),
             status: None,
             pose: None,
+            bits: None,
+            unreadable: false,
         };
         let mut axis_point = None;
         let mut centre_estimate = None;
@@ -398,15 +457,53 @@ impl Detector {
             d.status = t.status;
             d.yaw = Some(yaw);
             d.confidence = t.confidence;
-        } else if let Some(reader) = &self.reader {
-            let reading = reader.read(image, &outer, c.black, c.white);
-            d.id = reading.id;
-            d.code = reading.decoded.filter(|x| x.is_member()).map(|x| x.code);
-            d.status = reading.decoded.map(|x| x.status);
-            d.yaw = reading.yaw;
-            d.confidence = reading.confidence;
-            axis_point = reading.axis_point;
-            centre_estimate = reading.centre_estimate;
+        } else if self.whycode() {
+            let family_bits = self.config.family.as_ref().map(Family::bits);
+            let evidence = ring_evidence(image, &outer, c, family_bits);
+            let reader = match evidence {
+                RingEvidence::Manchester(ring) => {
+                    d.bits = Some(ring.bits);
+                    if Some(ring.bits) == family_bits {
+                        self.reader.as_ref()
+                    } else {
+                        // Not this family's ring (or no family given): the
+                        // code is what the ring says, the ID only from a
+                        // family of the ring's own bit count.
+                        d.code = Some(ring.code);
+                        d.confidence *= ring.fit;
+                        self.auto_reader(ring.bits)
+                    }
+                }
+                RingEvidence::Absent => {
+                    // A settled track whose ring blurs is still the marker.
+                    let settled = c
+                        .track
+                        .is_some_and(|i| self.tracks[i].id != 0 && self.tracks[i].id_streak >= 3);
+                    d.unreadable = !settled;
+                    None
+                }
+                // Auto mode cannot name the bit count of a ring too small
+                // to count its sectors: no evidence it is a marker.
+                RingEvidence::TooSmall if self.config.family.is_none() => {
+                    d.unreadable = true;
+                    None
+                }
+                RingEvidence::TooSmall => self.reader.as_ref(),
+            };
+            if let Some(reader) = reader {
+                let reading = reader.read(image, &outer, c.black, c.white);
+                d.id = reading.id;
+                d.code = reading
+                    .decoded
+                    .filter(|x| x.is_member())
+                    .map(|x| x.code)
+                    .or(d.code);
+                d.status = reading.decoded.map(|x| x.status);
+                d.yaw = reading.yaw;
+                d.confidence = reading.confidence;
+                axis_point = reading.axis_point;
+                centre_estimate = reading.centre_estimate;
+            }
         }
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed_yaw.is_some());
@@ -427,7 +524,12 @@ impl Detector {
                 .pose
                 .filter(|_| settled)
                 .map(|p| p.rotation.column(2).into_owned());
-            if let (Some(pose), Some(code), Some(family)) = (&d.pose, d.code, &self.config.family) {
+            let member_code = d
+                .code
+                .filter(|_| d.bits.is_none() || d.bits == family_bits(&self.config));
+            if let (Some(pose), Some(code), Some(family)) =
+                (&d.pose, member_code, &self.config.family)
+            {
                 let bits = family.bits();
                 if let Some(better) =
                     rectify::refine_rotation(gray, &camera, pose, diameter / 2.0, bits, code)
@@ -538,7 +640,7 @@ impl Detector {
             return Some((full_pose(camera, &candidates[k], yaw, axis_point), true));
         }
         let mid = (c.black + c.white) / 2.0;
-        let whycode = self.config.family.is_some();
+        let whycode = self.whycode();
         let inner_ratios: &[f64] = if whycode {
             &[RING_INNER_RATIO, WHYCODE_WHITE_RATIO]
         } else {
@@ -701,7 +803,7 @@ impl Detector {
             return None;
         }
         // Inside: white at the centre, black across the annulus.
-        let white_ratio = if self.config.family.is_some() {
+        let white_ratio = if self.whycode() {
             RING_INNER_RATIO
         } else {
             WHYCON_WHITE_RATIO
@@ -794,7 +896,7 @@ impl Detector {
         map: &ThresholdMap,
         seed: (u32, u32),
     ) -> Option<Candidate> {
-        let whycode = self.config.family.is_some();
+        let whycode = self.whycode();
         let dark = self
             .filler
             .fill(gray, map, &mut self.labels, seed, Fill::Dark);
@@ -905,6 +1007,38 @@ impl Detector {
             }
         }
         None
+    }
+}
+
+fn family_bits(config: &DetectorConfig) -> Option<u32> {
+    config.family.as_ref().map(Family::bits)
+}
+
+/// What the candidate's ring shows: the family's bit count is tried first
+/// (the common case), then every other count, so that a ring of another
+/// family is told apart from no ring at all.
+fn ring_evidence(
+    image: &GrayImage,
+    outer: &pose::ImageEllipse,
+    c: &Candidate,
+    family_bits: Option<u32>,
+) -> RingEvidence {
+    match family_bits {
+        Some(bits) if !manchester::testable(outer, bits) => RingEvidence::TooSmall,
+        Some(bits) => {
+            // Counts too long to test on this ring are no evidence against
+            // the family's.
+            let others = manchester::BITS.filter(|&n| n != bits && manchester::testable(outer, n));
+            let evidence = manchester::examine(
+                image,
+                outer,
+                c.black,
+                c.white,
+                std::iter::once(bits).chain(others),
+            );
+            evidence
+        }
+        None => manchester::examine(image, outer, c.black, c.white, manchester::BITS),
     }
 }
 

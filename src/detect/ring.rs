@@ -140,7 +140,7 @@ pub struct RingReader {
 
 /// Radii (relative to R) averaged for each angular sample: the middle two
 /// thirds of the ring 0.343..0.6, away from the white discs on both sides.
-fn sample_radii() -> [f64; 5] {
+pub(super) fn sample_radii() -> [f64; 5] {
     let width = WHYCODE_WHITE_RATIO - RING_INNER_RATIO;
     [1.0, 2.0, 3.0, 4.0, 5.0].map(|k| RING_INNER_RATIO + width * k / 6.0)
 }
@@ -458,7 +458,7 @@ fn logistic(x: f64) -> f64 {
 /// direction is the major one turned by -90°, which makes t run visually
 /// counter-clockwise.
 #[derive(Debug, Clone, Copy)]
-struct EllipseFrame {
+pub(super) struct EllipseFrame {
     /// Ellipse centre and scale (the semi-major axis) of the normalised
     /// coordinates the homography works in.
     centre: (f64, f64),
@@ -474,7 +474,7 @@ struct EllipseFrame {
 }
 
 impl EllipseFrame {
-    fn new(e: &ImageEllipse) -> EllipseFrame {
+    pub(super) fn new(e: &ImageEllipse) -> EllipseFrame {
         let (s, c) = e.angle.sin_cos();
         let k = e.semi_minor / e.semi_major;
         EllipseFrame {
@@ -624,7 +624,7 @@ impl EllipseFrame {
 
 /// Mean grey level over the given radii at `count` equally spaced
 /// parameters; `None` when the ring leaves the image.
-fn sample_profile(
+pub(super) fn sample_profile(
     image: &GrayImage,
     frame: &EllipseFrame,
     radii: &[f64],
@@ -811,7 +811,7 @@ fn edge_phase(profile: &[f64], bits: u32, per_sector: usize) -> f64 {
 
 /// Mean grey level of the central part of each of the 2n half-bit sectors,
 /// the first one starting at parameter `start`.
-fn half_sector_means(profile: &[f64], bits: u32, start: f64) -> Vec<f64> {
+pub(super) fn half_sector_means(profile: &[f64], bits: u32, start: f64) -> Vec<f64> {
     let count = profile.len() as f64;
     let sector = PI / f64::from(bits);
     // The central 60 % of each sector, away from blurred edges.
@@ -836,6 +836,6 @@ fn half_sector_means(profile: &[f64], bits: u32, start: f64) -> Vec<f64> {
 
 /// First half minus second half of every bit: positive means white then
 /// black, a 1 bit.
-fn bit_differences(halves: &[f64]) -> Vec<f64> {
+pub(super) fn bit_differences(halves: &[f64]) -> Vec<f64> {
     halves.chunks_exact(2).map(|h| h[0] - h[1]).collect()
 }
