@@ -26,6 +26,7 @@ pub mod idfilter;
 pub mod manchester;
 pub mod rectify;
 pub mod ring;
+pub mod ring_model;
 pub mod segment;
 pub mod threshold;
 pub mod track;
@@ -460,6 +461,15 @@ impl Detector {
         } else if self.whycode() {
             let family_bits = self.config.family.as_ref().map(Family::bits);
             let evidence = ring_evidence(image, &outer, c, family_bits);
+            // Rings whose sectors are a pixel or two wide: compare with the
+            // rendered members instead (also the ring test when too small
+            // for the sector test).
+            let small = match (&self.config.family, evidence) {
+                (Some(family), RingEvidence::TooSmall) => {
+                    ring_model::read_small_ring(image, &outer, family)
+                }
+                _ => None,
+            };
             let reader = match evidence {
                 RingEvidence::Manchester(ring) => {
                     d.bits = Some(ring.bits);
@@ -489,6 +499,25 @@ impl Detector {
                     None
                 }
                 RingEvidence::TooSmall => self.reader.as_ref(),
+            };
+            let reader = match small {
+                Some(ring) if !ring.structured => {
+                    let settled = c
+                        .track
+                        .is_some_and(|i| self.tracks[i].id != 0 && self.tracks[i].id_streak >= 3);
+                    d.unreadable = !settled;
+                    None
+                }
+                Some(ring) if ring.id != 0 => {
+                    d.id = ring.id;
+                    d.code = Some(ring.code);
+                    d.status = Some(MatchStatus::Exact);
+                    d.yaw = ring.yaw;
+                    d.confidence = (1.0 - 1.0 / ring.margin).clamp(0.0, 1.0);
+                    None
+                }
+                Some(_) => None,
+                None => reader,
             };
             if let Some(reader) = reader {
                 let reading = reader.read(image, &outer, c.black, c.white);
