@@ -1,6 +1,7 @@
 //! `whycode detect`: find markers in images and print IDs, yaw and pose.
 
 use crate::camera::Camera;
+use crate::detect::family_check::FamilyCheck;
 use crate::detect::{load_gray, Detection, Detector, DetectorConfig};
 use crate::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
 use crate::units::Length;
@@ -18,6 +19,8 @@ Examples:
   whycode detect --bits 8 --distance 1 --format json sheet.png
   whycode detect --family family.json --diameter 122mm --camera cam.yaml --format json frames/
   whycode detect --legacy --annotate out/ many.png
+  whycode detect --bits auto photo.jpg               # each ring's bit count and code
+  whycode detect --bits auto --distance 2 photo.jpg  # and IDs in the family of that count
 
 Folders are sequences: their images are read in name order and markers are
 tracked from frame to frame. Files named on the command line are independent
@@ -39,9 +42,12 @@ pub struct DetectArgs {
     #[arg(required = true, value_name = "IMAGE|FOLDER")]
     inputs: Vec<PathBuf>,
 
-    /// Code length of the markers' ID family [default: 8]
-    #[arg(long, short = 'b', conflicts_with_all = ["family", "legacy"])]
-    bits: Option<u32>,
+    /// Code length of the markers' ID family [default: 8], or `auto`: read
+    /// each ring's bit count (4-24) from the ring and report it with the
+    /// code (and the ID in the family of that count with --distance)
+    #[arg(long, short = 'b', value_name = "BITS|auto", value_parser = parse_bits,
+          conflicts_with_all = ["family", "legacy"])]
+    bits: Option<Bits>,
 
     /// Minimum cyclic Hamming distance of the ID family [default: 2]
     #[arg(long, short = 'd', conflicts_with_all = ["family", "legacy"])]
@@ -81,6 +87,27 @@ pub struct DetectArgs {
     /// processed in parallel)
     #[arg(long)]
     no_tracking: bool,
+
+    /// Also report round candidates whose ring shows no code structure
+    /// (marked "unreadable"); by default they are not taken for markers
+    #[arg(long, conflicts_with = "legacy")]
+    unreadable: bool,
+}
+
+/// `--bits`: a code length, or read from each ring.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Bits {
+    Count(u32),
+    Auto,
+}
+
+fn parse_bits(text: &str) -> Result<Bits, String> {
+    if text.eq_ignore_ascii_case("auto") {
+        return Ok(Bits::Auto);
+    }
+    text.parse()
+        .map(Bits::Count)
+        .map_err(|_| format!("expected a number of bits or `auto`, got {text:?}"))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -110,20 +137,32 @@ enum Job {
 }
 
 pub fn run(args: DetectArgs) -> Result<ExitCode> {
-    let family = if args.legacy {
+    let auto_bits = args.bits == Some(Bits::Auto);
+    let family = if args.legacy || auto_bits {
         None
     } else if let Some(path) = &args.family {
         Some(Family::load(path)?)
     } else {
-        let bits = args.bits.unwrap_or(DEFAULT_BITS);
+        let bits = match args.bits {
+            Some(Bits::Count(n)) => n,
+            _ => DEFAULT_BITS,
+        };
         let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
         Some(Family::generate(bits, distance).context("--bits/--distance")?)
     };
+    if let (true, Some(distance)) = (auto_bits, args.distance) {
+        // Refuse a distance no bit count accepts before any image is read.
+        Family::generate(DEFAULT_BITS.max(distance), distance).context("--distance")?;
+    }
+    let family_bits = family.as_ref().map(Family::bits);
     let camera = args.camera.as_deref().map(Camera::load).transpose()?;
     let mut config = DetectorConfig {
         family,
         diameter_m: args.diameter.map(Length::m),
         camera,
+        auto_bits,
+        auto_distance: args.distance.filter(|_| auto_bits),
+        report_unreadable: args.unreadable,
         ..DetectorConfig::default()
     };
     if let Some(n) = args.max_markers {
@@ -184,13 +223,17 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     if args.format == Format::Csv {
         writeln!(out, "{}", CSV_HEADER)?;
     }
+    let mut check = FamilyCheck::new(family_bits);
     for result in results.into_iter().flatten() {
         match result {
-            Ok(frame) => match args.format {
-                Format::Json => writeln!(out, "{}", frame_json(&frame))?,
-                Format::Csv => write_csv(&mut out, &frame)?,
-                Format::Table => write_table(&mut out, &frame, several)?,
-            },
+            Ok(frame) => {
+                check.observe(&frame.markers);
+                match args.format {
+                    Format::Json => writeln!(out, "{}", frame_json(&frame))?,
+                    Format::Csv => write_csv(&mut out, &frame)?,
+                    Format::Table => write_table(&mut out, &frame, several, family_bits)?,
+                }
+            }
             Err(err) => {
                 out.flush()?;
                 eprintln!("whycode: error: {}", super::one_line(&err));
@@ -199,6 +242,12 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         }
     }
     out.flush()?;
+    // In auto mode with a distance the IDs are there already.
+    if !(auto_bits && args.distance.is_some()) && !args.legacy {
+        if let Some(note) = check.note() {
+            eprintln!("whycode: note: {note}");
+        }
+    }
     Ok(if failures > 0 {
         ExitCode::FAILURE
     } else {
@@ -342,6 +391,9 @@ struct FrameRecord {
 struct MarkerRecord {
     id: u32,
     code: Option<u32>,
+    bits: Option<u32>,
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    unreadable: bool,
     u: f64,
     v: f64,
     yaw: Option<f64>,
@@ -361,6 +413,8 @@ fn frame_json(frame: &Frame) -> String {
             MarkerRecord {
                 id: m.id,
                 code: m.code,
+                bits: m.bits,
+                unreadable: m.unreadable,
                 u: round(m.u, 3),
                 v: round(m.v, 3),
                 yaw: m.yaw.map(|y| round(y, 5)),
@@ -390,7 +444,8 @@ fn frame_json(frame: &Frame) -> String {
     serde_json::to_string(&record).expect("plain records serialise")
 }
 
-const CSV_HEADER: &str = "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw";
+const CSV_HEADER: &str =
+    "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw,bits,unreadable";
 
 fn write_csv(out: &mut impl Write, frame: &Frame) -> Result<()> {
     let opt = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
@@ -399,7 +454,7 @@ fn write_csv(out: &mut impl Write, frame: &Frame) -> Result<()> {
         let pose = m.pose.as_ref();
         writeln!(
             out,
-            "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             m.id,
             m.code.map_or(String::new(), |c| c.to_string()),
             round(m.u, 3),
@@ -415,6 +470,8 @@ fn write_csv(out: &mut impl Write, frame: &Frame) -> Result<()> {
             opt(pose.map(|p| round(p.quaternion[1], 6))),
             opt(pose.map(|p| round(p.quaternion[2], 6))),
             opt(pose.map(|p| round(p.quaternion[3], 6))),
+            m.bits.map_or(String::new(), |b| b.to_string()),
+            u8::from(m.unreadable),
         )?;
     }
     Ok(())
@@ -428,7 +485,14 @@ fn csv_field(text: &str) -> String {
     }
 }
 
-fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Result<()> {
+/// `code` shows a ring of another bit count than the family's (or any, in
+/// auto mode) as code/bits, e.g. 1234/12b.
+fn write_table(
+    out: &mut impl Write,
+    frame: &Frame,
+    with_heading: bool,
+    family_bits: Option<u32>,
+) -> Result<()> {
     if with_heading {
         writeln!(
             out,
@@ -463,7 +527,11 @@ fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Resul
         } else {
             m.id.to_string()
         };
-        let code = m.code.map_or("-".to_string(), |c| c.to_string());
+        let code = match (m.code, m.bits) {
+            (Some(c), Some(b)) if Some(b) != family_bits => format!("{c}/{b}b"),
+            (Some(c), _) => c.to_string(),
+            _ => "-".to_string(),
+        };
         let yaw = m
             .yaw
             .map_or("-".to_string(), |y| format!("{:.1}", y.to_degrees()));
@@ -473,6 +541,9 @@ fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Resul
             "{id:>5} {code:>6} {:>9.2} {:>9.2} {yaw:>8} {axes:>15} {:>5.2}",
             m.u, m.v, m.confidence
         )?;
+        if m.unreadable {
+            write!(out, " unreadable")?;
+        }
         if let Some(p) = m.pose.as_ref() {
             write!(
                 out,

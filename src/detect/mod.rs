@@ -22,7 +22,9 @@
 
 pub mod annotate;
 pub mod ellipse;
+pub mod family_check;
 pub mod idfilter;
+pub mod legacy;
 pub mod manchester;
 pub mod rectify;
 pub mod ring;
@@ -155,6 +157,8 @@ pub struct Detector {
     /// A follow of this frame fell back to the flood fill.
     follow_filled: bool,
     tracks: Vec<Track>,
+    /// How this detector's markers decoded so far.
+    check: family_check::FamilyCheck,
     /// Readers for rings of each bit count, in auto mode with a distance.
     auto_readers: BTreeMap<u32, Option<RingReader>>,
     search: ThresholdSearch,
@@ -216,6 +220,7 @@ impl Detector {
             .map(|family| RingReader::new(Some(Decoder::new(family))));
         let whycode = config.family.is_some() || config.auto_bits;
         let white = expected_white_fraction(whycode);
+        let check = family_check::FamilyCheck::new(family_bits(&config));
         Detector {
             ratio: Adaptive::new(white, config.ratio_tolerance),
             roundness: Adaptive::new(0.0, config.roundness_tolerance),
@@ -230,6 +235,7 @@ impl Detector {
             follow_filled: false,
             tracks: Vec::new(),
             auto_readers: BTreeMap::new(),
+            check,
             search: ThresholdSearch::default(),
             frame: 0,
         }
@@ -399,7 +405,15 @@ impl Detector {
             }
         }
         detections.sort_by(|a, b| a.v.total_cmp(&b.v).then(a.u.total_cmp(&b.u)));
+        self.check.observe(&detections);
         detections
+    }
+
+    /// How the markers of every frame so far decoded: rings of other bit
+    /// counts, and IDs that needed error correction (see
+    /// [`family_check::FamilyCheck::note`] for a warning to show).
+    pub fn family_check(&self) -> &family_check::FamilyCheck {
+        &self.check
     }
 
     /// The detection of a candidate, and its normal when that was told
@@ -533,6 +547,13 @@ impl Detector {
                 axis_point = reading.axis_point;
                 centre_estimate = reading.centre_estimate;
             }
+        }
+        if !self.whycode()
+            && !(legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
+                && legacy::white_margin(gray, &c.outer, c.black, c.white))
+        {
+            // A marker followed for a while stays one when its inside blurs.
+            d.unreadable = !c.track.is_some_and(|i| self.tracks[i].hits >= 3);
         }
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed_yaw.is_some());
