@@ -8,7 +8,7 @@
 
 use super::ellipse::{self, Ellipse};
 use super::segment::Gray;
-use crate::geometry::WHYCON_WHITE_RATIO;
+use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
 
 /// Rays cast from the centre.
 const RAYS: usize = 32;
@@ -80,12 +80,28 @@ pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white:
     if radii.len() * 8 < RAYS * 7 {
         return false;
     }
-    radii.sort_by(f64::total_cmp);
-    let median = radii[radii.len() / 2];
     let pixel = 1.0 / radius_px;
-    // Middle 80 % of rays: one glint or scratch may move a few.
+    let ratio_ok = |median: f64, expected: f64| {
+        (median - expected).abs() <= RATIO_TOLERANCE + RATIO_TOLERANCE_PX * pixel
+    };
+    // A WhyCode marker is a WhyCon one too (paper section 5): its first
+    // edge is the centre disc's (0.343 R) on rays through black sectors and
+    // the ring's outside (0.6 R) on the others.
+    let split = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
+    let (inner, outer_edges): (Vec<f64>, Vec<f64>) =
+        radii.iter().copied().partition(|&r| r < split);
+    let whycode = inner.len() * 4 >= RAYS
+        && outer_edges.len() * 4 >= RAYS
+        && tight(inner, pixel).is_some_and(|m| ratio_ok(m, RING_INNER_RATIO))
+        && tight(outer_edges, pixel).is_some_and(|m| ratio_ok(m, WHYCODE_WHITE_RATIO));
+    whycode || tight(radii, pixel).is_some_and(|m| ratio_ok(m, WHYCON_WHITE_RATIO))
+}
+
+/// The median of edge radii that agree (trimmed spread within tolerance).
+fn tight(mut radii: Vec<f64>, pixel: f64) -> Option<f64> {
+    radii.sort_by(f64::total_cmp);
+    // Middle 80 %: one glint or scratch may move a few rays.
     let trim = radii.len() / 10;
     let spread = radii[radii.len() - 1 - trim] - radii[trim];
-    (median - WHYCON_WHITE_RATIO).abs() <= RATIO_TOLERANCE + RATIO_TOLERANCE_PX * pixel
-        && spread <= 2.0 * SPREAD_TOLERANCE + 2.0 * pixel
+    (spread <= 2.0 * SPREAD_TOLERANCE + 2.0 * pixel).then(|| radii[radii.len() / 2])
 }

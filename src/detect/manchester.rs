@@ -28,7 +28,8 @@ use std::ops::RangeInclusive;
 use image::GrayImage;
 
 use super::ring::{
-    bit_differences, half_sector_means, sample_profile, sample_radii, EllipseFrame, ImageEllipse,
+    bit_differences, half_sector_means, refined_centre, sample_profile, sample_radii, EllipseFrame,
+    ImageEllipse,
 };
 use crate::family::necklace;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
@@ -51,7 +52,7 @@ const MIN_BIT_EDGE: f64 = 0.3;
 
 /// Least share of the profile's variance the blurred Manchester model must
 /// explain (squared correlation).
-const MIN_FIT: f64 = 0.5;
+const MIN_FIT: f64 = 0.7;
 
 /// What the ring of one candidate shows.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -87,9 +88,10 @@ pub fn testable(outer: &ImageEllipse, bits: u32) -> bool {
 }
 
 /// Tests the ring inside `outer` for Manchester structure with each bit
-/// count in `bits`, in order; the first count that passes wins (a ring
-/// passes for one count only, so the order matters only for speed). When
-/// none passes, the ring is `Absent` only if every count could be tested.
+/// count in `bits`; of the counts that pass, the one whose model fits best
+/// wins (a ring of n bits can pass for n ± 1 when its profile is short).
+/// When none passes, the ring is `Absent` only if every count could be
+/// tested.
 pub fn examine(
     image: &GrayImage,
     outer: &ImageEllipse,
@@ -128,20 +130,68 @@ pub fn examine(
     // eight per sector of the longest code.
     let arc = 2.0 * PI * radii[radii.len() - 1] * outer.semi_major;
     let count = ((2.0 * arc).ceil() as usize).clamp(16 * 24, 2048);
-    let frame = EllipseFrame::new(outer);
-    let Some(profile) = sample_profile(image, &frame, radii, count) else {
-        // Cut by the image border: nothing to test, nothing to refute.
-        return RingEvidence::TooSmall;
-    };
     let pixels_per_sample =
         2.0 * PI * mid_ratio * (outer.semi_major * outer.semi_minor).sqrt() / count as f64;
-    let gradient: Vec<f64> = (0..count)
-        .map(|j| (profile[(j + 1) % count] - profile[j]).abs())
-        .collect();
-    counts
-        .into_iter()
-        .find_map(|n| test_bits(&profile, &gradient, n, contrast, pixels_per_sample))
+    let test = |frame: &EllipseFrame, counts: &[u32]| -> Option<Vec<Tested>> {
+        let profile = sample_profile(image, frame, radii, count)?;
+        let gradient: Vec<f64> = (0..count)
+            .map(|j| (profile[(j + 1) % count] - profile[j]).abs())
+            .collect();
+        Some(
+            counts
+                .iter()
+                .map(|&n| test_bits(&profile, &gradient, n, contrast, pixels_per_sample))
+                .collect(),
+        )
+    };
+    let best = |tested: &[Tested]| {
+        tested
+            .iter()
+            .filter_map(|t| t.ring)
+            .filter(|r| r.fit >= MIN_FIT)
+            .max_by(|a, b| a.fit.total_cmp(&b.fit))
+    };
+    let frame = EllipseFrame::new(outer);
+    // Cut by the image border: nothing to test, nothing to refute.
+    let Some(tested) = test(&frame, &counts) else {
+        return RingEvidence::TooSmall;
+    };
+    if let Some(ring) = best(&tested) {
+        return RingEvidence::Manchester(ring);
+    }
+    // Perspective: the outer ellipse's parameter does not space the ring's
+    // sectors evenly on a steep view, which spoils the model's fit. The
+    // ring's own radial edges show where the marker's centre projects;
+    // read again through that exact rectification.
+    // The count whose boundaries the edges follow best sets the rays.
+    let Some((nearest, bits)) = tested
+        .iter()
+        .zip(&counts)
+        .max_by(|a, b| a.0.coherence.total_cmp(&b.0.coherence))
+    else {
+        return absent;
+    };
+    let centre = refined_centre(
+        image,
+        &frame,
+        nearest.phase,
+        *bits,
+        0.5 * (black_level + white_level),
+    );
+    let rectified = centre.and_then(|p| EllipseFrame::with_projected_centre(outer, p));
+    rectified
+        .and_then(|frame| test(&frame, &counts))
+        .and_then(|tested| best(&tested))
         .map_or(absent, RingEvidence::Manchester)
+}
+
+/// One count tried: the ring read, if it passed the contrast and mid-bit
+/// edge tests (its fit still to be judged), and where and how clearly the
+/// profile's edges fall on that count's sector boundaries.
+struct Tested {
+    ring: Option<RingStructure>,
+    phase: f64,
+    coherence: f64,
 }
 
 /// The structure test for `bits` bits on a profile of the ring.
@@ -151,31 +201,48 @@ fn test_bits(
     bits: u32,
     disc_contrast: f64,
     pixels_per_sample: f64,
-) -> Option<RingStructure> {
+) -> Tested {
     let sector = PI / f64::from(bits);
-    let phase = boundary_phase(gradient, bits);
-    let pairings = [phase, phase + sector].map(|start| {
-        let halves = half_sector_means(profile, bits, start);
-        let diffs = bit_differences(&halves);
-        (start, halves, diffs)
-    });
-    let score = |d: &[f64]| d.iter().map(|x| x.abs()).sum::<f64>();
-    let (start, halves, diffs) = if score(&pairings[0].2) >= score(&pairings[1].2) {
-        pairings[0].clone()
-    } else {
-        pairings[1].clone()
-    };
+    let (phase, coherence) = boundary_phase(gradient, bits);
+    // Which boundaries are the mid-bit ones is clear from a varied code,
+    // but a code with long runs of equal bits reads almost as well paired
+    // the other way: both pairings are judged.
+    let ring = [phase, phase + sector]
+        .into_iter()
+        .filter_map(|start| pairing(profile, bits, start, disc_contrast, pixels_per_sample))
+        .max_by(|a, b| a.fit.total_cmp(&b.fit));
+    Tested {
+        ring,
+        phase,
+        coherence,
+    }
+}
+
+/// The structure test for one pairing of half-sectors into bits, the first
+/// bit starting at `start`.
+fn pairing(
+    profile: &[f64],
+    bits: u32,
+    start: f64,
+    disc_contrast: f64,
+    pixels_per_sample: f64,
+) -> Option<RingStructure> {
+    let halves = half_sector_means(profile, bits, start);
+    let diffs = bit_differences(&halves);
     let (mut bright, mut dark) = (0.0, 0.0);
     for pair in halves.chunks_exact(2) {
         bright += pair[0].max(pair[1]);
         dark += pair[0].min(pair[1]);
     }
     let ring_contrast = (bright - dark) / f64::from(bits);
+    if ring_contrast < MIN_CONTRAST * disc_contrast {
+        return None;
+    }
     let edges: Vec<f64> = diffs.iter().map(|d| d.abs() / ring_contrast).collect();
     let weak = edges.iter().filter(|&&e| e < MIN_BIT_EDGE).count() as u32;
     // A smudge or a glint may hide one bit's edge of a long code; a ring
     // of the wrong bit count loses many.
-    if weak > bits / 12 {
+    if weak > bits / 16 {
         return None;
     }
     let weakest_bit = edges.iter().copied().fold(f64::INFINITY, f64::min);
@@ -191,9 +258,6 @@ fn test_bits(
         return None;
     }
     let fit = model_fit(profile, bits, start, word, pixels_per_sample);
-    if fit < MIN_FIT {
-        return None;
-    }
     Some(RingStructure {
         bits,
         code: necklace::min_rotation(word, bits).0,
@@ -205,8 +269,9 @@ fn test_bits(
 
 /// Parameter (radians, within one sector) of the sector boundaries: the
 /// phase of the 2n-th harmonic of the gradient magnitude, where every edge
-/// of a Manchester ring sits.
-fn boundary_phase(gradient: &[f64], bits: u32) -> f64 {
+/// of a Manchester ring sits; and how much of the gradient that harmonic
+/// holds (1 when every edge sits on an n-bit boundary).
+fn boundary_phase(gradient: &[f64], bits: u32) -> (f64, f64) {
     let count = gradient.len() as f64;
     let harmonic = f64::from(2 * bits);
     let (mut re, mut im) = (0.0, 0.0);
@@ -218,7 +283,13 @@ fn boundary_phase(gradient: &[f64], bits: u32) -> f64 {
         im -= g * s;
     }
     let phase = -im.atan2(re) / harmonic;
-    phase.rem_euclid(PI / f64::from(bits))
+    let total: f64 = gradient.iter().sum();
+    let coherence = if total > 0.0 {
+        re.hypot(im) / total
+    } else {
+        0.0
+    };
+    (phase.rem_euclid(PI / f64::from(bits)), coherence)
 }
 
 /// Best squared correlation of the profile with the Manchester square wave

@@ -491,7 +491,7 @@ impl EllipseFrame {
     /// The frame in which `p` is the projection of the marker centre;
     /// `None` when that is inconsistent with the ellipse (p outside it, or
     /// a degenerate rectification).
-    fn with_projected_centre(e: &ImageEllipse, p: (f64, f64)) -> Option<EllipseFrame> {
+    pub(super) fn with_projected_centre(e: &ImageEllipse, p: (f64, f64)) -> Option<EllipseFrame> {
         let a = e.semi_major;
         let (s, c) = e.angle.sin_cos();
         let q = 1.0 / (e.semi_minor / a).powi(2);
@@ -652,7 +652,7 @@ pub(super) fn sample_profile(
 /// way perspective shifts concentric circles), so it is crossed at
 /// ρ + (1 - ρ²)·D·u(t); a scale and a constant term absorb ellipse size
 /// errors and blur. `None` when the rays do not show the ring's structure.
-fn refined_centre(
+pub(super) fn refined_centre(
     image: &GrayImage,
     frame: &EllipseFrame,
     phase: f64,

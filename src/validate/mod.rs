@@ -869,6 +869,8 @@ pub fn detector_for(manifest: &Manifest) -> anyhow::Result<crate::detect::Detect
             family: Some(family),
             max_markers: manifest.markers.len() * 2 + 64,
             tracking: false,
+            // A damaged ring is what validation is there to report.
+            report_unreadable: true,
             ..Default::default()
         },
     ))
