@@ -145,6 +145,10 @@ pub fn examine(
         )
     };
     let best = |tested: &[Tested]| {
+        if std::env::var("WHY_DEBUG").is_ok() {
+            for t in tested { if let Some(r) = t.ring { eprintln!("  {} coh {:.2} fit {:.3} weakest {:.2} contrast {:.2}", r.bits, t.coherence, r.fit, r.weakest_bit, r.contrast); } }
+            eprintln!("  --");
+        }
         tested
             .iter()
             .filter_map(|t| t.ring)
@@ -252,9 +256,12 @@ fn pairing(
             word |= 1 << (bits as usize - 1 - j);
         }
     }
-    // No family holds a word equal to one of its rotations, and a ring
-    // with few sectors read off a smooth blob (a letter, say) alternates.
-    if necklace::is_periodic(word, bits) {
+    // No family holds a word equal to one of its rotations, but printed
+    // sets do (the reference prints every word; tags_35.pdf has five, read
+    // as unknown), so long ones are kept. A short code's periodic word is
+    // a pattern of two or four lobes, what a letter or a squashed blob
+    // shows around its hole.
+    if bits < 8 && necklace::is_periodic(word, bits) {
         return None;
     }
     let fit = model_fit(profile, bits, start, word, pixels_per_sample);

@@ -519,7 +519,12 @@ impl Detector {
                     let settled = c
                         .track
                         .is_some_and(|i| self.tracks[i].id != 0 && self.tracks[i].id_streak >= 3);
-                    d.unreadable = !settled;
+                    // The rendered model ignores perspective, which a steep
+                    // view of a large marker cannot: there it names no ID
+                    // but refutes nothing either.
+                    let steep = outer.semi_major > 2.0 * outer.semi_minor
+                        && outer.semi_major > ring_model::MAX_AFFINE_SEMI_MAJOR;
+                    d.unreadable = !settled && !steep;
                     None
                 }
                 Some(ring) if ring.id != 0 => {

@@ -22,6 +22,10 @@ use super::ring::ImageEllipse;
 use crate::family::{necklace, Family};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
 
+/// Semi-major axis (pixels) up to which a steep view of the marker is
+/// still close enough to an affine one for the model to be trusted.
+pub const MAX_AFFINE_SEMI_MAJOR: f64 = 15.0;
+
 /// Most member rotations compared per ring (bounds the cost on families of
 /// long codes, whose sectors are too narrow at these sizes anyway).
 const MAX_MODELS: usize = 4096;
@@ -155,6 +159,7 @@ pub fn read_small_ring(
     let mut per_member = vec![f64::INFINITY; codes.len() + 1];
     let mut best_null = f64::INFINITY;
     let mut weights = vec![0.0f64; sectors];
+    let mut touched: Vec<usize> = Vec::with_capacity(sectors);
     for blur in BLURS {
         let sigma = (blur * blur + 1.0 / 12.0).sqrt();
         // A 5x5 grid of sub-samples, Gaussian-weighted, covers the footprint.
@@ -206,23 +211,28 @@ pub fn read_small_ring(
                 if samples.is_empty() {
                     continue;
                 }
-                weights.fill(0.0);
+                // A footprint covers a few sectors: keep only those.
+                touched.clear();
                 for &(t, w) in samples {
                     let index = (((t - phase) / sector).floor() as i64).rem_euclid(sectors as i64);
-                    weights[index as usize] += w;
+                    let index = index as usize;
+                    if weights[index] == 0.0 {
+                        touched.push(index);
+                    }
+                    weights[index] += w;
                 }
                 let y = pixels[k].2;
-                for i in 0..sectors {
+                for &i in &touched {
                     let wi = weights[i];
-                    if wi == 0.0 {
-                        continue;
-                    }
                     w_sum[i] += wi;
                     w_fixed[i] += wi * fixed[k];
                     w_y[i] += wi * y;
-                    for j in 0..sectors {
+                    for &j in &touched {
                         gram[i * sectors + j] += wi * weights[j];
                     }
+                }
+                for &i in &touched {
+                    weights[i] = 0.0;
                 }
             }
             for (id, rotation, white) in &patterns {
