@@ -282,12 +282,15 @@ fn boundary_phase(gradient: &[f64], bits: u32) -> (f64, f64) {
     let count = gradient.len() as f64;
     let harmonic = f64::from(2 * bits);
     let (mut re, mut im) = (0.0, 0.0);
-    for (j, g) in gradient.iter().enumerate() {
-        // The gradient between samples j and j+1 sits at j + 0.5.
-        let t = 2.0 * PI * (j as f64 + 0.5) / count;
-        let (s, c) = (harmonic * t).sin_cos();
+    // exp(i·h·t) at t = 2π(j + 0.5)/count (the gradient between samples j
+    // and j+1), advanced by one rotation per sample instead of a sine and
+    // a cosine each.
+    let (step_sin, step_cos) = (harmonic * 2.0 * PI / count).sin_cos();
+    let (mut s, mut c) = (harmonic * PI / count).sin_cos();
+    for g in gradient {
         re += g * c;
         im -= g * s;
+        (s, c) = (s * step_cos + c * step_sin, c * step_cos - s * step_sin);
     }
     let phase = -im.atan2(re) / harmonic;
     let total: f64 = gradient.iter().sum();
