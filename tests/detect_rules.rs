@@ -72,7 +72,7 @@ fn with_family(family: &Family) -> Detector {
     })
 }
 
-fn nearest<'a>(found: &'a [Detection], u: f64, v: f64, reach: f64) -> Option<&'a Detection> {
+fn nearest(found: &[Detection], u: f64, v: f64, reach: f64) -> Option<&Detection> {
     found.iter().find(|d| (d.u - u).hypot(d.v - v) < reach)
 }
 

@@ -243,7 +243,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     }
     out.flush()?;
     // In auto mode with a distance the IDs are there already.
-    if !(auto_bits && args.distance.is_some()) && !args.legacy {
+    if !(args.legacy || auto_bits && args.distance.is_some()) {
         if let Some(note) = check.note() {
             eprintln!("whycode: note: {note}");
         }

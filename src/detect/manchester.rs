@@ -146,7 +146,14 @@ pub fn examine(
     };
     let best = |tested: &[Tested]| {
         if std::env::var("WHY_DEBUG").is_ok() {
-            for t in tested { if let Some(r) = t.ring { eprintln!("  {} coh {:.2} fit {:.3} weakest {:.2} contrast {:.2}", r.bits, t.coherence, r.fit, r.weakest_bit, r.contrast); } }
+            for t in tested {
+                if let Some(r) = t.ring {
+                    eprintln!(
+                        "  {} coh {:.2} fit {:.3} weakest {:.2} contrast {:.2}",
+                        r.bits, t.coherence, r.fit, r.weakest_bit, r.contrast
+                    );
+                }
+            }
             eprintln!("  --");
         }
         tested

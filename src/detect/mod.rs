@@ -553,10 +553,11 @@ impl Detector {
                 centre_estimate = reading.centre_estimate;
             }
         }
-        if !self.whycode()
-            && !(legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
-                && legacy::white_margin(gray, &c.outer, c.black, c.white))
-        {
+        let legacy_disc = || {
+            legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
+                && legacy::white_margin(gray, &c.outer, c.black, c.white)
+        };
+        if !self.whycode() && !legacy_disc() {
             // A marker followed for a while stays one when its inside blurs.
             d.unreadable = !c.track.is_some_and(|i| self.tracks[i].hits >= 3);
         }
@@ -1084,14 +1085,13 @@ fn ring_evidence(
             // Counts too long to test on this ring are no evidence against
             // the family's.
             let others = manchester::BITS.filter(|&n| n != bits && manchester::testable(outer, n));
-            let evidence = manchester::examine(
+            manchester::examine(
                 image,
                 outer,
                 c.black,
                 c.white,
                 std::iter::once(bits).chain(others),
-            );
-            evidence
+            )
         }
         None => manchester::examine(image, outer, c.black, c.white, manchester::BITS),
     }

@@ -182,7 +182,7 @@ pub fn read_small_ring(
                 let (p, q) = to_marker(x + dx, y + dy);
                 let rho = p.hypot(q);
                 let w = w / total;
-                if rho < RING_INNER_RATIO || rho >= 1.0 {
+                if !(RING_INNER_RATIO..1.0).contains(&rho) {
                     white += w;
                 } else if rho < WHYCODE_WHITE_RATIO {
                     inside.push((q.atan2(p).rem_euclid(2.0 * PI), w));
@@ -255,7 +255,7 @@ pub fn read_small_ring(
                 let sse = syy - sym_c * sym_c / smm_c;
                 let slot = &mut per_member[*id as usize];
                 *slot = slot.min(sse);
-                if best.as_ref().is_none_or(|b| sse < b.sse) {
+                if best.as_ref().map_or(true, |b| sse < b.sse) {
                     best = Some(Best {
                         sse,
                         id: *id,
