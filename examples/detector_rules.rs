@@ -10,12 +10,12 @@ use std::f64::consts::PI;
 use image::GrayImage;
 use nalgebra::Vector3;
 use whycode::camera::Camera;
-use whycode::detect::{Detection, Detector, DetectorConfig};
+use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
+use whycode::math::Pcg32;
 use whycode::render::font::stroke_text;
 use whycode::render::page::{Anchor, Segment};
-use whycode::simulate::rng::Pcg32;
 use whycode::simulate::{self, Background, LooseMarker, Placement, Scene, SceneObject};
 
 const DEG: f64 = PI / 180.0;
@@ -98,14 +98,13 @@ enum Kind {
 
 /// A default detector for one kind of marker (None: not supported here).
 fn detector(kind: Kind) -> Option<Detector> {
-    let (family, auto_bits) = match kind {
-        Kind::Family(f) => (Some(f), false),
-        Kind::Auto => (None, true),
-        Kind::WhyCon => (None, false),
+    let target = match kind {
+        Kind::Family(f) => Target::WhyCode(f),
+        Kind::Auto => Target::AnyBits { distance: None },
+        Kind::WhyCon => Target::WhyCon,
     };
     Some(Detector::new(DetectorConfig {
-        family,
-        auto_bits,
+        target,
         ..Default::default()
     }))
 }

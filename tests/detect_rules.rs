@@ -7,10 +7,10 @@ use std::f64::consts::PI;
 
 use nalgebra::Vector3;
 use whycode::camera::Camera;
-use whycode::detect::{Detection, Detector, DetectorConfig};
+use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::{necklace, Family};
 use whycode::geometry::Marker;
-use whycode::simulate::rng::Pcg32;
+use whycode::math::Pcg32;
 use whycode::simulate::{
     render, Background, GroundTruth, LooseMarker, Placement, Scene, SceneObject,
 };
@@ -67,7 +67,7 @@ fn detector(config: DetectorConfig) -> Detector {
 
 fn with_family(family: &Family) -> Detector {
     detector(DetectorConfig {
-        family: Some(family.clone()),
+        target: Target::WhyCode(family.clone()),
         ..Default::default()
     })
 }
@@ -89,7 +89,7 @@ fn clutter_without_markers_gives_no_report() {
         let found = with_family(&family).detect(&image);
         assert!(found.is_empty(), "seed {seed}, 8-bit family: {found:?}");
         let found = detector(DetectorConfig {
-            auto_bits: true,
+            target: Target::AnyBits { distance: None },
             ..Default::default()
         })
         .detect(&image);
@@ -112,7 +112,7 @@ fn a_dark_disc_with_a_light_middle_is_reported_only_on_request_and_marked() {
     let family = Family::generate(8, 2).unwrap();
     assert!(with_family(&family).detect(&image).is_empty());
     let found = detector(DetectorConfig {
-        family: Some(family),
+        target: Target::WhyCode(family),
         report_unreadable: true,
         ..Default::default()
     })
@@ -182,7 +182,7 @@ fn auto_mode_names_the_bit_count_of_every_marker_in_a_mixed_frame() {
     }
     let (image, truth) = frame(&markers, 90.0, 5);
     let found = detector(DetectorConfig {
-        auto_bits: true,
+        target: Target::AnyBits { distance: None },
         ..Default::default()
     })
     .detect(&image);
@@ -199,8 +199,7 @@ fn auto_mode_names_the_bit_count_of_every_marker_in_a_mixed_frame() {
     }
     // With a distance, each ring's ID in the family of its own length.
     let named = detector(DetectorConfig {
-        auto_bits: true,
-        auto_distance: Some(2),
+        target: Target::AnyBits { distance: Some(2) },
         ..Default::default()
     })
     .detect(&image);

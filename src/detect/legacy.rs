@@ -6,9 +6,10 @@
 //! does not: it must lie at the same relative radius all round, and at
 //! WhyCon's.
 
-use super::ellipse::{self, Ellipse};
+use super::ellipse;
 use super::segment::Gray;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
+use crate::math::Ellipse;
 
 /// Rays cast from the centre.
 const RAYS: usize = 32;
@@ -29,11 +30,11 @@ const SPREAD_TOLERANCE: f64 = 0.04;
 pub fn white_margin(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> bool {
     let mid = 0.5 * (black + white);
     // Just outside the edge's blur, and inside the 0.3 R margin.
-    let rho = 1.0 + (0.15f64).max(1.5 / outer.b.max(1.0)).min(0.28);
+    let rho = 1.0 + (0.15f64).max(1.5 / outer.semi_minor.max(1.0)).min(0.28);
     let (mut seen, mut light) = (0, 0);
     for k in 0..RAYS {
         let t = std::f64::consts::TAU * k as f64 / RAYS as f64;
-        let (x, y) = outer.scaled(rho).point(t);
+        let (x, y) = outer.scaled(rho).point_at(t);
         if let Some(value) = ellipse::sample(gray, x, y) {
             seen += 1;
             light += usize::from(value >= mid);
@@ -46,13 +47,13 @@ pub fn white_margin(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> 
 /// centred on the black one.
 pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> bool {
     let mid = 0.5 * (black + white);
-    let radius_px = outer.b.max(1.0);
+    let radius_px = outer.semi_minor.max(1.0);
     let step = (0.25 / radius_px).min(0.02);
     let mut radii = Vec::with_capacity(RAYS);
     for k in 0..RAYS {
         let t = std::f64::consts::TAU * k as f64 / RAYS as f64;
         let at = |rho: f64| {
-            let (x, y) = outer.scaled(rho).point(t);
+            let (x, y) = outer.scaled(rho).point_at(t);
             ellipse::sample(gray, x, y)
         };
         // From inside the white disc outwards to the first dark sample.

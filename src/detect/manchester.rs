@@ -29,10 +29,10 @@ use image::GrayImage;
 
 use super::ring::{
     bit_differences, half_sector_means, refined_centre, sample_profile, sample_radii, EllipseFrame,
-    ImageEllipse,
 };
 use crate::family::necklace;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
+use crate::math::Ellipse as ImageEllipse;
 
 /// Bit counts a ring may carry (the family generator's range).
 pub const BITS: RangeInclusive<u32> = 4..=24;

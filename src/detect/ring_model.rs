@@ -18,9 +18,9 @@ use std::f64::consts::PI;
 
 use image::GrayImage;
 
-use super::ring::ImageEllipse;
 use crate::family::{necklace, Family};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
+use crate::math::Ellipse as ImageEllipse;
 
 /// Semi-major axis (pixels) up to which a steep view of the marker is
 /// still close enough to an affine one for the model to be trusted.

@@ -1,9 +1,9 @@
 //! What lies behind the paper: a plain surface, a table top, or clutter of
 //! shapes that look a little like markers but are not.
 
-use super::rng::Pcg32;
 use super::{Background, Scene};
-use rayon::prelude::*;
+use crate::math::Pcg32;
+use crate::parallel::prelude::*;
 
 const TABLE_REFLECTANCE: f64 = 0.22;
 const CLUTTER_BASE_REFLECTANCE: f64 = 0.5;
