@@ -2,8 +2,9 @@
 //! followed from the track's known code), the ID filter of tracked
 //! markers, and its pose.
 
-use image::GrayImage;
+use image::{ImageBuffer, Luma};
 use nalgebra::Vector3;
+use std::ops::Deref;
 
 use super::manchester::{self, RingEvidence};
 use super::segment::Gray;
@@ -26,9 +27,9 @@ struct PoseHints {
 impl Detector {
     /// The detection of a candidate, and its normal when that was told
     /// apart from the other pose candidate with confidence (for the track).
-    pub(super) fn describe(
+    pub(super) fn describe<C: Deref<Target = [u8]>>(
         &mut self,
-        image: &GrayImage,
+        image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,
     ) -> (Detection, Option<Vector3<f64>>) {
@@ -297,8 +298,8 @@ impl Detector {
 /// What the candidate's ring shows: the family's bit count is tried first
 /// (the common case), then every other count, so that a ring of another
 /// family is told apart from no ring at all.
-fn ring_evidence(
-    image: &GrayImage,
+fn ring_evidence<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
     outer: &Ellipse,
     c: &Candidate,
     family_bits: Option<u32>,

@@ -25,7 +25,9 @@
 use std::f64::consts::PI;
 use std::ops::RangeInclusive;
 
-use image::GrayImage;
+use std::ops::Deref;
+
+use image::{ImageBuffer, Luma};
 
 use super::ring::{
     bit_differences, half_sector_means, refined_centre, sample_profile, sample_radii, EllipseFrame,
@@ -95,8 +97,8 @@ pub fn testable(outer: &ImageEllipse, bits: u32) -> bool {
 /// wins (a ring of n bits can pass for n ± 1 when its profile is short).
 /// When none passes, the ring is `Absent` only if every count could be
 /// tested.
-pub fn examine(
-    image: &GrayImage,
+pub fn examine<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
     outer: &ImageEllipse,
     black_level: f64,
     white_level: f64,

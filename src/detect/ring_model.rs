@@ -16,7 +16,9 @@
 
 use std::f64::consts::PI;
 
-use image::GrayImage;
+use std::ops::Deref;
+
+use image::{ImageBuffer, Luma};
 
 use crate::family::{necklace, Family};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
@@ -69,8 +71,8 @@ pub struct SmallRing {
 /// Compares the pixels inside `outer` with every member of `family` at
 /// every rotation. `None` when the family is too large to compare or the
 /// ring leaves the image.
-pub fn read_small_ring(
-    image: &GrayImage,
+pub fn read_small_ring<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
     outer: &ImageEllipse,
     family: &Family,
 ) -> Option<SmallRing> {
