@@ -158,7 +158,7 @@ impl PyDetector {
     fn family(&self) -> Option<PyFamily> {
         match &self.config.target {
             Target::WhyCode(family) => Some(PyFamily::wrap(family.clone())),
-            Target::WhyCon => None,
+            Target::WhyCon | Target::AnyBits { .. } => None,
         }
     }
 
@@ -166,6 +166,10 @@ impl PyDetector {
         let family = match &self.config.target {
             Target::WhyCode(f) => format!("Family(bits={}, distance={})", f.bits(), f.distance()),
             Target::WhyCon => "None (legacy)".to_string(),
+            Target::AnyBits { distance: None } => "None (any bit count)".to_string(),
+            Target::AnyBits { distance: Some(d) } => {
+                format!("None (any bit count, distance={d})")
+            }
         };
         format!(
             "Detector(family={family}, diameter={:?}, camera={}, tracking={})",
