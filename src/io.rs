@@ -72,6 +72,38 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
     Ok(())
 }
 
+/// Output files for annotated copies of `inputs`, one per distinct input,
+/// in input order: `DIR/<stem>.annotated.png`, with `-2`, `-3`, ... before
+/// `.annotated` when two inputs share a stem (two phones' IMG_0001) or when
+/// the name is taken by one of the inputs themselves (annotating
+/// `view.annotated.png` beside `view.png`). An input is never an output.
+pub fn annotation_paths(dir: &Path, inputs: &[PathBuf]) -> Vec<(PathBuf, PathBuf)> {
+    // Compared canonically, so `./view.png` and `view.png` are one file.
+    let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    let taken_by_inputs: std::collections::HashSet<PathBuf> =
+        inputs.iter().map(|p| same_file(p)).collect();
+    let dir_real = same_file(dir);
+    let mut used = std::collections::HashSet::new();
+    let mut out: Vec<(PathBuf, PathBuf)> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    for input in inputs {
+        if !seen.insert(input.clone()) {
+            continue;
+        }
+        let stem = input
+            .file_stem()
+            .map_or_else(|| "image".into(), |s| s.to_string_lossy().into_owned());
+        let mut name = format!("{stem}.annotated.png");
+        let mut k = 2;
+        while taken_by_inputs.contains(&dir_real.join(&name)) || !used.insert(name.clone()) {
+            name = format!("{stem}-{k}.annotated.png");
+            k += 1;
+        }
+        out.push((input.clone(), dir.join(name)));
+    }
+    out
+}
+
 /// Where an output's bytes end up.
 enum Destination {
     /// A FIFO, device or socket: written to, never replaced.
@@ -232,6 +264,29 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&good).unwrap(), "old pdf");
         let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(left.len(), 1, "temporary files left behind: {left:?}");
+    }
+
+    #[test]
+    fn annotations_never_take_an_input_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let view = dir.path().join("view.png");
+        let already = dir.path().join("view.annotated.png");
+        std::fs::write(&view, "x").unwrap();
+        std::fs::write(&already, "x").unwrap();
+        let other = dir.path().join("sub/view.png");
+        let names = annotation_paths(dir.path(), &[view.clone(), already.clone(), other]);
+        let files: Vec<String> = names
+            .iter()
+            .map(|(_, out)| out.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(
+            files,
+            [
+                "view-2.annotated.png",
+                "view.annotated.annotated.png",
+                "view-3.annotated.png"
+            ]
+        );
     }
 
     #[test]

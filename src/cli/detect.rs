@@ -6,7 +6,6 @@ use crate::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
 use crate::units::Length;
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
-use std::collections::HashSet;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -69,7 +68,7 @@ pub struct DetectArgs {
     format: Format,
 
     /// Write each image with the markers' ellipses, IDs and +x axes drawn
-    /// into DIR (PNG, named after the image)
+    /// into DIR as <name>.annotated.png (never over an input)
     #[arg(long, value_name = "DIR")]
     annotate: Option<PathBuf>,
 
@@ -272,37 +271,23 @@ fn natural_order(a: &Path, b: &Path) -> std::cmp::Ordering {
     ca.len().cmp(&cb.len()).then_with(|| ta.cmp(&tb))
 }
 
-/// Output file for every image: DIR/<name>.png, with -2, -3, ... appended
-/// when two inputs share a name (chosen in input order, so stable).
+/// Output file for every image (see [`crate::io::annotation_paths`]).
 fn annotation_names(
     jobs: &[Job],
     dir: Option<&Path>,
 ) -> std::collections::HashMap<PathBuf, PathBuf> {
-    let mut names = std::collections::HashMap::new();
     let Some(dir) = dir else {
-        return names;
+        return std::collections::HashMap::new();
     };
-    let mut used = HashSet::new();
-    let all = jobs.iter().flat_map(|j| match j {
-        Job::Image(p) => std::slice::from_ref(p).iter(),
-        Job::Sequence(frames) => frames.iter(),
-    });
-    for path in all {
-        if names.contains_key(path) {
-            continue;
-        }
-        let stem = path
-            .file_stem()
-            .map_or_else(|| "image".to_string(), |s| s.to_string_lossy().into_owned());
-        let mut name = format!("{stem}.png");
-        let mut k = 2;
-        while !used.insert(name.clone()) {
-            name = format!("{stem}-{k}.png");
-            k += 1;
-        }
-        names.insert(path.clone(), dir.join(name));
-    }
-    names
+    let all: Vec<PathBuf> = jobs
+        .iter()
+        .flat_map(|j| match j {
+            Job::Image(p) => std::slice::from_ref(p).iter(),
+            Job::Sequence(frames) => frames.iter(),
+        })
+        .cloned()
+        .collect();
+    crate::io::annotation_paths(dir, &all).into_iter().collect()
 }
 
 fn detect_one(detector: &mut Detector, path: &Path, annotate: Option<&Path>) -> Result<Frame> {

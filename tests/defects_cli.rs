@@ -1,0 +1,56 @@
+//! Regression tests for the defects a new user found (issue 10): outputs
+//! that overwrote inputs or landed half, misleading results and messages.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn whycode_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_whycode"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("run whycode")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn ok(out: &Output) {
+    assert!(out.status.success(), "{}", stderr(out));
+}
+
+/// A marker photo: the 8-bit ID 4 rendered as a PNG by the tool itself.
+fn marker_photo(dir: &Path, name: &str) {
+    ok(&whycode_in(
+        dir,
+        &["marker", "--bits", "8", "--id", "4", "--diameter", "20mm", "--dpi", "150", "-o", name],
+    ));
+}
+
+#[test]
+fn detect_annotate_into_the_inputs_folder_keeps_the_input() {
+    let dir = tempfile::tempdir().unwrap();
+    marker_photo(dir.path(), "view.png");
+    let before = std::fs::read(dir.path().join("view.png")).unwrap();
+    ok(&whycode_in(dir.path(), &["detect", "--annotate", ".", "view.png"]));
+    assert_eq!(std::fs::read(dir.path().join("view.png")).unwrap(), before);
+    let annotated = image::open(dir.path().join("view.annotated.png")).unwrap();
+    assert_eq!(annotated.color(), image::ColorType::Rgb8);
+    // Annotating the annotated copy too must not replace it either.
+    let first = std::fs::read(dir.path().join("view.annotated.png")).unwrap();
+    ok(&whycode_in(
+        dir.path(),
+        &["detect", "--annotate", ".", "view.png", "view.annotated.png"],
+    ));
+    assert_eq!(std::fs::read(dir.path().join("view.png")).unwrap(), before);
+    assert_eq!(
+        std::fs::read(dir.path().join("view.annotated.png")).unwrap(),
+        first
+    );
+    assert!(dir.path().join("view-2.annotated.png").is_file());
+}
