@@ -54,3 +54,39 @@ fn detect_annotate_into_the_inputs_folder_keeps_the_input() {
     );
     assert!(dir.path().join("view-2.annotated.png").is_file());
 }
+
+#[cfg(unix)]
+#[test]
+fn sheet_whose_pages_cannot_be_written_leaves_no_manifest() {
+    let dir = tempfile::tempdir().unwrap();
+    std::os::unix::fs::symlink("/dev/full", dir.path().join("m.pdf")).unwrap();
+    let args = ["sheet", "--ids", "1-2", "--no-check", "-o", "m.pdf"];
+    let out = whycode_in(dir.path(), &args);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("m.pdf"), "{}", stderr(&out));
+    assert!(!dir.path().join("m.json").exists(), "orphan manifest written");
+    // An older manifest stays as it was.
+    std::fs::write(dir.path().join("m.json"), "old").unwrap();
+    let out = whycode_in(dir.path(), &args);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(std::fs::read_to_string(dir.path().join("m.json")).unwrap(), "old");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2, "temporary files left");
+}
+
+#[test]
+fn outputs_under_a_regular_file_fail_with_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("plain"), "x").unwrap();
+    for args in [
+        &["marker", "--bits", "8", "--id", "1", "--diameter", "20mm", "-o", "plain/m.svg"][..],
+        &["sheet", "--ids", "1-2", "--no-check", "-o", "plain/s.pdf"][..],
+        &["ids", "--bits", "8", "-o", "plain/ids.txt"][..],
+    ] {
+        let out = whycode_in(dir.path(), args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {}", stderr(&out));
+        let err = stderr(&out);
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains("plain/"), "{args:?}: {err}");
+    }
+    assert_eq!(std::fs::read_to_string(dir.path().join("plain")).unwrap(), "x");
+}
