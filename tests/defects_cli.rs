@@ -90,3 +90,22 @@ fn outputs_under_a_regular_file_fail_with_one_line() {
     }
     assert_eq!(std::fs::read_to_string(dir.path().join("plain")).unwrap(), "x");
 }
+
+#[test]
+fn long_codes_pass_the_self_check_at_an_ordinary_size() {
+    let dir = tempfile::tempdir().unwrap();
+    for (bits, id, diameter, name) in [
+        ("20", "1", "50mm", "b20.pdf"),
+        ("24", "3", "60mm", "b24.svg"),
+    ] {
+        let args = ["marker", "--bits", bits, "--id", id, "--diameter", diameter, "-o", name];
+        let out = whycode_in(dir.path(), &args);
+        assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+        assert!(dir.path().join(name).is_file());
+    }
+    let out = whycode_in(
+        dir.path(),
+        &["sheet", "--bits", "20", "--ids", "1-3", "--diameter", "50mm", "-o", "s20.pdf"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+}
