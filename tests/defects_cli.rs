@@ -109,3 +109,31 @@ fn long_codes_pass_the_self_check_at_an_ordinary_size() {
     );
     assert!(out.status.success(), "{}", stderr(&out));
 }
+
+#[test]
+fn scatter_places_every_marker_or_says_how_many_did_not_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = whycode_in(
+        dir.path(),
+        &[
+            "simulate", "--bits", "12", "--hamming", "1", "--ids", "1-300", "--layout", "scatter",
+            "-o", "crowd.png",
+        ],
+    );
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(err.contains("of 300 markers fit"), "{err}");
+    assert!(!dir.path().join("crowd.png").exists());
+    assert!(!dir.path().join("crowd.json").exists());
+    // A scatter that fits has every marker in its ground truth.
+    let out = whycode_in(
+        dir.path(),
+        &[
+            "simulate", "--bits", "8", "--ids", "1-16", "--layout", "scatter", "-o", "ok.png",
+        ],
+    );
+    ok(&out);
+    let truth: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("ok.json")).unwrap()).unwrap();
+    assert_eq!(truth["markers"].as_array().unwrap().len(), 16);
+}
