@@ -137,3 +137,25 @@ fn scatter_places_every_marker_or_says_how_many_did_not_fit() {
         serde_json::from_slice(&std::fs::read(dir.path().join("ok.json")).unwrap()).unwrap();
     assert_eq!(truth["markers"].as_array().unwrap().len(), 16);
 }
+
+#[test]
+fn an_edge_on_board_is_not_in_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = whycode_in(
+        dir.path(),
+        &["simulate", "--bits", "8", "--ids", "1-4", "--tilt", "90deg", "-o", "edge.png"],
+    );
+    ok(&out);
+    assert!(stdout(&out).contains("0 wholly in view"), "{}", stdout(&out));
+    let truth: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("edge.json")).unwrap()).unwrap();
+    for m in truth["markers"].as_array().unwrap() {
+        assert_eq!(m["visible"], false, "{m}");
+    }
+    // Nothing is drawn: the image is the plain background.
+    let image = image::open(dir.path().join("edge.png")).unwrap().to_luma8();
+    let (lo, hi) = image
+        .pixels()
+        .fold((255u8, 0u8), |(lo, hi), p| (lo.min(p.0[0]), hi.max(p.0[0])));
+    assert!(hi - lo < 40, "something was drawn: grey levels {lo}..{hi}");
+}
