@@ -159,3 +159,92 @@ fn an_edge_on_board_is_not_in_view() {
         .fold((255u8, 0u8), |(lo, hi), p| (lo.min(p.0[0]), hi.max(p.0[0])));
     assert!(hi - lo < 40, "something was drawn: grey levels {lo}..{hi}");
 }
+
+fn calibration(dir: &Path, name: &str, matrix: &str, distortion: &str) {
+    let text = format!(
+        "image_width: 640\nimage_height: 480\n\
+         camera_matrix: {{rows: 3, cols: 3, data: [{matrix}]}}\n\
+         distortion_coefficients: {{rows: 1, cols: 5, data: [{distortion}]}}\n"
+    );
+    std::fs::write(dir.join(name), text).unwrap();
+}
+
+#[test]
+fn absurd_calibrations_are_refused_naming_the_file_and_field() {
+    let dir = tempfile::tempdir().unwrap();
+    ok(&whycode_in(
+        dir.path(),
+        &["simulate", "--bits", "8", "--ids", "1-4", "--size", "640x480", "-o", "v.png"],
+    ));
+    let lens = "600, 0, 319.5, 0, 600, 239.5, 0, 0, 1";
+    for (name, matrix, distortion, field) in [
+        ("huge_k1.yaml", lens, "1e30, 0, 0, 0, 0", "distortion_coefficients"),
+        ("folding.yaml", lens, "-2, 0, 0, 0, 0", "distortion_coefficients"),
+        ("nan.yaml", lens, ".nan, 0, 0, 0, 0", "distortion_coefficients"),
+        ("fx.yaml", "1e308, 0, 319.5, 0, 600, 239.5, 0, 0, 1", "0, 0, 0, 0, 0", "fx"),
+        ("cx.yaml", "600, 0, 1e9, 0, 600, 239.5, 0, 0, 1", "0, 0, 0, 0, 0", "cx"),
+    ] {
+        calibration(dir.path(), name, matrix, distortion);
+        let out = whycode_in(dir.path(), &["detect", "--camera", name, "--diameter", "50mm", "v.png"]);
+        assert_eq!(out.status.code(), Some(1), "{name}: {}", stdout(&out));
+        let err = stderr(&out);
+        assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
+        assert!(err.contains(name) && err.contains(field), "{name}: {err}");
+        assert!(err.len() < 300, "{name}: {err}");
+    }
+    // A real lens passes and gives poses about a metre away.
+    calibration(dir.path(), "good.yaml", lens, "-0.3, 0.1, 0, 0, 0");
+    let out = whycode_in(
+        dir.path(),
+        &["detect", "--camera", "good.yaml", "--diameter", "50mm", "--format", "csv", "v.png"],
+    );
+    ok(&out);
+    let rows: Vec<String> = stdout(&out).lines().skip(1).map(String::from).collect();
+    assert_eq!(rows.len(), 4, "{}", stdout(&out));
+    for row in rows {
+        let z: f64 = row.split(',').nth(11).unwrap().parse().unwrap();
+        assert!((0.8..1.4).contains(&z), "{row}");
+    }
+}
+
+#[test]
+fn detect_applies_validates_rule_for_a_calibration_of_another_size() {
+    let dir = tempfile::tempdir().unwrap();
+    calibration(dir.path(), "cam.yaml", "600, 0, 319.5, 0, 600, 239.5, 0, 0, 1", "0, 0, 0, 0, 0");
+    let pose_z = |image: &str| -> Vec<f64> {
+        let out = whycode_in(
+            dir.path(),
+            &["detect", "--camera", "cam.yaml", "--diameter", "50mm", "--format", "csv", image],
+        );
+        ok(&out);
+        stdout(&out)
+            .lines()
+            .skip(1)
+            .map(|r| r.split(',').nth(11).unwrap().parse().unwrap())
+            .collect()
+    };
+    for size in ["640x480", "1280x960"] {
+        ok(&whycode_in(
+            dir.path(),
+            &[
+                "simulate", "--bits", "8", "--ids", "1-4", "--size", size, "--fov", "56.145deg",
+                "-o", &format!("{size}.png"),
+            ],
+        ));
+    }
+    // The same sensor at twice the resolution: rescaled, same distances.
+    let (small, large) = (pose_z("640x480.png"), pose_z("1280x960.png"));
+    assert_eq!(small.len(), 4);
+    assert_eq!(large.len(), 4);
+    for z in small.iter().chain(&large) {
+        assert!((z - 1.0).abs() < 0.03, "{small:?} {large:?}");
+    }
+    // Another aspect ratio: refused, naming the image.
+    ok(&whycode_in(
+        dir.path(),
+        &["simulate", "--bits", "8", "--ids", "1-4", "--size", "1920x1080", "-o", "wide.png"],
+    ));
+    let out = whycode_in(dir.path(), &["detect", "--camera", "cam.yaml", "--diameter", "50mm", "wide.png"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("wide.png: image is 1920x1080 but the camera calibration is for 640x480"), "{}", stderr(&out));
+}

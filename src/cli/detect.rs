@@ -292,6 +292,9 @@ fn annotation_names(
 
 fn detect_one(detector: &mut Detector, path: &Path, annotate: Option<&Path>) -> Result<Frame> {
     let image = load_gray(path)?;
+    detector
+        .fit_camera(image.width(), image.height())
+        .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
     let start = Instant::now();
     let markers = detector.detect(&image);
     let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;
