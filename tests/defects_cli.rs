@@ -248,3 +248,45 @@ fn detect_applies_validates_rule_for_a_calibration_of_another_size() {
     assert_eq!(out.status.code(), Some(1));
     assert!(stderr(&out).contains("wide.png: image is 1920x1080 but the camera calibration is for 640x480"), "{}", stderr(&out));
 }
+
+#[test]
+fn validate_refuses_broken_manifests_and_words_its_notes() {
+    let dir = tempfile::tempdir().unwrap();
+    ok(&whycode_in(dir.path(), &["sheet", "--ids", "1-4", "--diameter", "40mm", "-o", "four.pdf"]));
+    ok(&whycode_in(
+        dir.path(),
+        &["simulate", "--manifest", "four.json", "--print-scale", "0.98", "-o", "p98.png"],
+    ));
+    let out = whycode_in(dir.path(), &["validate", "--manifest", "four.json", "p98.png"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let table = stdout(&out);
+    assert!(!table.contains("size. "), "{table}");
+    assert!(
+        table.contains("printed at 97.9 % of the intended size; measured from the size of 4 discs"),
+        "{table}"
+    );
+
+    let original: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("four.json")).unwrap()).unwrap();
+    let broken = |edit: &dyn Fn(&mut serde_json::Value), expected: &str| {
+        let mut m = original.clone();
+        edit(&mut m);
+        std::fs::write(dir.path().join("bad.json"), m.to_string()).unwrap();
+        let out = whycode_in(dir.path(), &["validate", "--manifest", "bad.json", "p98.png"]);
+        assert_eq!(out.status.code(), Some(1), "{expected}: {}", stdout(&out));
+        let err = stderr(&out);
+        assert!(err.contains("bad.json") && err.contains(expected), "{expected}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    };
+    broken(&|m| m["markers"][1]["id"] = 999.into(), "ID 999 on page 1 is not in the 8-bit family");
+    broken(&|m| m["markers"][1]["id"] = 0.into(), "ID 0 on page 1 is not in the 8-bit family");
+    broken(&|m| m["markers"][1]["code"] = 11.into(), "has code 11, but ID 2 is code 7");
+    broken(
+        &|m| {
+            m["markers"][1]["x_mm"] = m["markers"][0]["x_mm"].clone();
+            m["markers"][1]["y_mm"] = m["markers"][0]["y_mm"].clone();
+        },
+        "markers ID 1 and ID 2 on page 1 overlap",
+    );
+    broken(&|m| m["pages"] = 0.into(), "pages is 0");
+}
