@@ -290,3 +290,20 @@ fn validate_refuses_broken_manifests_and_words_its_notes() {
     );
     broken(&|m| m["pages"] = 0.into(), "pages is 0");
 }
+
+#[test]
+fn detect_table_is_sorted_by_id() {
+    let dir = tempfile::tempdir().unwrap();
+    ok(&whycode_in(
+        dir.path(),
+        &["simulate", "--bits", "8", "--ids", "1-12", "--roll", "200deg", "-o", "v.png"],
+    ));
+    let out = whycode_in(dir.path(), &["detect", "v.png"]);
+    ok(&out);
+    let ids: Vec<u32> = stdout(&out)
+        .lines()
+        .skip(1)
+        .map(|l| l.split_whitespace().next().unwrap().parse().unwrap())
+        .collect();
+    assert_eq!(ids, (1..=12).collect::<Vec<_>>(), "{}", stdout(&out));
+}

@@ -62,7 +62,7 @@ pub struct DetectArgs {
     #[arg(long, value_name = "FILE", requires = "diameter")]
     camera: Option<PathBuf>,
 
-    /// Output: table (for reading), csv (one row per marker) or json (one
+    /// Output: table (for reading, sorted by ID), csv (one row per marker) or json (one
     /// object per image and line)
     #[arg(long, short = 'f', value_enum, default_value_t = Format::Table)]
     format: Format,
@@ -445,7 +445,16 @@ fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Resul
         write!(out, " {:>26}", "position_m (x, y, z)")?;
     }
     writeln!(out)?;
-    for m in &frame.markers {
+    // Sorted by ID for reading (unknown IDs last, then left to right); csv
+    // and json keep the detector's order.
+    let mut sorted: Vec<&Detection> = frame.markers.iter().collect();
+    sorted.sort_by(|a, b| {
+        (a.id == 0, a.id)
+            .cmp(&(b.id == 0, b.id))
+            .then(a.u.total_cmp(&b.u))
+            .then(a.v.total_cmp(&b.v))
+    });
+    for m in sorted {
         let id = if m.id == 0 {
             "?".to_string()
         } else {
