@@ -9,7 +9,7 @@
 //! of view (the paper's ASUS Xtion RGB camera), and a disc of 38.17 cm²
 //! (69.7 mm across). The paper gives its marker's area as "3.817 cm²", which
 //! cannot be right: a disc of 3.817 cm² (22 mm) at the paper's 5.4 m WhyCon
-//! range is 2.3 px across in that camera, far below what any circle detector
+//! range is 2.4 px across in that camera, far below what any circle detector
 //! finds, while 38.17 cm² gives the ~8 px detection needs there. Comparing
 //! with the paper at 22 mm would make ranges look three times worse than
 //! the paper's for no reason but the smaller disc. Ranges scale linearly
@@ -282,7 +282,7 @@ mod tests {
     fn the_default_marker_is_the_area_that_makes_the_paper_comparison_fair() {
         assert!((disc_diameter_mm(PAPER_AREA_MM2) - PAPER_DIAMETER_MM).abs() < 1e-6);
         let camera = Camera::ideal(640, 480, 58.0);
-        // The paper's "3.817 cm²" would be 2.3 px at its own detection range,
+        // The paper's "3.817 cm²" would be 2.4 px at its own detection range,
         // the corrected area the ~8 px a detector needs.
         let printed = disc_px(&camera, disc_diameter_mm(381.7), PAPER_WHYCON_RANGE_M);
         let fair = disc_px(&camera, PAPER_DIAMETER_MM, PAPER_WHYCON_RANGE_M);

@@ -314,7 +314,9 @@ impl Camera {
             width,
             height,
         };
-        camera.check_plausible().map_err(|problem| anyhow!(problem))?;
+        camera
+            .check_plausible()
+            .map_err(|problem| anyhow!(problem))?;
         Ok(camera)
     }
 
@@ -365,7 +367,16 @@ impl Camera {
         // Walk from the principal point to every corner and edge middle.
         let (x0, x1, y0, y1) = (-0.5, w - 0.5, -0.5, h - 0.5);
         let (xm, ym) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-        for (u, v) in [(x0, y0), (x1, y0), (x1, y1), (x0, y1), (xm, y0), (xm, y1), (x0, ym), (x1, ym)] {
+        for (u, v) in [
+            (x0, y0),
+            (x1, y0),
+            (x1, y1),
+            (x0, y1),
+            (xm, y0),
+            (xm, y1),
+            (x0, ym),
+            (x1, ym),
+        ] {
             let mut last = 0.0;
             const STEPS: usize = 32;
             for k in 1..=STEPS {

@@ -90,7 +90,8 @@ impl Manifest {
             ));
         }
         let [w, h] = self.page_size_mm;
-        if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
+        let side = 0.0..=super::template::MAX_PAGE_MM;
+        if !(w > 0.0 && h > 0.0 && side.contains(&w) && side.contains(&h)) {
             return Err(format!("page size {w} x {h} mm is not a page"));
         }
         if self.markers.is_empty() {
