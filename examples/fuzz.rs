@@ -24,7 +24,7 @@ fn main() -> std::process::ExitCode {
             ("--seed", Some(v)) => v.parse().map(|s| seed = s).is_ok(),
             _ => false,
         };
-        if !parsed || !(minutes.is_finite() && minutes > 0.0) {
+        if !(parsed && minutes.is_finite() && minutes > 0.0) {
             eprintln!("usage: fuzz [--minutes N] [--seed S]");
             return std::process::ExitCode::FAILURE;
         }

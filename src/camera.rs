@@ -384,7 +384,8 @@ impl Camera {
                 let (pu, pv) = (self.cx + (u - self.cx) * t, self.cy + (v - self.cy) * t);
                 let (x, y) = self.undistort(pu, pv);
                 let (bu, bv) = self.distort_normalized(x, y);
-                if !((bu - pu).hypot(bv - pv) < 0.01) {
+                let miss = (bu - pu).hypot(bv - pv);
+                if miss.is_nan() || miss >= 0.01 {
                     return bad(format!(
                         "pixel ({pu:.0}, {pv:.0}) has no undistorted position"
                     ));
