@@ -127,7 +127,10 @@ fn outputs_under_a_regular_file_fail_with_one_line() {
         assert_eq!(out.status.code(), Some(1), "{args:?}: {}", stderr(&out));
         let err = stderr(&out);
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
-        assert!(err.contains("plain is a file, not a folder"), "{args:?}: {err}");
+        assert!(
+            err.contains("plain is a file, not a folder"),
+            "{args:?}: {err}"
+        );
     }
     assert_eq!(
         std::fs::read_to_string(dir.path().join("plain")).unwrap(),
