@@ -186,7 +186,7 @@ fn scatter_places_every_marker_or_says_how_many_did_not_fit() {
             "simulate",
             "--bits",
             "12",
-            "--hamming",
+            "--distance",
             "1",
             "--ids",
             "1-300",
