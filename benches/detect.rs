@@ -15,7 +15,7 @@ use std::sync::OnceLock;
 use detect_common::{render, scatter, Look, Pinhole, Rng};
 use divan::{black_box, AllocProfiler, Bencher};
 use image::GrayImage;
-use whycode::detect::{Detector, DetectorConfig};
+use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 
@@ -91,7 +91,7 @@ fn small_scene() -> &'static GrayImage {
 
 fn config(tracking: bool, max_markers: usize) -> DetectorConfig {
     DetectorConfig {
-        family: Some(family()),
+        target: Target::WhyCode(family()),
         tracking,
         max_markers,
         ..DetectorConfig::default()

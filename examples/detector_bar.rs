@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use bar_support::*;
 use whycode::detect::{Detector, DetectorConfig};
-use whycode::simulate::rng::Pcg32;
+use whycode::math::Pcg32;
 use whycode::simulate::{self, Background};
 
 struct Row {

@@ -5,16 +5,18 @@
 
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use whycode::camera::Camera;
+use whycode::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
+use whycode::math::Ellipse;
 use whycode::pose::{
     choose_by_circle_points, choose_by_inner_circle, choose_by_radial_points, circle_poses,
     circle_poses_from_points, estimate_pose, full_pose, full_pose_from_yaw, project_circle,
-    project_marker_point, projected_center, reprojection_rms, CirclePose, ImageEllipse, Pose,
+    project_marker_point, projected_center, reprojection_rms, CirclePose, Pose,
 };
 
 /// Default marker of the reference ROS tools: 122 mm outer diameter.
 const RADIUS: f64 = 0.061;
 /// Legacy WhyCon inner white disc, relative to the outer radius.
-const INNER_RATIO: f64 = 50.0 / 122.0;
+const INNER_RATIO: f64 = WHYCON_WHITE_RATIO;
 
 fn distorted_640() -> Camera {
     Camera {
@@ -77,8 +79,8 @@ struct Outcome {
 }
 
 fn recover(camera: &Camera, truth: &Pose) -> Outcome {
-    let outer = ImageEllipse::fit(&circle_pixels(camera, truth, RADIUS, 64)).unwrap();
-    let inner = ImageEllipse::fit(&circle_pixels(camera, truth, INNER_RATIO * RADIUS, 64)).unwrap();
+    let outer = Ellipse::fit(&circle_pixels(camera, truth, RADIUS, 64)).unwrap();
+    let inner = Ellipse::fit(&circle_pixels(camera, truth, INNER_RATIO * RADIUS, 64)).unwrap();
     let candidates = circle_poses(camera, &outer, RADIUS);
     let errors = candidates.map(|c| {
         (
@@ -92,7 +94,8 @@ fn recover(camera: &Camera, truth: &Pose) -> Outcome {
     // When both candidates agree to within the accuracy asked for, either
     // choice is right.
     let both_fine = errors.iter().all(|e| e.0 < 0.5);
-    let x_axis_pixel = project_marker_point(camera, truth, 0.6 * RADIUS, 0.0).unwrap();
+    let x_axis_pixel =
+        project_marker_point(camera, truth, WHYCODE_WHITE_RATIO * RADIUS, 0.0).unwrap();
     let pose = full_pose(camera, &candidates[best], x_axis_pixel);
     Outcome {
         normal_error_deg: errors[best].0,
@@ -194,7 +197,7 @@ fn face_on_and_near_face_on_are_finite() {
     for tilt in [0.0, 1e-9, 1e-6, 0.01, 0.5] {
         for direction in [(0.0, 0.0), (0.3, -0.2)] {
             let truth = marker_pose(1.2, direction, tilt, 30.0, 0.0);
-            let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+            let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
             let candidates = circle_poses(&camera, &outer, RADIUS);
             for c in &candidates {
                 assert!(c
@@ -210,8 +213,7 @@ fn face_on_and_near_face_on_are_finite() {
                 .fold(f64::INFINITY, f64::min);
             assert!(best < 0.5, "tilt {tilt}: {best}°");
             let inner =
-                ImageEllipse::fit(&circle_pixels(&camera, &truth, INNER_RATIO * RADIUS, 64))
-                    .unwrap();
+                Ellipse::fit(&circle_pixels(&camera, &truth, INNER_RATIO * RADIUS, 64)).unwrap();
             let (chosen, margin) =
                 choose_by_inner_circle(&camera, &candidates, &inner, INNER_RATIO, RADIUS);
             assert!(chosen < 2 && margin.is_finite());
@@ -222,7 +224,7 @@ fn face_on_and_near_face_on_are_finite() {
         }
     }
     // An exact circle as the image ellipse, centred on the principal point.
-    let circle = ImageEllipse {
+    let circle = Ellipse {
         u: camera.cx,
         v: camera.cy,
         semi_major: 20.0,
@@ -266,7 +268,7 @@ fn face_on_upright_marker_has_the_conventional_rotation() {
 fn true_centre_differs_from_ellipse_centre_under_perspective() {
     let camera = Camera::ideal(1920, 1080, 60.0);
     let truth = marker_pose(0.4, (0.35, 0.2), 60.0, 20.0, 0.0);
-    let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+    let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
     let true_centre = camera.project(&truth.position).unwrap();
     let candidates = circle_poses(&camera, &outer, RADIUS);
     let best = candidates
@@ -291,7 +293,7 @@ fn ambiguity_resolved_from_points_on_the_inner_circle() {
     let camera = Camera::ideal(1280, 720, 60.0);
     for tilt in [20.0, 45.0, 70.0] {
         let truth = marker_pose(0.7, (0.2, 0.1), tilt, 100.0, 0.0);
-        let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+        let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
         let candidates = circle_poses(&camera, &outer, RADIUS);
         let right = if candidates[0].normal.angle(&truth.normal())
             < candidates[1].normal.angle(&truth.normal())
@@ -301,9 +303,9 @@ fn ambiguity_resolved_from_points_on_the_inner_circle() {
             1
         };
         // Edge points of the code ring's inner border (0.343 R), 24 of them.
-        let ring_edge = circle_pixels(&camera, &truth, 0.343 * RADIUS, 24);
+        let ring_edge = circle_pixels(&camera, &truth, RING_INNER_RATIO * RADIUS, 24);
         let (chosen, margin) =
-            choose_by_circle_points(&camera, &candidates, &ring_edge, 0.343 * RADIUS);
+            choose_by_circle_points(&camera, &candidates, &ring_edge, RING_INNER_RATIO * RADIUS);
         assert_eq!(chosen, right, "tilt {tilt}");
         assert!(margin > 0.0);
     }
@@ -389,8 +391,8 @@ fn noisy_ellipses_still_give_accurate_pose_and_the_right_candidate() {
                     .map(|(u, v)| (u + 0.1 * noise.gauss(), v + 0.1 * noise.gauss()))
                     .collect()
             };
-            let outer = ImageEllipse::fit(&jitter(circle_pixels(&camera, &truth, RADIUS, 64)));
-            let inner = ImageEllipse::fit(&jitter(circle_pixels(
+            let outer = Ellipse::fit(&jitter(circle_pixels(&camera, &truth, RADIUS, 64)));
+            let inner = Ellipse::fit(&jitter(circle_pixels(
                 &camera,
                 &truth,
                 INNER_RATIO * RADIUS,
@@ -416,7 +418,7 @@ fn projected_circle_matches_projected_points() {
     for camera in [Camera::ideal(1280, 720, 60.0), distorted_640()] {
         let truth = marker_pose(0.6, (0.3, -0.2), 55.0, 80.0, 0.0);
         let direct = project_circle(&camera, &truth.circle(), RADIUS).unwrap();
-        let fitted = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+        let fitted = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
         assert!((direct.u - fitted.u).hypot(direct.v - fitted.v) < 1e-3);
         assert!((direct.semi_major - fitted.semi_major).abs() < 1e-3);
         assert!((direct.semi_minor - fitted.semi_minor).abs() < 1e-3);
@@ -437,7 +439,7 @@ fn ambiguity_resolved_from_partial_ring_borders() {
     // sectors and its inner border (0.343 R) only beside black ones.
     let camera = distorted_640();
     let truth = marker_pose(0.9, (-0.1, 0.15), 40.0, 300.0, 0.0);
-    let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+    let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
     let candidates = circle_poses(&camera, &outer, RADIUS);
     let right = if candidates[0].normal.angle(&truth.normal())
         < candidates[1].normal.angle(&truth.normal())
@@ -451,7 +453,11 @@ fn ambiguity_resolved_from_partial_ring_borders() {
         .map(|i| {
             let theta = std::f64::consts::TAU * i as f64 / (sectors * 4) as f64;
             let white = (i / 4) % 2 == 0;
-            let radius = if white { 0.6 } else { 0.343 } * RADIUS;
+            let radius = if white {
+                WHYCODE_WHITE_RATIO
+            } else {
+                RING_INNER_RATIO
+            } * RADIUS;
             let pixel =
                 project_marker_point(&camera, &truth, radius * theta.cos(), radius * theta.sin())
                     .unwrap();
@@ -467,9 +473,8 @@ fn ambiguity_resolved_from_partial_ring_borders() {
 fn estimate_pose_in_one_call() {
     let camera = distorted_640();
     let truth = marker_pose(0.8, (0.1, -0.2), 45.0, 30.0, 120.0);
-    let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
-    let inner =
-        ImageEllipse::fit(&circle_pixels(&camera, &truth, INNER_RATIO * RADIUS, 64)).unwrap();
+    let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+    let inner = Ellipse::fit(&circle_pixels(&camera, &truth, INNER_RATIO * RADIUS, 64)).unwrap();
     let yaw = truth.image_yaw(&camera).unwrap();
     let estimate = estimate_pose(
         &camera,
@@ -501,7 +506,7 @@ fn estimate_pose_in_one_call() {
     assert!(legacy.pose.normal().angle(&truth.normal()).to_degrees() < 0.2);
     assert!(legacy.pose.image_yaw(&camera).unwrap().abs() < 1e-5);
 
-    let broken = ImageEllipse {
+    let broken = Ellipse {
         semi_minor: 0.0,
         ..outer
     };
@@ -514,10 +519,9 @@ fn ambiguity_margin_follows_the_documented_rule_of_thumb() {
     for distance in [1.0, 2.0, 3.0] {
         for tilt in [10.0f64, 25.0, 40.0, 55.0, 70.0] {
             let truth = marker_pose(distance, (0.2, 0.1), tilt, 60.0, 0.0);
-            let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+            let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
             let inner =
-                ImageEllipse::fit(&circle_pixels(&camera, &truth, INNER_RATIO * RADIUS, 64))
-                    .unwrap();
+                Ellipse::fit(&circle_pixels(&camera, &truth, INNER_RATIO * RADIUS, 64)).unwrap();
             let candidates = circle_poses(&camera, &outer, RADIUS);
             let (_, margin) =
                 choose_by_inner_circle(&camera, &candidates, &inner, INNER_RATIO, RADIUS);

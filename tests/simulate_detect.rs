@@ -5,7 +5,7 @@
 
 use std::f64::consts::PI;
 use whycode::camera::Camera;
-use whycode::detect::{Detector, DetectorConfig};
+use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::simulate::{layout, render, Background, GroundTruth, Scene, SceneObject};
@@ -38,7 +38,7 @@ fn scattered_markers_on_clutter_are_found_with_ids_and_yaw() {
     scene.seed = 3;
     let (image, truth) = render(&scene);
     let mut detector = Detector::new(DetectorConfig {
-        family: Some(family),
+        target: Target::WhyCode(family),
         ..Default::default()
     });
     let detections = detector.detect(&image);

@@ -20,10 +20,11 @@ use std::path::Path;
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 use whycode::camera::Camera;
-use whycode::detect::{load_gray, Detection, Detector, DetectorConfig};
+use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
-use whycode::render::manifest::{FamilyRef, Manifest};
+use whycode::image_io::load_gray;
+use whycode::manifest::{FamilyRef, Manifest};
 use whycode::render::sheet::{family_markers, layout, SheetSpec};
 use whycode::render::template::Template;
 use whycode::simulate::{render, Background, LooseMarker, Placement, Scene, SceneObject};
@@ -52,9 +53,9 @@ pub struct TargetSummary {
     pub failures: Vec<String>,
 }
 
-type Target = fn(&mut Fuzzer, &mut TestRunner) -> Result<bool, String>;
+type FuzzTarget = fn(&mut Fuzzer, &mut TestRunner) -> Result<bool, String>;
 
-pub const TARGETS: [(&str, Target); 6] = [
+pub const TARGETS: [(&str, FuzzTarget); 6] = [
     ("image files", Fuzzer::image_file),
     ("random images", Fuzzer::random_image),
     ("family files", Fuzzer::family_file),
@@ -76,7 +77,7 @@ pub fn run(settings: &Settings) -> Vec<TargetSummary> {
 fn run_target(
     settings: &Settings,
     name: &'static str,
-    target: Target,
+    target: FuzzTarget,
     share: Duration,
     index: u64,
 ) -> TargetSummary {
@@ -362,7 +363,7 @@ impl Fuzzer {
         Fuzzer {
             dir: tempfile::tempdir().unwrap(),
             detector: Detector::new(DetectorConfig {
-                family: Some(family.clone()),
+                target: Target::WhyCode(family.clone()),
                 ..DetectorConfig::default()
             }),
             detect_limit,
@@ -448,7 +449,7 @@ impl Fuzzer {
         check_json("family file", &family.to_json())?;
         // A loaded family must read its own markers.
         let mut detector = Detector::new(DetectorConfig {
-            family: Some(family.clone()),
+            target: Target::WhyCode(family.clone()),
             ..DetectorConfig::default()
         });
         let id = family.len() as u32;
@@ -571,7 +572,7 @@ fn seed_scene(family: &Family) -> image::GrayImage {
 /// Random pictures that stress segmentation: noise, many discs and rings,
 /// stripes, or a simulated scene of markers at random poses.
 fn random_image(w: u32, h: u32, kind: u8, seed: u64) -> image::GrayImage {
-    let mut rng = whycode::simulate::rng::Pcg32::new(seed, 7);
+    let mut rng = whycode::math::rng::Pcg32::new(seed, 7);
     match kind {
         0 => image::GrayImage::from_fn(w, h, |_, _| image::Luma([rng.next_u32() as u8])),
         1 | 2 => {

@@ -4,8 +4,8 @@
 #![allow(dead_code)]
 
 use image::GrayImage;
-use whycode::detect::ring::ImageEllipse;
 use whycode::geometry::Marker;
+use whycode::math::Ellipse;
 
 pub const BLACK: f64 = 30.0;
 pub const WHITE: f64 = 225.0;
@@ -55,7 +55,7 @@ impl View {
 /// A rendered view with what the ring reader is given and what it should find.
 pub struct Rendered {
     pub image: GrayImage,
-    pub ellipse: ImageEllipse,
+    pub ellipse: Ellipse,
     /// Image direction of the marker's +x axis, atan2(dv, du).
     pub yaw: f64,
 }
@@ -155,7 +155,7 @@ pub fn render_marker(view: &View, marker: &Marker) -> Rendered {
     let mean = 0.5 * (a + c);
     let root = (0.25 * (a - c) * (a - c) + b * b).sqrt();
     let angle = 0.5 * (2.0 * b).atan2(a - c);
-    let ellipse = ImageEllipse {
+    let ellipse = Ellipse {
         u: cu,
         v: cv,
         semi_major: radius * (mean + root).sqrt(),

@@ -1,5 +1,7 @@
-//! The record of what a sheet printed: written next to every sheet, read by
-//! validation to know which marker should be where.
+//! The record of what a sheet printed, and the contract between the stages
+//! that share it: `render` writes it next to every sheet, `simulate` lays
+//! out a photographed sheet from it and `validate` reads it to know which
+//! marker should be where.
 
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
@@ -90,7 +92,7 @@ impl Manifest {
             ));
         }
         let [w, h] = self.page_size_mm;
-        let side = 0.0..=super::template::MAX_PAGE_MM;
+        let side = 0.0..=crate::render::template::MAX_PAGE_MM;
         if !(w > 0.0 && h > 0.0 && side.contains(&w) && side.contains(&h)) {
             return Err(format!("page size {w} x {h} mm is not a page"));
         }
