@@ -2,8 +2,9 @@
 //! followed from the track's known code), the ID filter of tracked
 //! markers, and its pose.
 
-use image::GrayImage;
+use image::{ImageBuffer, Luma};
 use nalgebra::Vector3;
+use std::ops::Deref;
 
 use super::segment::Gray;
 use super::{ellipse, rectify, Candidate, Detection, Detector};
@@ -23,9 +24,9 @@ struct PoseHints {
 impl Detector {
     /// The detection of a candidate, and its normal when that was told
     /// apart from the other pose candidate with confidence (for the track).
-    pub(super) fn describe(
+    pub(super) fn describe<C: Deref<Target = [u8]>>(
         &mut self,
-        image: &GrayImage,
+        image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,
     ) -> (Detection, Option<Vector3<f64>>) {

@@ -38,8 +38,6 @@ pub mod segment;
 pub mod threshold;
 pub mod track;
 
-use image::GrayImage;
-
 use crate::camera::Camera;
 use crate::family::{Decoder, Family, MatchStatus};
 use crate::geometry::Design;
@@ -239,7 +237,14 @@ impl Detector {
 
     /// Finds the markers in one frame. With tracking on, state carries over
     /// to the next call.
-    pub fn detect(&mut self, image: &GrayImage) -> Vec<Detection> {
+    ///
+    /// Takes any 8-bit grey buffer: an owned [`image::GrayImage`] or a view of
+    /// borrowed pixels (`ImageBuffer<Luma<u8>, &[u8]>`), so callers that
+    /// hold frames in their own memory (Python's numpy arrays) need no copy.
+    pub fn detect<C: std::ops::Deref<Target = [u8]>>(
+        &mut self,
+        image: &image::ImageBuffer<image::Luma<u8>, C>,
+    ) -> Vec<Detection> {
         let (width, height) = (image.width() as usize, image.height() as usize);
         if width < 3 || height < 3 {
             self.tracks.clear();

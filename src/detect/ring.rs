@@ -39,7 +39,8 @@
 
 use crate::family::{Decoded, Decoder, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
-use image::GrayImage;
+use image::{ImageBuffer, Luma};
+use std::ops::Deref;
 
 use crate::math::sample::{Border, Plane};
 use crate::math::Ellipse;
@@ -168,9 +169,9 @@ impl RingReader {
     /// Reads the ring inside the outer ellipse `outer`. `black_level` and
     /// `white_level` are the grey levels of the marker's black disc and white
     /// disc as the detector measured them.
-    pub fn read(
+    pub fn read<C: Deref<Target = [u8]>>(
         &self,
-        image: &GrayImage,
+        image: &ImageBuffer<Luma<u8>, C>,
         outer: &Ellipse,
         black_level: f64,
         white_level: f64,
@@ -626,8 +627,8 @@ impl EllipseFrame {
 
 /// Mean grey level over the given radii at `count` equally spaced
 /// parameters; `None` when the ring leaves the image.
-fn sample_profile(
-    image: &GrayImage,
+fn sample_profile<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
     frame: &EllipseFrame,
     radii: &[f64],
     count: usize,
@@ -658,8 +659,8 @@ fn sample_profile(
 /// way perspective shifts concentric circles), so it is crossed at
 /// ρ + (1 - ρ²)·D·u(t); a scale and a constant term absorb ellipse size
 /// errors and blur. `None` when the rays do not show the ring's structure.
-fn refined_centre(
-    image: &GrayImage,
+fn refined_centre<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
     frame: &EllipseFrame,
     phase: f64,
     bits: u32,
