@@ -102,6 +102,16 @@ impl Manifest {
         if self.pages == 0 {
             return Err("pages is 0, but a sheet has at least one page".to_string());
         }
+        // Every page of a sheet holds a marker; a huge count (found by
+        // fuzzing: 2147483647) made validation walk billions of empty pages.
+        if self.pages as usize > self.markers.len() {
+            return Err(format!(
+                "pages is {}, but its {} markers fill at most {} pages",
+                self.pages,
+                self.markers.len(),
+                self.markers.len()
+            ));
+        }
         let mut seen = std::collections::HashSet::new();
         for m in &self.markers {
             let inside = (0.0..=w).contains(&m.x_mm) && (0.0..=h).contains(&m.y_mm);
@@ -283,6 +293,9 @@ mod tests {
         let mut m = sheet();
         m.markers[1].x_mm = m.markers[0].x_mm + 1.0;
         assert!(load_error(&m).contains("markers ID 1 and ID 2 on page 1 overlap"));
+        let mut m = sheet();
+        m.pages = 2147483647;
+        assert!(load_error(&m).contains("pages is 2147483647, but its 2 markers"));
         let mut m = sheet();
         m.pages = 0;
         assert!(load_error(&m).contains("pages is 0"), "{}", load_error(&m));
