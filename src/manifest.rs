@@ -66,18 +66,23 @@ impl Manifest {
     pub fn load(path: &Path) -> Result<Manifest> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("cannot read manifest {}", path.display()))?;
-        let manifest: Manifest = serde_json::from_str(&text)
-            .with_context(|| format!("{} is not a whycode sheet manifest", path.display()))?;
+        Manifest::from_json(&path.display().to_string(), &text)
+    }
+
+    /// Parses and checks a manifest's text; `name` (the file's name) starts
+    /// every error message. For callers without files, such as the browser.
+    pub fn from_json(name: &str, text: &str) -> Result<Manifest> {
+        let manifest: Manifest = serde_json::from_str(text)
+            .with_context(|| format!("{name} is not a whycode sheet manifest"))?;
         if manifest.version > MANIFEST_VERSION {
             anyhow::bail!(
-                "{}: manifest version {} is newer than this tool reads ({MANIFEST_VERSION})",
-                path.display(),
+                "{name}: manifest version {} is newer than this tool reads ({MANIFEST_VERSION})",
                 manifest.version
             );
         }
         manifest
             .check()
-            .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
+            .map_err(|problem| anyhow::anyhow!("{name}: {problem}"))?;
         Ok(manifest)
     }
 
