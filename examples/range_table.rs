@@ -2,13 +2,19 @@
 //! table comparable in form to the paper's Table 3 and Figure 6.
 //!
 //!     cargo run --release --example range_table -- [--camera cam.yaml]
-//!         [--diameter 22.05mm] [--bits 4,6,8,10,12,14,16] [--distance 2]
+//!         [--diameter 69.7mm] [--bits 4,6,8,10,12,14,16] [--distance 2]
 //!         [--noise 2] [--blur 0.6] [--seed 1]
 //!
 //! Without --camera: an ideal 640x480 camera with a 58° horizontal field
-//! of view (the paper's ASUS Xtion RGB camera), and a disc of the paper's
-//! marker area, 3.817 cm² (22.05 mm across). Ranges scale linearly with the
-//! diameter; the pixel sizes at the range limits do not depend on it. For each code length three
+//! of view (the paper's ASUS Xtion RGB camera), and a disc of 38.17 cm²
+//! (69.7 mm across). The paper gives its marker's area as "3.817 cm²", which
+//! cannot be right: a disc of 3.817 cm² (22 mm) at the paper's 5.4 m WhyCon
+//! range is 2.4 px across in that camera, far below what any circle detector
+//! finds, while 38.17 cm² gives the ~8 px detection needs there. Comparing
+//! with the paper at 22 mm would make ranges look three times worse than
+//! the paper's for no reason but the smaller disc. Ranges scale linearly
+//! with the diameter; the pixel sizes at the range limits do not depend on
+//! it. For each code length three
 //! markers (face-on, tilted, turned; different IDs and yaws) are placed at
 //! growing distances (5 % steps); the range is the last distance before
 //! the first failure: "detection" when all three are found where they are,
@@ -23,6 +29,22 @@ use whycode::geometry::Marker;
 use whycode::simulate::{render, Background, LooseMarker, Placement, Scene, SceneObject};
 use whycode::units::Length;
 
+/// The paper's marker area read as 38.17 cm² (see the comment at the top).
+const PAPER_AREA_MM2: f64 = 3817.0;
+/// Diameter of a disc of [`PAPER_AREA_MM2`]: 69.71 mm.
+const PAPER_DIAMETER_MM: f64 = 69.713_379_937;
+/// The paper's WhyCon detection range (Table 3), metres.
+const PAPER_WHYCON_RANGE_M: f64 = 5.4;
+
+fn disc_diameter_mm(area_mm2: f64) -> f64 {
+    2.0 * (area_mm2 / std::f64::consts::PI).sqrt()
+}
+
+/// Pixels across a disc of `diameter_mm` at `z` metres, face-on.
+fn disc_px(camera: &Camera, diameter_mm: f64, z: f64) -> f64 {
+    camera.fx * diameter_mm / 1000.0 / z
+}
+
 struct Options {
     camera: Camera,
     diameter_mm: f64,
@@ -33,16 +55,20 @@ struct Options {
     seed: u64,
 }
 
-fn parse_options() -> Result<Options> {
-    let mut o = Options {
+fn default_options() -> Options {
+    Options {
         camera: Camera::ideal(640, 480, 58.0),
-        diameter_mm: 2.0 * (381.7f64 / std::f64::consts::PI).sqrt(),
+        diameter_mm: PAPER_DIAMETER_MM,
         bits: vec![4, 6, 8, 10, 12, 14, 16],
         hamming: 2,
         noise: 2.0,
         blur: 0.6,
         seed: 1,
-    };
+    }
+}
+
+fn parse_options() -> Result<Options> {
+    let mut o = default_options();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut it = args.iter();
     while let Some(flag) = it.next() {
@@ -173,12 +199,31 @@ fn main() -> Result<()> {
         o.noise,
         o.blur
     );
+    if (o.diameter_mm - PAPER_DIAMETER_MM).abs() < 0.01 {
+        let printed = disc_diameter_mm(PAPER_AREA_MM2 / 10.0);
+        println!(
+            "marker size: 38.17 cm², not the paper's printed \"3.817 cm²\": a {:.1} mm disc of \
+             3.817 cm² would be {:.1} px across at the paper's {PAPER_WHYCON_RANGE_M} m WhyCon range \
+             in this camera, too small for any circle detector; 38.17 cm² ({:.1} mm) is {:.1} px \
+             there, what detection needs. At 22 mm every range below is about 3.2 times shorter.",
+            printed,
+            disc_px(c, printed, PAPER_WHYCON_RANGE_M),
+            PAPER_DIAMETER_MM,
+            disc_px(c, PAPER_DIAMETER_MM, PAPER_WHYCON_RANGE_M),
+        );
+    } else {
+        println!(
+            "marker size set with --diameter: compare with the paper (a {PAPER_DIAMETER_MM:.1} mm \
+             disc) by scaling its ranges by {:.3}",
+            o.diameter_mm / PAPER_DIAMETER_MM
+        );
+    }
     println!("range = last distance before the first failure, 5 % steps, three markers per frame");
     println!();
     println!(
         "code                     IDs   detection [m]   identification [m]   disc px at limits"
     );
-    let px = |z: f64| c.fx * o.diameter_mm / 1000.0 / z;
+    let px = |z: f64| disc_px(c, o.diameter_mm, z);
     let whycon: Vec<(Marker, u32)> = (0..3).map(|_| (Marker::whycon(o.diameter_mm), 0)).collect();
     let (det, _) = ranges(&o, None, &whycon);
     println!(
@@ -228,4 +273,23 @@ fn main() -> Result<()> {
     );
     println!("(Table 3); identification range against code length ~ min(2.4, 200/n) (Figure 6).");
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_marker_is_the_area_that_makes_the_paper_comparison_fair() {
+        assert!((disc_diameter_mm(PAPER_AREA_MM2) - PAPER_DIAMETER_MM).abs() < 1e-6);
+        let camera = Camera::ideal(640, 480, 58.0);
+        // The paper's "3.817 cm²" would be 2.4 px at its own detection range,
+        // the corrected area the ~8 px a detector needs.
+        let printed = disc_px(&camera, disc_diameter_mm(381.7), PAPER_WHYCON_RANGE_M);
+        let fair = disc_px(&camera, PAPER_DIAMETER_MM, PAPER_WHYCON_RANGE_M);
+        assert!((2.0..2.6).contains(&printed), "{printed}");
+        assert!((7.0..9.0).contains(&fair), "{fair}");
+        let o = default_options();
+        assert!((o.diameter_mm - 69.71).abs() < 0.01, "{}", o.diameter_mm);
+    }
 }

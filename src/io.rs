@@ -44,8 +44,8 @@ pub fn write_atomic_with(
 
 /// Writes several files as one: each is staged in a temporary file beside
 /// its target, and only when all are staged are they renamed into place. A
-/// failure while staging (a full disk, a missing folder) leaves every
-/// target as it was, old outputs included.
+/// failure while staging (a full disk, a missing folder) or while writing
+/// to a device leaves every regular target as it was, old outputs included.
 pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
     let mut staged = Vec::with_capacity(files.len());
     let mut in_place = Vec::new();
@@ -63,13 +63,48 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
             }
         }
     }
-    for (path, target, tmp) in staged {
-        commit(path, &target, tmp)?;
-    }
+    // Devices and pipes cannot be staged, so they are written before any
+    // staged file is renamed into place: when one fails (a link to
+    // /dev/full), the temporary files are dropped and no target changes.
     for (path, target, bytes) in in_place {
         write_in_place(path, &target, bytes)?;
     }
+    for (path, target, tmp) in staged {
+        commit(path, &target, tmp)?;
+    }
     Ok(())
+}
+
+/// Output files for annotated copies of `inputs`, one per distinct input,
+/// in input order: `DIR/<stem>.annotated.png`, with `-2`, `-3`, ... before
+/// `.annotated` when two inputs share a stem (two phones' IMG_0001) or when
+/// the name is taken by one of the inputs themselves (annotating
+/// `view.annotated.png` beside `view.png`). An input is never an output.
+pub fn annotation_paths(dir: &Path, inputs: &[PathBuf]) -> Vec<(PathBuf, PathBuf)> {
+    // Compared canonically, so `./view.png` and `view.png` are one file.
+    let same_file = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+    let taken_by_inputs: std::collections::HashSet<PathBuf> =
+        inputs.iter().map(|p| same_file(p)).collect();
+    let dir_real = same_file(dir);
+    let mut used = std::collections::HashSet::new();
+    let mut out: Vec<(PathBuf, PathBuf)> = Vec::new();
+    let mut seen = std::collections::HashSet::new();
+    for input in inputs {
+        if !seen.insert(input.clone()) {
+            continue;
+        }
+        let stem = input
+            .file_stem()
+            .map_or_else(|| "image".into(), |s| s.to_string_lossy().into_owned());
+        let mut name = format!("{stem}.annotated.png");
+        let mut k = 2;
+        while taken_by_inputs.contains(&dir_real.join(&name)) || !used.insert(name.clone()) {
+            name = format!("{stem}-{k}.annotated.png");
+            k += 1;
+        }
+        out.push((input.clone(), dir.join(name)));
+    }
+    out
 }
 
 /// Where an output's bytes end up.
@@ -101,6 +136,39 @@ fn write_in_place(path: &Path, target: &Path, bytes: &[u8]) -> Result<()> {
         .with_context(|| format!("cannot write {}", path.display()))
 }
 
+/// Fails early, before any work, when the output's folder is missing or is
+/// not a folder at all (a path under a regular file).
+pub fn check_output_dir(path: &Path) -> Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    match folder_problem(path, dir) {
+        Some(err) => Err(err),
+        None => Ok(()),
+    }
+}
+
+fn folder_problem(path: &Path, dir: &Path) -> Option<anyhow::Error> {
+    if dir.is_dir() {
+        return None;
+    }
+    // The nearest existing ancestor tells a missing folder from a file in the way.
+    let blocker = dir.ancestors().find(|a| a.exists() && !a.is_dir());
+    Some(match blocker {
+        Some(file) => anyhow::anyhow!(
+            "cannot write {}: {} is a file, not a folder",
+            path.display(),
+            file.display()
+        ),
+        None => anyhow::anyhow!(
+            "cannot write {}: folder {} does not exist",
+            path.display(),
+            dir.display()
+        ),
+    })
+}
+
 /// A temporary file in the target's folder, so that the final rename stays
 /// on one file system and is atomic.
 fn stage_beside(path: &Path, target: &Path) -> Result<tempfile::NamedTempFile> {
@@ -108,12 +176,8 @@ fn stage_beside(path: &Path, target: &Path) -> Result<tempfile::NamedTempFile> {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    if !dir.is_dir() {
-        bail!(
-            "cannot write {}: folder {} does not exist",
-            path.display(),
-            dir.display()
-        );
+    if let Some(err) = folder_problem(path, dir) {
+        return Err(err);
     }
     tempfile::Builder::new()
         .prefix(".whycode-")
@@ -232,6 +296,58 @@ mod tests {
         assert_eq!(std::fs::read_to_string(&good).unwrap(), "old pdf");
         let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
         assert_eq!(left.len(), 1, "temporary files left behind: {left:?}");
+    }
+
+    #[test]
+    fn annotations_never_take_an_input_name() {
+        let dir = tempfile::tempdir().unwrap();
+        let view = dir.path().join("view.png");
+        let already = dir.path().join("view.annotated.png");
+        std::fs::write(&view, "x").unwrap();
+        std::fs::write(&already, "x").unwrap();
+        let other = dir.path().join("sub/view.png");
+        let names = annotation_paths(dir.path(), &[view.clone(), already.clone(), other]);
+        let files: Vec<String> = names
+            .iter()
+            .map(|(_, out)| out.file_name().unwrap().to_string_lossy().into_owned())
+            .collect();
+        assert_eq!(
+            files,
+            [
+                "view-2.annotated.png",
+                "view.annotated.annotated.png",
+                "view-3.annotated.png"
+            ]
+        );
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_full_device_among_the_files_leaves_the_others_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let manifest = dir.path().join("m.json");
+        std::fs::write(&manifest, "old manifest").unwrap();
+        let pages = dir.path().join("m.pdf");
+        std::os::unix::fs::symlink("/dev/full", &pages).unwrap();
+        let files = vec![
+            (pages, b"new pdf".to_vec()),
+            (manifest.clone(), b"new manifest".to_vec()),
+        ];
+        let err = write_all_atomic(&files).unwrap_err();
+        assert!(format!("{err:#}").contains("m.pdf"), "{err:#}");
+        assert_eq!(std::fs::read_to_string(&manifest).unwrap(), "old manifest");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    #[test]
+    fn a_path_under_a_regular_file_is_an_error_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("plain");
+        std::fs::write(&file, "x").unwrap();
+        let err = write_atomic(&file.join("out.png"), b"x").unwrap_err();
+        let text = format!("{err:#}");
+        assert!(text.contains("plain/out.png"), "{text}");
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
     }
 
     #[test]

@@ -97,11 +97,25 @@ impl Manifest {
             ));
         }
         let [w, h] = self.page_size_mm;
-        if !(w.is_finite() && h.is_finite() && w > 0.0 && h > 0.0) {
+        let side = 0.0..=crate::render::template::MAX_PAGE_MM;
+        if !(w > 0.0 && h > 0.0 && side.contains(&w) && side.contains(&h)) {
             return Err(format!("page size {w} x {h} mm is not a page"));
         }
         if self.markers.is_empty() {
             return Err("lists no markers".to_string());
+        }
+        if self.pages == 0 {
+            return Err("pages is 0, but a sheet has at least one page".to_string());
+        }
+        // Every page of a sheet holds a marker; a huge count (found by
+        // fuzzing: 2147483647) made validation walk billions of empty pages.
+        if self.pages as usize > self.markers.len() {
+            return Err(format!(
+                "pages is {}, but its {} markers fill at most {} pages",
+                self.pages,
+                self.markers.len(),
+                self.markers.len()
+            ));
         }
         let mut seen = std::collections::HashSet::new();
         for m in &self.markers {
@@ -113,9 +127,13 @@ impl Manifest {
                 ));
             }
             if m.page == 0 || m.page > self.pages {
+                let pages = match self.pages {
+                    1 => "one page".to_string(),
+                    n => format!("pages 1-{n}"),
+                };
                 return Err(format!(
-                    "marker ID {} is on page {}, but the sheet has pages 1-{}",
-                    m.id, m.page, self.pages
+                    "marker ID {} is on page {}, but the sheet has {pages}",
+                    m.id, m.page
                 ));
             }
             if !self.legacy && !seen.insert(m.id) {
@@ -123,6 +141,76 @@ impl Manifest {
                     "ID {} is listed more than once, so its markers cannot be told apart",
                     m.id
                 ));
+            }
+        }
+        self.check_ids()?;
+        self.check_overlaps()
+    }
+
+    /// Every ID must be a member of the family, printed with its own code:
+    /// anything else would be reported as misread or missing, blaming the
+    /// print for a broken record.
+    fn check_ids(&self) -> std::result::Result<(), String> {
+        let family = match (self.legacy, self.family) {
+            (true, _) => return Ok(()),
+            (false, None) => {
+                return Err("names no family, and is not a legacy WhyCon sheet".to_string())
+            }
+            (false, Some(f)) => crate::family::Family::generate(f.bits, f.distance)
+                .map_err(|e| format!("family: {e}"))?,
+        };
+        for m in &self.markers {
+            match family.code(m.id) {
+                None => {
+                    return Err(format!(
+                        "marker ID {} on page {} is not in the {}-bit family with distance {} \
+                         (IDs 1-{})",
+                        m.id,
+                        m.page,
+                        family.bits(),
+                        family.distance(),
+                        family.len()
+                    ))
+                }
+                Some(code) if code != m.code => {
+                    return Err(format!(
+                        "marker ID {} on page {} has code {}, but ID {} is code {code}",
+                        m.id, m.page, m.code, m.id
+                    ))
+                }
+                Some(_) => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Printed discs cannot overlap: two markers at one place are a broken
+    /// record (a copied line), and validation could match either.
+    fn check_overlaps(&self) -> std::result::Result<(), String> {
+        let mut order: Vec<&PrintedMarker> = self.markers.iter().collect();
+        order.sort_by(|a, b| a.page.cmp(&b.page).then(a.x_mm.total_cmp(&b.x_mm)));
+        let widest = order.iter().map(|m| m.diameter_mm).fold(0.0, f64::max);
+        for (i, a) in order.iter().enumerate() {
+            for b in order[i + 1..]
+                .iter()
+                .take_while(|b| b.page == a.page && b.x_mm - a.x_mm < widest)
+            {
+                let apart = (a.x_mm - b.x_mm).hypot(a.y_mm - b.y_mm);
+                if apart < (a.diameter_mm + b.diameter_mm) / 2.0 {
+                    let name = |m: &PrintedMarker| {
+                        if self.legacy {
+                            format!("the marker at ({:.1}, {:.1}) mm", m.x_mm, m.y_mm)
+                        } else {
+                            format!("ID {}", m.id)
+                        }
+                    };
+                    return Err(format!(
+                        "markers {} and {} on page {} overlap ({apart:.1} mm apart)",
+                        name(a),
+                        name(b),
+                        a.page
+                    ));
+                }
             }
         }
         Ok(())
@@ -145,9 +233,10 @@ mod tests {
     use super::*;
 
     fn sheet() -> Manifest {
+        let family = crate::family::Family::generate(8, 2).unwrap();
         let marker = |id, x_mm| PrintedMarker {
             id,
-            code: id,
+            code: family.code(id).unwrap(),
             page: 1,
             x_mm,
             y_mm: 50.0,
@@ -196,7 +285,25 @@ mod tests {
         assert!(load_error(&m).contains("impossible place or size"));
         let mut m = sheet();
         m.markers[0].page = 3;
-        assert!(load_error(&m).contains("on page 3, but the sheet has pages 1-1"));
+        assert!(load_error(&m).contains("on page 3, but the sheet has one page"));
+        let mut m = sheet();
+        m.markers[1].id = 999;
+        assert!(load_error(&m).contains("ID 999 on page 1 is not in the 8-bit family"));
+        let mut m = sheet();
+        m.markers[1].id = 0;
+        assert!(load_error(&m).contains("ID 0 on page 1 is not in the 8-bit family"));
+        let mut m = sheet();
+        m.markers[1].code = 11;
+        assert!(load_error(&m).contains("ID 2 on page 1 has code 11, but ID 2 is code 7"));
+        let mut m = sheet();
+        m.markers[1].x_mm = m.markers[0].x_mm + 1.0;
+        assert!(load_error(&m).contains("markers ID 1 and ID 2 on page 1 overlap"));
+        let mut m = sheet();
+        m.pages = 2147483647;
+        assert!(load_error(&m).contains("pages is 2147483647, but its 2 markers"));
+        let mut m = sheet();
+        m.pages = 0;
+        assert!(load_error(&m).contains("pages is 0"), "{}", load_error(&m));
         let mut m = sheet();
         m.format = "other".into();
         assert!(load_error(&m).contains("format is 'other'"));

@@ -208,7 +208,9 @@ fn annotate_writes_the_image_with_markers_drawn() {
         path.to_str().unwrap(),
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let annotated = image::open(out_dir.join("photo.png")).unwrap().to_rgb8();
+    let annotated = image::open(out_dir.join("photo.annotated.png"))
+        .unwrap()
+        .to_rgb8();
     let original = image::open(&path).unwrap().to_luma8();
     assert_eq!(annotated.dimensions(), original.dimensions());
     // The outline is drawn in colour on the grey image, on the outer edge.

@@ -120,7 +120,7 @@ impl Camera {
                 .ok_or_else(|| anyhow!("missing image_height"))?,
         };
 
-        Ok(Camera {
+        let camera = Camera {
             fx,
             fy,
             cx,
@@ -128,7 +128,111 @@ impl Camera {
             distortion,
             width,
             height,
-        })
+        };
+        camera
+            .check_plausible()
+            .map_err(|problem| anyhow!(problem))?;
+        Ok(camera)
+    }
+
+    /// Refuses calibrations no real lens gives, which would otherwise turn
+    /// into poses kilometres away or silently empty pose columns: a field of
+    /// view outside 0.1-175°, pixels far from square, a principal point far
+    /// outside the image, or distortion that folds the image over, cannot
+    /// be inverted, or shrinks or stretches the image's edge by more than
+    /// four times.
+    pub fn check_plausible(&self) -> Result<(), String> {
+        let (w, h) = (f64::from(self.width), f64::from(self.height));
+        for (name, f, side) in [("fx", self.fx, w), ("fy", self.fy, h)] {
+            let fov = 2.0 * (0.5 * side / f).atan().to_degrees();
+            if !(fov.is_finite() && (0.1..=175.0).contains(&fov)) {
+                return Err(format!(
+                    "camera_matrix: {name} = {} gives a {fov:.3}° field of view across {side} \
+                     pixels; a real lens gives 0.1-175°",
+                    short_number(f)
+                ));
+            }
+        }
+        let aspect = self.fx / self.fy;
+        if !(0.25..=4.0).contains(&aspect) {
+            return Err(format!(
+                "camera_matrix: fx/fy = {aspect:.3}; real pixels are not that far from square"
+            ));
+        }
+        for (name, c, side) in [("cx", self.cx, w), ("cy", self.cy, h)] {
+            if !(-0.5 * side..=1.5 * side).contains(&c) {
+                return Err(format!(
+                    "camera_matrix: principal point {name} = {} lies far outside the {}x{} image",
+                    short_number(c),
+                    self.width,
+                    self.height
+                ));
+            }
+        }
+        if !self.has_distortion() {
+            return Ok(());
+        }
+        let bad = |what: String| {
+            let terms: Vec<String> = self.distortion.iter().map(|&k| short_number(k)).collect();
+            Err(format!(
+                "distortion_coefficients [{}] are not a real lens: {what}",
+                terms.join(", ")
+            ))
+        };
+        // Walk from the principal point to every corner and edge middle.
+        let (x0, x1, y0, y1) = (-0.5, w - 0.5, -0.5, h - 0.5);
+        let (xm, ym) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        for (u, v) in [
+            (x0, y0),
+            (x1, y0),
+            (x1, y1),
+            (x0, y1),
+            (xm, y0),
+            (xm, y1),
+            (x0, ym),
+            (x1, ym),
+        ] {
+            let mut last = 0.0;
+            const STEPS: usize = 32;
+            for k in 1..=STEPS {
+                let t = k as f64 / STEPS as f64;
+                let (pu, pv) = (self.cx + (u - self.cx) * t, self.cy + (v - self.cy) * t);
+                let (x, y) = self.undistort(pu, pv);
+                let (bu, bv) = self.distort_normalized(x, y);
+                let miss = (bu - pu).hypot(bv - pv);
+                if miss.is_nan() || miss >= 0.01 {
+                    return bad(format!(
+                        "pixel ({pu:.0}, {pv:.0}) has no undistorted position"
+                    ));
+                }
+                let radius = x.hypot(y);
+                if radius <= last {
+                    return bad(format!(
+                        "the image folds over itself towards pixel ({u:.0}, {v:.0})"
+                    ));
+                }
+                last = radius;
+            }
+            let distorted = ((u - self.cx) / self.fx).hypot((v - self.cy) / self.fy);
+            let ratio = last / distorted;
+            if !(0.25..=4.0).contains(&ratio) {
+                return bad(format!(
+                    "pixel ({u:.0}, {v:.0}) would lie at {:.3}% of its distance from the centre \
+                     without distortion (a real lens: 25-400%)",
+                    ratio * 100.0
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A number as a person writes it: 1e308 rather than 309 digits.
+fn short_number(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e7).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
     }
 }
 

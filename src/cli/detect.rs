@@ -3,7 +3,6 @@
 use super::args::{Format, FormatArg, MarkerKindArgs};
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
-use std::collections::HashSet;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -68,7 +67,7 @@ pub struct DetectArgs {
     format: FormatArg,
 
     /// Write each image with the markers' ellipses, IDs and +x axes drawn
-    /// into DIR (PNG, named after the image)
+    /// into DIR as <name>.annotated.png (never over an input)
     #[arg(long, value_name = "DIR")]
     annotate: Option<PathBuf>,
 
@@ -269,37 +268,25 @@ fn natural_order(a: &Path, b: &Path) -> std::cmp::Ordering {
     ca.len().cmp(&cb.len()).then_with(|| ta.cmp(&tb))
 }
 
-/// Output file for every image: DIR/<name>.png, with -2, -3, ... appended
-/// when two inputs share a name (chosen in input order, so stable).
+/// Output file for every image (see [`whycode::io::annotation_paths`]).
 fn annotation_names(
     jobs: &[Job],
     dir: Option<&Path>,
 ) -> std::collections::HashMap<PathBuf, PathBuf> {
-    let mut names = std::collections::HashMap::new();
     let Some(dir) = dir else {
-        return names;
+        return std::collections::HashMap::new();
     };
-    let mut used = HashSet::new();
-    let all = jobs.iter().flat_map(|j| match j {
-        Job::Image(p) => std::slice::from_ref(p).iter(),
-        Job::Sequence(frames) => frames.iter(),
-    });
-    for path in all {
-        if names.contains_key(path) {
-            continue;
-        }
-        let stem = path
-            .file_stem()
-            .map_or_else(|| "image".to_string(), |s| s.to_string_lossy().into_owned());
-        let mut name = format!("{stem}.png");
-        let mut k = 2;
-        while !used.insert(name.clone()) {
-            name = format!("{stem}-{k}.png");
-            k += 1;
-        }
-        names.insert(path.clone(), dir.join(name));
-    }
-    names
+    let all: Vec<PathBuf> = jobs
+        .iter()
+        .flat_map(|j| match j {
+            Job::Image(p) => std::slice::from_ref(p).iter(),
+            Job::Sequence(frames) => frames.iter(),
+        })
+        .cloned()
+        .collect();
+    whycode::io::annotation_paths(dir, &all)
+        .into_iter()
+        .collect()
 }
 
 fn detect_one(
@@ -308,6 +295,9 @@ fn detect_one(
     annotate: Option<&Path>,
 ) -> Result<FrameReport> {
     let image = load_gray(path)?;
+    detector
+        .fit_camera(image.width(), image.height())
+        .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
     let start = Instant::now();
     let markers = detector.detect(&image);
     let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;

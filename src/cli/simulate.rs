@@ -124,7 +124,10 @@ struct SimulateOptions {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Layout {
+    /// A flat board of markers in rows, centred in the view
     Grid,
+    /// Markers scattered at random through the view, none overlapping; an
+    /// error when they do not all fit
     Scatter,
 }
 
@@ -274,7 +277,8 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
                 } else {
                     40f64.to_radians()
                 };
-                layout::marker_scatter(&camera, &markers, distance, max_tilt, args.seed)
+                layout::marker_scatter_all(&camera, &markers, distance, max_tilt, args.seed)
+                    .map_err(|problem| anyhow::anyhow!("--layout scatter: {problem}"))?
             }
         };
         for &id in &args.blot {

@@ -53,8 +53,12 @@ pub fn run(args: ValidateArgs) -> Result<ExitCode> {
             .with_context(|| format!("cannot create folder {}", dir.display()))?;
     }
     let mut photos = Vec::new();
-    // Photos from different folders may share a name (two phones' IMG_0001).
-    let mut used_names = std::collections::HashSet::new();
+    let annotation_names: std::collections::HashMap<PathBuf, PathBuf> = match &args.annotate {
+        Some(dir) => whycode::io::annotation_paths(dir, &args.photos)
+            .into_iter()
+            .collect(),
+        None => Default::default(),
+    };
     for path in &args.photos {
         let image = whycode::image_io::load_gray(path)?;
         let cam = camera
@@ -64,18 +68,8 @@ pub fn run(args: ValidateArgs) -> Result<ExitCode> {
             .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
         let name = path.display().to_string();
         let report = validate::check_image(&name, &manifest, &image, cam.as_ref(), &mut detector);
-        if let Some(dir) = &args.annotate {
-            let stem = path
-                .file_stem()
-                .map_or_else(|| "photo".into(), |s| s.to_string_lossy().into_owned());
-            let mut name = format!("{stem}.annotated.png");
-            let mut k = 2;
-            while !used_names.insert(name.clone()) {
-                name = format!("{stem}-{k}.annotated.png");
-                k += 1;
-            }
-            let out = dir.join(name);
-            save_rgb(&out, &annotate::annotate(&image, &report))?;
+        if let Some(out) = annotation_names.get(path) {
+            save_rgb(out, &annotate::annotate(&image, &report))?;
         }
         photos.push(report);
     }

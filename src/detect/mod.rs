@@ -244,6 +244,17 @@ impl Detector {
         &self.config
     }
 
+    /// Fits the configured camera to an image of `width` x `height` with
+    /// [`Camera::for_image`] (rescaled for the same sensor at another
+    /// resolution, refused for another aspect ratio), so that a calibration
+    /// made for another image size never gives silently wrong poses.
+    pub fn fit_camera(&mut self, width: u32, height: u32) -> Result<(), String> {
+        if let Some(camera) = self.config.camera {
+            self.config.camera = Some(camera.for_image(width, height)?);
+        }
+        Ok(())
+    }
+
     /// How the markers of every frame so far decoded: rings of other bit
     /// counts, and IDs that needed error correction (see
     /// [`family_check::FamilyCheck::note`] for a warning to show).

@@ -134,7 +134,7 @@ impl FrameReport {
         out
     }
 
-    /// Aligned columns for reading: ID ("?" when unknown), code, centre,
+    /// Aligned columns for reading, sorted by ID: ID ("?" when unknown, last), code, centre,
     /// yaw in degrees, axes, confidence and, when any marker has a pose, its
     /// position. `with_heading` puts the image's name, size, marker count
     /// and time above the rows and a blank line below (for several images).
@@ -168,7 +168,16 @@ impl FrameReport {
             let _ = write!(out, " {:>26}", "position_m (x, y, z)");
         }
         out.push('\n');
-        for m in &self.markers {
+        // Sorted by ID for reading (unknown IDs last, then left to right);
+        // csv and json keep the detector's order.
+        let mut sorted: Vec<_> = self.markers.iter().collect();
+        sorted.sort_by(|a, b| {
+            (a.id == 0, a.id)
+                .cmp(&(b.id == 0, b.id))
+                .then(a.u.total_cmp(&b.u))
+                .then(a.v.total_cmp(&b.v))
+        });
+        for m in sorted {
             let id = if m.id == 0 {
                 "?".to_string()
             } else {

@@ -7,6 +7,7 @@ use super::page::Page;
 use super::raster;
 use super::sheet::Sheet;
 use crate::detect::{Detection, Detector, DetectorConfig, Target};
+use crate::family::Family;
 use crate::geometry::{Design, Marker, MarkerKind};
 use crate::manifest::PrintedMarker;
 use crate::math::angle::wrap_signed;
@@ -15,23 +16,38 @@ use anyhow::{bail, Result};
 
 /// The resolution a sheet is usually printed at.
 pub const PRINT_DPI: f64 = 300.0;
-/// Outer diameter, in pixels, of the smallest marker in the coarse raster.
+/// Outer diameter, in pixels, of the smallest marker in the coarse raster,
+/// for codes of up to [`COARSE_BITS`] bits.
 pub const COARSE_DIAMETER_PX: f64 = 30.0;
+/// Longer codes get a proportionally larger coarse marker: the coarse check
+/// is about blur and print dots, not about squeezing 2n ring sectors into a
+/// fixed 30 px (a 20-bit marker there has 1.1 px sectors, which no reader
+/// attempts, so such markers failed at every printed size).
+pub const COARSE_BITS: u32 = 12;
 /// Largest yaw error accepted, degrees.
 pub const MAX_YAW_ERROR_DEG: f64 = 4.0;
 
-/// The resolutions a sheet is checked at: print resolution, and the one at
-/// which its smallest marker is [`COARSE_DIAMETER_PX`] across (if lower).
-pub fn check_resolutions(sheet: &Sheet) -> Vec<f64> {
-    resolutions_for(&sheet.manifest.markers)
+/// Outer diameter, in pixels, the smallest marker is given in the coarse
+/// raster: ring sectors never narrower than those of a 12-bit marker 30 px
+/// across.
+pub fn coarse_diameter_px(bits: Option<u32>) -> f64 {
+    let bits = bits.unwrap_or(0).max(COARSE_BITS);
+    COARSE_DIAMETER_PX * f64::from(bits) / f64::from(COARSE_BITS)
 }
 
-fn resolutions_for(markers: &[PrintedMarker]) -> Vec<f64> {
+/// The resolutions a sheet is checked at: print resolution, and the one at
+/// which its smallest marker is [`coarse_diameter_px`] across (if lower).
+pub fn check_resolutions(sheet: &Sheet, target: &Target) -> Vec<f64> {
+    resolutions_for(&sheet.manifest.markers, target.family())
+}
+
+fn resolutions_for(markers: &[PrintedMarker], family: Option<&Family>) -> Vec<f64> {
     let smallest = markers
         .iter()
         .map(|m| m.diameter_mm)
         .fold(f64::INFINITY, f64::min);
-    let coarse = (COARSE_DIAMETER_PX / smallest * 25.4 * 10.0).ceil() / 10.0;
+    let coarse_px = coarse_diameter_px(family.map(Family::bits));
+    let coarse = (coarse_px / smallest * 25.4 * 10.0).ceil() / 10.0;
     if coarse.is_finite() && coarse < PRINT_DPI {
         vec![PRINT_DPI, coarse]
     } else {
@@ -165,7 +181,7 @@ fn check_pages(
     target: &Target,
     png_dpi: Option<f64>,
 ) -> Result<CheckReport> {
-    let mut resolutions = resolutions_for(markers);
+    let mut resolutions = resolutions_for(markers, target.family());
     if let Some(dpi) = png_dpi.filter(|&d| d < PRINT_DPI && !resolutions.contains(&d)) {
         resolutions.push(dpi);
     }
@@ -188,8 +204,10 @@ fn check_pages(
             });
             let detections = detector.detect(&image);
             for m in &expected {
-                check_marker(m, &detections, dpi, target.design())
-                    .map_err(|e| format!("{e} in a {dpi} dpi rendering"))?;
+                check_marker(m, &detections, dpi, target.design()).map_err(|e| {
+                    let across = m.diameter_mm * raster::px_per_mm(dpi);
+                    format!("{e} in a {dpi} dpi rendering, where it is {across:.0} px across")
+                })?;
             }
             Ok(expected.len())
         })

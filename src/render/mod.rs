@@ -101,18 +101,7 @@ pub fn encode_pages(
 
 /// Fails early, before any rendering, when the output's folder is missing.
 pub fn check_output_dir(path: &Path) -> Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    if !dir.is_dir() {
-        bail!(
-            "cannot write {}: folder {} does not exist",
-            path.display(),
-            dir.display()
-        );
-    }
-    Ok(())
+    crate::io::check_output_dir(path)
 }
 
 /// Writes a sheet's or marker's files together: all of them, or (when one

@@ -73,6 +73,9 @@ fn zero_or_length(field: &str, text: &str) -> Result<f64> {
     length(field, text)
 }
 
+/// The longest page side a template or manifest may have, mm.
+pub const MAX_PAGE_MM: f64 = 10_000.0;
+
 impl Template {
     /// Parses a template's TOML text.
     pub fn parse(name: &str, text: &str) -> Result<Template> {
@@ -99,8 +102,28 @@ impl Template {
                 template.label_size_pt
             );
         }
+        for (field, mm) in [
+            ("page_width", template.page_width_mm),
+            ("page_height", template.page_height_mm),
+        ] {
+            if !(mm > 0.0 && mm <= MAX_PAGE_MM) {
+                bail!(
+                    "{field} must be more than 0 and at most {} m (a plotter roll), got {} mm",
+                    MAX_PAGE_MM / 1000.0,
+                    crate::units::trim_float(mm)
+                );
+            }
+        }
         if 2.0 * template.margin_mm >= template.page_width_mm.min(template.page_height_mm) {
             bail!("the margins leave no room on the page");
+        }
+        // A gap wider than the page leaves room for one marker per page and
+        // made the hexagonal packing search for hours.
+        if template.gap_mm >= template.page_width_mm.min(template.page_height_mm) {
+            bail!(
+                "gap {} mm is wider than the page",
+                crate::units::trim_float(template.gap_mm)
+            );
         }
         Ok(template)
     }

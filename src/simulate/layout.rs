@@ -90,6 +90,32 @@ pub fn marker_scatter(
     placed.into_iter().map(|(m, ..)| m).collect()
 }
 
+/// [`marker_scatter`] that places every marker or fails: a scene missing
+/// some of the markers asked for would pass for a detector that lost them.
+/// The error says how many did not fit and what would make room.
+pub fn marker_scatter_all(
+    camera: &Camera,
+    markers: &[(Marker, u32)],
+    distance: f64,
+    max_tilt: f64,
+    seed: u64,
+) -> Result<Vec<LooseMarker>, String> {
+    let placed = marker_scatter(camera, markers, distance, max_tilt, seed);
+    if placed.len() < markers.len() {
+        return Err(format!(
+            "only {} of {} markers fit into the {}x{} view without overlapping ({} did not); \
+             scatter fewer, make them smaller (--diameter), move them further away (--distance) \
+             or use --layout grid",
+            placed.len(),
+            markers.len(),
+            camera.width,
+            camera.height,
+            markers.len() - placed.len()
+        ));
+    }
+    Ok(placed)
+}
+
 /// An ink smear over a marker's code ring: three overlapping black discs
 /// along the ring over two adjacent white sectors of two neighbouring bits
 /// (a 0 bit followed by a 1 bit: black-white, white-black), so that both

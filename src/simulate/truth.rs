@@ -50,7 +50,8 @@ pub struct TrueMarker {
     pub ellipse: Option<Ellipse>,
     /// Diameter of the black disc as printed, mm.
     pub diameter_mm: f64,
-    /// Facing the camera and wholly inside the frame.
+    /// Facing the camera, wholly inside the frame and seen at more than a
+    /// grazing angle (its outline at least a pixel wide).
     pub visible: bool,
     /// Some blot covers part of it.
     pub blotted: bool,
@@ -200,7 +201,9 @@ fn true_marker(
         })
         .fold(0.0, f64::max);
     let normal = placement.normal();
-    let facing = normal.dot(&position) < 0.0;
+    // An edge-on marker (tilt 90°) faces the camera only by rounding error:
+    // the plane must be seen at more than a grazing angle.
+    let facing = -normal.dot(&position) > 1e-9 * position.norm();
     let (w, h) = (f64::from(camera.width), f64::from(camera.height));
     let inside = rim.iter().all(|p| {
         p.is_some_and(|(pu, pv)| pu >= -0.5 && pv >= -0.5 && pu <= w - 0.5 && pv <= h - 0.5)
@@ -220,7 +223,8 @@ fn true_marker(
         diameter_px,
         ellipse,
         diameter_mm: 2.0 * r,
-        visible: facing && inside,
+        // Nothing is drawn of a marker whose image is thinner than a pixel.
+        visible: facing && inside && ellipse.is_some_and(|e| e.semi_minor >= 0.5),
         blotted,
         position: vec3(position),
         rotation: [

@@ -220,7 +220,12 @@ impl Report {
             let mut note = p.note.clone().unwrap_or_default();
             if let Some(s) = p.scale {
                 if p.scale_status != ScaleStatus::Ok {
-                    note = format!("printed at {:.1} % of the intended size. {note}", s * 100.0);
+                    let measured = format!("printed at {:.1} % of the intended size", s * 100.0);
+                    note = if note.is_empty() {
+                        measured
+                    } else {
+                        format!("{measured}; {note}")
+                    };
                 }
             }
             let _ = writeln!(

@@ -299,7 +299,7 @@ pub fn measure_discs(
         status: ScaleStatus::of(scale),
         edges: paper.edges.clone(),
         note: Some(format!(
-            "from the size of {} disc{} against the paper (too few markers to measure the layout)",
+            "measured from the size of {} disc{} against the paper (too few markers to measure the layout)",
             ratios.len(),
             if ratios.len() == 1 { "" } else { "s" }
         )),
