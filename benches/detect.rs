@@ -7,14 +7,14 @@
 //! whole process under 3x the image size, i.e. under 2x on top of it).
 //! Run with `cargo bench --bench detect`.
 
-#[path = "../tests/detect_common/mod.rs"]
-mod detect_common;
+#[path = "../tests/integration/support/scenes.rs"]
+mod scenes;
 
 use std::sync::OnceLock;
 
-use detect_common::{render, scatter, Look, Pinhole, Rng};
 use divan::{black_box, AllocProfiler, Bencher};
 use image::GrayImage;
+use scenes::{render, scatter, Look, Pinhole, Rng};
 use whycode::detect::{Detector, DetectorConfig};
 use whycode::family::Family;
 use whycode::geometry::Marker;

@@ -2,21 +2,8 @@
 //! templates, and byte-for-byte determinism.
 
 use std::path::Path;
-use std::process::Command;
 
-fn whycode(dir: &Path, args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_whycode"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "whycode {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
+use crate::support::run_ok_in;
 
 fn listing(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -51,7 +38,7 @@ fn svg_and_png_sheets_write_one_file_per_page_and_a_manifest() {
     let dir = tempfile::tempdir().unwrap();
     let mut args = SWARM.to_vec();
     args.extend(["-o", "swarm.svg"]);
-    whycode(dir.path(), &args);
+    run_ok_in(dir.path(), &args);
     // 8 markers of 40 mm: 12 fit on an A4 page.
     assert_eq!(listing(dir.path()), ["swarm.json", "swarm.svg"]);
     let m = manifest(&dir.path().join("swarm.json"));
@@ -73,7 +60,7 @@ fn svg_and_png_sheets_write_one_file_per_page_and_a_manifest() {
     assert_eq!(codes, [1, 7, 11, 13, 19, 37, 59, 61, 87]);
 
     let dir = tempfile::tempdir().unwrap();
-    whycode(
+    run_ok_in(
         dir.path(),
         &[
             "sheet",
@@ -111,11 +98,11 @@ fn same_inputs_give_the_same_bytes() {
         for dir in [&a, &b] {
             let mut args = SWARM.to_vec();
             args.extend(["--dpi", "50", "-o", out]);
-            whycode(dir.path(), &args);
+            run_ok_in(dir.path(), &args);
         }
     }
     for dir in [&a, &b] {
-        whycode(
+        run_ok_in(
             dir.path(),
             &[
                 "marker",
@@ -148,7 +135,7 @@ fn legacy_sheets_and_user_templates() {
         "page_width = \"120mm\"\npage_height = \"120mm\"\nmargin = \"5mm\"\ngap = \"0mm\"\ncut_guides = true\nscale_bar = \"50mm\"\n",
     )
     .unwrap();
-    whycode(
+    run_ok_in(
         dir.path(),
         &[
             "sheet",
@@ -183,7 +170,7 @@ fn legacy_sheets_and_user_templates() {
 #[test]
 fn list_templates_names_the_built_in_pages() {
     let dir = tempfile::tempdir().unwrap();
-    let out = whycode(dir.path(), &["sheet", "--list-templates"]);
+    let out = run_ok_in(dir.path(), &["sheet", "--list-templates"]);
     for name in ["a3", "a4", "a5", "letter", "legal"] {
         assert!(
             out.lines().any(|l| l.starts_with(name)),
@@ -196,7 +183,7 @@ fn list_templates_names_the_built_in_pages() {
 #[test]
 fn without_options_the_whole_default_family_goes_to_swarm_pdf() {
     let dir = tempfile::tempdir().unwrap();
-    whycode(dir.path(), &["sheet"]);
+    run_ok_in(dir.path(), &["sheet"]);
     assert_eq!(listing(dir.path()), ["swarm.json", "swarm.pdf"]);
     let m = manifest(&dir.path().join("swarm.json"));
     assert_eq!(m["family"], serde_json::json!({"bits": 8, "distance": 2}));

@@ -3,6 +3,8 @@
 //! uneven light, clutter. Correct IDs, centre, yaw and pose errors, each
 //! with its threshold stated at the assertion.
 
+use crate::support::angle_diff;
+
 use nalgebra::Vector3;
 use whycode::camera::Camera;
 use whycode::detect::{Detection, Detector, DetectorConfig};
@@ -14,11 +16,6 @@ use whycode::simulate::{
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 const DIAMETER_M: f64 = 0.1;
-
-fn angle_diff(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(std::f64::consts::TAU);
-    d.min(std::f64::consts::TAU - d)
-}
 
 /// A grid of markers, each tilted by `tilt_of(k)` about a varying axis.
 fn grid_scene(

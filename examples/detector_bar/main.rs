@@ -6,12 +6,11 @@
 //!
 //!     cargo run --release --example detector_bar [-- --quick]
 
-#[path = "../tests/bar_support/mod.rs"]
-mod bar_support;
+mod scenario;
 
 use std::time::Instant;
 
-use bar_support::*;
+use scenario::*;
 use whycode::detect::{Detector, DetectorConfig};
 use whycode::simulate::rng::Pcg32;
 use whycode::simulate::{self, Background};

@@ -169,12 +169,6 @@ pub fn render_marker(view: &View, marker: &Marker) -> Rendered {
     }
 }
 
-/// Smallest difference between two angles, radians.
-pub fn angle_error(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(2.0 * std::f64::consts::PI);
-    d.min(2.0 * std::f64::consts::PI - d)
-}
-
 pub struct Lcg(pub u64);
 
 impl Lcg {

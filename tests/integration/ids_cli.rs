@@ -1,14 +1,7 @@
 //! `whycode ids` through the real binary.
 
+use crate::support::whycode;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn whycode(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_whycode"))
-        .args(args)
-        .output()
-        .expect("the whycode binary runs")
-}
 
 fn stdout_of(args: &[&str]) -> String {
     let out = whycode(args);

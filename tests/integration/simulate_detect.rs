@@ -3,16 +3,13 @@
 //! yaw, and the clutter (rings and discs that are not markers) raises no
 //! detections. Also the `simulate` CLI's loose-marker mode.
 
-use std::f64::consts::PI;
+use crate::support::angle_diff;
+
 use whycode::camera::Camera;
 use whycode::detect::{Detector, DetectorConfig};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::simulate::{layout, render, Background, GroundTruth, Scene, SceneObject};
-
-fn angle_diff(a: f64, b: f64) -> f64 {
-    (a - b + PI).rem_euclid(2.0 * PI) - PI
-}
 
 #[test]
 fn scattered_markers_on_clutter_are_found_with_ids_and_yaw() {
@@ -51,7 +48,7 @@ fn scattered_markers_on_clutter_are_found_with_ids_and_yaw() {
         assert_eq!(d.id, t.id, "marker at ({:.1}, {:.1})", e.u, e.v);
         let yaw = d.yaw.expect("yaw of an identified marker");
         assert!(
-            angle_diff(yaw, t.yaw).abs() < 0.1,
+            angle_diff(yaw, t.yaw) < 0.1,
             "marker {}: yaw {yaw:.3} vs truth {:.3}",
             t.id,
             t.yaw
@@ -108,7 +105,7 @@ fn cli_loose_markers_write_image_and_truth() {
         assert_eq!(m.code, family.code(m.id).unwrap());
         assert!(m.visible);
         // Rolled 30° counter-clockwise as seen: +x points up-right, v down.
-        assert!(angle_diff(m.yaw, -30f64.to_radians()).abs() < 1e-9);
+        assert!(angle_diff(m.yaw, -30f64.to_radians()) < 1e-9);
     }
     let image = image::open(&out).unwrap();
     assert_eq!((image.width(), image.height()), (640, 480));

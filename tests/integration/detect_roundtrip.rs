@@ -1,9 +1,8 @@
 //! Round trips: markers drawn from `geometry::Marker` through a pinhole
 //! camera, then detected. Thresholds are stated next to each assertion.
 
-mod detect_common;
-
-use detect_common::{match_detections, render, scatter, Look, Pinhole, Placement, Rng};
+use crate::support::scenes::{match_detections, render, scatter, Look, Pinhole, Placement, Rng};
+use crate::support::{angle_diff, axis_angle_diff};
 use whycode::detect::ellipse::{fit_conic, Ellipse};
 use whycode::detect::{Detection, Detector, DetectorConfig};
 use whycode::family::Family;
@@ -27,11 +26,6 @@ fn true_outline(camera: &Pinhole, p: &Placement) -> Ellipse {
         .collect();
     let (u, v) = p.centre(camera);
     fit_conic(&points, (u, v), 50.0).unwrap()
-}
-
-fn axis_angle_diff(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(std::f64::consts::PI);
-    d.min(std::f64::consts::PI - d)
 }
 
 /// Every placement found once, nothing else found; returns the matches.
@@ -452,11 +446,6 @@ fn tracked_whycode_markers_keep_ids_and_yaw_while_turning() {
             );
         }
     }
-}
-
-fn angle_diff(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(std::f64::consts::TAU);
-    d.min(std::f64::consts::TAU - d)
 }
 
 /// Paper 5.1: a per-track Bayesian filter over IDs. One frame in which a

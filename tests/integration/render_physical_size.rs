@@ -2,6 +2,8 @@
 //! pdftoppm at 600 dpi) show the black disc at the asked diameter and the
 //! page at the exact paper size.
 
+use crate::support::run_ok;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -9,18 +11,6 @@ const DPI: f64 = 600.0;
 
 fn have(tool: &str) -> bool {
     Command::new(tool).arg("-v").output().is_ok()
-}
-
-fn whycode(args: &[&str]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_whycode"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "whycode {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 /// Rasterises page `page` of a PDF to a grey image with pdftoppm.
@@ -111,7 +101,7 @@ fn single_marker_pdf_has_the_asked_diameter_and_page_size() {
         all.extend(["--diameter", &d_arg, "-o", pdf.to_str().unwrap()]);
         let mut cmd = vec!["marker"];
         cmd.extend(all);
-        whycode(&cmd);
+        run_ok(&cmd);
         let side_mm = diameter * 1.3;
         if let Some((w, h)) = pdfinfo_size(&pdf) {
             let expected = side_mm / 25.4 * 72.0;
@@ -151,7 +141,7 @@ fn sheet_pdf_puts_markers_where_the_manifest_says_at_their_size() {
     }
     let dir = tempfile::tempdir().unwrap();
     let pdf = dir.path().join("swarm.pdf");
-    whycode(&[
+    run_ok(&[
         "sheet",
         "--bits",
         "8",
@@ -219,7 +209,7 @@ fn scale_bar_is_as_long_as_it_says() {
     }
     let dir = tempfile::tempdir().unwrap();
     let pdf = dir.path().join("bar.pdf");
-    whycode(&[
+    run_ok(&[
         "sheet",
         "--bits",
         "8",

@@ -9,6 +9,8 @@
 //! marker's own plane (mean under 0.15°), image yaw within 1°, and the +x
 //! rim point within 1 % of the radius of its true projection.
 
+use crate::support::angle_diff;
+
 use nalgebra::Vector3;
 use whycode::camera::Camera;
 use whycode::detect::ring::RingReader;
@@ -16,11 +18,6 @@ use whycode::family::{Decoder, Family};
 use whycode::geometry::Marker;
 use whycode::pose::ImageEllipse;
 use whycode::simulate::{render, LooseMarker, Placement, Scene, SceneObject};
-
-fn angle_error(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(std::f64::consts::TAU);
-    d.min(std::f64::consts::TAU - d)
-}
 
 #[test]
 fn yaw_under_perspective_stays_within_stated_bounds() {
@@ -79,7 +76,7 @@ fn yaw_under_perspective_stays_within_stated_bounds() {
                 continue;
             }
             assert_eq!(reading.id, id, "case {k}/{r}: {reading:?}");
-            let yaw_err = angle_error(reading.yaw.unwrap(), t.yaw).to_degrees();
+            let yaw_err = angle_diff(reading.yaw.unwrap(), t.yaw).to_degrees();
             let axis_true = camera.project(&placement.to_camera_mm(30.0, 0.0)).unwrap();
             let (ax, ay) = reading.axis_point.unwrap();
             let axis_err = (ax - axis_true.0).hypot(ay - axis_true.1) / ellipse.semi_major;

@@ -2,9 +2,7 @@
 //! (perspective, blur, noise, uneven light, JPEG) goes through the real
 //! detector and the validation.
 
-mod validate_common;
-
-use validate_common::*;
+use crate::support::sheets::*;
 use whycode::validate::scale::ScaleStatus;
 use whycode::validate::{check_image, detector_for, summarise, MarkerStatus, Report};
 

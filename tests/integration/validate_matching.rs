@@ -2,9 +2,7 @@
 //! ellipses and IDs): page location, marker verdicts, and the printed scale
 //! measured against the paper's edges in the real simulated image.
 
-mod validate_common;
-
-use validate_common::*;
+use crate::support::sheets::*;
 use whycode::validate::scale::ScaleStatus;
 use whycode::validate::{check_photo, summarise, MarkerStatus};
 

@@ -1,11 +1,9 @@
 //! No panic on any input: degenerate and random images, every supported
 //! file format, truncated and corrupt files, absurd dimensions.
 
-mod detect_common;
-
 use std::path::Path;
 
-use detect_common::Rng;
+use crate::support::scenes::Rng;
 use image::{GrayImage, Luma};
 use whycode::detect::{load_gray, Detector, DetectorConfig};
 use whycode::family::Family;

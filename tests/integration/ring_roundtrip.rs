@@ -3,9 +3,8 @@
 //! blur and noise, read back with `RingReader`. Thresholds are stated where
 //! they are checked; the printed figures are the measured ones.
 
-mod ring_support;
-
-use ring_support::*;
+use crate::support::angle_diff;
+use crate::support::ring_view::*;
 use whycode::detect::idfilter::IdFilter;
 use whycode::detect::ring::RingReader;
 use whycode::family::necklace::{is_periodic, mask, rotr};
@@ -58,7 +57,7 @@ fn sweep(family: &Family, diameter: f64, count: u32, adjust: impl Fn(&mut View, 
             let yaw = reading.yaw.expect("a known ID comes with a yaw");
             stats
                 .yaw_errors_deg
-                .push(angle_error(yaw, rendered.yaw).to_degrees());
+                .push(angle_diff(yaw, rendered.yaw).to_degrees());
         }
     }
     stats
@@ -250,7 +249,7 @@ fn a_blotted_bit_is_filled_only_when_the_distance_allows() {
             let d = reading.decoded.unwrap();
             assert!(d.distance <= 1);
             assert!(reading.confidence < 0.9);
-            assert!(angle_error(reading.yaw.unwrap(), rendered.yaw) < 0.5f64.to_radians());
+            assert!(angle_diff(reading.yaw.unwrap(), rendered.yaw) < 0.5f64.to_radians());
         } else {
             assert_eq!(reading.id, 0);
         }
@@ -296,7 +295,7 @@ fn rotation_convention_matches_the_decoder() {
         let rendered = render(&View::new(10, code, 80.0, psi));
         let reading = reader.read(&rendered.image, &rendered.ellipse, BLACK, WHITE);
         assert_eq!(reading.id, 7);
-        assert!(angle_error(reading.yaw.unwrap(), -psi) < 0.1f64.to_radians());
+        assert!(angle_diff(reading.yaw.unwrap(), -psi) < 0.1f64.to_radians());
         let word = reading.word.unwrap();
         let decoded = reading.decoded.unwrap();
         assert_eq!(rotr(code, 10, decoded.rotation), word);

@@ -2,30 +2,12 @@
 //! files in, report and exit status out.
 
 use std::path::Path;
-use std::process::Command;
 
-mod validate_common;
-
-fn whycode(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_whycode"))
-        .args(args)
-        .output()
-        .expect("whycode runs")
-}
-
-/// Runs whycode with `dir` as its working folder, where outputs named
-/// without a folder (a sheet's default swarm.pdf) land.
-fn whycode_in(dir: &Path, args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_whycode"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("whycode runs")
-}
+use crate::support::{sheets, whycode, whycode_in};
 
 fn simulate_photo(dir: &Path, name: &str, extra: &[&str]) -> String {
     let manifest = dir.join("sheet.json");
-    validate_common::a4_manifest().save(&manifest).unwrap();
+    sheets::a4_manifest().save(&manifest).unwrap();
     let photo = dir.join(name);
     let mut args = vec![
         "simulate",
@@ -191,7 +173,7 @@ fn default_sheet_validates_including_its_four_marker_page() {
 fn simulate_refuses_to_overwrite_the_sheet_manifest() {
     let dir = tempfile::tempdir().unwrap();
     let manifest = dir.path().join("sheet.json");
-    validate_common::a4_manifest().save(&manifest).unwrap();
+    sheets::a4_manifest().save(&manifest).unwrap();
     let before = std::fs::read(&manifest).unwrap();
     let out = whycode(&[
         "simulate",

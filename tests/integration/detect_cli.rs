@@ -1,27 +1,11 @@
 //! `whycode detect` as a user runs it: the real binary on rendered images.
 
-mod ring_support;
-
-use ring_support::{render, render_marker, View};
+use crate::support::ring_view::{render, render_marker, View};
+use crate::support::{angle_diff, stderr, stdout, whycode};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use whycode::family::Family;
 use whycode::geometry::Marker;
-
-fn whycode(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_whycode"))
-        .args(args)
-        .output()
-        .expect("run whycode")
-}
-
-fn stdout(out: &Output) -> String {
-    String::from_utf8(out.stdout.clone()).unwrap()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8(out.stderr.clone()).unwrap()
-}
 
 /// A 90 px marker of the 8-bit d = 2 family, ID `id`, turned visually CCW
 /// by `rotation`; returns the file and the true (u, v, yaw).
@@ -87,9 +71,8 @@ fn json_prints_one_object_per_image_with_the_documented_fields() {
     assert!(m["position"].is_null() && m["rotation"].is_null() && m["quaternion"].is_null());
     assert_eq!(m["id"], 5, "{m}");
     assert_eq!(m["code"], Family::generate(8, 2).unwrap().code(5).unwrap());
-    let yaw_err = (m["yaw"].as_f64().unwrap() - yaw).rem_euclid(std::f64::consts::TAU);
     assert!(
-        yaw_err.min(std::f64::consts::TAU - yaw_err) < 0.5f64.to_radians(),
+        angle_diff(m["yaw"].as_f64().unwrap(), yaw) < 0.5f64.to_radians(),
         "{m} vs {yaw}"
     );
     assert!(m["confidence"].as_f64().unwrap() > 0.5);

@@ -1,19 +1,9 @@
 //! The SVG rendered by an independent renderer (librsvg's rsvg-convert)
 //! agrees with our own PNG output pixel for pixel, up to anti-aliasing.
 
-use std::process::Command;
+use crate::support::run_ok;
 
-fn whycode(args: &[&str]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_whycode"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
+use std::process::Command;
 
 #[test]
 fn rsvg_rendering_of_our_svg_matches_our_png() {
@@ -66,7 +56,7 @@ fn rsvg_rendering_of_our_svg_matches_our_png() {
             let mut full = vec!["marker"];
             full.extend(&args);
             full.extend(["--dpi", "300", "-o", out.to_str().unwrap()]);
-            whycode(&full);
+            run_ok(&full);
         }
         let status = Command::new("rsvg-convert")
             .args(["-d", "300", "-p", "300", "-b", "white", "-o"])
