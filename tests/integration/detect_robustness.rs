@@ -3,10 +3,11 @@
 
 use std::path::Path;
 
-use crate::support::scenes::Rng;
+use crate::support::Pcg32;
 use image::{GrayImage, Luma};
 use whycode::detect::{load_gray, Detector, DetectorConfig};
 use whycode::family::Family;
+use whycode::geometry::WHYCON_WHITE_RATIO;
 
 fn detectors() -> Vec<Detector> {
     let family = Family::generate(8, 2).unwrap();
@@ -51,12 +52,12 @@ fn degenerate_sizes_give_no_detection() {
 /// are no member.
 #[test]
 fn random_images_never_panic() {
-    let mut rng = Rng(2024);
+    let mut rng = Pcg32::new(2024, 0);
     let family = Family::generate(8, 2).unwrap();
     let mut detectors = detectors();
     for round in 0..60 {
-        let w = 1 + (rng.uniform() * 260.0) as u32;
-        let h = 1 + (rng.uniform() * 200.0) as u32;
+        let w = 1 + (rng.next_f64() * 260.0) as u32;
+        let h = 1 + (rng.next_f64() * 200.0) as u32;
         let kind = round % 5;
         let mut image = GrayImage::new(w, h);
         let (cx, cy, r) = (
@@ -67,9 +68,9 @@ fn random_images_never_panic() {
         for (x, y, p) in image.enumerate_pixels_mut() {
             let (xf, yf) = (x as f64, y as f64);
             p.0[0] = match kind {
-                0 => (rng.next_u64() & 255) as u8,
+                0 => (rng.next_u32() & 255) as u8,
                 1 => {
-                    if (rng.next_u64() & 7) == 0 {
+                    if (rng.next_u32() & 7) == 0 {
                         0
                     } else {
                         255
@@ -79,7 +80,7 @@ fn random_images_never_panic() {
                 3 => ((x / 3 + y / 5) % 2 * 255) as u8,
                 _ => {
                     let d = (xf - cx).hypot(yf - cy) / r;
-                    if !(0.41..=1.0).contains(&d) {
+                    if !(WHYCON_WHITE_RATIO..=1.0).contains(&d) {
                         (200.0 + 20.0 * rng.gaussian()).clamp(0.0, 255.0) as u8
                     } else {
                         (30.0 + 20.0 * rng.gaussian()).clamp(0.0, 255.0) as u8
@@ -185,10 +186,10 @@ fn truncated_and_corrupt_files_are_errors() {
             }
         }
     }
-    let mut rng = Rng(5);
+    let mut rng = Pcg32::new(5, 0);
     for k in 0..40 {
-        let len = (rng.uniform() * 300.0) as usize;
-        let mut bytes: Vec<u8> = (0..len).map(|_| rng.next_u64() as u8).collect();
+        let len = (rng.next_f64() * 300.0) as usize;
+        let mut bytes: Vec<u8> = (0..len).map(|_| rng.next_u32() as u8).collect();
         // Keep a real signature on some, so the decoder gets past it.
         let signatures: [&[u8]; 4] = [b"\x89PNG\r\n\x1a\n", b"P5\n", b"BM", b"\xff\xd8\xff"];
         let sig = signatures[k % 4];

@@ -1,12 +1,13 @@
 //! Round trips: markers drawn from `geometry::Marker` through a pinhole
 //! camera, then detected. Thresholds are stated next to each assertion.
 
-use crate::support::scenes::{match_detections, render, scatter, Look, Pinhole, Placement, Rng};
+use crate::support::scenes::{match_detections, render, scatter, Look, Pinhole, Placement};
+use crate::support::Pcg32;
 use crate::support::{angle_diff, axis_angle_diff};
 use whycode::detect::ellipse::{fit_conic, Ellipse};
 use whycode::detect::{Detection, Detector, DetectorConfig};
 use whycode::family::Family;
-use whycode::geometry::Marker;
+use whycode::geometry::{Marker, WHYCON_WHITE_RATIO};
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 
@@ -56,7 +57,7 @@ fn face_on_legacy_markers_from_10_px_up_are_found_with_sub_pixel_centres() {
     let sizes = [
         10.0, 11.0, 12.0, 14.0, 16.0, 20.0, 30.0, 45.0, 70.0, 110.0, 180.0,
     ];
-    let mut rng = Rng(7);
+    let mut rng = Pcg32::new(7, 0);
     let mut placements = Vec::new();
     let mut x = 20.0;
     for (k, &d) in sizes.iter().enumerate() {
@@ -157,7 +158,7 @@ fn scattered_scene(
         cx: 600.0,
         cy: 400.0,
     };
-    let mut rng = Rng(seed);
+    let mut rng = Pcg32::new(seed, 0);
     let placements = scatter(&mut rng, &camera, 1200, 800, count, diameters, &mut |_| {
         Marker::whycon(100.0)
     });
@@ -217,7 +218,7 @@ fn whycode_markers_pass_the_disc_tests() {
         cx: 600.0,
         cy: 400.0,
     };
-    let mut rng = Rng(21);
+    let mut rng = Pcg32::new(21, 0);
     let placements = scatter(&mut rng, &camera, 1200, 800, 16, (40.0, 110.0), &mut |k| {
         Marker::whycode(8, codes[k % codes.len()], 100.0)
     });
@@ -236,7 +237,7 @@ fn whycode_markers_pass_the_disc_tests() {
 #[test]
 fn clutter_without_markers_gives_no_detection() {
     let (w, h) = (900u32, 600u32);
-    let mut rng = Rng(99);
+    let mut rng = Pcg32::new(99, 0);
     let mut img = image::GrayImage::from_pixel(w, h, image::Luma([200]));
     let paint = |img: &mut image::GrayImage, f: &dyn Fn(f64, f64) -> bool, value: u8| {
         for y in 0..h {
@@ -271,7 +272,7 @@ fn clutter_without_markers_gives_no_detection() {
                 &mut img,
                 &|x, y| {
                     let m = (x - cx).abs().max((y - cy).abs());
-                    m < r && m > 0.41 * r
+                    m < r && m > WHYCON_WHITE_RATIO * r
                 },
                 shade,
             ),

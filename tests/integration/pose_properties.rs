@@ -6,6 +6,7 @@
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use proptest::prelude::*;
 use whycode::camera::Camera;
+use whycode::geometry::WHYCON_WHITE_RATIO;
 use whycode::pose::{
     choose_by_inner_circle, circle_poses, full_pose, project_marker_point, try_circle_poses,
     ImageEllipse, Pose,
@@ -81,10 +82,10 @@ proptest! {
             prop_assert!(errors[best] < 1.0, "normal off by {}°", errors[best]);
             prop_assert!(position_error < 0.01, "position off by {}", position_error);
         }
-        if let Some(inner_points) = boundary(&camera, &truth, 0.41 * radius) {
+        if let Some(inner_points) = boundary(&camera, &truth, WHYCON_WHITE_RATIO * radius) {
             if let Some(inner) = ImageEllipse::fit(&inner_points) {
                 let (chosen, margin) =
-                    choose_by_inner_circle(&camera, &candidates, &inner, 0.41, radius);
+                    choose_by_inner_circle(&camera, &candidates, &inner, WHYCON_WHITE_RATIO, radius);
                 prop_assert!(chosen < 2 && !margin.is_nan());
             }
         }

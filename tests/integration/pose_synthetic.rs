@@ -5,6 +5,7 @@
 
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use whycode::camera::Camera;
+use whycode::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
 use whycode::pose::{
     choose_by_circle_points, choose_by_inner_circle, choose_by_radial_points, circle_poses,
     circle_poses_from_points, estimate_pose, full_pose, full_pose_from_yaw, project_circle,
@@ -14,7 +15,6 @@ use whycode::pose::{
 /// Default marker of the reference ROS tools: 122 mm outer diameter.
 const RADIUS: f64 = 0.061;
 /// Legacy WhyCon inner white disc, relative to the outer radius.
-const INNER_RATIO: f64 = 50.0 / 122.0;
 
 fn distorted_640() -> Camera {
     Camera {
@@ -78,7 +78,13 @@ struct Outcome {
 
 fn recover(camera: &Camera, truth: &Pose) -> Outcome {
     let outer = ImageEllipse::fit(&circle_pixels(camera, truth, RADIUS, 64)).unwrap();
-    let inner = ImageEllipse::fit(&circle_pixels(camera, truth, INNER_RATIO * RADIUS, 64)).unwrap();
+    let inner = ImageEllipse::fit(&circle_pixels(
+        camera,
+        truth,
+        WHYCON_WHITE_RATIO * RADIUS,
+        64,
+    ))
+    .unwrap();
     let candidates = circle_poses(camera, &outer, RADIUS);
     let errors = candidates.map(|c| {
         (
@@ -88,11 +94,12 @@ fn recover(camera: &Camera, truth: &Pose) -> Outcome {
     });
     let best = if errors[0].0 <= errors[1].0 { 0 } else { 1 };
     let (chosen, margin_px) =
-        choose_by_inner_circle(camera, &candidates, &inner, INNER_RATIO, RADIUS);
+        choose_by_inner_circle(camera, &candidates, &inner, WHYCON_WHITE_RATIO, RADIUS);
     // When both candidates agree to within the accuracy asked for, either
     // choice is right.
     let both_fine = errors.iter().all(|e| e.0 < 0.5);
-    let x_axis_pixel = project_marker_point(camera, truth, 0.6 * RADIUS, 0.0).unwrap();
+    let x_axis_pixel =
+        project_marker_point(camera, truth, WHYCODE_WHITE_RATIO * RADIUS, 0.0).unwrap();
     let pose = full_pose(camera, &candidates[best], x_axis_pixel);
     Outcome {
         normal_error_deg: errors[best].0,
@@ -209,11 +216,15 @@ fn face_on_and_near_face_on_are_finite() {
                 .map(|c| c.normal.angle(&truth.normal()).to_degrees())
                 .fold(f64::INFINITY, f64::min);
             assert!(best < 0.5, "tilt {tilt}: {best}°");
-            let inner =
-                ImageEllipse::fit(&circle_pixels(&camera, &truth, INNER_RATIO * RADIUS, 64))
-                    .unwrap();
+            let inner = ImageEllipse::fit(&circle_pixels(
+                &camera,
+                &truth,
+                WHYCON_WHITE_RATIO * RADIUS,
+                64,
+            ))
+            .unwrap();
             let (chosen, margin) =
-                choose_by_inner_circle(&camera, &candidates, &inner, INNER_RATIO, RADIUS);
+                choose_by_inner_circle(&camera, &candidates, &inner, WHYCON_WHITE_RATIO, RADIUS);
             assert!(chosen < 2 && margin.is_finite());
             let x_pixel = project_marker_point(&camera, &truth, RADIUS, 0.0).unwrap();
             let pose = full_pose(&camera, &candidates[chosen], x_pixel);
@@ -300,10 +311,10 @@ fn ambiguity_resolved_from_points_on_the_inner_circle() {
         } else {
             1
         };
-        // Edge points of the code ring's inner border (0.343 R), 24 of them.
-        let ring_edge = circle_pixels(&camera, &truth, 0.343 * RADIUS, 24);
+        // Edge points of the code ring's inner border, 24 of them.
+        let ring_edge = circle_pixels(&camera, &truth, RING_INNER_RATIO * RADIUS, 24);
         let (chosen, margin) =
-            choose_by_circle_points(&camera, &candidates, &ring_edge, 0.343 * RADIUS);
+            choose_by_circle_points(&camera, &candidates, &ring_edge, RING_INNER_RATIO * RADIUS);
         assert_eq!(chosen, right, "tilt {tilt}");
         assert!(margin > 0.0);
     }
@@ -393,12 +404,17 @@ fn noisy_ellipses_still_give_accurate_pose_and_the_right_candidate() {
             let inner = ImageEllipse::fit(&jitter(circle_pixels(
                 &camera,
                 &truth,
-                INNER_RATIO * RADIUS,
+                WHYCON_WHITE_RATIO * RADIUS,
                 64,
             )));
             let candidates = circle_poses(&camera, &outer.unwrap(), RADIUS);
-            let (chosen, _) =
-                choose_by_inner_circle(&camera, &candidates, &inner.unwrap(), INNER_RATIO, RADIUS);
+            let (chosen, _) = choose_by_inner_circle(
+                &camera,
+                &candidates,
+                &inner.unwrap(),
+                WHYCON_WHITE_RATIO,
+                RADIUS,
+            );
             let errors = candidates.map(|c| c.normal.angle(&truth.normal()));
             if errors[chosen] > errors[1 - chosen] {
                 wrong += 1;
@@ -433,8 +449,8 @@ fn projected_circle_matches_projected_points() {
 
 #[test]
 fn ambiguity_resolved_from_partial_ring_borders() {
-    // A WhyCode ring shows its outer border (0.6 R) only beside white
-    // sectors and its inner border (0.343 R) only beside black ones.
+    // A WhyCode ring shows its outer border (the white disc's edge) only beside white
+    // sectors and its inner border only beside black ones.
     let camera = distorted_640();
     let truth = marker_pose(0.9, (-0.1, 0.15), 40.0, 300.0, 0.0);
     let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
@@ -451,7 +467,11 @@ fn ambiguity_resolved_from_partial_ring_borders() {
         .map(|i| {
             let theta = std::f64::consts::TAU * i as f64 / (sectors * 4) as f64;
             let white = (i / 4) % 2 == 0;
-            let radius = if white { 0.6 } else { 0.343 } * RADIUS;
+            let radius = if white {
+                WHYCODE_WHITE_RATIO
+            } else {
+                RING_INNER_RATIO
+            } * RADIUS;
             let pixel =
                 project_marker_point(&camera, &truth, radius * theta.cos(), radius * theta.sin())
                     .unwrap();
@@ -468,14 +488,19 @@ fn estimate_pose_in_one_call() {
     let camera = distorted_640();
     let truth = marker_pose(0.8, (0.1, -0.2), 45.0, 30.0, 120.0);
     let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
-    let inner =
-        ImageEllipse::fit(&circle_pixels(&camera, &truth, INNER_RATIO * RADIUS, 64)).unwrap();
+    let inner = ImageEllipse::fit(&circle_pixels(
+        &camera,
+        &truth,
+        WHYCON_WHITE_RATIO * RADIUS,
+        64,
+    ))
+    .unwrap();
     let yaw = truth.image_yaw(&camera).unwrap();
     let estimate = estimate_pose(
         &camera,
         &outer,
         RADIUS,
-        Some((&inner, INNER_RATIO)),
+        Some((&inner, WHYCON_WHITE_RATIO)),
         Some(yaw),
     )
     .unwrap();
@@ -497,7 +522,14 @@ fn estimate_pose_in_one_call() {
     assert!((estimate.center_px.0 - u).hypot(estimate.center_px.1 - v) < 0.05);
 
     // Legacy marker without yaw: normal right, +x towards image +u.
-    let legacy = estimate_pose(&camera, &outer, RADIUS, Some((&inner, INNER_RATIO)), None).unwrap();
+    let legacy = estimate_pose(
+        &camera,
+        &outer,
+        RADIUS,
+        Some((&inner, WHYCON_WHITE_RATIO)),
+        None,
+    )
+    .unwrap();
     assert!(legacy.pose.normal().angle(&truth.normal()).to_degrees() < 0.2);
     assert!(legacy.pose.image_yaw(&camera).unwrap().abs() < 1e-5);
 
@@ -515,13 +547,18 @@ fn ambiguity_margin_follows_the_documented_rule_of_thumb() {
         for tilt in [10.0f64, 25.0, 40.0, 55.0, 70.0] {
             let truth = marker_pose(distance, (0.2, 0.1), tilt, 60.0, 0.0);
             let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
-            let inner =
-                ImageEllipse::fit(&circle_pixels(&camera, &truth, INNER_RATIO * RADIUS, 64))
-                    .unwrap();
+            let inner = ImageEllipse::fit(&circle_pixels(
+                &camera,
+                &truth,
+                WHYCON_WHITE_RATIO * RADIUS,
+                64,
+            ))
+            .unwrap();
             let candidates = circle_poses(&camera, &outer, RADIUS);
             let (_, margin) =
-                choose_by_inner_circle(&camera, &candidates, &inner, INNER_RATIO, RADIUS);
-            let rule = (1.0 - INNER_RATIO * INNER_RATIO) * outer.semi_major.powi(2) / camera.fx
+                choose_by_inner_circle(&camera, &candidates, &inner, WHYCON_WHITE_RATIO, RADIUS);
+            let rule = (1.0 - WHYCON_WHITE_RATIO * WHYCON_WHITE_RATIO) * outer.semi_major.powi(2)
+                / camera.fx
                 * (2.0 * tilt.to_radians()).sin();
             let ratio = margin / rule;
             assert!(

@@ -3,8 +3,8 @@
 //! blur and noise, read back with `RingReader`. Thresholds are stated where
 //! they are checked; the printed figures are the measured ones.
 
-use crate::support::angle_diff;
 use crate::support::ring_view::*;
+use crate::support::{angle_diff, Pcg32};
 use whycode::detect::idfilter::IdFilter;
 use whycode::detect::ring::RingReader;
 use whycode::family::necklace::{is_periodic, mask, rotr};
@@ -330,39 +330,39 @@ fn id_filter_settles_on_the_truth_from_noisy_small_views() {
 /// errors): families with distance >= 2 never give a wrong ID; the d = 1
 /// family (no error detection at all) at most one in 150.
 fn random_harsh_views_give_no_wrong_ids_with_error_detection() {
-    let mut rng = Lcg(12345);
+    let mut rng = Pcg32::new(12345, 0);
     for (bits, dist) in [(8u32, 1u32), (8, 2), (12, 2), (16, 2), (16, 3)] {
         let family = Family::generate(bits, dist).unwrap();
         let reader = RingReader::new(Some(Decoder::new(&family)));
         let (mut ok, mut wrong, mut unk) = (0, 0usize, 0);
         for _ in 0..150 {
-            let id = 1 + (rng.uniform() * family.len() as f64) as u32 % family.len() as u32;
-            let d = 12.0 + rng.uniform() * 70.0;
-            let mut v = View::new(bits, family.code(id).unwrap(), d, rng.uniform() * 7.0);
-            v.offset = (rng.uniform(), rng.uniform());
-            v.seed = rng.next_u64();
-            if rng.uniform() < 0.4 {
-                v.motion_blur = rng.uniform() * d / 6.0;
-                v.motion_direction = rng.uniform() * 7.0;
+            let id = 1 + (rng.next_f64() * family.len() as f64) as u32 % family.len() as u32;
+            let d = 12.0 + rng.next_f64() * 70.0;
+            let mut v = View::new(bits, family.code(id).unwrap(), d, rng.next_f64() * 7.0);
+            v.offset = (rng.next_f64(), rng.next_f64());
+            v.seed = u64::from(rng.next_u32());
+            if rng.next_f64() < 0.4 {
+                v.motion_blur = rng.next_f64() * d / 6.0;
+                v.motion_direction = rng.next_f64() * 7.0;
             }
-            v.noise = rng.uniform() * 10.0;
-            v.gaussian_blur = rng.uniform() * 1.5;
-            if rng.uniform() < 0.4 {
-                v.tilt = rng.uniform() * 1.05;
-                v.tilt_direction = rng.uniform() * 7.0;
+            v.noise = rng.next_f64() * 10.0;
+            v.gaussian_blur = rng.next_f64() * 1.5;
+            if rng.next_f64() < 0.4 {
+                v.tilt = rng.next_f64() * 1.05;
+                v.tilt_direction = rng.next_f64() * 7.0;
             }
             let r = render(&v);
             // detector-like ellipse error
             let mut e = r.ellipse;
-            e.u += (rng.uniform() - 0.5) * 0.4;
-            e.v += (rng.uniform() - 0.5) * 0.4;
-            e.semi_major *= 1.0 + (rng.uniform() - 0.5) * 0.04;
-            e.semi_minor *= 1.0 + (rng.uniform() - 0.5) * 0.04;
+            e.u += (rng.next_f64() - 0.5) * 0.4;
+            e.v += (rng.next_f64() - 0.5) * 0.4;
+            e.semi_major *= 1.0 + (rng.next_f64() - 0.5) * 0.04;
+            e.semi_minor *= 1.0 + (rng.next_f64() - 0.5) * 0.04;
             let rd = reader.read(
                 &r.image,
                 &e,
-                BLACK + (rng.uniform() - 0.5) * 20.0,
-                WHITE + (rng.uniform() - 0.5) * 20.0,
+                BLACK + (rng.next_f64() - 0.5) * 20.0,
+                WHITE + (rng.next_f64() - 0.5) * 20.0,
             );
             if rd.id == 0 {
                 unk += 1

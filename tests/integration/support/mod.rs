@@ -10,8 +10,11 @@ pub mod scenes;
 pub mod sheets;
 
 use std::f64::consts::TAU;
+
 use std::path::Path;
 use std::process::{Command, Output};
+/// The library's seeded generator, so test scenes draw like the simulator.
+pub use whycode::simulate::rng::Pcg32;
 
 /// Runs the `whycode` binary built for this test run.
 pub fn whycode(args: &[&str]) -> Output {

@@ -6,6 +6,7 @@
 use image::GrayImage;
 use whycode::detect::ring::ImageEllipse;
 use whycode::geometry::Marker;
+use whycode::simulate::rng::Pcg32;
 
 pub const BLACK: f64 = 30.0;
 pub const WHITE: f64 = 225.0;
@@ -142,7 +143,7 @@ pub fn render_marker(view: &View, marker: &Marker) -> Rendered {
         image = image::imageops::blur(&image, view.gaussian_blur as f32);
     }
     if view.noise > 0.0 {
-        let mut rng = Lcg(view.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1);
+        let mut rng = Pcg32::new(view.seed, 0);
         for p in image.pixels_mut() {
             let n = rng.gaussian() * view.noise;
             p.0[0] = (f64::from(p.0[0]) + n).round().clamp(0.0, 255.0) as u8;
@@ -166,27 +167,5 @@ pub fn render_marker(view: &View, marker: &Marker) -> Rendered {
         image,
         ellipse,
         yaw: m[1][0].atan2(m[0][0]),
-    }
-}
-
-pub struct Lcg(pub u64);
-
-impl Lcg {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        self.0 >> 11
-    }
-
-    pub fn uniform(&mut self) -> f64 {
-        self.next_u64() as f64 / (1u64 << 53) as f64
-    }
-
-    pub fn gaussian(&mut self) -> f64 {
-        let u1 = self.uniform().max(1e-12);
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
     }
 }

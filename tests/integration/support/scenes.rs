@@ -7,6 +7,7 @@
 use image::GrayImage;
 use nalgebra::{Matrix3, Vector3};
 use whycode::geometry::Marker;
+use whycode::simulate::rng::Pcg32;
 
 /// A marker placed in front of a pinhole camera.
 #[derive(Debug, Clone, Copy)]
@@ -191,7 +192,7 @@ pub fn render(
             look.blur as usize,
         );
     }
-    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut rng = Pcg32::new(0x9e37_79b9_7f4a_7c15, 0);
     let pixels: Vec<u8> = reflectance
         .iter()
         .enumerate()
@@ -226,36 +227,10 @@ fn box_blur(data: &mut [f32], w: usize, h: usize, r: usize) {
     }
 }
 
-/// A small deterministic generator (xorshift64*), so tests need no crate.
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    pub fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.uniform()
-    }
-
-    pub fn gaussian(&mut self) -> f64 {
-        let (a, b) = (self.uniform().max(1e-12), self.uniform());
-        (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
-    }
-}
-
 /// Places `count` markers of 60-120 px (or the given range) at random
 /// without overlapping footprints, face-on, random in-plane rotation.
 pub fn scatter(
-    rng: &mut Rng,
+    rng: &mut Pcg32,
     camera: &Pinhole,
     width: u32,
     height: u32,
