@@ -1,13 +1,10 @@
-//! "The bar": independent scenes from `whycode::simulate` on which the
-//! detector is measured against the figures of the original WhyCode
-//! detector and of AprilTag (yaw bias, wrong normals, false markers in
-//! clutter, dark frames, light gradients with a shadow, motion blur, the
-//! smallest readable marker, speed). Shared by `examples/detector_bar.rs`
-//! (full sizes, prints a table) and `tests/bar_scenes.rs` (small, asserts).
+//! Scenes of the detector bar: a [`Scenario`] is a seeded series of frames
+//! from `whycode::simulate` (markers spread over a camera view, then the
+//! light, background and effects of the row), and [`Counts`] / [`Errors`]
+//! tally what the detector made of them against the ground truth.
 //!
-//! Every scene is seeded; a failing figure can be reproduced from the item,
-//! the seed and the parameters printed with it.
-#![allow(dead_code)]
+//! Every frame is seeded (`seed0 + frame`); a failing figure can be
+//! reproduced from the row, the seed and the marker printed with it.
 
 use std::collections::HashMap;
 use std::f64::consts::PI;
@@ -19,9 +16,7 @@ use whycode::detect::{Detection, Detector, DetectorConfig};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::simulate::rng::Pcg32;
-use whycode::simulate::{
-    self, Background, GroundTruth, LooseMarker, MotionBlur, Placement, Scene, SceneObject,
-};
+use whycode::simulate::{self, GroundTruth, LooseMarker, Placement, Scene, SceneObject};
 
 pub const DEG: f64 = PI / 180.0;
 
@@ -82,6 +77,30 @@ pub struct Spread {
     /// Exact tilt of every marker about a random in-plane axis, radians;
     /// overrides `max_tilt` when set.
     pub fixed_tilt: Option<f64>,
+}
+
+impl Spread {
+    /// `count` markers of `diameter_px`, tilt and pan each drawn within
+    /// ±`max_tilt_deg`.
+    pub fn tilted(count: usize, diameter_px: (f64, f64), max_tilt_deg: f64) -> Spread {
+        Spread {
+            count,
+            diameter_px,
+            max_tilt: max_tilt_deg * DEG,
+            fixed_tilt: None,
+        }
+    }
+
+    /// `count` markers of `diameter_px`, each tilted by exactly `tilt_deg`
+    /// about a random in-plane axis.
+    pub fn fixed_tilt(count: usize, diameter_px: (f64, f64), tilt_deg: f64) -> Spread {
+        Spread {
+            count,
+            diameter_px,
+            max_tilt: 0.0,
+            fixed_tilt: Some(tilt_deg * DEG),
+        }
+    }
 }
 
 /// Markers on a jittered grid over the frame, none overlapping, each with
@@ -154,6 +173,11 @@ pub fn detector(family: Option<&Family>, camera: &Camera, tracking: bool) -> Det
     })
 }
 
+/// A detection this close to any true marker (in its diameters, plus 2 px)
+/// is about that marker, not a false one: the card reaches 0.75 D from the
+/// centre, a blurred outline a little past D/2.
+const NEAR_MARKER: f64 = 0.6;
+
 /// Detections paired with the visible true markers: for each true marker
 /// the nearest detection within a quarter diameter (+2 px); detections near
 /// no marker at all (visible or not) are false.
@@ -187,10 +211,9 @@ pub fn match_truth(truth: &GroundTruth, found: &[Detection]) -> Matched {
     let false_detections = (0..found.len())
         .filter(|&k| {
             !used[k]
-                && !truth
-                    .markers
-                    .iter()
-                    .any(|m| (found[k].u - m.u).hypot(found[k].v - m.v) < 0.6 * m.diameter_px + 2.0)
+                && !truth.markers.iter().any(|m| {
+                    (found[k].u - m.u).hypot(found[k].v - m.v) < NEAR_MARKER * m.diameter_px + 2.0
+                })
         })
         .collect();
     Matched {
@@ -318,366 +341,110 @@ impl Counts {
     }
 }
 
-/// Renders `scene`, detects with `detector` and adds to `counts`.
-pub fn run(
-    scene: &Scene,
-    detector: &mut Detector,
-    counts: &mut Counts,
-) -> (GrayImage, GroundTruth, Vec<Detection>) {
-    let (image, truth) = simulate::render(scene);
-    let found = detector.detect(&image);
-    counts.add(scene.seed, &truth, &found);
-    (image, truth, found)
+/// One frame of a scenario: its seed, the image and the truth.
+pub struct Frame {
+    pub seed: u64,
+    pub image: GrayImage,
+    pub truth: GroundTruth,
 }
 
-// ---------------------------------------------------------------- items
+type Look<'a> = dyn Fn(&mut Scene, &mut Pcg32, usize) + 'a;
+type AfterRender<'a> = dyn Fn(&mut GrayImage, &mut Pcg32) + 'a;
 
-/// The scene of item 1 (and 2): 800x600, markers of `family` spread on a
-/// mid-grey background.
-pub fn yaw_scene(family: &Family, spread: Spread, seed: u64) -> Scene {
-    let cam = camera(800, 600);
-    let mut rng = Pcg32::new(seed, 1);
-    scene(
-        &cam,
-        spread_markers(&cam, Some(family), spread, &mut rng),
-        seed,
-    )
+/// A seeded series of frames: markers of `family` (legacy WhyCon without)
+/// spread as `spread` over a distortion-free 60° camera, then the row's
+/// look. Frame `f` draws everything from `Pcg32::new(seed0 + f, 1)`: first
+/// the markers, then whatever [`Scenario::look`] and
+/// [`Scenario::after_render`] draw, in that order.
+pub struct Scenario<'a> {
+    pub size: (u32, u32),
+    pub family: Option<&'a Family>,
+    pub spread: Spread,
+    pub frames: usize,
+    pub seed0: u64,
+    look: Box<Look<'a>>,
+    after_render: Option<Box<AfterRender<'a>>>,
 }
 
-/// Item 1: yaw of markers with a correct ID against the true image
-/// direction of +x. Returns errors in degrees and the ID counts.
-pub fn yaw_errors(
-    families: &mut Families,
-    bits: &[u32],
-    frames_per_bits: usize,
-    spread: Spread,
-    seed0: u64,
-) -> (Errors, Counts) {
-    let cam = camera(800, 600);
-    let mut errors = Errors::default();
-    let mut counts = Counts::default();
-    for (b, &n) in bits.iter().enumerate() {
-        let family = families.get(n, 2);
-        let mut det = detector(Some(&family), &cam, false);
-        for f in 0..frames_per_bits {
-            let seed = seed0 + 1000 * b as u64 + f as u64;
-            let mut rng = Pcg32::new(seed, 1);
-            let s = scene(
-                &cam,
-                spread_markers(&cam, Some(&family), spread, &mut rng),
-                seed,
-            );
-            let (_, truth, found) = run(&s, &mut det, &mut counts);
-            for (t, d) in match_truth(&truth, &found).pairs {
-                let Some(d) = d else { continue };
-                let (m, d) = (&truth.markers[t], &found[d]);
-                if let (true, Some(yaw)) = (d.id == m.id, d.yaw) {
-                    errors.add(wrap(yaw - m.yaw) / DEG, (seed, t));
-                }
-            }
+impl<'a> Scenario<'a> {
+    /// `frames` frames of 800x600 with the simulator's default look.
+    pub fn new(family: Option<&'a Family>, spread: Spread, frames: usize, seed0: u64) -> Self {
+        Scenario {
+            size: (800, 600),
+            family,
+            spread,
+            frames,
+            seed0,
+            look: Box::new(|_, _, _| {}),
+            after_render: None,
         }
     }
-    (errors, counts)
-}
 
-/// Item 2: angle between the estimated and the true marker normal, in
-/// degrees, per 10° band of the true viewing angle (between the normal and
-/// the line of sight); and how many exceed `wrong_deg` (the wrong one of
-/// the two candidate normals picked). Also the in-plane rotation error of
-/// the full pose (its +x axis against the true one, degrees) and the centre
-/// errors (px) of `Detection::u, v` and of the pose's projected position.
-pub struct NormalResult {
-    pub per_view: Vec<(f64, Errors)>,
-    pub all: Errors,
-    pub wrong_picks: usize,
-    pub first_wrong: Option<(u64, usize, f64)>,
-    pub pose_roll: Errors,
-    pub centre: Errors,
-    pub pose_centre: Errors,
-    pub counts: Counts,
-}
-
-/// View angle of a true marker: between its normal and the direction to
-/// the camera, degrees.
-pub fn view_angle(m: &simulate::TrueMarker) -> f64 {
-    let n = Vector3::from(m.normal);
-    let to_camera = -Vector3::from(m.position).normalize();
-    n.dot(&to_camera).clamp(-1.0, 1.0).acos() / DEG
-}
-
-pub fn normal_errors(
-    families: &mut Families,
-    tilts_deg: &[f64],
-    frames_per_tilt: usize,
-    markers_per_frame: usize,
-    diameter_px: (f64, f64),
-    wrong_deg: f64,
-    seed0: u64,
-) -> NormalResult {
-    let cam = camera(800, 600);
-    let family = families.get(8, 2);
-    let mut det = detector(Some(&family), &cam, false);
-    let mut bands = vec![Errors::default(); 9];
-    let mut result = NormalResult {
-        per_view: Vec::new(),
-        all: Errors::default(),
-        wrong_picks: 0,
-        first_wrong: None,
-        pose_roll: Errors::default(),
-        centre: Errors::default(),
-        pose_centre: Errors::default(),
-        counts: Counts::default(),
-    };
-    for (k, &tilt) in tilts_deg.iter().enumerate() {
-        for f in 0..frames_per_tilt {
-            let seed = seed0 + 1000 * k as u64 + f as u64;
-            let spread = Spread {
-                count: markers_per_frame,
-                diameter_px,
-                max_tilt: 0.0,
-                fixed_tilt: Some(tilt * DEG),
-            };
-            let s = yaw_scene(&family, spread, seed);
-            let (_, truth, found) = run(&s, &mut det, &mut result.counts);
-            for (t, d) in match_truth(&truth, &found).pairs {
-                let Some(d) = d.map(|d| &found[d]) else {
-                    continue;
-                };
-                let m = &truth.markers[t];
-                result.centre.add((d.u - m.u).hypot(d.v - m.v), (seed, t));
-                let Some(pose) = d.pose.as_ref() else {
-                    continue;
-                };
-                if let Some((pu, pv)) = cam.project(&pose.position) {
-                    result
-                        .pose_centre
-                        .add((pu - m.u).hypot(pv - m.v), (seed, t));
-                }
-                let n = pose.rotation.column(2).into_owned();
-                let want = Vector3::from(m.normal);
-                let angle = n.normalize().dot(&want).clamp(-1.0, 1.0).acos() / DEG;
-                let band = ((view_angle(m) / 10.0) as usize).min(bands.len() - 1);
-                bands[band].add(angle, (seed, t));
-                result.all.add(angle, (seed, t));
-                if angle > wrong_deg {
-                    result.wrong_picks += 1;
-                    result.first_wrong.get_or_insert((seed, t, angle));
-                }
-                if d.id == m.id {
-                    // Rotation about the normal: the estimated +x axis
-                    // against the true one, both projected onto the true
-                    // marker plane.
-                    let rot = nalgebra::Matrix3::from_fn(|i, j| m.rotation[i][j]);
-                    let x_est = rot.transpose() * pose.rotation.column(0).into_owned();
-                    result
-                        .pose_roll
-                        .add(x_est.y.atan2(x_est.x) / DEG, (seed, t));
-                }
-            }
-        }
+    pub fn size(mut self, width: u32, height: u32) -> Self {
+        self.size = (width, height);
+        self
     }
-    result.per_view = bands
-        .into_iter()
-        .enumerate()
-        .filter(|(_, e)| e.n > 0)
-        .map(|(k, e)| (10.0 * k as f64, e))
-        .collect();
-    result
-}
 
-/// Item 3: cluttered frames (circles, rings of wrong proportions, bars,
-/// lines) with a few real markers.
-pub fn clutter(
-    family: Option<&Family>,
-    frames: usize,
-    density: f64,
-    real_markers: usize,
-    seed0: u64,
-) -> Counts {
-    let cam = camera(800, 600);
-    let mut det = detector(family, &cam, false);
-    let mut counts = Counts::default();
-    for f in 0..frames {
-        let seed = seed0 + f as u64;
+    /// Sets the scene's background, light and effects; gets the frame's
+    /// generator and the frame number.
+    pub fn look(mut self, look: impl Fn(&mut Scene, &mut Pcg32, usize) + 'a) -> Self {
+        self.look = Box::new(look);
+        self
+    }
+
+    /// Changes the rendered image (what the simulator cannot draw itself).
+    pub fn after_render(mut self, change: impl Fn(&mut GrayImage, &mut Pcg32) + 'a) -> Self {
+        self.after_render = Some(Box::new(change));
+        self
+    }
+
+    pub fn camera(&self) -> Camera {
+        camera(self.size.0, self.size.1)
+    }
+
+    pub fn frame(&self, f: usize) -> Frame {
+        let seed = self.seed0 + f as u64;
+        let cam = self.camera();
         let mut rng = Pcg32::new(seed, 1);
-        let spread = Spread {
-            count: real_markers,
-            diameter_px: (40.0, 90.0),
-            max_tilt: 30.0 * DEG,
-            fixed_tilt: None,
-        };
-        let mut s = scene(&cam, spread_markers(&cam, family, spread, &mut rng), seed);
-        s.background = Background::Clutter { density };
-        s.noise = 2.0;
-        run(&s, &mut det, &mut counts);
-    }
-    counts
-}
-
-/// One frame of item 4.
-pub fn dark_scene(
-    family: Option<&Family>,
-    markers_per_frame: usize,
-    exposure: (f64, f64),
-    worn_ink: bool,
-    seed: u64,
-) -> Scene {
-    let cam = camera(800, 600);
-    let mut rng = Pcg32::new(seed, 1);
-    let spread = Spread {
-        count: markers_per_frame,
-        diameter_px: (40.0, 90.0),
-        max_tilt: 30.0 * DEG,
-        fixed_tilt: None,
-    };
-    let mut s = scene(&cam, spread_markers(&cam, family, spread, &mut rng), seed);
-    s.background = Background::Table;
-    s.exposure = rng.range(exposure.0, exposure.1);
-    s.noise = rng.range(1.0, 2.5);
-    if worn_ink {
-        s.ink_reflectance = 0.15;
-    }
-    s
-}
-
-/// Item 4: dark frames on a dark table top with sensor noise; every other
-/// frame a worn, greyer ink. `exposure` 0.15-0.35 gives frames with a mean
-/// grey of 10-25 (white paper at 33-77); 0.065-0.13 gives means of 5-9
-/// (paper at 14-28). Returns the counts and the range of the frames' means.
-pub fn dark(
-    family: Option<&Family>,
-    frames: usize,
-    markers_per_frame: usize,
-    exposure: (f64, f64),
-    seed0: u64,
-) -> (Counts, (f64, f64)) {
-    let cam = camera(800, 600);
-    let mut det = detector(family, &cam, false);
-    let mut counts = Counts::default();
-    let mut means = (f64::MAX, f64::MIN);
-    for f in 0..frames {
-        let seed = seed0 + f as u64;
-        let s = dark_scene(family, markers_per_frame, exposure, f % 2 == 1, seed);
-        let (image, ..) = run(&s, &mut det, &mut counts);
-        let mean = image.as_raw().iter().map(|&p| f64::from(p)).sum::<f64>() / image.len() as f64;
-        means = (means.0.min(mean), means.1.max(mean));
-    }
-    (counts, means)
-}
-
-/// One frame of item 5, rendered (the shadow is applied to the image).
-pub fn gradient_frame(
-    family: Option<&Family>,
-    markers_per_frame: usize,
-    ratio: f64,
-    shadow: Option<f64>,
-    seed: u64,
-) -> (GrayImage, GroundTruth) {
-    let cam = camera(800, 600);
-    let mut rng = Pcg32::new(seed, 1);
-    let spread = Spread {
-        count: markers_per_frame,
-        diameter_px: (40.0, 90.0),
-        max_tilt: 30.0 * DEG,
-        fixed_tilt: None,
-    };
-    let mut s = scene(&cam, spread_markers(&cam, family, spread, &mut rng), seed);
-    s.background = Background::Table;
-    s.gradient = ratio;
-    s.gradient_angle = rng.range(0.0, 2.0 * PI);
-    s.exposure = 1.1;
-    s.noise = 1.5;
-    let (mut image, truth) = simulate::render(&s);
-    if let Some(factor) = shadow {
-        let through = (rng.range(200.0, 600.0), rng.range(150.0, 450.0));
-        cast_shadow(&mut image, through, rng.range(0.0, 2.0 * PI), factor, 12.0);
-    }
-    (image, truth)
-}
-
-/// Item 5: a light gradient of `ratio`:1 across the frame in a random
-/// direction, plus (when `shadow` is set) a soft cast shadow at that
-/// fraction of the light over part of the frame.
-pub fn gradient(
-    family: Option<&Family>,
-    frames: usize,
-    markers_per_frame: usize,
-    ratio: f64,
-    shadow: Option<f64>,
-    seed0: u64,
-) -> Counts {
-    let cam = camera(800, 600);
-    let mut det = detector(family, &cam, false);
-    let mut counts = Counts::default();
-    for f in 0..frames {
-        let seed = seed0 + f as u64;
-        let (image, truth) = gradient_frame(family, markers_per_frame, ratio, shadow, seed);
-        let found = det.detect(&image);
-        counts.add(seed, &truth, &found);
-    }
-    counts
-}
-
-/// Item 6: motion blur of `length_px` in a random direction.
-pub fn motion_blur(
-    family: &Family,
-    frames: usize,
-    markers_per_frame: usize,
-    length_px: f64,
-    seed0: u64,
-) -> Counts {
-    let cam = camera(800, 600);
-    let mut det = detector(Some(family), &cam, false);
-    let mut counts = Counts::default();
-    for f in 0..frames {
-        let seed = seed0 + f as u64;
-        let mut rng = Pcg32::new(seed, 1);
-        let spread = Spread {
-            count: markers_per_frame,
-            diameter_px: (50.0, 100.0),
-            max_tilt: 30.0 * DEG,
-            fixed_tilt: None,
-        };
         let mut s = scene(
             &cam,
-            spread_markers(&cam, Some(family), spread, &mut rng),
+            spread_markers(&cam, self.family, self.spread, &mut rng),
             seed,
         );
-        s.motion_blur = Some(MotionBlur {
-            length_px,
-            angle: rng.range(0.0, PI),
-        });
-        s.noise = 2.0;
-        run(&s, &mut det, &mut counts);
+        (self.look)(&mut s, &mut rng, f);
+        let (mut image, truth) = simulate::render(&s);
+        if let Some(change) = &self.after_render {
+            change(&mut image, &mut rng);
+        }
+        Frame { seed, image, truth }
     }
-    counts
-}
 
-/// Item 7: markers of one diameter (px), slight tilts, a little focus blur
-/// and noise.
-pub fn small(
-    family: Option<&Family>,
-    diameter_px: f64,
-    frames: usize,
-    markers_per_frame: usize,
-    seed0: u64,
-) -> Counts {
-    let cam = camera(640, 480);
-    let mut det = detector(family, &cam, false);
-    let mut counts = Counts::default();
-    for f in 0..frames {
-        let seed = seed0 + f as u64;
-        let mut rng = Pcg32::new(seed, 1);
-        let spread = Spread {
-            count: markers_per_frame,
-            diameter_px: (diameter_px, diameter_px),
-            max_tilt: 15.0 * DEG,
-            fixed_tilt: None,
-        };
-        let mut s = scene(&cam, spread_markers(&cam, family, spread, &mut rng), seed);
-        s.focus_blur_px = 0.5;
-        s.noise = 2.0;
-        run(&s, &mut det, &mut counts);
+    /// Detects every frame with `detector` (whose adaptive state carries
+    /// over, as in a video), adds to `counts` and shows each frame and its
+    /// detections to `visit`.
+    pub fn run(
+        &self,
+        detector: &mut Detector,
+        counts: &mut Counts,
+        mut visit: impl FnMut(&Frame, &[Detection]),
+    ) {
+        for f in 0..self.frames {
+            let frame = self.frame(f);
+            let found = detector.detect(&frame.image);
+            counts.add(frame.seed, &frame.truth, &found);
+            visit(&frame, &found);
+        }
     }
-    counts
+
+    /// [`Scenario::run`] with a fresh detector (with pose, no tracking).
+    pub fn counts_with(&self, visit: impl FnMut(&Frame, &[Detection])) -> Counts {
+        let mut det = detector(self.family, &self.camera(), false);
+        let mut counts = Counts::default();
+        self.run(&mut det, &mut counts, visit);
+        counts
+    }
+
+    pub fn counts(&self) -> Counts {
+        self.counts_with(|_, _| {})
+    }
 }
