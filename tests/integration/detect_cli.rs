@@ -1,22 +1,20 @@
 //! `whycode detect` as a user runs it: the real binary on rendered images.
 
-use crate::support::ring_view::{render, render_marker, View};
-use crate::support::{angle_diff, stderr, stdout, whycode};
+use crate::support::{angle_diff, marker_photo, stderr, stdout, whycode};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 use whycode::family::Family;
 use whycode::geometry::Marker;
 
-/// A 90 px marker of the 8-bit d = 2 family, ID `id`, turned visually CCW
-/// by `rotation`; returns the file and the true (u, v, yaw).
-fn marker_png(dir: &Path, name: &str, id: u32, rotation: f64) -> (PathBuf, (f64, f64, f64)) {
+/// A 90 px marker of the 8-bit d = 2 family, ID `id`, turned by `roll`;
+/// returns the file and the true (u, v, yaw).
+fn marker_png(dir: &Path, name: &str, id: u32, roll: f64) -> (PathBuf, (f64, f64, f64)) {
     let family = Family::generate(8, 2).unwrap();
-    let mut view = View::new(8, family.code(id).unwrap(), 90.0, rotation);
-    view.gaussian_blur = 0.6;
-    let r = render(&view);
+    let marker = Marker::whycode(8, family.code(id).unwrap(), 50.0);
+    let (image, truth) = marker_photo(marker, id, 90.0, roll);
     let path = dir.join(name);
-    r.image.save(&path).unwrap();
-    (path, (r.ellipse.u, r.ellipse.v, r.yaw))
+    image.save(&path).unwrap();
+    (path, (truth.u, truth.v, truth.yaw))
 }
 
 fn json_lines(out: &Output) -> Vec<serde_json::Value> {
@@ -207,10 +205,9 @@ fn annotate_writes_the_image_with_markers_drawn() {
 #[test]
 fn legacy_markers_have_no_id_and_no_yaw() {
     let dir = tempfile::tempdir().unwrap();
-    let view = View::new(8, 1, 80.0, 0.0);
-    let r = render_marker(&view, &Marker::whycon(80.0));
+    let (image, truth) = marker_photo(Marker::whycon(50.0), 0, 80.0, 0.0);
     let path = dir.path().join("legacy.png");
-    r.image.save(&path).unwrap();
+    image.save(&path).unwrap();
     let out = whycode(&[
         "detect",
         "--legacy",
@@ -223,7 +220,7 @@ fn legacy_markers_have_no_id_and_no_yaw() {
     let m = &lines[0]["markers"][0];
     assert_eq!(m["id"], 0);
     assert!(m["yaw"].is_null() && m["code"].is_null(), "{m}");
-    assert!((m["u"].as_f64().unwrap() - r.ellipse.u).abs() < 0.3);
+    assert!((m["u"].as_f64().unwrap() - truth.u).abs() < 0.3);
 }
 
 #[test]

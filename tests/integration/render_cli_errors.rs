@@ -1,17 +1,26 @@
-//! Bad input through the real binary: non-zero exit, one line on stderr
-//! naming the problem, and no file left behind.
+//! Bad input through the real binary: exit status 1, one line on stderr
+//! naming the problem, and no file left behind. One test per row of the
+//! table below: the arguments, then what the message must contain.
 
 use std::path::Path;
-use std::process::Command;
 
-/// Runs whycode in `dir`, expecting failure; returns its stderr.
+use crate::support::whycode_in;
+
+/// Runs whycode in an empty folder, expecting failure; checks the contract
+/// and that every `wanted` piece is in the message.
+fn refused(args: &[&str], wanted: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let err = fails(dir.path(), args);
+    for piece in wanted {
+        assert!(
+            err.contains(piece),
+            "whycode {args:?}: {err:?} lacks {piece:?}"
+        );
+    }
+}
+
 fn fails(dir: &Path, args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_whycode"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(!out.status.success(), "whycode {args:?} succeeded");
+    let out = whycode_in(dir, args);
     assert_eq!(out.status.code(), Some(1), "whycode {args:?}");
     let stderr = String::from_utf8(out.stderr).unwrap();
     assert_eq!(stderr.lines().count(), 1, "not one line: {stderr:?}");
@@ -21,224 +30,62 @@ fn fails(dir: &Path, args: &[&str]) -> String {
     stderr
 }
 
-#[test]
-fn id_outside_the_family_names_the_valid_range() {
-    let dir = tempfile::tempdir().unwrap();
-    let err = fails(
-        dir.path(),
-        &[
-            "marker",
-            "--bits",
-            "8",
-            "--distance",
-            "2",
-            "--id",
-            "40",
-            "--diameter",
-            "50mm",
-            "-o",
-            "x.pdf",
-        ],
-    );
-    assert!(
-        err.contains("ID 40 is not in the 8-bit distance-2 family (IDs 1-16)"),
-        "{err}"
-    );
-    let err = fails(
-        dir.path(),
-        &[
-            "sheet",
-            "--bits",
-            "8",
-            "--ids",
-            "1-5,17",
-            "--diameter",
-            "40mm",
-            "-o",
-            "s.pdf",
-        ],
-    );
-    assert!(
-        err.contains("ID 17 is not in the 8-bit distance-2 family (IDs 1-16)"),
-        "{err}"
-    );
-}
-
-#[test]
-fn too_large_markers_name_the_largest_that_fits() {
-    let dir = tempfile::tempdir().unwrap();
-    let err = fails(
-        dir.path(),
-        &[
-            "sheet",
-            "--bits",
-            "8",
-            "--ids",
-            "1",
-            "--diameter",
-            "250mm",
-            "--template",
-            "a5",
-            "-o",
-            "s.svg",
-        ],
-    );
-    assert!(err.contains("does not fit on the a5 page"), "{err}");
-    assert!(err.contains("the largest that fits is 101.5 mm"), "{err}");
-}
-
-#[test]
-fn unknown_template_lists_the_known_ones() {
-    let dir = tempfile::tempdir().unwrap();
-    let err = fails(
-        dir.path(),
-        &[
-            "sheet",
-            "--bits",
-            "8",
-            "--all",
-            "--diameter",
-            "40mm",
-            "--template",
-            "b5",
-            "-o",
-            "s.pdf",
-        ],
-    );
-    assert!(err.contains("unknown template 'b5'"), "{err}");
-    assert!(err.contains("a3, a4, a5, legal, letter"), "{err}");
-    let err = fails(
-        dir.path(),
-        &[
-            "sheet",
-            "--bits",
-            "8",
-            "--all",
-            "--diameter",
-            "40mm",
-            "--template",
-            "missing.toml",
-            "-o",
-            "s.pdf",
-        ],
-    );
-    assert!(err.contains("missing.toml"), "{err}");
-}
-
-#[test]
-fn unwritable_paths_and_unknown_formats_fail_cleanly() {
-    let dir = tempfile::tempdir().unwrap();
-    let err = fails(
-        dir.path(),
-        &[
-            "marker",
-            "--bits",
-            "8",
-            "--id",
-            "1",
-            "--diameter",
-            "50mm",
-            "-o",
-            "no/such/dir/m.pdf",
-        ],
-    );
-    assert!(err.contains("no/such/dir/m.pdf"), "{err}");
-    let err = fails(
-        dir.path(),
-        &[
-            "sheet",
-            "--bits",
-            "8",
-            "--all",
-            "--diameter",
-            "20mm",
-            "-o",
-            "no/such/dir/s.svg",
-        ],
-    );
-    assert!(err.contains("no/such/dir/s"), "{err}");
-    let err = fails(
-        dir.path(),
-        &[
-            "marker",
-            "--bits",
-            "8",
-            "--id",
-            "1",
-            "--diameter",
-            "50mm",
-            "-o",
-            "m.jpg",
-        ],
-    );
-    assert!(err.contains("unknown output format '.jpg'"), "{err}");
-    let err = fails(
-        dir.path(),
-        &[
-            "marker",
-            "--bits",
-            "8",
-            "--id",
-            "1",
-            "--diameter",
-            "50mm",
-            "--margin",
-            "2mm",
-            "-o",
-            "m.pdf",
-        ],
-    );
-    assert!(err.contains("too small"), "{err}");
-}
-
-#[test]
-fn id_lists_that_would_print_a_marker_twice_or_too_many_are_refused() {
-    let dir = tempfile::tempdir().unwrap();
-    let sheet = |ids: &[&str]| {
-        let mut args = vec!["sheet", "--diameter", "20mm", "-o", "s.pdf"];
-        args.extend_from_slice(ids);
-        fails(dir.path(), &args)
+/// `name: [args] => [pieces of the message]` becomes one test.
+macro_rules! refused {
+    ($($name:ident: [$($arg:expr),* $(,)?] => [$($want:expr),+ $(,)?];)+) => {
+        $(
+            #[test]
+            fn $name() {
+                refused(&[$($arg),*], &[$($want),+]);
+            }
+        )+
     };
-    let err = sheet(&["--bits", "8", "--ids", "1-4,3"]);
-    assert!(err.contains("ID 3 is listed more than once"), "{err}");
-    let err = sheet(&["--bits", "8", "--ids", "0-3"]);
-    assert!(err.contains("IDs start at 1"), "{err}");
-    let err = sheet(&["--bits", "8", "--ids", "x"]);
-    assert!(
-        err.ends_with("--ids: 'x' is not an ID or a range like 3-7\n"),
-        "{err}"
-    );
-    let err = sheet(&["--bits", "24", "--distance", "1", "--all"]);
-    assert!(err.contains("too many to print at once"), "{err}");
 }
 
-#[test]
-fn unreadable_markers_are_not_written() {
-    let dir = tempfile::tempdir().unwrap();
-    let err = fails(
-        dir.path(),
-        &[
-            "marker",
-            "--bits",
-            "24",
-            "--id",
-            "3",
-            "--diameter",
-            "2mm",
-            "-o",
-            "tiny.pdf",
-        ],
-    );
-    assert!(err.contains("self-check failed: ID 3"), "{err}");
-    assert!(err.contains("could not be read"), "{err}");
-}
-
-#[test]
-fn usage_errors_are_one_line_with_exit_status_1() {
-    let dir = tempfile::tempdir().unwrap();
-    let err = fails(dir.path(), &["marker", "--bogus"]);
-    assert!(
-        err.contains("unexpected argument '--bogus'") && err.contains("whycode marker --help"),
-        "{err}"
-    );
+refused! {
+    marker_id_outside_the_family_names_the_valid_range:
+        ["marker", "--bits", "8", "--distance", "2", "--id", "40", "--diameter", "50mm", "-o", "x.pdf"]
+        => ["ID 40 is not in the 8-bit distance-2 family (IDs 1-16)"];
+    sheet_id_outside_the_family_names_the_valid_range:
+        ["sheet", "--bits", "8", "--ids", "1-5,17", "--diameter", "40mm", "-o", "s.pdf"]
+        => ["ID 17 is not in the 8-bit distance-2 family (IDs 1-16)"];
+    too_large_markers_name_the_largest_that_fits:
+        ["sheet", "--bits", "8", "--ids", "1", "--diameter", "250mm", "--template", "a5", "-o", "s.svg"]
+        => ["does not fit on the a5 page", "the largest that fits is 101.5 mm"];
+    unknown_template_lists_the_known_ones:
+        ["sheet", "--bits", "8", "--all", "--diameter", "40mm", "--template", "b5", "-o", "s.pdf"]
+        => ["unknown template 'b5'", "a3, a4, a5, legal, letter"];
+    missing_template_file_is_named:
+        ["sheet", "--bits", "8", "--all", "--diameter", "40mm", "--template", "missing.toml", "-o", "s.pdf"]
+        => ["missing.toml"];
+    unwritable_marker_path_is_named:
+        ["marker", "--bits", "8", "--id", "1", "--diameter", "50mm", "-o", "no/such/dir/m.pdf"]
+        => ["no/such/dir/m.pdf"];
+    unwritable_sheet_path_is_named:
+        ["sheet", "--bits", "8", "--all", "--diameter", "20mm", "-o", "no/such/dir/s.svg"]
+        => ["no/such/dir/s"];
+    unknown_output_format_is_named:
+        ["marker", "--bits", "8", "--id", "1", "--diameter", "50mm", "-o", "m.jpg"]
+        => ["unknown output format '.jpg'"];
+    too_small_margin_is_refused:
+        ["marker", "--bits", "8", "--id", "1", "--diameter", "50mm", "--margin", "2mm", "-o", "m.pdf"]
+        => ["too small"];
+    id_listed_twice_is_refused:
+        ["sheet", "--diameter", "20mm", "-o", "s.pdf", "--bits", "8", "--ids", "1-4,3"]
+        => ["ID 3 is listed more than once"];
+    id_zero_is_refused:
+        ["sheet", "--diameter", "20mm", "-o", "s.pdf", "--bits", "8", "--ids", "0-3"]
+        => ["IDs start at 1"];
+    id_list_that_is_not_a_list_is_refused:
+        ["sheet", "--diameter", "20mm", "-o", "s.pdf", "--bits", "8", "--ids", "x"]
+        => ["--ids: 'x' is not an ID or a range like 3-7\n"];
+    too_many_markers_at_once_are_refused:
+        ["sheet", "--diameter", "20mm", "-o", "s.pdf", "--bits", "24", "--distance", "1", "--all"]
+        => ["too many to print at once"];
+    unreadable_markers_are_not_written:
+        ["marker", "--bits", "24", "--id", "3", "--diameter", "2mm", "-o", "tiny.pdf"]
+        => ["self-check failed: ID 3", "could not be read"];
+    usage_errors_are_one_line_with_exit_status_1:
+        ["marker", "--bogus"]
+        => ["unexpected argument '--bogus'", "whycode marker --help"];
 }

@@ -13,8 +13,13 @@ use std::f64::consts::TAU;
 
 use std::path::Path;
 use std::process::{Command, Output};
+
+use nalgebra::Vector3;
+use whycode::camera::Camera;
+use whycode::geometry::Marker;
 /// The library's seeded generator, so test scenes draw like the simulator.
 pub use whycode::simulate::rng::Pcg32;
+use whycode::simulate::{self, LooseMarker, Placement, Scene, SceneObject, TrueMarker};
 
 /// Runs the `whycode` binary built for this test run.
 pub fn whycode(args: &[&str]) -> Output {
@@ -103,4 +108,27 @@ pub fn angle_diff(a: f64, b: f64) -> f64 {
 pub fn axis_angle_diff(a: f64, b: f64) -> f64 {
     let d = (a - b).rem_euclid(TAU / 2.0);
     d.min(TAU / 2.0 - d)
+}
+
+/// A face-on photo of one marker, `diameter_px` across, turned by `roll`
+/// about the line of sight, its centre a fraction of a pixel off the image
+/// centre, with a light focus blur; and the simulator's truth about it.
+pub fn marker_photo(
+    marker: Marker,
+    id: u32,
+    diameter_px: f64,
+    roll: f64,
+) -> (image::GrayImage, TrueMarker) {
+    let side = (diameter_px * 1.8).ceil() as u32 + 12;
+    let camera = Camera::ideal(side, side, 60.0);
+    let z = camera.fx * marker.diameter_mm / 1000.0 / diameter_px;
+    let (x, y) = camera.undistort(camera.cx + 0.37, camera.cy + 0.21);
+    let placement = Placement::viewed(Vector3::new(x * z, y * z, z), 0.0, 0.0, roll);
+    let mut scene = Scene::new(camera);
+    scene
+        .objects
+        .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+    scene.focus_blur_px = 0.6;
+    let (image, truth) = simulate::render(&scene);
+    (image, truth.markers[0].clone())
 }
