@@ -2,7 +2,7 @@
 //! table comparable in form to the paper's Table 3 and Figure 6.
 //!
 //!     cargo run --release --example range_table -- [--camera cam.yaml]
-//!         [--diameter 22.05mm] [--bits 4,6,8,10,12,14,16] [--hamming 2]
+//!         [--diameter 22.05mm] [--bits 4,6,8,10,12,14,16] [--distance 2]
 //!         [--noise 2] [--blur 0.6] [--seed 1]
 //!
 //! Without --camera: an ideal 640x480 camera with a 58° horizontal field
@@ -58,7 +58,8 @@ fn parse_options() -> Result<Options> {
                     .map(|b| b.trim().parse().context("--bits: a list like 4,8,12"))
                     .collect::<Result<_>>()?
             }
-            "--hamming" => o.hamming = value()?.parse()?,
+            // The Hamming distance, spelled as in `whycode` (--hamming was its old name).
+            "--distance" | "--hamming" => o.hamming = value()?.parse()?,
             "--noise" => o.noise = value()?.parse()?,
             "--blur" => o.blur = value()?.trim_end_matches("px").parse()?,
             "--seed" => o.seed = value()?.parse()?,

@@ -6,7 +6,8 @@
 //! PNG and print sheets), [`detect`] (finding and decoding markers in
 //! images), [`camera`] and [`pose`] (calibration and 6-DoF pose),
 //! [`simulate`] (synthetic camera views with ground truth) and [`validate`]
-//! (checking printed sheets from photos). [`cli`] is a thin layer over them.
+//! (checking printed sheets from photos). The `whycode` command line
+//! (src/cli/, compiled into the binary only) is a thin layer over them.
 //!
 //! ```no_run
 //! use whycode::detect::{load_gray, Detector, DetectorConfig};
@@ -26,11 +27,12 @@
 //! ```
 
 pub mod camera;
-pub mod cli;
 pub mod detect;
 pub mod family;
 pub mod geometry;
+#[cfg(feature = "files")]
 pub mod io;
+mod parallel;
 pub mod pose;
 pub mod render;
 pub mod simulate;

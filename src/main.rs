@@ -1,3 +1,7 @@
+//! The `whycode` command line; the work is done by the library.
+
+mod cli;
+
 fn main() -> std::process::ExitCode {
-    whycode::cli::main()
+    cli::main()
 }

@@ -48,10 +48,7 @@ impl FromStr for Length {
 
     fn from_str(text: &str) -> Result<Length, String> {
         let t = text.trim();
-        let split = t
-            .find(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-' || c == '+'))
-            .unwrap_or(t.len());
-        let (number, unit) = t.split_at(split);
+        let (number, unit) = t.split_at(number_prefix_len(t));
         let value: f64 = number.parse().map_err(|_| {
             format!("'{text}' is not a length (write e.g. 50mm, 5cm, 0.05m or 2in)")
         })?;
@@ -86,8 +83,40 @@ impl fmt::Display for Length {
     }
 }
 
-/// An angle, stored in radians. Parses "30deg", "30°", "0.5rad"; a bare
-/// number means degrees.
+/// Length of the decimal number at the start of `text`: sign, digits,
+/// fraction and exponent ("-1.5e3" of "-1.5e3mm"). An "e" not followed by
+/// digits belongs to the unit.
+fn number_prefix_len(text: &str) -> usize {
+    let bytes = text.as_bytes();
+    let digits = |mut i: usize| {
+        while i < bytes.len() && bytes[i].is_ascii_digit() {
+            i += 1;
+        }
+        i
+    };
+    let mut i = 0;
+    if matches!(bytes.first(), Some(b'+' | b'-')) {
+        i = 1;
+    }
+    i = digits(i);
+    if bytes.get(i) == Some(&b'.') {
+        i = digits(i + 1);
+    }
+    if matches!(bytes.get(i), Some(b'e' | b'E')) {
+        let mut j = i + 1;
+        if matches!(bytes.get(j), Some(b'+' | b'-')) {
+            j += 1;
+        }
+        let end = digits(j);
+        if end > j {
+            i = end;
+        }
+    }
+    i
+}
+
+/// An angle, stored in radians. Parses "30deg", "30°", "0.5rad". Like a
+/// length, an angle needs its unit: a bare "0.5" could be either.
 #[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
 pub struct Angle {
     rad: f64,
@@ -119,6 +148,12 @@ impl FromStr for Angle {
         } else if let Some(n) = t.strip_suffix("rad") {
             (n, 1.0)
         } else {
+            if let Ok(value) = t.parse::<f64>() {
+                let value = format_number(value);
+                return Err(format!(
+                    "'{text}' has no unit (write e.g. {value}deg or {value}rad)"
+                ));
+            }
             (t, std::f64::consts::PI / 180.0)
         };
         let value: f64 = number
@@ -131,6 +166,18 @@ impl FromStr for Angle {
         Ok(Angle {
             rad: value * to_rad,
         })
+    }
+}
+
+/// Formats a number the way a person would type it back: plain for
+/// everyday magnitudes, exponent notation for huge or tiny ones, so a
+/// message never echoes hundreds of digits.
+pub fn format_number(v: f64) -> String {
+    let magnitude = v.abs();
+    if magnitude != 0.0 && !(1e-4..1e9).contains(&magnitude) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
 
@@ -159,6 +206,12 @@ mod tests {
         assert!("50".parse::<Length>().is_err());
         assert!("-5mm".parse::<Length>().is_err());
         assert!("5furlongs".parse::<Length>().is_err());
+        assert_eq!("1e3mm".parse::<Length>().unwrap().mm(), 1000.0);
+        assert_eq!("2.5E-1m".parse::<Length>().unwrap().mm(), 250.0);
+        assert!("2em"
+            .parse::<Length>()
+            .unwrap_err()
+            .contains("unknown unit 'em'"));
         assert_eq!(
             Length::parse_with_default_unit("0.122", "m").unwrap().mm(),
             122.0
@@ -169,6 +222,7 @@ mod tests {
     fn angles_parse() {
         assert!((("30deg".parse::<Angle>().unwrap().degrees()) - 30.0).abs() < 1e-12);
         assert!((("0.5rad".parse::<Angle>().unwrap().radians()) - 0.5).abs() < 1e-12);
-        assert!((("45".parse::<Angle>().unwrap().degrees()) - 45.0).abs() < 1e-12);
+        assert!("45".parse::<Angle>().unwrap_err().contains("has no unit"));
+        assert!((("-45deg".parse::<Angle>().unwrap().degrees()) + 45.0).abs() < 1e-12);
     }
 }

@@ -1,9 +1,6 @@
 //! `whycode detect`: find markers in images and print IDs, yaw and pose.
 
-use crate::camera::Camera;
-use crate::detect::{load_gray, Detection, Detector, DetectorConfig};
-use crate::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
-use crate::units::Length;
+use super::args::{Format, FormatArg, MarkerKindArgs};
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
 use std::collections::HashSet;
@@ -11,6 +8,10 @@ use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
+use whycode::camera::Camera;
+use whycode::detect::report::{FrameReport, CSV_HEADER};
+use whycode::detect::{load_gray, Detector, DetectorConfig};
+use whycode::units::Length;
 
 const EXAMPLES: &str = "\
 Examples:
@@ -18,6 +19,9 @@ Examples:
   whycode detect --bits 8 --distance 1 --format json sheet.png
   whycode detect --family family.json --diameter 122mm --camera cam.yaml --format json frames/
   whycode detect --legacy --annotate out/ many.png
+
+Formats: table (for reading), csv (one row per marker) or json (one object
+per image and line).
 
 Folders are sequences: their images are read in name order and markers are
 tracked from frame to frame. Files named on the command line are independent
@@ -39,34 +43,25 @@ pub struct DetectArgs {
     #[arg(required = true, value_name = "IMAGE|FOLDER")]
     inputs: Vec<PathBuf>,
 
-    /// Code length of the markers' ID family [default: 8]
-    #[arg(long, short = 'b', conflicts_with_all = ["family", "legacy"])]
-    bits: Option<u32>,
-
-    /// Minimum cyclic Hamming distance of the ID family [default: 2]
-    #[arg(long, short = 'd', conflicts_with_all = ["family", "legacy"])]
-    distance: Option<u32>,
-
-    /// ID family from a family file (written by `whycode ids --format json`)
-    #[arg(long, value_name = "FILE", conflicts_with = "legacy")]
-    family: Option<PathBuf>,
-
-    /// Legacy WhyCon markers (black and white discs, no ID ring)
-    #[arg(long)]
-    legacy: bool,
+    #[command(flatten)]
+    kind: MarkerKindArgs,
 
     /// Outer diameter of the black disc, for pose: 0.122 (metres), 122mm, 4.8in
-    #[arg(long, value_name = "LENGTH", value_parser = parse_diameter, requires = "camera")]
+    #[arg(
+        long,
+        value_name = "LENGTH",
+        value_parser = parse_diameter,
+        requires = "camera",
+        allow_hyphen_values = true
+    )]
     diameter: Option<Length>,
 
     /// Camera calibration (ROS camera_info or OpenCV YAML), for pose
     #[arg(long, value_name = "FILE", requires = "diameter")]
     camera: Option<PathBuf>,
 
-    /// Output: table (for reading), csv (one row per marker) or json (one
-    /// object per image and line)
-    #[arg(long, short = 'f', value_enum, default_value_t = Format::Table)]
-    format: Format,
+    #[command(flatten)]
+    format: FormatArg,
 
     /// Write each image with the markers' ellipses, IDs and +x axes drawn
     /// into DIR (PNG, named after the image)
@@ -83,24 +78,8 @@ pub struct DetectArgs {
     no_tracking: bool,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum Format {
-    Table,
-    Csv,
-    Json,
-}
-
 fn parse_diameter(text: &str) -> Result<Length, String> {
     Length::parse_with_default_unit(text, "m")
-}
-
-/// The detections in one image.
-struct Frame {
-    image: PathBuf,
-    width: u32,
-    height: u32,
-    elapsed_ms: f64,
-    markers: Vec<Detection>,
 }
 
 /// One unit of work: an independent image, or a folder's frames in order.
@@ -110,15 +89,7 @@ enum Job {
 }
 
 pub fn run(args: DetectArgs) -> Result<ExitCode> {
-    let family = if args.legacy {
-        None
-    } else if let Some(path) = &args.family {
-        Some(Family::load(path)?)
-    } else {
-        let bits = args.bits.unwrap_or(DEFAULT_BITS);
-        let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
-        Some(Family::generate(bits, distance).context("--bits/--distance")?)
-    };
+    let family = args.kind.resolve()?;
     let camera = args.camera.as_deref().map(Camera::load).transpose()?;
     let mut config = DetectorConfig {
         family,
@@ -149,7 +120,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         indicatif::ProgressBar::hidden()
     };
 
-    let process = |detector: &mut Detector, path: &Path| -> Result<Frame> {
+    let process = |detector: &mut Detector, path: &Path| -> Result<FrameReport> {
         let result = detect_one(
             detector,
             path,
@@ -159,7 +130,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         result
     };
     // Jobs run in parallel; a sequence's frames run in order on one detector.
-    let results: Vec<Vec<Result<Frame>>> = jobs
+    let results: Vec<Vec<Result<FrameReport>>> = jobs
         .par_iter()
         .map(|job| match job {
             Job::Image(path) => {
@@ -181,15 +152,15 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     let mut out = std::io::BufWriter::new(stdout.lock());
     let mut failures = 0;
     let several = total > 1;
-    if args.format == Format::Csv {
-        writeln!(out, "{}", CSV_HEADER)?;
+    if args.format.format == Format::Csv {
+        writeln!(out, "{CSV_HEADER}")?;
     }
     for result in results.into_iter().flatten() {
         match result {
-            Ok(frame) => match args.format {
-                Format::Json => writeln!(out, "{}", frame_json(&frame))?,
-                Format::Csv => write_csv(&mut out, &frame)?,
-                Format::Table => write_table(&mut out, &frame, several)?,
+            Ok(frame) => match args.format.format {
+                Format::Json => writeln!(out, "{}", frame.to_json())?,
+                Format::Csv => out.write_all(frame.to_csv_rows().as_bytes())?,
+                Format::Table => out.write_all(frame.to_table(several).as_bytes())?,
             },
             Err(err) => {
                 out.flush()?;
@@ -305,190 +276,26 @@ fn annotation_names(
     names
 }
 
-fn detect_one(detector: &mut Detector, path: &Path, annotate: Option<&Path>) -> Result<Frame> {
+fn detect_one(
+    detector: &mut Detector,
+    path: &Path,
+    annotate: Option<&Path>,
+) -> Result<FrameReport> {
     let image = load_gray(path)?;
     let start = Instant::now();
     let markers = detector.detect(&image);
     let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;
     if let Some(out) = annotate {
-        let png = crate::detect::annotate::annotated_png(&image, &markers)?;
-        crate::io::write_atomic(out, &png)?;
+        let png = whycode::detect::annotate::annotated_png(&image, &markers)?;
+        whycode::io::write_atomic(out, &png)?;
     }
-    Ok(Frame {
-        image: path.to_path_buf(),
+    Ok(FrameReport {
+        image: path.display().to_string(),
         width: image.width(),
         height: image.height(),
         elapsed_ms,
         markers,
     })
-}
-
-fn round(x: f64, decimals: i32) -> f64 {
-    let k = 10f64.powi(decimals);
-    (x * k).round() / k
-}
-
-/// JSON records, fields in the documented order.
-#[derive(serde::Serialize)]
-struct FrameRecord {
-    image: String,
-    width: u32,
-    height: u32,
-    elapsed_ms: f64,
-    markers: Vec<MarkerRecord>,
-}
-
-#[derive(serde::Serialize)]
-struct MarkerRecord {
-    id: u32,
-    code: Option<u32>,
-    u: f64,
-    v: f64,
-    yaw: Option<f64>,
-    axes: [f64; 2],
-    confidence: f64,
-    position: Option<[f64; 3]>,
-    rotation: Option<[[f64; 3]; 3]>,
-    quaternion: Option<[f64; 4]>,
-}
-
-fn frame_json(frame: &Frame) -> String {
-    let markers = frame
-        .markers
-        .iter()
-        .map(|m| {
-            let pose = m.pose.as_ref();
-            MarkerRecord {
-                id: m.id,
-                code: m.code,
-                u: round(m.u, 3),
-                v: round(m.v, 3),
-                yaw: m.yaw.map(|y| round(y, 5)),
-                axes: [round(m.axes[0], 3), round(m.axes[1], 3)],
-                confidence: round(m.confidence, 3),
-                position: pose.map(|p| {
-                    [
-                        round(p.position.x, 5),
-                        round(p.position.y, 5),
-                        round(p.position.z, 5),
-                    ]
-                }),
-                rotation: pose.map(|p| {
-                    std::array::from_fn(|r| std::array::from_fn(|c| round(p.rotation[(r, c)], 6)))
-                }),
-                quaternion: pose.map(|p| p.quaternion.map(|q| round(q, 6))),
-            }
-        })
-        .collect();
-    let record = FrameRecord {
-        image: frame.image.display().to_string(),
-        width: frame.width,
-        height: frame.height,
-        elapsed_ms: round(frame.elapsed_ms, 3),
-        markers,
-    };
-    serde_json::to_string(&record).expect("plain records serialise")
-}
-
-const CSV_HEADER: &str = "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw";
-
-fn write_csv(out: &mut impl Write, frame: &Frame) -> Result<()> {
-    let opt = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
-    let image = csv_field(&frame.image.display().to_string());
-    for m in &frame.markers {
-        let pose = m.pose.as_ref();
-        writeln!(
-            out,
-            "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            m.id,
-            m.code.map_or(String::new(), |c| c.to_string()),
-            round(m.u, 3),
-            round(m.v, 3),
-            opt(m.yaw.map(|y| round(y, 5))),
-            round(m.axes[0], 3),
-            round(m.axes[1], 3),
-            round(m.confidence, 3),
-            opt(pose.map(|p| round(p.position.x, 5))),
-            opt(pose.map(|p| round(p.position.y, 5))),
-            opt(pose.map(|p| round(p.position.z, 5))),
-            opt(pose.map(|p| round(p.quaternion[0], 6))),
-            opt(pose.map(|p| round(p.quaternion[1], 6))),
-            opt(pose.map(|p| round(p.quaternion[2], 6))),
-            opt(pose.map(|p| round(p.quaternion[3], 6))),
-        )?;
-    }
-    Ok(())
-}
-
-fn csv_field(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_string()
-    }
-}
-
-fn write_table(out: &mut impl Write, frame: &Frame, with_heading: bool) -> Result<()> {
-    if with_heading {
-        writeln!(
-            out,
-            "{} ({}x{}, {} markers, {:.1} ms)",
-            frame.image.display(),
-            frame.width,
-            frame.height,
-            frame.markers.len(),
-            frame.elapsed_ms
-        )?;
-    }
-    if frame.markers.is_empty() {
-        writeln!(out, "  no markers")?;
-        if with_heading {
-            writeln!(out)?;
-        }
-        return Ok(());
-    }
-    let has_pose = frame.markers.iter().any(|m| m.pose.as_ref().is_some());
-    write!(
-        out,
-        "{:>5} {:>6} {:>9} {:>9} {:>8} {:>15} {:>5}",
-        "id", "code", "u", "v", "yaw_deg", "axes_px", "conf"
-    )?;
-    if has_pose {
-        write!(out, " {:>26}", "position_m (x, y, z)")?;
-    }
-    writeln!(out)?;
-    for m in &frame.markers {
-        let id = if m.id == 0 {
-            "?".to_string()
-        } else {
-            m.id.to_string()
-        };
-        let code = m.code.map_or("-".to_string(), |c| c.to_string());
-        let yaw = m
-            .yaw
-            .map_or("-".to_string(), |y| format!("{:.1}", y.to_degrees()));
-        let axes = format!("{:.1} x {:.1}", m.axes[0], m.axes[1]);
-        write!(
-            out,
-            "{id:>5} {code:>6} {:>9.2} {:>9.2} {yaw:>8} {axes:>15} {:>5.2}",
-            m.u, m.v, m.confidence
-        )?;
-        if let Some(p) = m.pose.as_ref() {
-            write!(
-                out,
-                " {:>26}",
-                format!(
-                    "{:.3}, {:.3}, {:.3}",
-                    p.position.x, p.position.y, p.position.z
-                )
-            )?;
-        }
-        writeln!(out)?;
-    }
-    if with_heading {
-        writeln!(out)?;
-    }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -1,11 +1,12 @@
 //! `whycode ids`: a family's IDs and codes, or the count matrix.
 
-use crate::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MIN_BITS};
+use super::args::{Format, FormatArg};
 use anyhow::{bail, Context, Result};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use whycode::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MIN_BITS};
 
 const EXAMPLES: &str = "\
 Examples:
@@ -13,7 +14,9 @@ Examples:
   whycode ids --bits 12 --distance 3 --format csv
   whycode ids --bits 12 --distance 3 --format json -o family.json
   whycode ids --family family.json                   # check and show a saved family
-  whycode ids --counts --bits 4..16:2 --distance 1..4";
+  whycode ids --counts --bits 4..16:2 --distance 1..4
+
+The json format is the family file a lab keeps to pin its family.";
 
 #[derive(Debug, clap::Args)]
 #[command(after_help = EXAMPLES)]
@@ -40,30 +43,16 @@ pub struct IdsArgs {
     #[arg(long, value_name = "FILE")]
     family: Option<PathBuf>,
 
-    /// Output format: table (aligned columns), csv or json (the
-    /// family file a lab keeps to pin its family) [default: table]
-    #[arg(long, short = 'f', value_name = "FORMAT")]
-    format: Option<String>,
+    #[command(flatten)]
+    format: FormatArg,
 
     /// Write to FILE (whole or not at all) instead of standard output
     #[arg(long, short = 'o', value_name = "FILE")]
     output: Option<PathBuf>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Format {
-    Table,
-    Csv,
-    Json,
-}
-
 pub fn run(args: IdsArgs) -> Result<ExitCode> {
-    let format = match args.format.as_deref() {
-        None | Some("table") => Format::Table,
-        Some("csv") => Format::Csv,
-        Some("json") => Format::Json,
-        Some(other) => bail!("--format: unknown format '{other}' (use table, csv or json)"),
-    };
+    let format = args.format.format;
     let text = if args.counts {
         if args.family.is_some() {
             bail!("--counts and --family cannot be used together");
@@ -89,7 +78,7 @@ pub fn run(args: IdsArgs) -> Result<ExitCode> {
         family_text(&family, format)
     };
     match &args.output {
-        Some(path) => crate::io::write_atomic(path, text.as_bytes())?,
+        Some(path) => whycode::io::write_atomic(path, text.as_bytes())?,
         None => {
             let mut stdout = std::io::stdout().lock();
             if let Err(err) = stdout

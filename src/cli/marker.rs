@@ -1,13 +1,13 @@
-use crate::family::Family;
-use crate::geometry::Marker;
-use crate::render::check::check_marker_page;
-use crate::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
-use crate::render::sheet::id_range_error;
-use crate::render::{encode_pages, write_all, Format};
-use crate::units::Length;
+use super::args::{whole_number, DpiArg, MarkerKindArgs};
 use anyhow::{bail, Result};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use whycode::geometry::Marker;
+use whycode::render::check::check_marker_page;
+use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
+use whycode::render::sheet::id_range_error;
+use whycode::render::{encode_pages, write_all, Format};
+use whycode::units::Length;
 
 /// Render one marker; the format follows the output's extension (.svg, .pdf, .png).
 #[derive(Debug, clap::Args)]
@@ -19,27 +19,25 @@ whycode marker --bits 8 --id 5 --diameter 2in --dpi 600 -o id5.png\n  \
 whycode marker --legacy --diameter 122mm -o whycon.svg"
 )]
 pub struct MarkerArgs {
-    /// Code length of the family, in bits
-    #[arg(long, required_unless_present = "legacy")]
-    bits: Option<u32>,
-    /// Minimum Hamming distance of the family
-    #[arg(long, default_value_t = 2)]
-    distance: u32,
+    #[command(flatten)]
+    kind: MarkerKindArgs,
     /// Marker ID within the family (from 1)
-    #[arg(long, required_unless_present = "legacy", conflicts_with = "legacy")]
+    #[arg(
+        long,
+        required_unless_present = "legacy",
+        conflicts_with = "legacy",
+        value_parser = whole_number,
+        allow_hyphen_values = true
+    )]
     id: Option<u32>,
-    /// Legacy WhyCon circle without an ID ring
-    #[arg(long, conflicts_with = "bits")]
-    legacy: bool,
     /// Outer diameter of the black disc, with a unit (50mm, 5cm, 2in)
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     diameter: Length,
     /// White margin around the black disc (default and minimum: 0.3 x radius)
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     margin: Option<Length>,
-    /// Resolution of PNG output, in dots per inch
-    #[arg(long, default_value_t = 300.0)]
-    dpi: f64,
+    #[command(flatten)]
+    dpi: DpiArg,
     /// Thin grey cross in the white centre, for aligning the marker
     #[arg(long)]
     cross: bool,
@@ -53,39 +51,38 @@ pub struct MarkerArgs {
     #[arg(long)]
     label: bool,
     /// Output file: .svg, .pdf or .png
-    #[arg(short, long)]
+    #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
 }
 
 pub fn run(args: MarkerArgs) -> Result<ExitCode> {
     let format = Format::from_path(&args.output)?;
-    if format == Format::Png && !(args.dpi.is_finite() && (10.0..=4800.0).contains(&args.dpi)) {
-        bail!("--dpi must be between 10 and 4800, got {}", args.dpi);
-    }
-    crate::render::check_output_dir(&args.output)?;
+    let dpi = args.dpi.dpi;
+    whycode::render::check_output_dir(&args.output)?;
     let diameter = args.diameter.mm();
-    let mut family = None;
-    let (marker, title) = if args.legacy {
-        (Marker::whycon(diameter), "WhyCon marker".to_string())
-    } else {
-        let bits = args.bits.expect("clap requires --bits without --legacy");
-        let id = args.id.expect("clap requires --id without --legacy");
-        let family_of_id = Family::generate(bits, args.distance)?;
-        let Some(code) = family_of_id.code(id) else {
-            bail!("{}", id_range_error(&family_of_id, id));
-        };
-        family = Some(family_of_id);
-        (
-            Marker::whycode(bits, code, diameter),
-            format!("WhyCode {bits}-bit d{} ID {id}", args.distance),
-        )
-    };
-    let label = args.label.then(|| {
-        if args.legacy {
-            marker_label(&marker, None, None)
-        } else {
-            marker_label(&marker, args.id, Some(args.distance))
+    let family = args.kind.resolve()?;
+    let marker = match &family {
+        None => Marker::whycon(diameter),
+        Some(family) => {
+            let id = args.id.expect("clap requires --id without --legacy");
+            let Some(code) = family.code(id) else {
+                bail!("{}", id_range_error(family, id));
+            };
+            Marker::whycode(family.bits(), code, diameter)
         }
+    };
+    let title = match &family {
+        None => "WhyCon marker".to_string(),
+        Some(family) => format!(
+            "WhyCode {}-bit d{} ID {}",
+            family.bits(),
+            family.distance(),
+            args.id.unwrap_or(0)
+        ),
+    };
+    let label = args.label.then(|| match &family {
+        None => marker_label(&marker, None, None),
+        Some(family) => marker_label(&marker, args.id, Some(family.distance())),
     });
     let options = MarkerOptions {
         margin_mm: args.margin.map(Length::mm),
@@ -99,7 +96,7 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
     if args.no_check {
         eprintln!("whycode: note: self-check skipped (--no-check): the marker was not read back before writing");
     } else {
-        let png_dpi = (format == Format::Png).then_some(args.dpi);
+        let png_dpi = (format == Format::Png).then_some(dpi);
         check_marker_page(
             &page,
             &marker,
@@ -108,7 +105,7 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
             png_dpi,
         )?;
     }
-    let files = encode_pages(std::slice::from_ref(&page), &args.output, &title, args.dpi)?;
+    let files = encode_pages(std::slice::from_ref(&page), &args.output, &title, dpi)?;
     write_all(&files)?;
     Ok(ExitCode::SUCCESS)
 }

@@ -4,12 +4,13 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
-pub mod detect;
-pub mod ids;
-pub mod marker;
-pub mod sheet;
-pub mod simulate;
-pub mod validate;
+mod args;
+mod detect;
+mod ids;
+mod marker;
+mod sheet;
+mod simulate;
+mod validate;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -66,17 +67,17 @@ pub fn main() -> ExitCode {
 /// and tips, which scripts and people scanning a log both read badly.
 fn usage_error(err: clap::Error) -> ExitCode {
     use clap::error::ErrorKind;
-    if matches!(
-        err.kind(),
-        ErrorKind::DisplayHelp
-            | ErrorKind::DisplayVersion
-            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
-    ) {
-        err.exit();
+    match err.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => err.exit(),
+        // `whycode` alone: the help, as a failure. Not clap's usual 2:
+        // `validate` exits 2 for "markers missing or misread", and a
+        // mistyped command line must not read as a verdict.
+        ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+            let _ = err.print();
+            return ExitCode::FAILURE;
+        }
+        _ => {}
     }
-    let rendered = err.render().to_string();
-    let first = rendered.lines().next().unwrap_or("invalid arguments");
-    let message = first.strip_prefix("error: ").unwrap_or(first);
     let subcommand = std::env::args()
         .nth(1)
         .filter(|a| Cli::command_names().iter().any(|name| name == a));
@@ -84,10 +85,52 @@ fn usage_error(err: clap::Error) -> ExitCode {
         Some(name) => format!("whycode {name} --help"),
         None => "whycode --help".to_string(),
     };
-    eprintln!("whycode: error: {message} (see '{help}')");
-    // Not clap's usual 2: `validate` exits 2 for "markers missing or
-    // misread", and a mistyped option must not read as a verdict.
+    eprintln!(
+        "whycode: error: {} (see '{help}')",
+        one_line_usage(&err.render().to_string())
+    );
     ExitCode::FAILURE
+}
+
+/// Clap's message on one line: its first paragraph (the problem and the
+/// arguments it names: missing, conflicting, or the possible values), joined
+/// with ", ", plus a "did you mean" tip if there is one. The usage block and
+/// the pointer to --help are left out.
+fn one_line_usage(rendered: &str) -> String {
+    let mut paragraphs = rendered.split("\n\n");
+    let first: Vec<&str> = paragraphs
+        .next()
+        .unwrap_or_default()
+        .lines()
+        .map(str::trim)
+        .filter(|line| !line.is_empty())
+        .collect();
+    let mut message = match first.split_first() {
+        Some((head, rest)) => {
+            let head = head.strip_prefix("error: ").unwrap_or(head);
+            let rest = rest.join(", ");
+            if rest.is_empty() {
+                head.to_string()
+            } else if rest.starts_with('[') || head.ends_with(':') {
+                format!("{head} {rest}")
+            } else {
+                format!("{head}: {rest}")
+            }
+        }
+        None => "invalid arguments".to_string(),
+    };
+    // Clap suggests "-- -5" for values that look like flags; every option
+    // that takes a number already accepts a leading '-', so that tip only
+    // misleads. "a similar argument exists" is worth keeping.
+    for line in paragraphs.flat_map(str::lines).map(str::trim) {
+        if let Some(tip) = line.strip_prefix("tip: ") {
+            if tip.contains("similar") {
+                message.push_str("; ");
+                message.push_str(tip);
+            }
+        }
+    }
+    message
 }
 
 impl Cli {
@@ -100,57 +143,9 @@ impl Cli {
     }
 }
 
-/// Most IDs one list may name: a sheet or scene of this many is already far
-/// beyond any swarm, and the bound keeps `1-4000000000` from filling memory.
-pub(crate) const MAX_LISTED_IDS: usize = 100_000;
-
-/// Parses `--ids` lists like "1-5,9, 12-14" in the order written. An ID
-/// named twice is refused: a sheet printing it twice would make the
-/// manifest's marker-to-ID match, and so validation, ambiguous.
-pub(crate) fn parse_id_list(text: &str) -> anyhow::Result<Vec<u32>> {
-    use anyhow::bail;
-    let mut ids = Vec::new();
-    for part in text.split(',').map(str::trim).filter(|p| !p.is_empty()) {
-        let parse = |s: &str| -> anyhow::Result<u32> {
-            match s.trim().parse::<u32>() {
-                Ok(0) => {
-                    bail!("--ids: '{part}' names ID 0, which means \"unknown\"; IDs start at 1")
-                }
-                Ok(id) => Ok(id),
-                Err(_) => bail!("--ids: '{part}' is not an ID or a range like 3-7"),
-            }
-        };
-        match part.split_once('-') {
-            Some((a, b)) => {
-                let (a, b) = (parse(a)?, parse(b)?);
-                if a > b {
-                    bail!("--ids: range '{part}' runs backwards");
-                }
-                if (b - a) as usize >= MAX_LISTED_IDS {
-                    bail!("--ids: range '{part}' names more than {MAX_LISTED_IDS} IDs");
-                }
-                ids.extend(a..=b);
-            }
-            None => ids.push(parse(part)?),
-        }
-        if ids.len() > MAX_LISTED_IDS {
-            bail!("--ids: the list names more than {MAX_LISTED_IDS} IDs");
-        }
-    }
-    if ids.is_empty() {
-        bail!("--ids: no IDs given");
-    }
-    let mut sorted = ids.clone();
-    sorted.sort_unstable();
-    if let Some(pair) = sorted.windows(2).find(|w| w[0] == w[1]) {
-        bail!("--ids: ID {} is listed more than once", pair[0]);
-    }
-    Ok(ids)
-}
-
 /// The error's context chain joined with ": " on one line. Causes whose text
 /// their parent already quotes (image decoding errors do) are left out.
-pub(crate) fn one_line(err: &anyhow::Error) -> String {
+pub fn one_line(err: &anyhow::Error) -> String {
     let mut parts: Vec<String> = Vec::new();
     for cause in err.chain() {
         let text = cause
@@ -168,26 +163,30 @@ pub(crate) fn one_line(err: &anyhow::Error) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::parse_id_list;
+    use super::*;
 
     #[test]
-    fn id_lists_take_ranges_and_single_ids_in_order() {
-        assert_eq!(
-            parse_id_list("1-5,9, 12-14").unwrap(),
-            [1, 2, 3, 4, 5, 9, 12, 13, 14]
-        );
-        assert_eq!(parse_id_list("7,2").unwrap(), [7, 2]);
+    fn every_subcommand_is_a_consistent_clap_definition() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
     }
 
     #[test]
-    fn bad_id_lists_get_plain_messages() {
-        let error = |text: &str| format!("{:#}", parse_id_list(text).unwrap_err());
-        assert!(error("5-3").contains("backwards"));
-        assert_eq!(error("1,x"), "--ids: 'x' is not an ID or a range like 3-7");
-        assert!(error("-3").contains("'-3' is not an ID"));
-        assert!(error("0").contains("IDs start at 1"));
-        assert!(error("1-3,2").contains("ID 2 is listed more than once"));
-        assert!(error("1-4000000000").contains("more than 100000 IDs"));
-        assert!(error(" , ").contains("no IDs given"));
+    fn clap_messages_keep_their_names_on_one_line() {
+        let missing = "error: the following required arguments were not provided:\n  \
+--diameter <DIAMETER>\n  --id <ID>\n\nUsage: whycode marker --diameter <DIAMETER>\n\n\
+For more information, try '--help'.\n";
+        assert_eq!(
+            one_line_usage(missing),
+            "the following required arguments were not provided: --diameter <DIAMETER>, --id <ID>"
+        );
+        let value = "error: invalid value 'xml' for '--format <FORMAT>'\n  \
+[possible values: table, csv, json]\n\n  tip: a similar value exists: 'csv'\n\n\
+For more information, try '--help'.\n";
+        assert_eq!(
+            one_line_usage(value),
+            "invalid value 'xml' for '--format <FORMAT>' [possible values: table, csv, json]; \
+a similar value exists: 'csv'"
+        );
     }
 }

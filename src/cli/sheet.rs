@@ -1,13 +1,14 @@
-use crate::family::Family;
-use crate::render::check::{check_sheet, check_sheet_png};
-use crate::render::manifest::FamilyRef;
-use crate::render::sheet::{family_markers, layout, legacy_markers, SheetSpec};
-use crate::render::template::Template;
-use crate::render::{encode_pages, write_all, Format};
-use crate::units::Length;
-use anyhow::{bail, Result};
+use super::args::{whole_number, DpiArg, MarkerKindArgs};
+use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
 use std::process::ExitCode;
+use whycode::family::{parse_id_list, MAX_LISTED_IDS};
+use whycode::render::check::{check_sheet, check_sheet_png};
+use whycode::render::manifest::FamilyRef;
+use whycode::render::sheet::{family_markers, layout, legacy_markers, SheetSpec};
+use whycode::render::template::Template;
+use whycode::render::{encode_pages, write_all, Format};
+use whycode::units::Length;
 
 /// Lay out markers on print pages; PDF gives one file, SVG and PNG one file
 /// per page (name-1.svg, name-2.svg, ... when there is more than one page).
@@ -25,33 +26,31 @@ whycode sheet --legacy --count 6 --diameter 80mm -o whycon.pdf\n\n\
 Without options: every ID of the 8-bit distance-2 family, 40 mm, on A4, written to swarm.pdf."
 )]
 pub struct SheetArgs {
-    /// Code length of the family, in bits [default: 8]
-    #[arg(long)]
-    bits: Option<u32>,
-    /// Minimum Hamming distance of the family
-    #[arg(long, default_value_t = 2)]
-    distance: u32,
+    #[command(flatten)]
+    kind: MarkerKindArgs,
     /// IDs to print: a list of IDs and ranges, e.g. 1-5,9,12-14 [default: every ID]
     #[arg(long, conflicts_with_all = ["all", "legacy"])]
     ids: Option<String>,
     /// Print every ID of the family (what happens without --ids)
     #[arg(long, conflicts_with_all = ["legacy", "ids"])]
     all: bool,
-    /// Legacy WhyCon circles without IDs (with --count)
-    #[arg(long, conflicts_with = "bits", requires = "count")]
-    legacy: bool,
-    /// Number of legacy WhyCon circles
-    #[arg(long, requires = "legacy")]
-    count: Option<usize>,
+    /// Number of legacy WhyCon circles (with --legacy)
+    #[arg(
+        long,
+        requires = "legacy",
+        required_if_eq("legacy", "true"),
+        value_parser = whole_number,
+        allow_hyphen_values = true
+    )]
+    count: Option<u32>,
     /// Outer diameter of the black disc, with a unit (40mm, 4cm, 1.5in)
-    #[arg(long, default_value = "40mm")]
+    #[arg(long, default_value = "40mm", allow_hyphen_values = true)]
     diameter: Length,
     /// Page template: a built-in name (see --list-templates) or a .toml file
     #[arg(long, default_value = "a4")]
     template: String,
-    /// Resolution of PNG output, in dots per inch
-    #[arg(long, default_value_t = 300.0)]
-    dpi: f64,
+    #[command(flatten)]
+    dpi: DpiArg,
     /// Skip the self-check that renders each page and reads every marker back
     #[arg(long)]
     no_check: bool,
@@ -59,7 +58,7 @@ pub struct SheetArgs {
     #[arg(long)]
     list_templates: bool,
     /// Output file: .pdf, .svg or .png
-    #[arg(short, long, default_value = "swarm.pdf")]
+    #[arg(short, long, value_name = "FILE", default_value = "swarm.pdf")]
     output: PathBuf,
 }
 
@@ -69,9 +68,9 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
             println!(
                 "{:<8} {:>6} x {:<6} mm  margin {} mm  {}",
                 t.name,
-                crate::units::trim_float(t.page_width_mm),
-                crate::units::trim_float(t.page_height_mm),
-                crate::units::trim_float(t.margin_mm),
+                whycode::units::trim_float(t.page_width_mm),
+                whycode::units::trim_float(t.page_height_mm),
+                whycode::units::trim_float(t.margin_mm),
                 t.description
             );
         }
@@ -80,40 +79,32 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
     let output = args.output;
     let diameter = args.diameter.mm();
     let format = Format::from_path(&output)?;
-    if format == Format::Png && !(args.dpi.is_finite() && (10.0..=1200.0).contains(&args.dpi)) {
-        bail!("--dpi must be between 10 and 1200, got {}", args.dpi);
-    }
-    crate::render::check_output_dir(&output)?;
+    let dpi = args.dpi.dpi;
+    let legacy = args.kind.legacy;
+    whycode::render::check_output_dir(&output)?;
     let template = Template::resolve(&args.template)?;
-    let mut check_family = None;
-    let (markers, family) = if args.legacy {
-        let count = args.count.expect("clap requires --count with --legacy");
-        if count == 0 || count > 100_000 {
-            bail!("--count must be between 1 and 100000, got {count}");
+    let check_family = args.kind.resolve()?;
+    let (markers, family) = match &check_family {
+        None => {
+            let count = args.count.expect("clap requires --count with --legacy") as usize;
+            if count == 0 || count > 100_000 {
+                bail!("--count must be between 1 and 100000, got {count}");
+            }
+            (legacy_markers(count, diameter), None)
         }
-        (legacy_markers(count, diameter), None)
-    } else {
-        let bits = args.bits.unwrap_or(crate::family::DEFAULT_BITS);
-        let family = Family::generate(bits, args.distance)?;
-        let ids: Vec<u32> = match &args.ids {
-            Some(list) => super::parse_id_list(list)?,
-            None if family.len() > super::MAX_LISTED_IDS => bail!(
-                "the {bits}-bit family with distance {} has {} IDs, too many to print at once; choose some with --ids (at most {})",
-                args.distance,
-                family.len(),
-                super::MAX_LISTED_IDS
-            ),
-            None => (1..=family.len() as u32).collect(),
-        };
-        let markers = family_markers(&family, &ids, diameter)?;
-        check_family = Some(family);
-        (
-            markers,
-            Some(FamilyRef {
-                bits,
-                distance: args.distance,
-            }),
-        )
+        Some(family) => {
+            let (bits, distance) = (family.bits(), family.distance());
+            let ids: Vec<u32> = match &args.ids {
+                Some(list) => parse_id_list(list).context("--ids")?,
+                None if family.len() > MAX_LISTED_IDS => bail!(
+                    "the {bits}-bit family with distance {distance} has {} IDs, too many to print at once; choose some with --ids (at most {MAX_LISTED_IDS})",
+                    family.len(),
+                ),
+                None => (1..=family.len() as u32).collect(),
+            };
+            let markers = family_markers(family, &ids, diameter)?;
+            (markers, Some(FamilyRef { bits, distance }))
+        }
     };
     let name = output
         .file_stem()
@@ -124,19 +115,19 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         template,
         name: name.clone(),
         family,
-        legacy: args.legacy,
+        legacy,
     };
     let sheet = layout(&spec)?;
     if args.no_check {
         eprintln!("whycode: note: self-check skipped (--no-check): the markers were not read back before writing");
     } else {
         let report = if format == Format::Png {
-            check_sheet_png(&sheet, check_family.as_ref(), args.dpi)?
+            check_sheet_png(&sheet, check_family.as_ref(), dpi)?
         } else {
             check_sheet(&sheet, check_family.as_ref())?
         };
         let dpis: Vec<String> = report.resolutions.iter().map(|d| format!("{d}")).collect();
-        let what = if args.legacy {
+        let what = if legacy {
             "found in place"
         } else {
             "read back as its own ID, upright,"
@@ -149,7 +140,7 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
             }
         );
     }
-    let mut files = encode_pages(&sheet.pages, &output, &name, args.dpi)?;
+    let mut files = encode_pages(&sheet.pages, &output, &name, dpi)?;
     files.push((
         output.with_extension("json"),
         sheet.manifest.to_json().into_bytes(),

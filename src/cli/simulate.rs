@@ -1,22 +1,29 @@
 //! `whycode simulate`: render a synthetic camera view with ground truth.
 
-use crate::camera::Camera;
-use crate::family::Family;
-use crate::geometry::Marker;
-use crate::render::manifest::Manifest;
-use crate::simulate::{self, layout, Background, MotionBlur, Scene, SceneObject, SheetPage};
-use crate::units::{Angle, Length};
+use super::args::{parse_plain_number, whole_number, DistanceArg, FamilyArgs};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use whycode::camera::Camera;
+use whycode::family::parse_id_list;
+use whycode::geometry::Marker;
+use whycode::render::manifest::Manifest;
+use whycode::simulate::{self, layout, Background, MotionBlur, Scene, SceneObject, SheetPage};
+use whycode::units::{Angle, Length};
 
 #[derive(Debug, clap::Args)]
 #[command(
     after_help = "Without --camera the camera is ideal (no distortion): --size (default \
 1920x1080) and --fov (default 60deg, horizontal). Writes the image (format from the \
 extension: .png, .jpg, .pgm, .bmp) and the ground truth as JSON next to it (view.png -> \
-view.json): every marker's ID, code, pixel centre, yaw, size and pose."
+view.json): every marker's ID, code, pixel centre, yaw, size and pose.\n\n\
+Lengths need a unit (mm, cm, m, in) and angles one too (deg, rad). --distance is the \
+family's Hamming distance, as in every command; the camera's distance is --camera-distance. \
+For one more release the old spellings still work, with a note: --hamming N, and \
+--distance with a length (0.8m) for the camera distance.\n\nExamples:\n  \
+whycode simulate --manifest swarm.json --camera-distance 0.8m --tilt 30deg -o view.png\n  \
+whycode simulate --bits 12 --distance 2 --ids 1-20 --diameter 50mm -o scene.png"
 )]
 pub struct SimulateArgs {
     // Boxed: the options are many, and the CLI's subcommand enum stays small.
@@ -27,25 +34,24 @@ pub struct SimulateArgs {
 #[derive(Debug, clap::Args)]
 struct SimulateOptions {
     /// Sheet manifest: show one page of the printed sheet
-    #[arg(long, value_name = "FILE", conflicts_with_all = ["bits", "ids"])]
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["bits", "family", "ids"])]
     manifest: Option<PathBuf>,
     /// Page of the sheet to show
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = whole_number, allow_hyphen_values = true)]
     page: u32,
     /// Scale the printer applied to the content, e.g. 0.97 or 97%
-    #[arg(long, default_value = "1", value_parser = parse_scale)]
+    #[arg(long, default_value = "1", value_parser = parse_scale, allow_hyphen_values = true)]
     print_scale: f64,
-    /// Loose markers: code length
-    #[arg(long, requires = "ids")]
-    bits: Option<u32>,
-    /// Minimum Hamming distance of the family (loose markers)
-    #[arg(long, default_value_t = 2)]
-    hamming: u32,
+    #[command(flatten)]
+    family: FamilyArgs,
+    /// Old name of --distance (the Hamming distance), kept for one release
+    #[arg(long, hide = true, value_parser = whole_number)]
+    hamming: Option<u32>,
     /// Loose markers: IDs, e.g. 1-20 or 1,4,9-12
-    #[arg(long, requires = "bits")]
+    #[arg(long)]
     ids: Option<String>,
     /// Loose markers: diameter of the black disc
-    #[arg(long, default_value = "50mm")]
+    #[arg(long, default_value = "50mm", allow_hyphen_values = true)]
     diameter: Length,
     /// Loose markers: arrangement
     #[arg(long, value_enum, default_value_t = Layout::Grid)]
@@ -59,10 +65,10 @@ struct SimulateOptions {
     /// Horizontal field of view of the ideal camera
     #[arg(long, default_value = "60deg", conflicts_with = "camera")]
     fov: Angle,
-    /// Distance from the camera to the page centre / marker board (default:
-    /// a page fills 80 % of the frame; loose markers 1 m)
-    #[arg(long)]
-    distance: Option<Length>,
+    /// Distance from the camera to the page centre / marker board, with a
+    /// unit (default: a page fills 80 % of the frame; loose markers 1 m)
+    #[arg(long, value_name = "LENGTH", allow_hyphen_values = true)]
+    camera_distance: Option<Length>,
     /// Rotation about the horizontal axis (positive: top edge towards the camera)
     #[arg(long, default_value = "0deg", allow_hyphen_values = true)]
     tilt: Angle,
@@ -76,7 +82,7 @@ struct SimulateOptions {
     #[arg(long, value_enum)]
     background: Option<BackgroundArg>,
     /// Illumination ratio brightest:darkest across the frame, e.g. 3
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value = "1", value_parser = parse_plain_number, allow_hyphen_values = true)]
     gradient: f64,
     /// Direction in which the light falls off (image angle, 0 = to the right)
     #[arg(long, default_value = "0deg", allow_hyphen_values = true)]
@@ -85,19 +91,19 @@ struct SimulateOptions {
     #[arg(long, conflicts_with = "exposure")]
     dark: bool,
     /// Exposure: 1 puts white paper near grey 220
-    #[arg(long)]
+    #[arg(long, value_parser = parse_plain_number, allow_hyphen_values = true)]
     exposure: Option<f64>,
     /// Focus blur: Gaussian sigma in pixels, e.g. 2px
-    #[arg(long, default_value = "0px", value_parser = parse_pixels)]
+    #[arg(long, default_value = "0px", value_parser = parse_pixels, allow_hyphen_values = true)]
     blur: f64,
     /// Motion blur: length of the smear in pixels, e.g. 6px
-    #[arg(long, default_value = "0px", value_parser = parse_pixels)]
+    #[arg(long, default_value = "0px", value_parser = parse_pixels, allow_hyphen_values = true)]
     motion_blur: f64,
     /// Direction of the motion blur (image angle)
     #[arg(long, default_value = "0deg", allow_hyphen_values = true)]
     motion_angle: Angle,
     /// Sensor noise: Gaussian sigma in grey levels
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value = "0", value_parser = parse_plain_number, allow_hyphen_values = true)]
     noise: f64,
     /// JPEG quality (1-100): compress the image (a .jpg output is written at this quality)
     #[arg(long, value_parser = clap::value_parser!(u8).range(1..=100))]
@@ -176,7 +182,8 @@ fn parse_size(text: &str) -> Result<(u32, u32)> {
 }
 
 pub fn run(args: SimulateArgs) -> Result<ExitCode> {
-    let args = *args.options;
+    let mut args = *args.options;
+    let camera_distance = take_old_spellings(&mut args)?;
     let camera = match &args.camera {
         Some(path) => Camera::load(path)?,
         None => {
@@ -202,7 +209,10 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
             bail!("{}: has no page {}", path.display(), args.page);
         }
         let [w, h] = manifest.page_size_mm;
-        let distance = match args.distance {
+        if args.family.distance.is_some() {
+            bail!("--distance: the manifest names the family; the camera's distance is --camera-distance");
+        }
+        let distance = match camera_distance {
             Some(d) => d.m(),
             None => layout::distance_to_fill(&camera, w, h, 0.8),
         };
@@ -230,12 +240,15 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
         scene.objects.push(SceneObject::Page(page));
         scene.background = Background::Table;
     } else {
-        let (Some(bits), Some(ids)) = (args.bits, &args.ids) else {
-            bail!("say what to show: --manifest FILE, or --bits N --ids LIST for loose markers");
+        let Some(ids) = &args.ids else {
+            bail!("say what to show: --manifest FILE, or --ids LIST (with --bits and --distance, or --family) for loose markers");
         };
-        let family = Family::generate(bits, args.hamming)
-            .with_context(|| format!("--bits {bits} --hamming {}", args.hamming))?;
-        let ids = super::parse_id_list(ids)?;
+        let family = args
+            .family
+            .resolve()
+            .with_context(|| args.family.describe())?;
+        let bits = family.bits();
+        let ids = parse_id_list(ids).context("--ids")?;
         let diameter = args.diameter.mm();
         let markers = ids
             .iter()
@@ -243,14 +256,14 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
                 let code = family.code(id).with_context(|| {
                     format!(
                         "--ids: ID {id} is not in the {bits}-bit family with distance {} ({} IDs)",
-                        args.hamming,
+                        family.distance(),
                         family.len()
                     )
                 })?;
                 Ok((Marker::whycode(bits, code, diameter), id))
             })
             .collect::<Result<Vec<_>>>()?;
-        let distance = args.distance.map_or(1.0, Length::m);
+        let distance = camera_distance.map_or(1.0, Length::m);
         let mut loose = match args.layout {
             Layout::Grid => {
                 layout::marker_grid(&markers, &layout::centred(distance, tilt, pan, roll))
@@ -329,7 +342,7 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
         );
     }
     simulate::save_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
-    crate::io::write_atomic(&truth_path, truth.to_json().as_bytes())?;
+    whycode::io::write_atomic(&truth_path, truth.to_json().as_bytes())?;
     let visible = truth.markers.iter().filter(|m| m.visible).count();
     println!(
         "wrote {} ({}x{}) and {}: {} markers, {} wholly in view",
@@ -341,6 +354,33 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
         visible
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Accepts the spellings of the release before `--distance` meant the
+/// Hamming distance everywhere, with a note: `--hamming N` and
+/// `--distance LENGTH`. Returns the camera distance.
+fn take_old_spellings(args: &mut SimulateOptions) -> Result<Option<Length>> {
+    let mut camera_distance = args.camera_distance;
+    if let Some(DistanceArg::Length { length, text }) = &args.family.distance {
+        if camera_distance.is_some() {
+            bail!("--distance '{text}' and --camera-distance both give the camera's distance; keep --camera-distance");
+        }
+        eprintln!(
+            "whycode: note: --distance {text} reads as the camera distance for one more release; write --camera-distance {text} (--distance is now the Hamming distance)"
+        );
+        camera_distance = Some(*length);
+        args.family.distance = None;
+    }
+    if let Some(hamming) = args.hamming {
+        if args.family.distance.is_some() || args.family.family.is_some() {
+            bail!("--hamming is the old name of --distance; give the family once, as --distance (or --family)");
+        }
+        eprintln!(
+            "whycode: note: --hamming is now --distance; --hamming {hamming} still works for one more release"
+        );
+        args.family.distance = Some(DistanceArg::Hamming(hamming));
+    }
+    Ok(camera_distance)
 }
 
 fn display(path: &Path) -> String {

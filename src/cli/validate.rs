@@ -1,12 +1,12 @@
 //! `whycode validate`: check photos of printed sheets against the manifest.
 
-use crate::camera::Camera;
-use crate::render::manifest::Manifest;
-use crate::validate::{self, annotate};
 use anyhow::{Context, Result};
 use clap::ValueEnum;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use whycode::camera::Camera;
+use whycode::render::manifest::Manifest;
+use whycode::validate::{self, annotate};
 
 /// Exit status when the check ran but the sheet has problems.
 const PROBLEMS: u8 = 2;
@@ -33,7 +33,7 @@ pub struct ValidateArgs {
     #[arg(long, value_name = "DIR")]
     annotate: Option<PathBuf>,
     /// Report format on standard output
-    #[arg(long, value_enum, default_value_t = Format::Table)]
+    #[arg(long, short = 'f', value_enum, default_value_t = Format::Table)]
     format: Format,
 }
 
@@ -56,7 +56,7 @@ pub fn run(args: ValidateArgs) -> Result<ExitCode> {
     // Photos from different folders may share a name (two phones' IMG_0001).
     let mut used_names = std::collections::HashSet::new();
     for path in &args.photos {
-        let image = crate::detect::load_gray(path)?;
+        let image = whycode::detect::load_gray(path)?;
         let cam = camera
             .as_ref()
             .map(|c| c.for_image(image.width(), image.height()))
@@ -102,5 +102,5 @@ fn save_rgb(path: &Path, picture: &image::RgbImage) -> Result<()> {
             image::ExtendedColorType::Rgb8,
         )
         .map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", path.display()))?;
-    crate::io::write_atomic(path, &bytes)
+    whycode::io::write_atomic(path, &bytes)
 }

@@ -24,6 +24,7 @@ pub mod annotate;
 pub mod ellipse;
 pub mod idfilter;
 pub mod rectify;
+pub mod report;
 pub mod ring;
 pub mod segment;
 pub mod threshold;

@@ -168,6 +168,7 @@ impl Family {
     }
 
     /// Writes the family file whole or not at all.
+    #[cfg(feature = "files")]
     pub fn save(&self, path: &Path) -> Result<()> {
         crate::io::write_atomic(path, self.to_json().as_bytes())
     }

@@ -3,11 +3,13 @@
 //! them (spec section 3), and the lookup that decodes ring readings into IDs.
 
 mod file;
+mod id_list;
 pub mod lookup;
 pub mod necklace;
 mod stats;
 
 pub use file::{FAMILY_FILE_FORMAT, FAMILY_FILE_VERSION};
+pub use id_list::{parse_id_list, IdListError, MAX_LISTED_IDS};
 pub use lookup::{Decoded, Decoder, MatchStatus};
 pub use stats::FamilyStats;
 

@@ -10,8 +10,8 @@ use super::sheet::Sheet;
 use crate::detect::{Detection, Detector, DetectorConfig};
 use crate::family::Family;
 use crate::geometry::{Marker, MarkerKind};
+use crate::parallel::prelude::*;
 use anyhow::{bail, Result};
-use rayon::prelude::*;
 
 /// The resolution a sheet is usually printed at.
 pub const PRINT_DPI: f64 = 300.0;

@@ -127,6 +127,7 @@ impl Manifest {
         s
     }
 
+    #[cfg(feature = "files")]
     pub fn save(&self, path: &Path) -> Result<()> {
         crate::io::write_atomic(path, self.to_json().as_bytes())
     }

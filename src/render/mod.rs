@@ -118,6 +118,7 @@ pub fn check_output_dir(path: &Path) -> Result<()> {
 
 /// Writes a sheet's or marker's files together: all of them, or (when one
 /// cannot be written) none, with any earlier outputs left as they were.
+#[cfg(feature = "files")]
 pub fn write_all(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
     crate::io::write_all_atomic(files)
 }

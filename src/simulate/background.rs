@@ -3,7 +3,7 @@
 
 use super::rng::Pcg32;
 use super::{Background, Scene};
-use rayon::prelude::*;
+use crate::parallel::prelude::*;
 
 const TABLE_REFLECTANCE: f64 = 0.22;
 const CLUTTER_BASE_REFLECTANCE: f64 = 0.5;

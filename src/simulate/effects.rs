@@ -3,8 +3,8 @@
 
 use super::rng::Pcg32;
 use super::Scene;
+use crate::parallel::prelude::*;
 use image::GrayImage;
-use rayon::prelude::*;
 
 /// Grey level of a perfectly white surface at exposure 1.
 const FULL_SCALE: f64 = 255.0;

@@ -289,6 +289,7 @@ impl ImageFormat {
 
 /// Writes a grey image whole or not at all, in the format of the path's
 /// extension (JPEG at `jpeg_quality`).
+#[cfg(feature = "files")]
 pub fn save_image(
     path: &std::path::Path,
     image: &image::GrayImage,

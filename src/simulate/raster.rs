@@ -3,8 +3,8 @@
 use super::{background, Blot, LooseMarker, Placement, Scene, SceneObject, SheetPage};
 use crate::camera::Camera;
 use crate::geometry::Marker;
+use crate::parallel::prelude::*;
 use nalgebra::{Matrix3, Vector3};
-use rayon::prelude::*;
 
 /// Viewing rays of pixel positions: exact for a distortion-free camera,
 /// otherwise bilinear between undistorted rays on a coarse grid (the lens

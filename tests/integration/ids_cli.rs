@@ -199,7 +199,10 @@ fn bad_input_gets_one_line_and_a_failure() {
             "distance must be between 1 and the bit count 6, got 7",
         ),
         (&["ids", "--distance", "-2"], "'-2' is not a whole number"),
-        (&["ids", "--format", "xml"], "unknown format 'xml'"),
+        (
+            &["ids", "--format", "xml"],
+            "invalid value 'xml' for '--format <FORMAT>' [possible values: table, csv, json]",
+        ),
         (
             &["ids", "--counts", "--bits", "4.."],
             "'4..' is not a number or range",

@@ -14,8 +14,6 @@ use whycode::pose::{
 
 /// Default marker of the reference ROS tools: 122 mm outer diameter.
 const RADIUS: f64 = 0.061;
-/// Legacy WhyCon inner white disc, relative to the outer radius.
-
 fn distorted_640() -> Camera {
     Camera {
         fx: 554.0,

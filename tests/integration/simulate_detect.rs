@@ -81,7 +81,7 @@ fn cli_loose_markers_write_image_and_truth() {
             "40mm",
             "--size",
             "640x480",
-            "--distance",
+            "--camera-distance",
             "0.6m",
             "--roll",
             "30deg",

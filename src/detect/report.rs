@@ -1,0 +1,264 @@
+//! Detect's reports: JSON lines, CSV rows and a table, shared by the command
+//! line and the bindings so every front end emits the same fields.
+
+use super::Detection;
+use std::fmt::Write as _;
+
+/// The detections in one image.
+#[derive(Debug, Clone)]
+pub struct FrameReport {
+    /// The image's name as the caller wants it reported (usually its path).
+    pub image: String,
+    pub width: u32,
+    pub height: u32,
+    /// Detection time the caller measured (0 when not measured: the library
+    /// has no clock on every target).
+    pub elapsed_ms: f64,
+    pub markers: Vec<Detection>,
+}
+
+/// The CSV header line (without its newline); [`FrameReport::to_csv_rows`]
+/// writes the rows under it.
+pub const CSV_HEADER: &str =
+    "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw";
+
+fn round(x: f64, decimals: i32) -> f64 {
+    let k = 10f64.powi(decimals);
+    (x * k).round() / k
+}
+
+/// JSON records, fields in the documented order.
+#[derive(serde::Serialize)]
+struct FrameRecord<'a> {
+    image: &'a str,
+    width: u32,
+    height: u32,
+    elapsed_ms: f64,
+    markers: Vec<MarkerRecord>,
+}
+
+#[derive(serde::Serialize)]
+struct MarkerRecord {
+    id: u32,
+    code: Option<u32>,
+    u: f64,
+    v: f64,
+    yaw: Option<f64>,
+    axes: [f64; 2],
+    confidence: f64,
+    position: Option<[f64; 3]>,
+    rotation: Option<[[f64; 3]; 3]>,
+    quaternion: Option<[f64; 4]>,
+}
+
+impl FrameReport {
+    /// One JSON object on one line (no newline): image, width, height,
+    /// elapsed_ms and the markers with id, code, u, v, yaw, axes,
+    /// confidence, position, rotation and quaternion.
+    pub fn to_json(&self) -> String {
+        let markers = self
+            .markers
+            .iter()
+            .map(|m| {
+                let pose = m.pose.as_ref();
+                MarkerRecord {
+                    id: m.id,
+                    code: m.code,
+                    u: round(m.u, 3),
+                    v: round(m.v, 3),
+                    yaw: m.yaw.map(|y| round(y, 5)),
+                    axes: [round(m.axes[0], 3), round(m.axes[1], 3)],
+                    confidence: round(m.confidence, 3),
+                    position: pose.map(|p| {
+                        [
+                            round(p.position.x, 5),
+                            round(p.position.y, 5),
+                            round(p.position.z, 5),
+                        ]
+                    }),
+                    rotation: pose.map(|p| {
+                        std::array::from_fn(|r| {
+                            std::array::from_fn(|c| round(p.rotation[(r, c)], 6))
+                        })
+                    }),
+                    quaternion: pose.map(|p| p.quaternion.map(|q| round(q, 6))),
+                }
+            })
+            .collect();
+        let record = FrameRecord {
+            image: &self.image,
+            width: self.width,
+            height: self.height,
+            elapsed_ms: round(self.elapsed_ms, 3),
+            markers,
+        };
+        serde_json::to_string(&record).expect("plain records serialise")
+    }
+
+    /// One CSV row per marker, each ending in a newline, in the columns of
+    /// [`CSV_HEADER`].
+    pub fn to_csv_rows(&self) -> String {
+        let opt = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
+        let image = csv_field(&self.image);
+        let mut out = String::new();
+        for m in &self.markers {
+            let pose = m.pose.as_ref();
+            let _ = writeln!(
+                out,
+                "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                m.id,
+                m.code.map_or(String::new(), |c| c.to_string()),
+                round(m.u, 3),
+                round(m.v, 3),
+                opt(m.yaw.map(|y| round(y, 5))),
+                round(m.axes[0], 3),
+                round(m.axes[1], 3),
+                round(m.confidence, 3),
+                opt(pose.map(|p| round(p.position.x, 5))),
+                opt(pose.map(|p| round(p.position.y, 5))),
+                opt(pose.map(|p| round(p.position.z, 5))),
+                opt(pose.map(|p| round(p.quaternion[0], 6))),
+                opt(pose.map(|p| round(p.quaternion[1], 6))),
+                opt(pose.map(|p| round(p.quaternion[2], 6))),
+                opt(pose.map(|p| round(p.quaternion[3], 6))),
+            );
+        }
+        out
+    }
+
+    /// Aligned columns for reading: ID ("?" when unknown), code, centre,
+    /// yaw in degrees, axes, confidence and, when any marker has a pose, its
+    /// position. `with_heading` puts the image's name, size, marker count
+    /// and time above the rows and a blank line below (for several images).
+    pub fn to_table(&self, with_heading: bool) -> String {
+        let mut out = String::new();
+        if with_heading {
+            let _ = writeln!(
+                out,
+                "{} ({}x{}, {} markers, {:.1} ms)",
+                self.image,
+                self.width,
+                self.height,
+                self.markers.len(),
+                self.elapsed_ms
+            );
+        }
+        if self.markers.is_empty() {
+            out.push_str("  no markers\n");
+            if with_heading {
+                out.push('\n');
+            }
+            return out;
+        }
+        let has_pose = self.markers.iter().any(|m| m.pose.is_some());
+        let _ = write!(
+            out,
+            "{:>5} {:>6} {:>9} {:>9} {:>8} {:>15} {:>5}",
+            "id", "code", "u", "v", "yaw_deg", "axes_px", "conf"
+        );
+        if has_pose {
+            let _ = write!(out, " {:>26}", "position_m (x, y, z)");
+        }
+        out.push('\n');
+        for m in &self.markers {
+            let id = if m.id == 0 {
+                "?".to_string()
+            } else {
+                m.id.to_string()
+            };
+            let code = m.code.map_or("-".to_string(), |c| c.to_string());
+            let yaw = m
+                .yaw
+                .map_or("-".to_string(), |y| format!("{:.1}", y.to_degrees()));
+            let axes = format!("{:.1} x {:.1}", m.axes[0], m.axes[1]);
+            let _ = write!(
+                out,
+                "{id:>5} {code:>6} {:>9.2} {:>9.2} {yaw:>8} {axes:>15} {:>5.2}",
+                m.u, m.v, m.confidence
+            );
+            if let Some(p) = m.pose.as_ref() {
+                let _ = write!(
+                    out,
+                    " {:>26}",
+                    format!(
+                        "{:.3}, {:.3}, {:.3}",
+                        p.position.x, p.position.y, p.position.z
+                    )
+                );
+            }
+            out.push('\n');
+        }
+        if with_heading {
+            out.push('\n');
+        }
+        out
+    }
+}
+
+fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn frame(image: &str, markers: Vec<Detection>) -> FrameReport {
+        FrameReport {
+            image: image.to_string(),
+            width: 640,
+            height: 480,
+            elapsed_ms: 1.23456,
+            markers,
+        }
+    }
+
+    fn marker(id: u32) -> Detection {
+        Detection {
+            id,
+            code: (id > 0).then_some(7),
+            u: 10.12345,
+            v: 20.5,
+            yaw: (id > 0).then_some(0.123456),
+            axes: [30.0, 29.0],
+            angle: 0.0,
+            confidence: 0.9876,
+            status: None,
+            pose: None,
+        }
+    }
+
+    #[test]
+    fn json_has_the_documented_fields_rounded() {
+        let json = frame("a.png", vec![marker(3)]).to_json();
+        assert_eq!(
+            json,
+            "{\"image\":\"a.png\",\"width\":640,\"height\":480,\"elapsed_ms\":1.235,\
+\"markers\":[{\"id\":3,\"code\":7,\"u\":10.123,\"v\":20.5,\"yaw\":0.12346,\
+\"axes\":[30.0,29.0],\"confidence\":0.988,\"position\":null,\"rotation\":null,\"quaternion\":null}]}"
+        );
+    }
+
+    #[test]
+    fn csv_quotes_awkward_names_and_leaves_unknowns_empty() {
+        let rows = frame("a,\"b\".png", vec![marker(0)]).to_csv_rows();
+        assert_eq!(
+            rows,
+            "\"a,\"\"b\"\".png\",0,,10.123,20.5,,30,29,0.988,,,,,,,\n"
+        );
+    }
+
+    #[test]
+    fn table_marks_unknown_ids_and_empty_frames() {
+        let table = frame("a.png", vec![marker(0)]).to_table(false);
+        assert!(table.lines().nth(1).unwrap().trim_start().starts_with("? "));
+        assert_eq!(frame("a.png", vec![]).to_table(false), "  no markers\n");
+        assert!(frame("a.png", vec![])
+            .to_table(true)
+            .starts_with("a.png (640x480, 0 markers, 1.2 ms)\n"));
+    }
+}
