@@ -2,7 +2,7 @@
 //! detector; a sound sheet passes, and a sheet with a wrong, damaged or
 //! rotated marker is refused with an error naming that marker.
 
-use std::process::Command;
+use crate::support::whycode_in;
 use whycode::family::necklace::rotr;
 use whycode::family::Family;
 use whycode::render::check::check_sheet;
@@ -95,22 +95,19 @@ fn a_blotted_ring_is_named() {
 fn the_command_checks_by_default_and_says_when_it_does_not() {
     let dir = tempfile::tempdir().unwrap();
     let run = |extra: &[&str]| {
-        let out = Command::new(env!("CARGO_BIN_EXE_whycode"))
-            .current_dir(dir.path())
-            .args([
-                "sheet",
-                "--bits",
-                "10",
-                "--ids",
-                "1-6",
-                "--diameter",
-                "25mm",
-                "-o",
-                "s.pdf",
-            ])
-            .args(extra)
-            .output()
-            .unwrap();
+        let mut args = vec![
+            "sheet",
+            "--bits",
+            "10",
+            "--ids",
+            "1-6",
+            "--diameter",
+            "25mm",
+            "-o",
+            "s.pdf",
+        ];
+        args.extend_from_slice(extra);
+        let out = whycode_in(dir.path(), &args);
         assert!(out.status.success());
         String::from_utf8(out.stderr).unwrap()
     };

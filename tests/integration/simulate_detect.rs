@@ -3,7 +3,7 @@
 //! yaw, and the clutter (rings and discs that are not markers) raises no
 //! detections. Also the `simulate` CLI's loose-marker mode.
 
-use crate::support::angle_diff;
+use crate::support::{angle_diff, run_ok};
 
 use whycode::camera::Camera;
 use whycode::detect::{Detector, DetectorConfig};
@@ -70,31 +70,23 @@ fn scattered_markers_on_clutter_are_found_with_ids_and_yaw() {
 fn cli_loose_markers_write_image_and_truth() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("scene.png");
-    let status = std::process::Command::new(env!("CARGO_BIN_EXE_whycode"))
-        .args([
-            "simulate",
-            "--bits",
-            "12",
-            "--ids",
-            "1-4,9",
-            "--diameter",
-            "40mm",
-            "--size",
-            "640x480",
-            "--camera-distance",
-            "0.6m",
-            "--roll",
-            "30deg",
-            "-o",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        status.status.success(),
-        "{}",
-        String::from_utf8_lossy(&status.stderr)
-    );
+    run_ok(&[
+        "simulate",
+        "--bits",
+        "12",
+        "--ids",
+        "1-4,9",
+        "--diameter",
+        "40mm",
+        "--size",
+        "640x480",
+        "--camera-distance",
+        "0.6m",
+        "--roll",
+        "30deg",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     let truth: GroundTruth =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("scene.json")).unwrap())
             .unwrap();
