@@ -1,13 +1,15 @@
-//! Synthetic camera views for the detector's tests and benchmarks: markers
-//! drawn by point-sampling `geometry::Marker::is_black_at` (3 x 3 samples a
-//! pixel) through a pinhole projection, with optional light gradient, blur
-//! and noise. Ground truth comes from the same projection.
+//! Camera views for the detector's tests and benchmarks: markers placed in
+//! front of a pinhole camera and drawn by `whycode::simulate` on white
+//! paper, with optional light gradient, blur and noise. Ground truth comes
+//! from the same projection.
 #![allow(dead_code)]
 
 use image::GrayImage;
 use nalgebra::{Matrix3, Vector3};
+use whycode::camera::Camera;
 use whycode::geometry::Marker;
 use whycode::simulate::rng::Pcg32;
+use whycode::simulate::{self, Background, LooseMarker, Scene, SceneObject};
 
 /// A marker placed in front of a pinhole camera.
 #[derive(Debug, Clone, Copy)]
@@ -86,37 +88,6 @@ impl Placement {
         let (u1, v1) = camera.project(self.in_camera(self.marker.diameter_mm * 1e-3, 0.0));
         (v1 - v0).atan2(u1 - u0)
     }
-
-    /// Image → marker-plane map (a homography), for sampling.
-    fn inverse(&self, camera: &Pinhole) -> Matrix3<f64> {
-        let k = Matrix3::new(
-            camera.f, 0.0, camera.cx, 0.0, camera.f, camera.cy, 0.0, 0.0, 1.0,
-        );
-        let r = self.rotation;
-        let h = k * Matrix3::from_columns(&[r.column(0).into(), r.column(1).into(), self.position]);
-        h.try_inverse().expect("marker plane seen edge-on")
-    }
-
-    /// Pixel bounding box of the marker's footprint.
-    fn bbox(&self, camera: &Pinhole, width: u32, height: u32) -> (u32, u32, u32, u32) {
-        let r = self.marker.footprint_radius();
-        let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
-        for k in 0..64 {
-            let t = k as f64 * std::f64::consts::TAU / 64.0;
-            let (u, v) = camera.project(self.in_camera(r * 1.05 * t.cos(), r * 1.05 * t.sin()));
-            x0 = x0.min(u);
-            y0 = y0.min(v);
-            x1 = x1.max(u);
-            y1 = y1.max(v);
-        }
-        let clamp = |a: f64, hi: u32| a.clamp(0.0, f64::from(hi) - 1.0) as u32;
-        (
-            clamp(x0 - 2.0, width),
-            clamp(y0 - 2.0, height),
-            clamp(x1 + 2.0, width),
-            clamp(y1 + 2.0, height),
-        )
-    }
 }
 
 /// Scene rendering options.
@@ -144,7 +115,9 @@ impl Default for Look {
     }
 }
 
-/// Draws the markers on a white background.
+/// Draws the markers on white paper that fills the frame, with
+/// `whycode::simulate` (each marker's card is cut to its black disc's
+/// square, so neighbouring cards never cover a marker).
 pub fn render(
     width: u32,
     height: u32,
@@ -152,79 +125,35 @@ pub fn render(
     markers: &[Placement],
     look: Look,
 ) -> GrayImage {
-    // Reflectance 1 = white paper, 0 = black ink.
-    let mut reflectance = vec![1.0f32; (width * height) as usize];
-    const S: usize = 3;
-    for m in markers {
-        let inv = m.inverse(camera);
-        let (x0, y0, x1, y1) = m.bbox(camera, width, height);
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                let mut black = 0;
-                for j in 0..S {
-                    for i in 0..S {
-                        let px = f64::from(x) + (i as f64 + 0.5) / S as f64 - 0.5;
-                        let py = f64::from(y) + (j as f64 + 0.5) / S as f64 - 0.5;
-                        let p = inv * Vector3::new(px, py, 1.0);
-                        if m.marker.is_black_at(p.x / p.z, p.y / p.z) {
-                            black += 1;
-                        }
-                    }
-                }
-                if black > 0 {
-                    let idx = (y * width + x) as usize;
-                    reflectance[idx] = reflectance[idx].min(1.0 - black as f32 / (S * S) as f32);
-                }
-            }
-        }
-    }
-    if look.blur > 0 {
-        box_blur(
-            &mut reflectance,
-            width as usize,
-            height as usize,
-            look.blur as usize,
-        );
-        box_blur(
-            &mut reflectance,
-            width as usize,
-            height as usize,
-            look.blur as usize,
-        );
-    }
-    let mut rng = Pcg32::new(0x9e37_79b9_7f4a_7c15, 0);
-    let pixels: Vec<u8> = reflectance
+    let mut scene = Scene::new(Camera {
+        fx: camera.f,
+        fy: camera.f,
+        cx: camera.cx,
+        cy: camera.cy,
+        distortion: [0.0; 5],
+        width,
+        height,
+    });
+    let paper = look.white / 255.0;
+    scene.background = Background::Uniform(paper);
+    scene.paper_reflectance = paper;
+    scene.ink_reflectance = look.black / 255.0;
+    scene.gradient = 1.0 / look.gradient_right;
+    // A box blur of radius r applied twice has the variance of a Gaussian
+    // of sigma² = 2 ((2r + 1)² - 1) / 12.
+    let r = f64::from(look.blur);
+    scene.focus_blur_px = (((2.0 * r + 1.0).powi(2) - 1.0) / 6.0).sqrt();
+    scene.noise = look.noise;
+    scene.objects = markers
         .iter()
-        .enumerate()
-        .map(|(i, &r)| {
-            let x = (i % width as usize) as f64 / f64::from(width.max(1));
-            let light = 1.0 + (look.gradient_right - 1.0) * x;
-            let value = light * (look.black + (look.white - look.black) * f64::from(r));
-            let noise = if look.noise > 0.0 {
-                look.noise * rng.gaussian()
-            } else {
-                0.0
-            };
-            (value + noise).round().clamp(0.0, 255.0) as u8
+        .map(|m| {
+            let placement = simulate::Placement::new(m.position / 1000.0, m.rotation);
+            let mut loose = LooseMarker::new(m.marker, 0, placement);
+            loose.card_half_mm = m.marker.outer_radius();
+            SceneObject::Marker(loose)
         })
         .collect();
-    GrayImage::from_raw(width, height, pixels).unwrap()
-}
-
-fn box_blur(data: &mut [f32], w: usize, h: usize, r: usize) {
-    let mut tmp = data.to_vec();
-    for y in 0..h {
-        for x in 0..w {
-            let (a, b) = (x.saturating_sub(r), (x + r).min(w - 1));
-            tmp[y * w + x] = data[y * w + a..=y * w + b].iter().sum::<f32>() / (b - a + 1) as f32;
-        }
-    }
-    for y in 0..h {
-        let (a, b) = (y.saturating_sub(r), (y + r).min(h - 1));
-        for x in 0..w {
-            data[y * w + x] = (a..=b).map(|yy| tmp[yy * w + x]).sum::<f32>() / (b - a + 1) as f32;
-        }
-    }
+    simulate::render(&scene).0
 }
 
 /// Places `count` markers of 60-120 px (or the given range) at random
