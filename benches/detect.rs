@@ -15,10 +15,10 @@ use std::sync::OnceLock;
 use divan::{black_box, AllocProfiler, Bencher};
 use image::GrayImage;
 use scenes::{render, scatter, Look, Pinhole};
-use whycode::detect::{Detector, DetectorConfig};
+use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
-use whycode::simulate::rng::Pcg32;
+use whycode::math::Pcg32;
 
 #[global_allocator]
 static ALLOC: AllocProfiler = AllocProfiler::system();
@@ -92,7 +92,7 @@ fn small_scene() -> &'static GrayImage {
 
 fn config(tracking: bool, max_markers: usize) -> DetectorConfig {
     DetectorConfig {
-        family: Some(family()),
+        target: Target::WhyCode(family()),
         tracking,
         max_markers,
         ..DetectorConfig::default()

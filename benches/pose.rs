@@ -3,16 +3,16 @@
 use divan::black_box;
 use nalgebra::{Matrix3, Vector3};
 use whycode::camera::Camera;
-use whycode::pose::{
-    choose_by_inner_circle, circle_poses, full_pose, project_marker_point, ImageEllipse, Pose,
-};
+use whycode::geometry::WHYCON_WHITE_RATIO;
+use whycode::math::Ellipse;
+use whycode::pose::{choose_by_inner_circle, circle_poses, full_pose, project_marker_point, Pose};
 
 fn main() {
     divan::main();
 }
 
 const RADIUS: f64 = 0.061;
-const INNER_RATIO: f64 = 50.0 / 122.0;
+const INNER_RATIO: f64 = WHYCON_WHITE_RATIO;
 
 fn distorted() -> Camera {
     Camera {
@@ -29,14 +29,14 @@ fn tilted_marker() -> Pose {
     Pose::new(Vector3::new(0.2, -0.1, 1.2), rotation)
 }
 
-fn ellipse(camera: &Camera, pose: &Pose, radius: f64) -> ImageEllipse {
+fn ellipse(camera: &Camera, pose: &Pose, radius: f64) -> Ellipse {
     let points: Vec<_> = (0..64)
         .map(|i| {
             let t = std::f64::consts::TAU * i as f64 / 64.0;
             project_marker_point(camera, pose, radius * t.cos(), radius * t.sin()).unwrap()
         })
         .collect();
-    ImageEllipse::fit(&points).unwrap()
+    Ellipse::fit(&points).unwrap()
 }
 
 #[divan::bench(args = [false, true])]
@@ -79,7 +79,7 @@ fn ellipse_fit_64_points(bencher: divan::Bencher) {
             project_marker_point(&camera, &truth, RADIUS * t.cos(), RADIUS * t.sin()).unwrap()
         })
         .collect();
-    bencher.bench(|| ImageEllipse::fit(black_box(&points)));
+    bencher.bench(|| Ellipse::fit(black_box(&points)));
 }
 
 #[divan::bench]

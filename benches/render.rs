@@ -2,7 +2,7 @@
 //! 1 s and stay under 2 MB (the size is printed once).
 
 use whycode::family::Family;
-use whycode::render::manifest::FamilyRef;
+use whycode::manifest::FamilyRef;
 use whycode::render::sheet::{family_markers, layout, SheetSpec};
 use whycode::render::{pdf, raster, svg, Template};
 

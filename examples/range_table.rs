@@ -17,7 +17,7 @@
 use anyhow::{bail, Context, Result};
 use nalgebra::Vector3;
 use whycode::camera::Camera;
-use whycode::detect::{Detector, DetectorConfig};
+use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::simulate::{render, Background, LooseMarker, Placement, Scene, SceneObject};
@@ -130,7 +130,7 @@ fn trial(
 /// Last distances before the first detection / identification failure.
 fn ranges(o: &Options, family: Option<&Family>, markers: &[(Marker, u32)]) -> (f64, f64) {
     let mut detector = Detector::new(DetectorConfig {
-        family: family.cloned(),
+        target: family.map_or(Target::WhyCon, |f| Target::WhyCode(f.clone())),
         ..Default::default()
     });
     let (mut detection, mut identification) = (0.0, 0.0);

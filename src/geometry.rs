@@ -30,6 +30,66 @@ pub enum MarkerKind {
     WhyCode { bits: u32, code: u32 },
 }
 
+impl MarkerKind {
+    pub fn design(self) -> Design {
+        match self {
+            MarkerKind::WhyCon => Design::WhyCon,
+            MarkerKind::WhyCode { .. } => Design::WhyCode,
+        }
+    }
+}
+
+/// The two marker designs, whatever the code: the proportions every stage
+/// that draws or looks for a marker takes from here.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Design {
+    WhyCon,
+    WhyCode,
+}
+
+impl Design {
+    /// Ratio of the white disc to the outer radius.
+    pub fn white_ratio(self) -> f64 {
+        match self {
+            Design::WhyCon => WHYCON_WHITE_RATIO,
+            Design::WhyCode => WHYCODE_WHITE_RATIO,
+        }
+    }
+
+    /// Radius (relative) of the solid white disc at the centre: the whole
+    /// white disc of a WhyCon marker, the disc inside a WhyCode ring.
+    pub fn centre_white_ratio(self) -> f64 {
+        match self {
+            Design::WhyCon => WHYCON_WHITE_RATIO,
+            Design::WhyCode => RING_INNER_RATIO,
+        }
+    }
+
+    /// Radii (relative) of the concentric circles inside the black disc
+    /// where white meets black: WhyCode's show only in part (the ring's
+    /// inner border beside black sectors, its outer border beside white).
+    pub fn inner_edge_ratios(self) -> &'static [f64] {
+        match self {
+            Design::WhyCon => &[WHYCON_WHITE_RATIO],
+            Design::WhyCode => &[RING_INNER_RATIO, WHYCODE_WHITE_RATIO],
+        }
+    }
+
+    /// Share of the whole disc (radius R) that is white.
+    pub fn white_fraction(self) -> f64 {
+        match self {
+            Design::WhyCon => WHYCON_WHITE_RATIO.powi(2),
+            // Centre disc plus the white half of the ring's 2n sectors
+            // (Manchester coding makes exactly half of them black, whatever
+            // the code).
+            Design::WhyCode => {
+                let ring = WHYCODE_WHITE_RATIO.powi(2) - RING_INNER_RATIO.powi(2);
+                RING_INNER_RATIO.powi(2) + ring / 2.0
+            }
+        }
+    }
+}
+
 /// A filled region of the marker, in marker-frame millimetres.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shape {
@@ -74,7 +134,7 @@ impl Marker {
 
     /// Radius of the white disc inside the black one.
     pub fn white_radius(&self) -> f64 {
-        self.outer_radius() * inner_white_ratio(self.kind)
+        self.outer_radius() * self.kind.design().white_ratio()
     }
 
     /// The least white margin to keep clear around the black disc.
@@ -137,14 +197,6 @@ impl Marker {
                 }
             }
         }
-    }
-}
-
-/// Ratio of the white disc to the outer radius for a marker kind.
-pub fn inner_white_ratio(kind: MarkerKind) -> f64 {
-    match kind {
-        MarkerKind::WhyCon => WHYCON_WHITE_RATIO,
-        MarkerKind::WhyCode { .. } => WHYCODE_WHITE_RATIO,
     }
 }
 

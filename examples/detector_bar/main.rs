@@ -18,7 +18,7 @@ use std::time::Instant;
 use measures::{normal_errors, yaw_errors};
 use scenario::*;
 use whycode::detect::{Detector, DetectorConfig};
-use whycode::simulate::rng::Pcg32;
+use whycode::math::Pcg32;
 use whycode::simulate::{self, Background, MotionBlur};
 
 struct Row {

@@ -12,10 +12,10 @@ use std::f64::consts::PI;
 use image::GrayImage;
 use nalgebra::Vector3;
 use whycode::camera::Camera;
-use whycode::detect::{Detection, Detector, DetectorConfig};
+use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
-use whycode::simulate::rng::Pcg32;
+use whycode::math::Pcg32;
 use whycode::simulate::{self, GroundTruth, LooseMarker, Placement, Scene, SceneObject};
 
 pub const DEG: f64 = PI / 180.0;
@@ -165,7 +165,7 @@ pub fn scene(camera: &Camera, objects: Vec<SceneObject>, seed: u64) -> Scene {
 /// A detector for `family` (legacy without), with pose.
 pub fn detector(family: Option<&Family>, camera: &Camera, tracking: bool) -> Detector {
     Detector::new(DetectorConfig {
-        family: family.cloned(),
+        target: family.map_or(Target::WhyCon, |f| Target::WhyCode(f.clone())),
         camera: Some(*camera),
         diameter_m: Some(DIAMETER_M),
         tracking,

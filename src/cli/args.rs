@@ -3,6 +3,7 @@
 
 use anyhow::{bail, Result};
 use std::path::PathBuf;
+use whycode::detect::Target;
 use whycode::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
 use whycode::units::{format_number, Length};
 
@@ -137,12 +138,13 @@ impl FamilyArgs {
 }
 
 impl MarkerKindArgs {
-    /// The ID family, or `None` for legacy circles.
-    pub fn resolve(&self) -> Result<Option<Family>> {
+    /// Which markers these flags name: legacy circles, or WhyCode markers
+    /// of the family.
+    pub fn resolve(&self) -> Result<Target> {
         if self.legacy {
-            Ok(None)
+            Ok(Target::WhyCon)
         } else {
-            self.family.resolve().map(Some)
+            self.family.resolve().map(Target::WhyCode)
         }
     }
 }

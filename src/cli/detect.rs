@@ -10,7 +10,8 @@ use std::process::ExitCode;
 use std::time::Instant;
 use whycode::camera::Camera;
 use whycode::detect::report::{FrameReport, CSV_HEADER};
-use whycode::detect::{load_gray, Detector, DetectorConfig};
+use whycode::detect::{Detector, DetectorConfig};
+use whycode::image_io::load_gray;
 use whycode::units::Length;
 
 const EXAMPLES: &str = "\
@@ -89,10 +90,10 @@ enum Job {
 }
 
 pub fn run(args: DetectArgs) -> Result<ExitCode> {
-    let family = args.kind.resolve()?;
+    let target = args.kind.resolve()?;
     let camera = args.camera.as_deref().map(Camera::load).transpose()?;
     let mut config = DetectorConfig {
-        family,
+        target,
         diameter_m: args.diameter.map(Length::m),
         camera,
         ..DetectorConfig::default()

@@ -60,7 +60,8 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
     let dpi = args.dpi.dpi;
     whycode::render::check_output_dir(&args.output)?;
     let diameter = args.diameter.mm();
-    let family = args.kind.resolve()?;
+    let target = args.kind.resolve()?;
+    let family = target.family();
     let marker = match &family {
         None => Marker::whycon(diameter),
         Some(family) => {
@@ -97,13 +98,7 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
         eprintln!("whycode: note: self-check skipped (--no-check): the marker was not read back before writing");
     } else {
         let png_dpi = (format == Format::Png).then_some(dpi);
-        check_marker_page(
-            &page,
-            &marker,
-            args.id.unwrap_or(0),
-            family.as_ref(),
-            png_dpi,
-        )?;
+        check_marker_page(&page, &marker, args.id.unwrap_or(0), &target, png_dpi)?;
     }
     let files = encode_pages(std::slice::from_ref(&page), &args.output, &title, dpi)?;
     write_all(&files)?;

@@ -3,8 +3,8 @@ use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use whycode::family::{parse_id_list, MAX_LISTED_IDS};
+use whycode::manifest::FamilyRef;
 use whycode::render::check::{check_sheet, check_sheet_png};
-use whycode::render::manifest::FamilyRef;
 use whycode::render::sheet::{family_markers, layout, legacy_markers, SheetSpec};
 use whycode::render::template::Template;
 use whycode::render::{encode_pages, write_all, Format};
@@ -83,7 +83,8 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
     let legacy = args.kind.legacy;
     whycode::render::check_output_dir(&output)?;
     let template = Template::resolve(&args.template)?;
-    let check_family = args.kind.resolve()?;
+    let target = args.kind.resolve()?;
+    let check_family = target.family();
     let (markers, family) = match &check_family {
         None => {
             let count = args.count.expect("clap requires --count with --legacy") as usize;
@@ -122,9 +123,9 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         eprintln!("whycode: note: self-check skipped (--no-check): the markers were not read back before writing");
     } else {
         let report = if format == Format::Png {
-            check_sheet_png(&sheet, check_family.as_ref(), dpi)?
+            check_sheet_png(&sheet, &target, dpi)?
         } else {
-            check_sheet(&sheet, check_family.as_ref())?
+            check_sheet(&sheet, &target)?
         };
         let dpis: Vec<String> = report.resolutions.iter().map(|d| format!("{d}")).collect();
         let what = if legacy {

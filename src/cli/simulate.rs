@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use whycode::camera::Camera;
 use whycode::family::parse_id_list;
 use whycode::geometry::Marker;
-use whycode::render::manifest::Manifest;
+use whycode::manifest::Manifest;
 use whycode::simulate::{self, layout, Background, MotionBlur, Scene, SceneObject, SheetPage};
 use whycode::units::{Angle, Length};
 
@@ -314,9 +314,9 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
     }
     scene.noise = args.noise;
     scene.seed = args.seed;
-    let format = simulate::ImageFormat::from_path(&args.output)?;
+    let format = whycode::image_io::ImageFormat::from_path(&args.output)?;
     // A JPEG output file is itself the compression step: do it once.
-    scene.jpeg_quality = if format == simulate::ImageFormat::Jpeg {
+    scene.jpeg_quality = if format == whycode::image_io::ImageFormat::Jpeg {
         None
     } else {
         args.jpeg
@@ -341,7 +341,7 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
             truth_path.display()
         );
     }
-    simulate::save_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
+    whycode::image_io::save_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
     whycode::io::write_atomic(&truth_path, truth.to_json().as_bytes())?;
     let visible = truth.markers.iter().filter(|m| m.visible).count();
     println!(

@@ -5,7 +5,7 @@ use clap::ValueEnum;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use whycode::camera::Camera;
-use whycode::render::manifest::Manifest;
+use whycode::manifest::Manifest;
 use whycode::validate::{self, annotate};
 
 /// Exit status when the check ran but the sheet has problems.
@@ -56,7 +56,7 @@ pub fn run(args: ValidateArgs) -> Result<ExitCode> {
     // Photos from different folders may share a name (two phones' IMG_0001).
     let mut used_names = std::collections::HashSet::new();
     for path in &args.photos {
-        let image = whycode::detect::load_gray(path)?;
+        let image = whycode::image_io::load_gray(path)?;
         let cam = camera
             .as_ref()
             .map(|c| c.for_image(image.width(), image.height()))

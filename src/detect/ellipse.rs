@@ -8,138 +8,22 @@
 //! point does not move with symmetric blur) and fits a conic to those points.
 
 use super::segment::{Gray, Stats};
+use crate::math::sample::Border;
+use crate::math::Ellipse;
 
-/// An ellipse in pixel coordinates (origin at the top-left pixel's centre).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Ellipse {
-    pub u: f64,
-    pub v: f64,
-    /// Semi-major axis, pixels.
-    pub a: f64,
-    /// Semi-minor axis, pixels.
-    pub b: f64,
-    /// Direction of the major axis, atan2(dv, du), in (-π/2, π/2].
-    pub angle: f64,
-}
-
-impl Ellipse {
-    /// The ellipse of a uniformly filled region with these moments: its
-    /// covariance has eigenvalues a²/4 and b²/4.
-    pub fn from_moments(stats: &Stats) -> Option<Ellipse> {
-        if stats.count < 3 {
-            return None;
-        }
-        let (u, v) = stats.centroid();
-        let (cuu, cuv, cvv) = stats.covariance();
-        let mean = (cuu + cvv) / 2.0;
-        let diff = ((cuu - cvv) / 2.0).hypot(cuv);
-        let (l0, l1) = (mean + diff, mean - diff);
-        if l1 <= 0.0 || !l0.is_finite() {
-            return None;
-        }
-        let angle = if diff > 0.0 {
-            0.5 * (2.0 * cuv).atan2(cuu - cvv)
-        } else {
-            0.0
-        };
-        Some(Ellipse {
-            u,
-            v,
-            a: 2.0 * l0.sqrt(),
-            b: 2.0 * l1.sqrt(),
-            angle,
-        })
-    }
-
-    pub fn area(&self) -> f64 {
-        std::f64::consts::PI * self.a * self.b
-    }
-
-    /// The point at parameter t: centre + a·cos t along the major axis +
-    /// b·sin t along the minor axis.
-    pub fn point(&self, t: f64) -> (f64, f64) {
-        let (s, c) = self.angle.sin_cos();
-        let (x, y) = (self.a * t.cos(), self.b * t.sin());
-        (self.u + x * c - y * s, self.v + x * s + y * c)
-    }
-
-    /// The same ellipse scaled about its centre.
-    pub fn scaled(&self, k: f64) -> Ellipse {
-        Ellipse {
-            a: self.a * k,
-            b: self.b * k,
-            ..*self
-        }
-    }
-
-    /// The ellipse of a conic A x² + B xy + C y² + D x + E y + F = 0, if it
-    /// is a real ellipse.
-    pub fn from_conic(k: [f64; 6]) -> Option<Ellipse> {
-        let [a, b, c, d, e, f] = k;
-        let det = 4.0 * a * c - b * b;
-        if det <= 0.0 {
-            return None;
-        }
-        let u = (b * e - 2.0 * c * d) / det;
-        let v = (b * d - 2.0 * a * e) / det;
-        // Value of the conic at the centre: the quadratic form equals -f0 there.
-        let f0 = f + (d * u + e * v) / 2.0;
-        let mean = (a + c) / 2.0;
-        let diff = ((a - c) / 2.0).hypot(b / 2.0);
-        let (l_small, l_large) = (mean - diff, mean + diff);
-        // Normalise so that the form is positive definite.
-        let (l_small, l_large, f0) = if l_small < 0.0 {
-            (-l_large, -l_small, -f0)
-        } else {
-            (l_small, l_large, f0)
-        };
-        if l_small <= 0.0 || f0 >= 0.0 {
-            return None;
-        }
-        let major = (-f0 / l_small).sqrt();
-        let minor = (-f0 / l_large).sqrt();
-        // The major axis is the eigenvector of the smaller eigenvalue.
-        let mut angle = 0.5 * b.atan2(a - c) + std::f64::consts::FRAC_PI_2;
-        if a + c < 0.0 {
-            angle -= std::f64::consts::FRAC_PI_2;
-        }
-        Some(Ellipse {
-            u,
-            v,
-            a: major,
-            b: minor,
-            angle: normalise_axis_angle(angle),
-        })
-    }
-}
-
-/// An axis direction has no sign: fold it into (-π/2, π/2].
-pub fn normalise_axis_angle(angle: f64) -> f64 {
-    use std::f64::consts::PI;
-    let mut a = angle.rem_euclid(PI);
-    if a > PI / 2.0 {
-        a -= PI;
-    }
-    a
-}
-
-/// Bilinear interpolation; None outside the image.
+/// Bilinear grey level; None unless the 2×2 neighbourhood is in the image.
 #[inline]
-pub fn sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
-    if !(x >= 0.0 && y >= 0.0) {
+pub(crate) fn sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
+    image.at(x, y, Border::Interior)
+}
+
+/// The coarse outline of a segment: the ellipse of its pixel moments.
+pub fn from_moments(stats: &Stats) -> Option<Ellipse> {
+    if stats.count < 3 {
         return None;
     }
-    let (x0, y0) = (x as usize, y as usize);
-    if x0 + 1 >= image.width || y0 + 1 >= image.height {
-        return None;
-    }
-    let (fx, fy) = (x - x0 as f64, y - y0 as f64);
-    let i = y0 * image.width + x0;
-    let p = image.pixels;
-    let top = f64::from(p[i]) + fx * (f64::from(p[i + 1]) - f64::from(p[i]));
-    let bottom = f64::from(p[i + image.width])
-        + fx * (f64::from(p[i + image.width + 1]) - f64::from(p[i + image.width]));
-    Some(top + fy * (bottom - top))
+    let (u, v) = stats.centroid();
+    Ellipse::from_moments(u, v, stats.covariance())
 }
 
 /// Sub-pixel points on the outer edge of the black disc, found along rays
@@ -149,7 +33,7 @@ pub fn sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
 /// Returns the number of rays cast.
 pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>) -> usize {
     out.clear();
-    let perimeter = std::f64::consts::PI * (coarse.a + coarse.b);
+    let perimeter = std::f64::consts::PI * (coarse.semi_major + coarse.semi_minor);
     let rays = ((perimeter / 4.0) as usize).clamp(24, 64);
     // Profile from 0.75 to 1.3 of the edge radius, in steps of at most one
     // pixel; the black annulus is at least 0.4 R wide and the white margin
@@ -157,7 +41,7 @@ pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>)
     let mut profile = [0.0f64; 48];
     for k in 0..rays {
         let t = std::f64::consts::TAU * (k as f64 + 0.5) / rays as f64;
-        let (px, py) = coarse.point(t);
+        let (px, py) = coarse.point_at(t);
         let (dx, dy) = (px - coarse.u, py - coarse.v);
         let r = dx.hypot(dy);
         if r < 1.0 {
@@ -228,7 +112,7 @@ pub fn inner_edge_points(
     let rays = 48;
     for k in 0..rays {
         let t = std::f64::consts::TAU * (k as f64 + 0.5) / f64::from(rays);
-        let (px, py) = outer.point(t);
+        let (px, py) = outer.point_at(t);
         let (dx, dy) = (px - outer.u, py - outer.v);
         let r = dx.hypot(dy);
         let (s0, s1) = ((ratio - 0.07) * r, (ratio + 0.07) * r);
@@ -269,16 +153,23 @@ pub fn scanline_edge_points(
 ) -> usize {
     out.clear();
     let (s, c) = guess.angle.sin_cos();
-    let (ia, ib) = (1.0 / (guess.a * guess.a), 1.0 / (guess.b * guess.b));
+    let (ia, ib) = (
+        1.0 / (guess.semi_major * guess.semi_major),
+        1.0 / (guess.semi_minor * guess.semi_minor),
+    );
     // Q(dx, dy) = A dx² + 2 H dx dy + D dy² = 1 on the outline.
     let (qa, qh, qd) = (
         c * c * ia + s * s * ib,
         c * s * (ia - ib),
         s * s * ia + c * c * ib,
     );
-    let half_height = (guess.a * guess.a * s * s + guess.b * guess.b * c * c).sqrt();
-    let half_width = (guess.a * guess.a * c * c + guess.b * guess.b * s * s).sqrt();
-    let perimeter = std::f64::consts::PI * (guess.a + guess.b);
+    let half_height = (guess.semi_major * guess.semi_major * s * s
+        + guess.semi_minor * guess.semi_minor * c * c)
+        .sqrt();
+    let half_width = (guess.semi_major * guess.semi_major * c * c
+        + guess.semi_minor * guess.semi_minor * s * s)
+        .sqrt();
+    let perimeter = std::f64::consts::PI * (guess.semi_major + guess.semi_minor);
     let lines = ((perimeter / 12.0) as usize).clamp(6, 16);
     let half = window.ceil() as isize;
     let mut tried = 0;
@@ -399,49 +290,6 @@ pub fn scanline_edge_points(
     tried
 }
 
-/// Least-squares conic through the points, normalised by A + C = 1 (never
-/// zero for an ellipse), in coordinates centred on `origin` and scaled to
-/// unit size for conditioning.
-pub fn fit_conic(points: &[(f64, f64)], origin: (f64, f64), scale: f64) -> Option<Ellipse> {
-    if points.len() < 6 {
-        return None;
-    }
-    // Unknowns B, C, D, E, F with A = 1 - C:
-    // (y² - x²) C + xy B + x D + y E + F = -x².
-    let mut ata = nalgebra::Matrix5::<f64>::zeros();
-    let mut atb = nalgebra::Vector5::<f64>::zeros();
-    for &(px, py) in points {
-        let (x, y) = ((px - origin.0) / scale, (py - origin.1) / scale);
-        let row = nalgebra::Vector5::new(x * y, y * y - x * x, x, y, 1.0);
-        ata += row * row.transpose();
-        atb += row * (-x * x);
-    }
-    let sol = ata.lu().solve(&atb)?;
-    let (b, c, d, e, f) = (sol[0], sol[1], sol[2], sol[3], sol[4]);
-    let unit = Ellipse::from_conic([1.0 - c, b, c, d, e, f])?;
-    Some(Ellipse {
-        u: origin.0 + unit.u * scale,
-        v: origin.1 + unit.v * scale,
-        a: unit.a * scale,
-        b: unit.b * scale,
-        angle: unit.angle,
-    })
-}
-
-/// Approximate distance of a point from an ellipse (exact on the axes),
-/// via the radial scaling of the point onto the curve.
-pub fn radial_distance(e: &Ellipse, x: f64, y: f64) -> f64 {
-    let (s, c) = e.angle.sin_cos();
-    let (dx, dy) = (x - e.u, y - e.v);
-    let (p, q) = (dx * c + dy * s, -dx * s + dy * c);
-    let r = p.hypot(q);
-    let k = ((p / e.a).powi(2) + (q / e.b).powi(2)).sqrt();
-    if k == 0.0 {
-        return e.b;
-    }
-    (r - r / k).abs()
-}
-
 /// A refined outline and how well the edge fits it.
 #[derive(Debug, Clone, Copy)]
 pub struct Refined {
@@ -457,11 +305,11 @@ pub struct Refined {
 /// None when the edge does not support a consistent ellipse near `coarse`.
 pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) -> Option<Refined> {
     let rays = edge_points(image, coarse, scratch);
-    let scale = coarse.a.max(1.0);
-    let first = fit_conic(scratch, (coarse.u, coarse.v), scale)?;
+    let scale = coarse.semi_major.max(1.0);
+    let first = Ellipse::fit_near(scratch, (coarse.u, coarse.v), scale)?;
     let mut residuals: Vec<f64> = scratch
         .iter()
-        .map(|&(x, y)| radial_distance(&first, x, y))
+        .map(|&(x, y)| first.radial_distance(x, y))
         .collect();
     let mut sorted = residuals.clone();
     sorted.sort_by(f64::total_cmp);
@@ -473,16 +321,17 @@ pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) 
     if scratch.len() * 4 < total * 3 {
         return None;
     }
-    let fitted = fit_conic(scratch, (coarse.u, coarse.v), scale)?;
-    let consistent = (fitted.u - coarse.u).hypot(fitted.v - coarse.v) < 0.25 * coarse.b + 1.0
-        && (fitted.a / coarse.a - 1.0).abs() < 0.25
-        && (fitted.b / coarse.b - 1.0).abs() < 0.25;
+    let fitted = Ellipse::fit_near(scratch, (coarse.u, coarse.v), scale)?;
+    let consistent = (fitted.u - coarse.u).hypot(fitted.v - coarse.v)
+        < 0.25 * coarse.semi_minor + 1.0
+        && (fitted.semi_major / coarse.semi_major - 1.0).abs() < 0.25
+        && (fitted.semi_minor / coarse.semi_minor - 1.0).abs() < 0.25;
     if !consistent {
         return None;
     }
     let sum_sq: f64 = scratch
         .iter()
-        .map(|&(x, y)| radial_distance(&fitted, x, y).powi(2))
+        .map(|&(x, y)| fitted.radial_distance(x, y).powi(2))
         .sum();
     Some(Refined {
         ellipse: fitted,
@@ -494,25 +343,6 @@ pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn conic_of_a_rotated_ellipse_round_trips() {
-        let e = Ellipse {
-            u: 40.3,
-            v: 21.7,
-            a: 12.0,
-            b: 5.0,
-            angle: 0.6,
-        };
-        let points: Vec<(f64, f64)> = (0..20).map(|k| e.point(k as f64 * 0.31)).collect();
-        let fitted = fit_conic(&points, (40.0, 20.0), 12.0).unwrap();
-        assert!((fitted.u - e.u).abs() < 1e-9 && (fitted.v - e.v).abs() < 1e-9);
-        assert!((fitted.a - e.a).abs() < 1e-9 && (fitted.b - e.b).abs() < 1e-9);
-        assert!((fitted.angle - e.angle).abs() < 1e-9, "{}", fitted.angle);
-        for &(x, y) in &points {
-            assert!(radial_distance(&fitted, x, y) < 1e-9);
-        }
-    }
 
     #[test]
     fn moments_of_a_filled_disc_give_its_radius() {
@@ -527,10 +357,10 @@ mod tests {
                 0,
             );
         }
-        let e = Ellipse::from_moments(&s).unwrap();
+        let e = from_moments(&s).unwrap();
         assert!((e.u - 100.0).abs() < 1e-9 && (e.v - 100.0).abs() < 1e-9);
         assert!(
-            (e.a - 30.0).abs() < 0.6 && (e.b - 30.0).abs() < 0.6,
+            (e.semi_major - 30.0).abs() < 0.6 && (e.semi_minor - 30.0).abs() < 0.6,
             "{e:?}"
         );
     }

@@ -8,10 +8,11 @@
 
 use nalgebra::Vector3;
 
-use super::ellipse::{sample, Ellipse};
+use super::ellipse::sample;
 use super::segment::Gray;
 use crate::camera::Camera;
 use crate::geometry::{sector_is_black, sector_width, RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
+use crate::math::Ellipse;
 use crate::pose::Pose;
 
 /// Samples per ring sector along the rectified circle.
@@ -156,7 +157,7 @@ pub fn follow_ring(
     let (sa, ca) = outer.angle.sin_cos();
     let (dy, dx) = previous_yaw.sin_cos();
     let (ex, ey) = (dx * ca + dy * sa, -dx * sa + dy * ca);
-    let t0 = (ey / outer.b).atan2(ex / outer.a);
+    let t0 = (ey / outer.semi_minor).atan2(ex / outer.semi_major);
     let scales = [0.42, 0.52];
     // Walk t by a fixed rotation instead of evaluating sines per sample.
     let (step_sin, step_cos) = (-std::f64::consts::TAU / n as f64).sin_cos();
@@ -165,7 +166,7 @@ pub fn follow_ring(
     for _ in 0..n {
         let mut sum = 0.0;
         for k in scales {
-            let (x, y) = (k * outer.a * ct, k * outer.b * st);
+            let (x, y) = (k * outer.semi_major * ct, k * outer.semi_minor * st);
             sum += sample(image, outer.u + x * ca - y * sa, outer.v + x * sa + y * ca)?;
         }
         profile.push(sum / scales.len() as f64);
@@ -175,7 +176,7 @@ pub fn follow_ring(
     if phi.abs() > w / 2.0 {
         return None;
     }
-    let (x, y) = outer.point(t0 - phi);
+    let (x, y) = outer.point_at(t0 - phi);
     Some((y - outer.v).atan2(x - outer.u))
 }
 

@@ -25,22 +25,24 @@
 //!
 //! Perspective: the outer ellipse alone determines the marker-to-image map
 //! only up to perspective, under which the ring is neither centred on the
-//! ellipse nor evenly spaced in its parameter (2-6° of yaw error for a
+//! ellipse nor evenly spaced in its parameter (degrees of yaw error for a
 //! close, tilted marker in a wide-angle view). The reader locates the
 //! projected marker centre from the ring's radial edges (a white sector
 //! ends at 0.6 R, a black one starts at 0.343 R; perspective shifts
 //! concentric circles by amounts growing as ρ²), then rectifies exactly:
 //! the polar line of that centre is the image of the line at infinity. Yaw
 //! is the image direction from the projected centre to the rim point on
-//! the +x axis ([`RingReading::axis_point`], for the pose stage). Measured:
-//! 0.07° mean, 0.33° worst in the marker plane, 60 mm markers at 20-35 cm
-//! from a 90° camera at up to 60° tilt (tests/ring_perspective.rs).
+//! the +x axis ([`RingReading::axis_point`], for the pose stage). The yaw
+//! error this leaves on close, tilted markers in a wide-angle view is
+//! bounded by `yaw_under_perspective_stays_within_stated_bounds`
+//! (tests/ring_perspective.rs).
 
 use crate::family::{Decoded, Decoder, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
 use image::GrayImage;
 
-pub use crate::pose::ImageEllipse;
+use crate::math::sample::{Border, Plane};
+use crate::math::Ellipse;
 use std::f64::consts::PI;
 
 /// Rings whose sectors are narrower than this many pixels (at the sample
@@ -169,7 +171,7 @@ impl RingReader {
     pub fn read(
         &self,
         image: &GrayImage,
-        outer: &ImageEllipse,
+        outer: &Ellipse,
         black_level: f64,
         white_level: f64,
     ) -> RingReading {
@@ -474,7 +476,7 @@ struct EllipseFrame {
 }
 
 impl EllipseFrame {
-    fn new(e: &ImageEllipse) -> EllipseFrame {
+    fn new(e: &Ellipse) -> EllipseFrame {
         let (s, c) = e.angle.sin_cos();
         let k = e.semi_minor / e.semi_major;
         EllipseFrame {
@@ -491,7 +493,7 @@ impl EllipseFrame {
     /// The frame in which `p` is the projection of the marker centre;
     /// `None` when that is inconsistent with the ellipse (p outside it, or
     /// a degenerate rectification).
-    fn with_projected_centre(e: &ImageEllipse, p: (f64, f64)) -> Option<EllipseFrame> {
+    fn with_projected_centre(e: &Ellipse, p: (f64, f64)) -> Option<EllipseFrame> {
         let a = e.semi_major;
         let (s, c) = e.angle.sin_cos();
         let q = 1.0 / (e.semi_minor / a).powi(2);
@@ -630,14 +632,18 @@ fn sample_profile(
     radii: &[f64],
     count: usize,
 ) -> Option<Vec<f64>> {
-    let sampler = Sampler::new(image);
+    let plane = Plane::new(
+        image.as_raw(),
+        image.width() as usize,
+        image.height() as usize,
+    );
     let mut profile = Vec::with_capacity(count);
     for j in 0..count {
         let direction = frame.direction(2.0 * PI * j as f64 / count as f64);
         let mut sum = 0.0;
         for &rho in radii {
             let (x, y) = frame.at(direction, rho);
-            sum += sampler.at(x, y)?;
+            sum += plane.at(x, y, Border::Interior)?;
         }
         profile.push(sum / radii.len() as f64);
     }
@@ -659,7 +665,11 @@ fn refined_centre(
     bits: u32,
     mid_level: f64,
 ) -> Option<(f64, f64)> {
-    let sampler = Sampler::new(image);
+    let plane = Plane::new(
+        image.as_raw(),
+        image.width() as usize,
+        image.height() as usize,
+    );
     let sector = PI / f64::from(bits);
     let major = frame.scale * frame.major.0.hypot(frame.major.1);
     let step = 0.5 / major.max(1.0);
@@ -675,7 +685,7 @@ fn refined_centre(
             let direction = frame.direction(t);
             let at = |rho: f64| {
                 let (x, y) = frame.at(direction, rho);
-                sampler.at(x, y)
+                plane.at(x, y, Border::Interior)
             };
             let mut previous = at(start)?;
             if previous <= mid_level {
@@ -746,45 +756,6 @@ fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
         x[row] = (b[row] - sum) / a[row][row];
     }
     Some(x)
-}
-
-/// Bilinear interpolation with pixel centres at integer coordinates.
-struct Sampler<'a> {
-    raw: &'a [u8],
-    stride: usize,
-    max_x: f64,
-    max_y: f64,
-}
-
-impl<'a> Sampler<'a> {
-    fn new(image: &'a GrayImage) -> Sampler<'a> {
-        let (w, h) = image.dimensions();
-        Sampler {
-            raw: image.as_raw(),
-            stride: w as usize,
-            // Keep x0 + 1 inside the image; the last row and column are
-            // reached with a zero weight on the next one.
-            max_x: f64::from(w.max(2)) - 1.0 - 1e-9,
-            max_y: f64::from(h.max(2)) - 1.0 - 1e-9,
-        }
-    }
-
-    /// `None` outside the image (or for an image narrower than 2 pixels).
-    #[inline]
-    fn at(&self, x: f64, y: f64) -> Option<f64> {
-        if !(x >= 0.0 && y >= 0.0 && x <= self.max_x && y <= self.max_y) {
-            return None;
-        }
-        // Non-negative, so truncation is floor.
-        let (x0, y0) = (x as usize, y as usize);
-        let (fx, fy) = (x - x0 as f64, y - y0 as f64);
-        let i = y0 * self.stride + x0;
-        let row0 = self.raw.get(i..i + 2)?;
-        let row1 = self.raw.get(i + self.stride..i + self.stride + 2)?;
-        let top = f64::from(row0[0]) + fx * (f64::from(row0[1]) - f64::from(row0[0]));
-        let bottom = f64::from(row1[0]) + fx * (f64::from(row1[1]) - f64::from(row1[0]));
-        Some(top + fy * (bottom - top))
-    }
 }
 
 /// Parameter (radians, in [0, one sector)) of the ring's sector boundaries:

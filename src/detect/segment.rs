@@ -201,12 +201,7 @@ pub struct FillResult {
 }
 
 /// A grey image borrowed as rows of bytes.
-#[derive(Debug, Clone, Copy)]
-pub struct Gray<'a> {
-    pub pixels: &'a [u8],
-    pub width: usize,
-    pub height: usize,
-}
+pub type Gray<'a> = crate::math::sample::Plane<'a, u8>;
 
 /// The reusable work space of the flood fill.
 #[derive(Debug, Clone, Default)]

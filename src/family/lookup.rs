@@ -79,12 +79,10 @@ impl Decoded {
 /// bitset of all member rotations (2^n bits, 2 MiB at 24 bits) and searches:
 /// it walks the Hamming ball of the word, one bitset probe per neighbour,
 /// or, when that ball is larger than the family, compares against every
-/// member rotation. Measured per decoded word on one core (`cargo bench
-/// --bench family`, `decode_1000_words`: a mix of exact, 1- and 2-bit-error
-/// and random readings): 21-24 bits at d = 1-3 about 0.06-0.09 µs, 24 bits
-/// at d = 5 about 0.4 µs, d = 7 (the slowest, where the ball and the family
-/// are about equally large) about 1.3 µs, d = 9 about 0.3 µs. Building the
-/// searching decoder takes under 1 ms at 24 bits, d = 3.
+/// member rotation. The search is slowest where the ball and the family are
+/// about equally large; per-word times (a mix of exact, 1- and 2-bit-error
+/// and random readings) are measured by `cargo bench --bench family`
+/// (`decode_1000_words`), building the decoder by `decoder_build`.
 #[derive(Debug, Clone)]
 pub struct Decoder {
     family: Family,

@@ -3,13 +3,13 @@
 //! one, the detector runs on each raster, and every marker must be found at
 //! its place, read as its own ID, with yaw 0 (markers are printed upright).
 
-use super::manifest::PrintedMarker;
 use super::page::Page;
 use super::raster;
 use super::sheet::Sheet;
-use crate::detect::{Detection, Detector, DetectorConfig};
-use crate::family::Family;
-use crate::geometry::{Marker, MarkerKind};
+use crate::detect::{Detection, Detector, DetectorConfig, Target};
+use crate::geometry::{Design, Marker, MarkerKind};
+use crate::manifest::PrintedMarker;
+use crate::math::angle::wrap_signed;
 use crate::parallel::prelude::*;
 use anyhow::{bail, Result};
 
@@ -60,8 +60,7 @@ fn describe(m: &PrintedMarker) -> String {
 }
 
 fn wrap_degrees(rad: f64) -> f64 {
-    let deg = rad.to_degrees();
-    (deg + 180.0).rem_euclid(360.0) - 180.0
+    wrap_signed(rad.to_degrees(), 360.0)
 }
 
 /// Checks one expected marker against a page's detections.
@@ -69,7 +68,7 @@ fn check_marker(
     m: &PrintedMarker,
     detections: &[Detection],
     dpi: f64,
-    whycode: bool,
+    design: Design,
 ) -> Result<(), String> {
     let s = raster::px_per_mm(dpi);
     // Detector pixel coordinates have their origin at the top-left pixel's centre.
@@ -84,7 +83,7 @@ fn check_marker(
         return Err(format!("{} was not found", describe(m)));
     };
     let _ = dist;
-    if !whycode {
+    if design == Design::WhyCon {
         return Ok(());
     }
     if d.id != m.id {
@@ -106,24 +105,21 @@ fn check_marker(
 }
 
 /// Renders each page at each check resolution, detects, and confirms every
-/// marker. `family` is the family of the sheet's IDs (None for legacy
-/// WhyCon sheets, where only presence and position are checked).
-pub fn check_sheet(sheet: &Sheet, family: Option<&Family>) -> Result<CheckReport> {
-    check_pages(&sheet.pages, &sheet.manifest.markers, family, None)
+/// marker. `target` says what the sheet holds: for WhyCode markers their
+/// family (IDs and yaw are checked), for WhyCon circles only presence and
+/// position are.
+pub fn check_sheet(sheet: &Sheet, target: &Target) -> Result<CheckReport> {
+    check_pages(&sheet.pages, &sheet.manifest.markers, target, None)
 }
 
 /// [`check_sheet`] for a sheet written as PNG at `output_dpi`: that raster
 /// is what gets printed, so it is checked too when it is coarser than print
 /// resolution.
-pub fn check_sheet_png(
-    sheet: &Sheet,
-    family: Option<&Family>,
-    output_dpi: f64,
-) -> Result<CheckReport> {
+pub fn check_sheet_png(sheet: &Sheet, target: &Target, output_dpi: f64) -> Result<CheckReport> {
     check_pages(
         &sheet.pages,
         &sheet.manifest.markers,
-        family,
+        target,
         Some(output_dpi),
     )
 }
@@ -136,7 +132,7 @@ pub fn check_marker_page(
     page: &Page,
     marker: &Marker,
     id: u32,
-    family: Option<&Family>,
+    target: &Target,
     png_dpi: Option<f64>,
 ) -> Result<CheckReport> {
     let on_paper = page.on_white(marker.outer_radius());
@@ -158,7 +154,7 @@ pub fn check_marker_page(
     check_pages(
         std::slice::from_ref(&on_paper),
         &[expected],
-        family,
+        target,
         png_dpi,
     )
 }
@@ -166,7 +162,7 @@ pub fn check_marker_page(
 fn check_pages(
     pages: &[Page],
     markers: &[PrintedMarker],
-    family: Option<&Family>,
+    target: &Target,
     png_dpi: Option<f64>,
 ) -> Result<CheckReport> {
     let mut resolutions = resolutions_for(markers);
@@ -186,13 +182,13 @@ fn check_pages(
                 .collect();
             let image = raster::render_page(page, dpi).map_err(|e| format!("{e:#}"))?;
             let mut detector = Detector::new(DetectorConfig {
-                family: family.cloned(),
+                target: target.clone(),
                 max_markers: expected.len() * 2 + 16,
                 ..DetectorConfig::default()
             });
             let detections = detector.detect(&image);
             for m in &expected {
-                check_marker(m, &detections, dpi, family.is_some())
+                check_marker(m, &detections, dpi, target.design())
                     .map_err(|e| format!("{e} in a {dpi} dpi rendering"))?;
             }
             Ok(expected.len())

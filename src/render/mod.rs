@@ -6,7 +6,6 @@
 
 pub mod check;
 pub mod font;
-pub mod manifest;
 pub mod marker;
 pub mod page;
 pub mod pdf;

@@ -1,5 +1,5 @@
 //! SVG output: the page in millimetres (width/height in mm, viewBox in mm),
-//! marker discs as <circle>, ring runs as <path> arcs, labels as real text.
+//! marker discs as `<circle>`, ring runs as `<path>` arcs, labels as real text.
 
 use super::page::{Anchor, Item, Page, MM_PER_PT};
 use crate::geometry::{Marker, Shape};

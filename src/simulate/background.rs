@@ -1,8 +1,8 @@
 //! What lies behind the paper: a plain surface, a table top, or clutter of
 //! shapes that look a little like markers but are not.
 
-use super::rng::Pcg32;
 use super::{Background, Scene};
+use crate::math::Pcg32;
 use crate::parallel::prelude::*;
 
 const TABLE_REFLECTANCE: f64 = 0.22;

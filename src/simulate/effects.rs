@@ -1,8 +1,9 @@
 //! From reflectance to an 8-bit camera image: illumination, blur, noise,
 //! quantisation and JPEG, in the order a camera applies them.
 
-use super::rng::Pcg32;
 use super::Scene;
+use crate::math::sample::{Border, Plane};
+use crate::math::Pcg32;
 use crate::parallel::prelude::*;
 use image::GrayImage;
 
@@ -74,14 +75,9 @@ fn illuminate(scene: &Scene, image: &mut [f32], width: usize) {
 
 /// Bilinear sample with edge clamping.
 fn sample(image: &[f32], width: usize, height: usize, u: f64, v: f64) -> f32 {
-    let u = u.clamp(0.0, (width - 1) as f64);
-    let v = v.clamp(0.0, (height - 1) as f64);
-    let (x0, y0) = (u.floor() as usize, v.floor() as usize);
-    let (x1, y1) = ((x0 + 1).min(width - 1), (y0 + 1).min(height - 1));
-    let (tx, ty) = ((u - x0 as f64) as f32, (v - y0 as f64) as f32);
-    let at = |x: usize, y: usize| image[y * width + x];
-    (at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx) * (1.0 - ty)
-        + (at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx) * ty
+    Plane::new(image, width, height)
+        .at(u, v, Border::Clamp)
+        .unwrap_or(0.0)
 }
 
 /// Average along a centred line segment of `length` pixels.

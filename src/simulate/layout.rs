@@ -1,10 +1,10 @@
 //! Ready-made arrangements: a sheet page in front of the camera, loose
 //! markers in a grid or scattered, a blot over a marker's ring.
 
-use super::rng::Pcg32;
 use super::{Blot, LooseMarker, Placement};
 use crate::camera::Camera;
 use crate::geometry::{sector_width, Marker, MarkerKind, RING_SAMPLE_RATIO};
+use crate::math::Pcg32;
 use nalgebra::Vector3;
 
 /// Distance (metres) at which an object `width_mm` × `height_mm` seen

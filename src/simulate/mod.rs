@@ -21,14 +21,13 @@ mod background;
 mod effects;
 pub mod layout;
 mod raster;
-pub mod rng;
 mod truth;
 
-pub use truth::{GroundTruth, TrueEllipse, TrueMarker, TruePage};
+pub use truth::{GroundTruth, TrueMarker, TruePage};
 
 use crate::camera::Camera;
 use crate::geometry::Marker;
-use crate::render::manifest::Manifest;
+use crate::manifest::Manifest;
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 /// Where an object sits: object frame (metres) → camera frame.
@@ -165,10 +164,7 @@ impl SheetPage {
 
     /// The marker shape of one manifest entry (WhyCode when the manifest
     /// names a family, WhyCon otherwise), at the intended size.
-    pub fn marker_of(
-        manifest: &Manifest,
-        entry: &crate::render::manifest::PrintedMarker,
-    ) -> Marker {
+    pub fn marker_of(manifest: &Manifest, entry: &crate::manifest::PrintedMarker) -> Marker {
         match manifest.family {
             Some(f) if !manifest.legacy => Marker::whycode(f.bits, entry.code, entry.diameter_mm),
             _ => Marker::whycon(entry.diameter_mm),
@@ -256,74 +252,4 @@ pub fn render(scene: &Scene) -> (image::GrayImage, GroundTruth) {
     let reflectance = raster::render_reflectance(scene);
     let image = effects::develop(scene, reflectance);
     (image, truth::ground_truth(scene))
-}
-
-/// Image file formats the simulator writes, chosen by file extension.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ImageFormat {
-    Png,
-    Jpeg,
-    Pgm,
-    Bmp,
-}
-
-impl ImageFormat {
-    pub fn from_path(path: &std::path::Path) -> anyhow::Result<ImageFormat> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .unwrap_or_default()
-            .to_ascii_lowercase();
-        Ok(match ext.as_str() {
-            "png" => ImageFormat::Png,
-            "jpg" | "jpeg" => ImageFormat::Jpeg,
-            "pgm" | "pnm" => ImageFormat::Pgm,
-            "bmp" => ImageFormat::Bmp,
-            _ => anyhow::bail!(
-                "{}: unknown image type (use .png, .jpg, .pgm or .bmp)",
-                path.display()
-            ),
-        })
-    }
-}
-
-/// Writes a grey image whole or not at all, in the format of the path's
-/// extension (JPEG at `jpeg_quality`).
-#[cfg(feature = "files")]
-pub fn save_image(
-    path: &std::path::Path,
-    image: &image::GrayImage,
-    jpeg_quality: u8,
-) -> anyhow::Result<()> {
-    use image::ImageEncoder;
-    let format = ImageFormat::from_path(path)?;
-    let (w, h) = image.dimensions();
-    let mut bytes = Vec::new();
-    let colour = image::ExtendedColorType::L8;
-    let result = match format {
-        ImageFormat::Png => image::codecs::png::PngEncoder::new(&mut bytes).write_image(
-            image.as_raw(),
-            w,
-            h,
-            colour,
-        ),
-        ImageFormat::Jpeg => image::codecs::jpeg::JpegEncoder::new_with_quality(
-            &mut bytes,
-            jpeg_quality.clamp(1, 100),
-        )
-        .write_image(image.as_raw(), w, h, colour),
-        ImageFormat::Pgm => image::codecs::pnm::PnmEncoder::new(&mut bytes)
-            .with_subtype(image::codecs::pnm::PnmSubtype::Graymap(
-                image::codecs::pnm::SampleEncoding::Binary,
-            ))
-            .write_image(image.as_raw(), w, h, colour),
-        ImageFormat::Bmp => image::codecs::bmp::BmpEncoder::new(&mut bytes).write_image(
-            image.as_raw(),
-            w,
-            h,
-            colour,
-        ),
-    };
-    result.map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", path.display()))?;
-    crate::io::write_atomic(path, &bytes)
 }

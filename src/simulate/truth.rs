@@ -3,6 +3,7 @@
 use super::{Blot, Placement, Scene, SceneObject, SheetPage};
 use crate::camera::Camera;
 use crate::geometry::{Marker, MarkerKind};
+use crate::math::{Ellipse, Homography};
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -46,7 +47,7 @@ pub struct TrueMarker {
     /// distortion; with distortion, the ellipse of the undistorted view moved
     /// to the distorted centre). Its centre is where a detector's ellipse
     /// fit lands, which under perspective is not (u, v).
-    pub ellipse: Option<TrueEllipse>,
+    pub ellipse: Option<Ellipse>,
     /// Diameter of the black disc as printed, mm.
     pub diameter_mm: f64,
     /// Facing the camera and wholly inside the frame.
@@ -61,16 +62,6 @@ pub struct TrueMarker {
     pub normal: [f64; 3],
     /// The rotation as a quaternion x, y, z, w.
     pub quaternion: [f64; 4],
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct TrueEllipse {
-    pub u: f64,
-    pub v: f64,
-    pub semi_major: f64,
-    pub semi_minor: f64,
-    /// Direction of the major axis, atan2(dv, du).
-    pub angle: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -250,7 +241,7 @@ fn outline_ellipse(
     centre: (f64, f64),
     r: f64,
     facing: bool,
-) -> Option<TrueEllipse> {
+) -> Option<Ellipse> {
     if !facing || placement.position.z <= 0.0 {
         return None;
     }
@@ -262,17 +253,11 @@ fn outline_ellipse(
     plane.set_column(0, &(rot.column(0) / 1000.0));
     plane.set_column(1, &(rot.column(1) / 1000.0));
     plane.set_column(2, &placement.position);
-    let h = crate::validate::homography::Homography { matrix: k * plane };
+    let h = Homography { matrix: k * plane };
     let e = h.circle_image(centre.0, centre.1, r)?;
     let (u, v) =
         camera.distort_normalized((e.u - camera.cx) / camera.fx, (e.v - camera.cy) / camera.fy);
-    Some(TrueEllipse {
-        u,
-        v,
-        semi_major: e.semi_major,
-        semi_minor: e.semi_minor,
-        angle: e.angle,
-    })
+    Some(Ellipse { u, v, ..e })
 }
 
 fn vec3(v: Vector3<f64>) -> [f64; 3] {

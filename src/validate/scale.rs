@@ -7,8 +7,9 @@
 //! line to each edge in page coordinates, and compare the paper's size in
 //! manifest millimetres with the template's page size.
 
-use super::homography::{Homography, ImageEllipse};
 use crate::camera::Camera;
+use crate::math::sample::{Border, Plane};
+use crate::math::{Ellipse, Homography};
 use image::GrayImage;
 use serde::Serialize;
 
@@ -234,7 +235,7 @@ impl ScaleMeasurement {
 #[derive(Debug, Clone, Copy)]
 pub struct DiscView {
     /// The disc's outline in the photo (image pixels).
-    pub outline: ImageEllipse,
+    pub outline: Ellipse,
     /// The radius it was meant to have, mm.
     pub radius_mm: f64,
 }
@@ -345,23 +346,10 @@ fn paper_corners([w, h]: [f64; 2], lines: [Option<EdgeLine>; 4]) -> [Option<(f64
     [corner(t, l), corner(t, r), corner(b, r), corner(b, l)]
 }
 
-/// Bilinear grey value, `None` outside the image.
+/// Bilinear grey value, `None` outside the rectangle of pixel centres.
 fn sample(image: &GrayImage, u: f64, v: f64) -> Option<f64> {
-    let (w, h) = (f64::from(image.width()), f64::from(image.height()));
-    if !(u >= 0.0 && v >= 0.0 && u <= w - 1.0 && v <= h - 1.0) {
-        return None;
-    }
-    let (x0, y0) = (u.floor() as u32, v.floor() as u32);
-    let (x1, y1) = (
-        (x0 + 1).min(image.width() - 1),
-        (y0 + 1).min(image.height() - 1),
-    );
-    let (tx, ty) = (u - f64::from(x0), v - f64::from(y0));
-    let at = |x: u32, y: u32| f64::from(image.get_pixel(x, y)[0]);
-    Some(
-        (at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx) * (1.0 - ty)
-            + (at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx) * ty,
-    )
+    let (w, h) = (image.width() as usize, image.height() as usize);
+    Plane::new(image.as_raw(), w, h).at(u, v, Border::Closed)
 }
 
 /// Finds one paper edge. Side 0..4 = top, right, bottom, left.

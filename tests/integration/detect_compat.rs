@@ -3,7 +3,8 @@
 
 use std::path::PathBuf;
 
-use whycode::detect::{load_gray, Detection, Detector, DetectorConfig};
+use whycode::detect::{Detection, Detector, DetectorConfig, Target};
+use whycode::image_io::load_gray;
 
 fn compat(name: &str) -> Option<PathBuf> {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -97,7 +98,7 @@ fn tags_35_reads_every_id_the_original_reads() {
     let image = load_gray(&prefix.with_extension("png")).unwrap();
     let family = whycode::family::Family::generate(8, 1).unwrap();
     let mut detector = Detector::new(DetectorConfig {
-        family: Some(family),
+        target: Target::WhyCode(family),
         ..DetectorConfig::default()
     });
     let found = detector.detect(&image);

@@ -5,20 +5,21 @@ use std::path::Path;
 
 use crate::support::Pcg32;
 use image::{GrayImage, Luma};
-use whycode::detect::{load_gray, Detector, DetectorConfig};
+use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::WHYCON_WHITE_RATIO;
+use whycode::image_io::load_gray;
 
 fn detectors() -> Vec<Detector> {
     let family = Family::generate(8, 2).unwrap();
     vec![
         Detector::new(DetectorConfig::default()),
         Detector::new(DetectorConfig {
-            family: Some(family.clone()),
+            target: Target::WhyCode(family.clone()),
             ..DetectorConfig::default()
         }),
         Detector::new(DetectorConfig {
-            family: Some(family),
+            target: Target::WhyCode(family),
             tracking: true,
             ..DetectorConfig::default()
         }),
@@ -275,7 +276,7 @@ fn ten_bit_data_in_a_sixteen_bit_file_keeps_its_contrast() {
     let brightest = loaded.pixels().map(|p| p.0[0]).max().unwrap();
     assert_eq!(brightest, 255);
     let mut detector = Detector::new(DetectorConfig {
-        family: Some(family),
+        target: Target::WhyCode(family),
         ..DetectorConfig::default()
     });
     let found = detector.detect(&loaded);

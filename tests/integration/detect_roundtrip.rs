@@ -4,10 +4,10 @@
 use crate::support::scenes::{match_detections, render, scatter, Look, Pinhole, Placement};
 use crate::support::Pcg32;
 use crate::support::{angle_diff, axis_angle_diff};
-use whycode::detect::ellipse::{fit_conic, Ellipse};
-use whycode::detect::{Detection, Detector, DetectorConfig};
+use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::{Marker, WHYCON_WHITE_RATIO};
+use whycode::math::Ellipse;
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 
@@ -26,7 +26,7 @@ fn true_outline(camera: &Pinhole, p: &Placement) -> Ellipse {
         })
         .collect();
     let (u, v) = p.centre(camera);
-    fit_conic(&points, (u, v), 50.0).unwrap()
+    Ellipse::fit_near(&points, (u, v), 50.0).unwrap()
 }
 
 /// Every placement found once, nothing else found; returns the matches.
@@ -80,21 +80,23 @@ fn face_on_legacy_markers_from_10_px_up_are_found_with_sub_pixel_centres() {
     for (p, d) in placements.iter().zip(matched) {
         let truth = true_outline(&camera, p);
         let centre_error = (d.u - truth.u).hypot(d.v - truth.v);
-        let size_error = (d.axes[0] - truth.a).abs().max((d.axes[1] - truth.b).abs());
+        let size_error = (d.axes[0] - truth.semi_major)
+            .abs()
+            .max((d.axes[1] - truth.semi_minor).abs());
         eprintln!(
             "d={:5.1}: centre error {centre_error:.3} px, axis error {size_error:.3} px",
-            2.0 * truth.a
+            2.0 * truth.semi_major
         );
         // Sub-pixel at every size: centres within 0.06 px, axes 0.15 px.
         assert!(
             centre_error < 0.06,
             "centre error {centre_error} at d={}",
-            2.0 * truth.a
+            2.0 * truth.semi_major
         );
         assert!(
             size_error < 0.15,
             "axis error {size_error} at d={}",
-            2.0 * truth.a
+            2.0 * truth.semi_major
         );
     }
 }
@@ -127,17 +129,19 @@ fn tilted_markers_up_to_60_degrees_keep_their_outline() {
     for (p, d) in placements.iter().zip(matched) {
         let truth = true_outline(&camera, p);
         let centre_error = (d.u - truth.u).hypot(d.v - truth.v);
-        let size_error = (d.axes[0] - truth.a).abs().max((d.axes[1] - truth.b).abs());
+        let size_error = (d.axes[0] - truth.semi_major)
+            .abs()
+            .max((d.axes[1] - truth.semi_minor).abs());
         let angle_error = axis_angle_diff(d.angle, truth.angle);
         eprintln!(
             "axes {:.1}/{:.1}: centre {centre_error:.3} px, axes {size_error:.3} px, angle {:.2}°",
-            truth.a,
-            truth.b,
+            truth.semi_major,
+            truth.semi_minor,
             angle_error / DEG
         );
         assert!(centre_error < 0.1, "centre error {centre_error}");
         assert!(size_error < 0.15, "axis error {size_error}");
-        if truth.a / truth.b > 1.05 {
+        if truth.semi_major / truth.semi_minor > 1.05 {
             assert!(
                 angle_error < 0.5 * DEG,
                 "axis direction off by {}°",
@@ -224,7 +228,7 @@ fn whycode_markers_pass_the_disc_tests() {
     });
     let image = render(1200, 800, &camera, &placements, Look::default());
     let mut detector = Detector::new(DetectorConfig {
-        family: Some(family),
+        target: Target::WhyCode(family),
         ..DetectorConfig::default()
     });
     let found = detector.detect(&image);
@@ -397,7 +401,7 @@ fn tracked_whycode_markers_keep_ids_and_yaw_while_turning() {
         cy: 300.0,
     };
     let config = DetectorConfig {
-        family: Some(family.clone()),
+        target: Target::WhyCode(family.clone()),
         ..DetectorConfig::default()
     };
     let mut tracked = Detector::new(DetectorConfig {
@@ -461,7 +465,7 @@ fn the_id_filter_outvotes_a_single_misread() {
         cy: 200.0,
     };
     let config = DetectorConfig {
-        family: Some(family.clone()),
+        target: Target::WhyCode(family.clone()),
         ..DetectorConfig::default()
     };
     let mut tracked = Detector::new(DetectorConfig {
@@ -537,7 +541,7 @@ fn small_whycode_markers_read_right_or_unknown() {
         },
     );
     let config = DetectorConfig {
-        family: Some(family),
+        target: Target::WhyCode(family),
         ..DetectorConfig::default()
     };
     let found = Detector::new(config).detect(&image);

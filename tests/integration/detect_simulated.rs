@@ -7,7 +7,7 @@ use crate::support::angle_diff;
 
 use nalgebra::Vector3;
 use whycode::camera::Camera;
-use whycode::detect::{Detection, Detector, DetectorConfig};
+use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::simulate::{
@@ -97,7 +97,7 @@ fn compare(truth: &GroundTruth, found: &[Detection]) -> Errors {
 
 fn detector(family: &Family, camera: Camera) -> Detector {
     Detector::new(DetectorConfig {
-        family: Some(family.clone()),
+        target: Target::WhyCode(family.clone()),
         camera: Some(camera),
         diameter_m: Some(DIAMETER_M),
         ..DetectorConfig::default()
@@ -221,7 +221,7 @@ fn tracking_a_rotating_board_finds_what_fresh_detection_finds() {
         .map(|id| (Marker::whycode(8, family.code(id).unwrap(), 50.0), id))
         .collect();
     let config = DetectorConfig {
-        family: Some(family.clone()),
+        target: Target::WhyCode(family.clone()),
         ..DetectorConfig::default()
     };
     let mut tracker = Detector::new(DetectorConfig {
@@ -271,7 +271,7 @@ fn dark_noisy_uneven_still_image_is_read_in_one_call() {
     scene.noise = 6.0;
     let (image, truth) = simulate::render(&scene);
     let found = Detector::new(DetectorConfig {
-        family: Some(family.clone()),
+        target: Target::WhyCode(family.clone()),
         ..DetectorConfig::default()
     })
     .detect(&image);

@@ -7,9 +7,9 @@ use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use proptest::prelude::*;
 use whycode::camera::Camera;
 use whycode::geometry::WHYCON_WHITE_RATIO;
+use whycode::math::Ellipse;
 use whycode::pose::{
-    choose_by_inner_circle, circle_poses, full_pose, project_marker_point, try_circle_poses,
-    ImageEllipse, Pose,
+    choose_by_inner_circle, circle_poses, full_pose, project_marker_point, try_circle_poses, Pose,
 };
 
 fn camera(width: u32, fov: f64, k1: f64, tangential: f64) -> Camera {
@@ -60,7 +60,7 @@ proptest! {
         let truth = pose(distance, direction, tilt, axis, yaw);
         let radius = 0.061;
         let points = boundary(&camera, &truth, radius).unwrap();
-        let Some(outer) = ImageEllipse::fit(&points) else {
+        let Some(outer) = Ellipse::fit(&points) else {
             // Only for degenerate slivers (a few hundredths of a pixel wide).
             prop_assert!(tilt > 1.3);
             return Ok(());
@@ -83,7 +83,7 @@ proptest! {
             prop_assert!(position_error < 0.01, "position off by {}", position_error);
         }
         if let Some(inner_points) = boundary(&camera, &truth, WHYCON_WHITE_RATIO * radius) {
-            if let Some(inner) = ImageEllipse::fit(&inner_points) {
+            if let Some(inner) = Ellipse::fit(&inner_points) {
                 let (chosen, margin) =
                     choose_by_inner_circle(&camera, &candidates, &inner, WHYCON_WHITE_RATIO, radius);
                 prop_assert!(chosen < 2 && !margin.is_nan());
@@ -105,7 +105,7 @@ proptest! {
         k1 in -0.5f64..0.5,
     ) {
         let camera = camera(640, 60.0, k1, 0.0);
-        let ellipse = ImageEllipse { u, v, semi_major: a, semi_minor: a * ratio, angle };
+        let ellipse = Ellipse { u, v, semi_major: a, semi_minor: a * ratio, angle };
         if let Some(candidates) = try_circle_poses(&camera, &ellipse, 0.05) {
             for c in &candidates {
                 prop_assert!(c.center.iter().chain(c.normal.iter()).all(|x| x.is_finite()));

@@ -8,7 +8,8 @@ use nalgebra::{Matrix3, Vector3};
 use whycode::camera::Camera;
 use whycode::detect::{Detector, DetectorConfig};
 use whycode::geometry::Marker;
-use whycode::pose::{circle_poses, full_pose_from_yaw, projected_center, ImageEllipse, Pose};
+use whycode::math::Ellipse;
+use whycode::pose::{circle_poses, full_pose_from_yaw, projected_center, Pose};
 use whycode::simulate::{render, LooseMarker, Placement, Scene, SceneObject};
 
 const DIAMETER_MM: f64 = 122.0;
@@ -33,7 +34,7 @@ fn round_trip(camera: Camera, placement: Placement) -> Result {
     let detections = detector.detect(&image);
     assert_eq!(detections.len(), 1, "{placement:?}");
     let d = &detections[0];
-    let ellipse = ImageEllipse {
+    let ellipse = Ellipse {
         u: d.u,
         v: d.v,
         semi_major: d.axes[0],

@@ -6,10 +6,11 @@
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use whycode::camera::Camera;
 use whycode::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
+use whycode::math::Ellipse;
 use whycode::pose::{
     choose_by_circle_points, choose_by_inner_circle, choose_by_radial_points, circle_poses,
     circle_poses_from_points, estimate_pose, full_pose, full_pose_from_yaw, project_circle,
-    project_marker_point, projected_center, reprojection_rms, CirclePose, ImageEllipse, Pose,
+    project_marker_point, projected_center, reprojection_rms, CirclePose, Pose,
 };
 
 /// Default marker of the reference ROS tools: 122 mm outer diameter.
@@ -75,8 +76,8 @@ struct Outcome {
 }
 
 fn recover(camera: &Camera, truth: &Pose) -> Outcome {
-    let outer = ImageEllipse::fit(&circle_pixels(camera, truth, RADIUS, 64)).unwrap();
-    let inner = ImageEllipse::fit(&circle_pixels(
+    let outer = Ellipse::fit(&circle_pixels(camera, truth, RADIUS, 64)).unwrap();
+    let inner = Ellipse::fit(&circle_pixels(
         camera,
         truth,
         WHYCON_WHITE_RATIO * RADIUS,
@@ -199,7 +200,7 @@ fn face_on_and_near_face_on_are_finite() {
     for tilt in [0.0, 1e-9, 1e-6, 0.01, 0.5] {
         for direction in [(0.0, 0.0), (0.3, -0.2)] {
             let truth = marker_pose(1.2, direction, tilt, 30.0, 0.0);
-            let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+            let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
             let candidates = circle_poses(&camera, &outer, RADIUS);
             for c in &candidates {
                 assert!(c
@@ -214,7 +215,7 @@ fn face_on_and_near_face_on_are_finite() {
                 .map(|c| c.normal.angle(&truth.normal()).to_degrees())
                 .fold(f64::INFINITY, f64::min);
             assert!(best < 0.5, "tilt {tilt}: {best}°");
-            let inner = ImageEllipse::fit(&circle_pixels(
+            let inner = Ellipse::fit(&circle_pixels(
                 &camera,
                 &truth,
                 WHYCON_WHITE_RATIO * RADIUS,
@@ -231,7 +232,7 @@ fn face_on_and_near_face_on_are_finite() {
         }
     }
     // An exact circle as the image ellipse, centred on the principal point.
-    let circle = ImageEllipse {
+    let circle = Ellipse {
         u: camera.cx,
         v: camera.cy,
         semi_major: 20.0,
@@ -275,7 +276,7 @@ fn face_on_upright_marker_has_the_conventional_rotation() {
 fn true_centre_differs_from_ellipse_centre_under_perspective() {
     let camera = Camera::ideal(1920, 1080, 60.0);
     let truth = marker_pose(0.4, (0.35, 0.2), 60.0, 20.0, 0.0);
-    let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+    let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
     let true_centre = camera.project(&truth.position).unwrap();
     let candidates = circle_poses(&camera, &outer, RADIUS);
     let best = candidates
@@ -300,7 +301,7 @@ fn ambiguity_resolved_from_points_on_the_inner_circle() {
     let camera = Camera::ideal(1280, 720, 60.0);
     for tilt in [20.0, 45.0, 70.0] {
         let truth = marker_pose(0.7, (0.2, 0.1), tilt, 100.0, 0.0);
-        let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+        let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
         let candidates = circle_poses(&camera, &outer, RADIUS);
         let right = if candidates[0].normal.angle(&truth.normal())
             < candidates[1].normal.angle(&truth.normal())
@@ -398,8 +399,8 @@ fn noisy_ellipses_still_give_accurate_pose_and_the_right_candidate() {
                     .map(|(u, v)| (u + 0.1 * noise.gauss(), v + 0.1 * noise.gauss()))
                     .collect()
             };
-            let outer = ImageEllipse::fit(&jitter(circle_pixels(&camera, &truth, RADIUS, 64)));
-            let inner = ImageEllipse::fit(&jitter(circle_pixels(
+            let outer = Ellipse::fit(&jitter(circle_pixels(&camera, &truth, RADIUS, 64)));
+            let inner = Ellipse::fit(&jitter(circle_pixels(
                 &camera,
                 &truth,
                 WHYCON_WHITE_RATIO * RADIUS,
@@ -430,7 +431,7 @@ fn projected_circle_matches_projected_points() {
     for camera in [Camera::ideal(1280, 720, 60.0), distorted_640()] {
         let truth = marker_pose(0.6, (0.3, -0.2), 55.0, 80.0, 0.0);
         let direct = project_circle(&camera, &truth.circle(), RADIUS).unwrap();
-        let fitted = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+        let fitted = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
         assert!((direct.u - fitted.u).hypot(direct.v - fitted.v) < 1e-3);
         assert!((direct.semi_major - fitted.semi_major).abs() < 1e-3);
         assert!((direct.semi_minor - fitted.semi_minor).abs() < 1e-3);
@@ -451,7 +452,7 @@ fn ambiguity_resolved_from_partial_ring_borders() {
     // sectors and its inner border only beside black ones.
     let camera = distorted_640();
     let truth = marker_pose(0.9, (-0.1, 0.15), 40.0, 300.0, 0.0);
-    let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+    let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
     let candidates = circle_poses(&camera, &outer, RADIUS);
     let right = if candidates[0].normal.angle(&truth.normal())
         < candidates[1].normal.angle(&truth.normal())
@@ -485,8 +486,8 @@ fn ambiguity_resolved_from_partial_ring_borders() {
 fn estimate_pose_in_one_call() {
     let camera = distorted_640();
     let truth = marker_pose(0.8, (0.1, -0.2), 45.0, 30.0, 120.0);
-    let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
-    let inner = ImageEllipse::fit(&circle_pixels(
+    let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+    let inner = Ellipse::fit(&circle_pixels(
         &camera,
         &truth,
         WHYCON_WHITE_RATIO * RADIUS,
@@ -531,7 +532,7 @@ fn estimate_pose_in_one_call() {
     assert!(legacy.pose.normal().angle(&truth.normal()).to_degrees() < 0.2);
     assert!(legacy.pose.image_yaw(&camera).unwrap().abs() < 1e-5);
 
-    let broken = ImageEllipse {
+    let broken = Ellipse {
         semi_minor: 0.0,
         ..outer
     };
@@ -544,8 +545,8 @@ fn ambiguity_margin_follows_the_documented_rule_of_thumb() {
     for distance in [1.0, 2.0, 3.0] {
         for tilt in [10.0f64, 25.0, 40.0, 55.0, 70.0] {
             let truth = marker_pose(distance, (0.2, 0.1), tilt, 60.0, 0.0);
-            let outer = ImageEllipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
-            let inner = ImageEllipse::fit(&circle_pixels(
+            let outer = Ellipse::fit(&circle_pixels(&camera, &truth, RADIUS, 64)).unwrap();
+            let inner = Ellipse::fit(&circle_pixels(
                 &camera,
                 &truth,
                 WHYCON_WHITE_RATIO * RADIUS,

@@ -7,7 +7,7 @@ use std::path::Path;
 use image::GrayImage;
 use serde_json::json;
 use whycode::camera::Camera;
-use whycode::detect::{Detector, DetectorConfig};
+use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::simulate::{self, layout, Background, MotionBlur, Scene, SceneObject};
@@ -112,7 +112,7 @@ fn simulated_photos_and_the_ids_read_in_them_match_the_stored_ones() {
     ] {
         let (image, truth) = simulate::render(&scene);
         let mut detector = Detector::new(DetectorConfig {
-            family: Some(Family::generate(bits, 2).unwrap()),
+            target: Target::WhyCode(Family::generate(bits, 2).unwrap()),
             ..DetectorConfig::default()
         });
         let found = detector.detect(&image);

@@ -3,7 +3,7 @@
 //! the renderer's own geometry helpers.
 
 use whycode::family::Family;
-use whycode::geometry::Marker;
+use whycode::geometry::{Marker, RING_SAMPLE_RATIO};
 use whycode::render::png::marker_png;
 use whycode::render::MarkerOptions;
 
@@ -20,7 +20,7 @@ fn read_ring(img: &image::GrayImage, bits: u32, r_px: f64) -> Option<u32> {
         let mut n = 0.0;
         for a in 0..9 {
             let theta = (f64::from(k) + 0.25 + 0.5 * f64::from(a) / 8.0) * width;
-            for rr in [0.42, 0.4714, 0.52] {
+            for rr in [-0.05, 0.0, 0.05].map(|d| RING_SAMPLE_RATIO + d) {
                 let (x, y) = (cx + rr * r_px * theta.cos(), cy - rr * r_px * theta.sin());
                 sum += f64::from(img.get_pixel(x as u32, y as u32)[0]);
                 n += 1.0;

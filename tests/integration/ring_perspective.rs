@@ -16,7 +16,7 @@ use whycode::camera::Camera;
 use whycode::detect::ring::RingReader;
 use whycode::family::{Decoder, Family};
 use whycode::geometry::Marker;
-use whycode::pose::ImageEllipse;
+use whycode::math::Ellipse;
 use whycode::simulate::{render, LooseMarker, Placement, Scene, SceneObject};
 
 #[test]
@@ -65,7 +65,7 @@ fn yaw_under_perspective_stays_within_stated_bounds() {
                     camera.project(&placement.to_camera_mm(30.0 * a.cos(), 30.0 * a.sin()))
                 })
                 .collect();
-            let ellipse = ImageEllipse::fit(&rim).unwrap();
+            let ellipse = Ellipse::fit(&rim).unwrap();
             let reading = reader.read(&image, &ellipse, 15.0, 190.0);
             total += 1;
             if reading.id == 0 {

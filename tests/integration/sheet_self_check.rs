@@ -3,10 +3,11 @@
 //! rotated marker is refused with an error naming that marker.
 
 use crate::support::whycode_in;
+use whycode::detect::Target;
 use whycode::family::necklace::rotr;
 use whycode::family::Family;
+use whycode::manifest::FamilyRef;
 use whycode::render::check::check_sheet;
-use whycode::render::manifest::FamilyRef;
 use whycode::render::sheet::{family_markers, layout, Sheet, SheetSpec};
 use whycode::render::{Item, Template};
 
@@ -44,7 +45,7 @@ fn sound_sheets_pass_at_print_and_coarse_resolution() {
         let family = Family::generate(bits, distance).unwrap();
         let ids: Vec<u32> = (1..=family.len().min(12) as u32).collect();
         let (sheet, family) = sheet(bits, distance, &ids, diameter);
-        let report = check_sheet(&sheet, Some(&family)).unwrap();
+        let report = check_sheet(&sheet, &Target::WhyCode(family.clone())).unwrap();
         assert_eq!(report.resolutions.len(), 2);
         // The coarse raster makes the markers about 30 px across.
         let coarse_px = diameter / 25.4 * report.resolutions[1];
@@ -57,7 +58,9 @@ fn sound_sheets_pass_at_print_and_coarse_resolution() {
 fn a_wrong_marker_is_named() {
     let (mut sheet, family) = sheet(8, 2, &[1, 2, 3, 4, 5, 6], 30.0);
     redraw(&mut sheet, 2, |_| family.code(9).unwrap());
-    let err = check_sheet(&sheet, Some(&family)).unwrap_err().to_string();
+    let err = check_sheet(&sheet, &Target::WhyCode(family.clone()))
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("ID 3 on page 1"), "{err}");
     assert!(err.contains("reads as ID 9"), "{err}");
 }
@@ -67,7 +70,9 @@ fn a_rotated_marker_fails_on_yaw() {
     let (mut sheet, family) = sheet(8, 2, &[1, 2, 3, 4, 5, 6], 30.0);
     // The same necklace turned by one bit: same ID, yaw 45°.
     redraw(&mut sheet, 4, |c| rotr(c, 8, 1));
-    let err = check_sheet(&sheet, Some(&family)).unwrap_err().to_string();
+    let err = check_sheet(&sheet, &Target::WhyCode(family.clone()))
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("ID 5 on page 1"), "{err}");
     assert!(err.contains("yaw"), "{err}");
 }
@@ -87,7 +92,9 @@ fn a_blotted_ring_is_named() {
         height: 9.0,
         grey: 0,
     });
-    let err = check_sheet(&sheet, Some(&family)).unwrap_err().to_string();
+    let err = check_sheet(&sheet, &Target::WhyCode(family.clone()))
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("ID 2 on page 1"), "{err}");
 }
 

@@ -6,7 +6,7 @@
 use crate::support::{angle_diff, run_ok};
 
 use whycode::camera::Camera;
-use whycode::detect::{Detector, DetectorConfig};
+use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::simulate::{layout, render, Background, GroundTruth, Scene, SceneObject};
@@ -35,7 +35,7 @@ fn scattered_markers_on_clutter_are_found_with_ids_and_yaw() {
     scene.seed = 3;
     let (image, truth) = render(&scene);
     let mut detector = Detector::new(DetectorConfig {
-        family: Some(family),
+        target: Target::WhyCode(family),
         ..Default::default()
     });
     let detections = detector.detect(&image);

@@ -2,8 +2,8 @@
 
 use nalgebra::Vector3;
 use whycode::camera::Camera;
-use whycode::geometry::Marker;
-use whycode::render::manifest::{FamilyRef, Manifest, PrintedMarker};
+use whycode::geometry::{Marker, RING_SAMPLE_RATIO};
+use whycode::manifest::{FamilyRef, Manifest, PrintedMarker};
 use whycode::simulate::{
     render, Background, Blot, LooseMarker, MotionBlur, Placement, Scene, SceneObject, SheetPage,
 };
@@ -79,7 +79,7 @@ fn face_on_marker_has_the_right_size_centre_and_colours() {
     assert_eq!(image.get_pixel(5, 5)[0], (0.45f64 * 255.0).round() as u8);
     // Code 1 = 00000001: sector 0 (just CCW of +x, i.e. up-right in the
     // image) is black, sector 1 white.
-    let ring = 0.4714 * r;
+    let ring = RING_SAMPLE_RATIO * r;
     let at_angle = |deg: f64| {
         let a = deg.to_radians();
         grey(ring * a.cos(), -ring * a.sin())

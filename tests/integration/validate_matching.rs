@@ -169,16 +169,14 @@ fn two_pages_in_two_photos_combine_into_one_verdict() {
     let mut manifest = a4_manifest();
     manifest.pages = 2;
     for (k, id) in (13..=16u32).enumerate() {
-        manifest
-            .markers
-            .push(whycode::render::manifest::PrintedMarker {
-                id,
-                code: family.code(id).unwrap(),
-                page: 2,
-                x_mm: 60.0 + 90.0 * (k % 2) as f64,
-                y_mm: 70.0 + 150.0 * (k / 2) as f64,
-                diameter_mm: 60.0,
-            });
+        manifest.markers.push(whycode::manifest::PrintedMarker {
+            id,
+            code: family.code(id).unwrap(),
+            page: 2,
+            x_mm: 60.0 + 90.0 * (k % 2) as f64,
+            y_mm: 70.0 + 150.0 * (k / 2) as f64,
+            diameter_mm: 60.0,
+        });
     }
     let mut reports = Vec::new();
     for page in [1, 2] {

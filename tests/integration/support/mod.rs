@@ -18,7 +18,7 @@ use nalgebra::Vector3;
 use whycode::camera::Camera;
 use whycode::geometry::Marker;
 /// The library's seeded generator, so test scenes draw like the simulator.
-pub use whycode::simulate::rng::Pcg32;
+pub use whycode::math::Pcg32;
 use whycode::simulate::{self, LooseMarker, Placement, Scene, SceneObject, TrueMarker};
 
 /// Runs the `whycode` binary built for this test run.

@@ -6,8 +6,8 @@
 use image::GrayImage;
 use nalgebra::{Rotation3, Unit, Vector3};
 use whycode::camera::Camera;
-use whycode::detect::ring::ImageEllipse;
 use whycode::geometry::Marker;
+use whycode::math::Ellipse;
 use whycode::simulate::{self, Background, LooseMarker, MotionBlur, Placement, Scene, SceneObject};
 
 pub const BLACK: f64 = 30.0;
@@ -58,7 +58,7 @@ impl View {
 /// A rendered view with what the ring reader is given and what it should find.
 pub struct Rendered {
     pub image: GrayImage,
-    pub ellipse: ImageEllipse,
+    pub ellipse: Ellipse,
     /// Image direction of the marker's +x axis, atan2(dv, du).
     pub yaw: f64,
 }
@@ -106,7 +106,7 @@ pub fn render_marker(view: &View, marker: &Marker) -> Rendered {
     let e = m.ellipse.expect("the marker is in view");
     Rendered {
         image,
-        ellipse: ImageEllipse {
+        ellipse: Ellipse {
             u: e.u,
             v: e.v,
             semi_major: e.semi_major,

@@ -8,7 +8,7 @@ use image::GrayImage;
 use nalgebra::{Matrix3, Vector3};
 use whycode::camera::Camera;
 use whycode::geometry::Marker;
-use whycode::simulate::rng::Pcg32;
+use whycode::math::Pcg32;
 use whycode::simulate::{self, Background, LooseMarker, Scene, SceneObject};
 
 /// A marker placed in front of a pinhole camera.

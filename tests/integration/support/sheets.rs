@@ -4,7 +4,7 @@
 
 use whycode::camera::Camera;
 use whycode::family::Family;
-use whycode::render::manifest::{FamilyRef, Manifest, PrintedMarker};
+use whycode::manifest::{FamilyRef, Manifest, PrintedMarker};
 use whycode::simulate::{layout, render, Background, GroundTruth, Scene, SceneObject, SheetPage};
 use whycode::validate::Observation;
 

@@ -1,5 +1,7 @@
-//! The record of what a sheet printed: written next to every sheet, read by
-//! validation to know which marker should be where.
+//! The record of what a sheet printed, and the contract between the stages
+//! that share it: `render` writes it next to every sheet, `simulate` lays
+//! out a photographed sheet from it and `validate` reads it to know which
+//! marker should be where.
 
 use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};

@@ -1,15 +1,20 @@
 //! Print sheets: many labelled markers packed onto template pages, each page
 //! with a scale check bar, plus the manifest recording where each marker is.
 
-use super::font::{helvetica_width_mm, CAP_HEIGHT};
-use super::manifest::{FamilyRef, Manifest, PrintedMarker};
-use super::marker::{cut_circle, marker_label, CUT_CLEARANCE_MM, LABEL_GAP_MM, MIN_LABEL_PT};
+mod footer;
+mod packing;
+
+use super::font::CAP_HEIGHT;
+use super::marker::{cut_circle, marker_label, LABEL_GAP_MM};
 use super::page::{Anchor, Item, Page, MM_PER_PT};
 use super::template::Template;
 use crate::family::Family;
-use crate::geometry::{Marker, MIN_MARGIN_RATIO};
+use crate::geometry::Marker;
+use crate::manifest::{FamilyRef, Manifest, PrintedMarker};
 use crate::units::trim_float;
 use anyhow::{bail, Result};
+use footer::push_footer;
+use packing::{best_packing, layout_area, Cell};
 
 /// One marker to place on a sheet.
 #[derive(Debug, Clone, PartialEq)]
@@ -100,191 +105,10 @@ pub fn legacy_markers(count: usize, diameter_mm: f64) -> Vec<SheetMarker> {
         .collect()
 }
 
-/// Height of the page footer (scale bar and page caption) above the bottom margin.
-const FOOTER_MM: f64 = 11.0;
-/// Scale bar thickness and end-tick height, mm.
-const BAR_MM: f64 = 0.8;
-const TICK_MM: f64 = 2.5;
-const TICK_WIDTH_MM: f64 = 0.3;
 /// Leading between label lines, as a multiple of the font size.
-const LINE_SPACING: f64 = 1.2;
+pub(super) const LINE_SPACING: f64 = 1.2;
 /// Depth below the baseline kept for descenders, as a multiple of the font size.
-const DESCENT: f64 = 0.25;
-
-/// The geometry of one marker cell: footprint and label block.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Cell {
-    /// Radius of black disc plus white margin, plus the clearance outside
-    /// it when a cut guide runs around the marker.
-    footprint: f64,
-    label_pt: f64,
-    two_lines: bool,
-    label_width: f64,
-    /// From the top of the footprint circle to the bottom of the label.
-    height: f64,
-    /// Horizontal pitch (cell width plus gap).
-    pitch_x: f64,
-}
-
-impl Cell {
-    fn label_height(&self) -> f64 {
-        let s = self.label_pt * MM_PER_PT;
-        let lines = if self.two_lines { 2.0 } else { 1.0 };
-        (lines - 1.0) * LINE_SPACING * s + (CAP_HEIGHT + DESCENT) * s
-    }
-}
-
-fn cell_for(markers: &[SheetMarker], diameter_mm: f64, template: &Template) -> Cell {
-    let clearance = if template.cut_guides {
-        CUT_CLEARANCE_MM
-    } else {
-        0.0
-    };
-    let footprint = diameter_mm / 2.0 * (1.0 + MIN_MARGIN_RATIO) + clearance;
-    let room = 2.0 * footprint + template.gap_mm;
-    let widest = |f: &dyn Fn(&SheetMarker) -> f64| markers.iter().map(f).fold(0.0, f64::max);
-    let wanted = template.label_size_pt;
-    let one_line = widest(&|m| helvetica_width_mm(&m.label, wanted));
-    let (two_lines, label_pt, label_width) = if one_line <= room {
-        (false, wanted, one_line)
-    } else {
-        let two = widest(&|m| {
-            m.label_lines
-                .iter()
-                .map(|l| helvetica_width_mm(l, wanted))
-                .fold(0.0, f64::max)
-        });
-        let size = if two <= room {
-            wanted
-        } else {
-            (wanted * room / two).max(MIN_LABEL_PT)
-        };
-        (true, size, two * size / wanted)
-    };
-    let mut cell = Cell {
-        footprint,
-        label_pt,
-        two_lines,
-        label_width,
-        height: 0.0,
-        pitch_x: (2.0 * footprint).max(label_width) + template.gap_mm,
-    };
-    cell.height = 2.0 * footprint + LABEL_GAP_MM + cell.label_height();
-    cell
-}
-
-/// Where markers go on a page: centres relative to the layout area's
-/// top-left corner.
-#[derive(Debug, Clone, PartialEq)]
-struct Packing {
-    centres: Vec<(f64, f64)>,
-}
-
-fn grid_packing(cell: &Cell, width: f64, height: f64, gap: f64) -> Packing {
-    let cols = ((width + gap) / cell.pitch_x + 1e-9).floor() as usize;
-    let pitch_y = cell.height + gap;
-    let rows = ((height + gap) / pitch_y + 1e-9).floor() as usize;
-    let block = cols as f64 * cell.pitch_x - gap;
-    let x0 = (width - block) / 2.0 + (cell.pitch_x - gap) / 2.0;
-    let y0 = (height - (rows as f64 * pitch_y - gap)) / 2.0;
-    let mut centres = Vec::new();
-    for r in 0..rows {
-        for c in 0..cols {
-            centres.push((
-                x0 + c as f64 * cell.pitch_x,
-                y0 + cell.footprint + r as f64 * pitch_y,
-            ));
-        }
-    }
-    Packing { centres }
-}
-
-/// Distance from point (px, py) to the rectangle [x0, x1] x [y0, y1].
-fn point_rect_distance(px: f64, py: f64, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
-    let dx = (x0 - px).max(px - x1).max(0.0);
-    let dy = (y0 - py).max(py - y1).max(0.0);
-    dx.hypot(dy)
-}
-
-/// The least row pitch at which rows shifted by half a column keep every
-/// footprint and label clear of their neighbours by `gap`.
-fn hex_row_pitch(cell: &Cell, gap: f64) -> f64 {
-    let dx = cell.pitch_x / 2.0;
-    let f = cell.footprint;
-    let half_label = cell.label_width / 2.0;
-    let label_top = f + LABEL_GAP_MM;
-    let label_bottom = f + LABEL_GAP_MM + cell.label_height();
-    let fits = |p: f64| {
-        // Footprints of diagonal neighbours.
-        dx.hypot(p) >= 2.0 * f + gap
-            // The upper marker's label against the lower neighbour's footprint.
-            && point_rect_distance(dx, p, -half_label, half_label, label_top, label_bottom) >= f + gap
-            // Labels of diagonal neighbours.
-            && (dx >= 2.0 * half_label + gap || p >= label_bottom - label_top + gap)
-            // Same column two rows apart.
-            && 2.0 * p >= cell.height + gap
-    };
-    let mut p = f;
-    while !fits(p) {
-        p += 0.05;
-    }
-    p
-}
-
-fn hex_packing(cell: &Cell, width: f64, height: f64, gap: f64) -> Packing {
-    let full = ((width + gap) / cell.pitch_x + 1e-9).floor() as usize;
-    let shifted = ((width + gap - cell.pitch_x / 2.0) / cell.pitch_x + 1e-9).floor() as usize;
-    if full == 0 || height + 1e-9 < cell.height {
-        return Packing {
-            centres: Vec::new(),
-        };
-    }
-    let pitch_y = hex_row_pitch(cell, gap);
-    let rows = 1 + ((height - cell.height) / pitch_y + 1e-9).floor() as usize;
-    let block =
-        (full as f64 * cell.pitch_x).max(shifted as f64 * cell.pitch_x + cell.pitch_x / 2.0) - gap;
-    let x0 = (width - block) / 2.0 + (cell.pitch_x - gap) / 2.0;
-    let y0 = (height - ((rows - 1) as f64 * pitch_y + cell.height)) / 2.0;
-    let mut centres = Vec::new();
-    for r in 0..rows {
-        let (cols, offset) = if r % 2 == 0 {
-            (full, 0.0)
-        } else {
-            (shifted, cell.pitch_x / 2.0)
-        };
-        for c in 0..cols {
-            centres.push((
-                x0 + offset + c as f64 * cell.pitch_x,
-                y0 + cell.footprint + r as f64 * pitch_y,
-            ));
-        }
-    }
-    Packing { centres }
-}
-
-/// The layout area of a page: left, top, width, height (mm).
-fn layout_area(template: &Template) -> (f64, f64, f64, f64) {
-    let m = template.margin_mm;
-    (
-        m,
-        m,
-        template.page_width_mm - 2.0 * m,
-        template.page_height_mm - 2.0 * m - FOOTER_MM,
-    )
-}
-
-/// The packing fitting more markers on a page (grid on a tie).
-fn best_packing(markers: &[SheetMarker], diameter_mm: f64, template: &Template) -> (Cell, Packing) {
-    let cell = cell_for(markers, diameter_mm, template);
-    let (_, _, w, h) = layout_area(template);
-    let grid = grid_packing(&cell, w, h, template.gap_mm);
-    let hex = hex_packing(&cell, w, h, template.gap_mm);
-    if hex.centres.len() > grid.centres.len() {
-        (cell, hex)
-    } else {
-        (cell, grid)
-    }
-}
+pub(super) const DESCENT: f64 = 0.25;
 
 /// The sheet a manifest records, laid out again: for showing the printed
 /// page as it was (labels, scale bar, caption) where only the manifest is at
@@ -413,7 +237,7 @@ pub fn layout(spec: &SheetSpec) -> Result<Sheet> {
     }
     let manifest = Manifest {
         format: "whycode-sheet".to_string(),
-        version: super::manifest::MANIFEST_VERSION,
+        version: crate::manifest::MANIFEST_VERSION,
         tool: format!("whycode {}", env!("CARGO_PKG_VERSION")),
         family: spec.family,
         legacy: spec.legacy,
@@ -449,85 +273,11 @@ fn push_label(page: &mut Page, m: &SheetMarker, cell: &Cell, cx: f64, cy: f64) {
     }
 }
 
-/// The scale check bar and the page caption along the bottom margin.
-fn push_footer(page: &mut Page, template: &Template, name: &str, number: usize, count: usize) {
-    let left = template.margin_mm;
-    let right = template.page_width_mm - template.margin_mm;
-    let bottom = template.page_height_mm - template.margin_mm;
-    let room = right - left;
-    let bar = if template.scale_bar_mm <= room {
-        template.scale_bar_mm
-    } else {
-        // Whole centimetres when the page is too narrow for the asked length.
-        ((room / 10.0).floor() * 10.0).max(room.floor().min(10.0))
-    };
-    page.push(Item::Rect {
-        x: left,
-        y: bottom - BAR_MM,
-        width: bar,
-        height: BAR_MM,
-        grey: 0,
-    });
-    for x in [left, left + bar - TICK_WIDTH_MM] {
-        page.push(Item::Rect {
-            x,
-            y: bottom - TICK_MM,
-            width: TICK_WIDTH_MM,
-            height: TICK_MM,
-            grey: 0,
-        });
-    }
-    // Centimetre ticks, so that a ruler can be checked against the bar
-    // piece by piece and a wrong scale shows without measuring the whole.
-    let mut tick = 10.0;
-    while tick < bar - 1.0 {
-        page.push(Item::Rect {
-            x: left + tick - TICK_WIDTH_MM / 2.0,
-            y: bottom - TICK_MM / 2.0,
-            width: TICK_WIDTH_MM,
-            height: TICK_MM / 2.0,
-            grey: 0,
-        });
-        tick += 10.0;
-    }
-    let size = template.label_size_pt;
-    let baseline = bottom - TICK_MM - 1.2;
-    let measure = format!(
-        "Print at 100 % (actual size): this bar must measure {} mm",
-        trim_float(bar)
-    );
-    let caption = if name.is_empty() {
-        format!("page {number}/{count}")
-    } else {
-        format!("{name} · page {number}/{count}")
-    };
-    let caption_baseline =
-        if helvetica_width_mm(&measure, size) + helvetica_width_mm(&caption, size) + 5.0 <= room {
-            baseline
-        } else {
-            baseline - LINE_SPACING * size * MM_PER_PT
-        };
-    page.push(Item::Text {
-        x: left,
-        y: baseline,
-        size_pt: size,
-        anchor: Anchor::Start,
-        grey: 0,
-        text: measure,
-    });
-    page.push(Item::Text {
-        x: right,
-        y: caption_baseline,
-        size_pt: size,
-        anchor: Anchor::End,
-        grey: 80,
-        text: caption,
-    });
-}
-
 #[cfg(test)]
 mod tests {
+    use super::packing::point_rect_distance;
     use super::*;
+    use crate::render::font::helvetica_width_mm;
 
     fn spec(ids: std::ops::RangeInclusive<u32>, d: f64, template: &str) -> SheetSpec {
         let family = Family::generate(8, 2).unwrap();

@@ -2,8 +2,7 @@
 //! and the image of a circle (whose centre is not the image of the
 //! circle's centre under perspective).
 
-pub use crate::pose::ImageEllipse;
-use crate::simulate::rng::Pcg32;
+use super::{Ellipse, Pcg32};
 use nalgebra::{DMatrix, Matrix2, Matrix3, SymmetricEigen, Vector3};
 
 /// A plane point and the image point it maps to.
@@ -43,11 +42,11 @@ impl Homography {
 
     /// The image of the circle of radius `r` about (x, y) as an ellipse:
     /// (centre u, centre v, semi-major, semi-minor, major-axis angle).
-    pub fn circle_image(&self, x: f64, y: f64, r: f64) -> Option<ImageEllipse> {
+    pub fn circle_image(&self, x: f64, y: f64, r: f64) -> Option<Ellipse> {
         let c = Matrix3::new(1.0, 0.0, -x, 0.0, 1.0, -y, -x, -y, x * x + y * y - r * r);
         let inv = self.matrix.try_inverse()?;
         let conic = inv.transpose() * c * inv;
-        ImageEllipse::from_conic(&conic)
+        Ellipse::from_conic(&conic)
     }
 
     /// Least-squares fit (normalised DLT) to at least four pairs

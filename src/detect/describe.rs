@@ -1,0 +1,214 @@
+//! Describing a candidate disc: its ID and yaw (read from the ring, or
+//! followed from the track's known code), the ID filter of tracked
+//! markers, and its pose.
+
+use image::GrayImage;
+use nalgebra::Vector3;
+
+use super::segment::Gray;
+use super::{ellipse, rectify, Candidate, Detection, Detector};
+use crate::camera::Camera;
+use crate::math::Ellipse;
+use crate::pose::{self, CirclePose, Pose};
+
+/// What the ring reading and the marker's track tell the pose stage.
+#[derive(Debug, Clone, Copy)]
+struct PoseHints {
+    yaw: Option<f64>,
+    axis_point: Option<(f64, f64)>,
+    centre_estimate: Option<(f64, f64)>,
+    settled_normal: Option<Vector3<f64>>,
+}
+
+impl Detector {
+    /// The detection of a candidate, and its normal when that was told
+    /// apart from the other pose candidate with confidence (for the track).
+    pub(super) fn describe(
+        &mut self,
+        image: &GrayImage,
+        gray: Gray<'_>,
+        c: &Candidate,
+    ) -> (Detection, Option<Vector3<f64>>) {
+        let quality = 1.0 - (c.area_error / self.area.tolerance()).min(1.0);
+        let outer = c.outer;
+        let mut d = Detection {
+            id: 0,
+            code: None,
+            u: c.outer.u,
+            v: c.outer.v,
+            yaw: None,
+            axes: [c.outer.semi_major, c.outer.semi_minor],
+            angle: c.outer.angle,
+            confidence: (0.5 + 0.5 * quality).clamp(0.0, 1.0),
+            status: None,
+            pose: None,
+        };
+        let mut axis_point = None;
+        let mut centre_estimate = None;
+        let mut settled_normal = None;
+        // A marker followed from the last frames whose ID has been read
+        // the same several times: its known code's edges give the yaw at a
+        // fraction of a full read, and confirm the code on the way.
+        let known = c
+            .track
+            .map(|i| self.tracks[i].clone())
+            .filter(|t| t.id_streak >= 3);
+        let followed_yaw = match (known, self.config.target.family()) {
+            (Some(t), Some(family)) => match (t.code, t.yaw) {
+                (Some(code), Some(yaw)) => {
+                    rectify::follow_ring(gray, &c.outer, family.bits(), code, yaw).map(|y| (t, y))
+                }
+                _ => None,
+            },
+            _ => None,
+        };
+        if let Some((t, yaw)) = &followed_yaw {
+            let (t, yaw) = (t, *yaw);
+            d.id = t.id;
+            d.code = t.code;
+            d.status = t.status;
+            d.yaw = Some(yaw);
+            d.confidence = t.confidence;
+        } else if let Some(reader) = &self.reader {
+            let reading = reader.read(image, &outer, c.black, c.white);
+            d.id = reading.id;
+            d.code = reading.decoded.filter(|x| x.is_member()).map(|x| x.code);
+            d.status = reading.decoded.map(|x| x.status);
+            d.yaw = reading.yaw;
+            d.confidence = reading.confidence;
+            axis_point = reading.axis_point;
+            centre_estimate = reading.centre_estimate;
+        }
+        if let Some(i) = c.track {
+            self.filter_identity(gray, c, i, &mut d, followed_yaw.is_some());
+        }
+        if let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) {
+            let hints = PoseHints {
+                yaw: d.yaw,
+                axis_point,
+                centre_estimate,
+                settled_normal: c.track.and_then(|i| self.tracks[i].normal),
+            };
+            let (pose, settled) = match self.pose(&camera, diameter / 2.0, gray, c, &outer, hints) {
+                Some((pose, settled)) => (Some(pose), settled),
+                None => (None, false),
+            };
+            d.pose = pose;
+            settled_normal = d
+                .pose
+                .filter(|_| settled)
+                .map(|p| p.rotation.column(2).into_owned());
+            if let (Some(pose), Some(code), Some(family)) =
+                (&d.pose, d.code, self.config.target.family())
+            {
+                let bits = family.bits();
+                if let Some(better) =
+                    rectify::refine_rotation(gray, &camera, pose, diameter / 2.0, bits, code)
+                {
+                    d.pose = Some(better);
+                }
+            }
+            // Under perspective the centre of the outer ellipse is not the
+            // image of the marker's centre, nor is the ellipse-based yaw
+            // the direction of +x at that centre: the pose knows both.
+            if let Some(pose) = &d.pose {
+                if let Some((u, v)) = camera.project(&pose.position) {
+                    d.u = u;
+                    d.v = v;
+                }
+                if d.yaw.is_some() {
+                    d.yaw = pose.image_yaw(&camera).or(d.yaw);
+                }
+            }
+        }
+        (d, settled_normal)
+    }
+
+    /// Tracked markers report what the ID filter believes after this
+    /// frame's reading, not the single reading: one misread (motion blur,
+    /// a glint) does not change a marker's ID, and a marker whose readings
+    /// disagree is "unknown" until they settle.
+    fn filter_identity(
+        &mut self,
+        gray: Gray<'_>,
+        c: &Candidate,
+        index: usize,
+        d: &mut Detection,
+        followed: bool,
+    ) {
+        let Some(family) = self.config.target.family() else {
+            return;
+        };
+        let track = &mut self.tracks[index];
+        let previous_yaw = track.yaw;
+        let estimate = track.observe_reading(family.len(), d);
+        if followed || estimate.id == d.id {
+            if estimate.id != 0 {
+                d.confidence = estimate.probability;
+            }
+            return;
+        }
+        d.id = estimate.id;
+        d.code = family.code(estimate.id);
+        d.confidence = estimate.probability;
+        // The reading's yaw belongs to the code it read; the believed code's
+        // edges give the yaw instead.
+        d.yaw = match (d.code, previous_yaw) {
+            (Some(code), Some(yaw)) => {
+                rectify::follow_ring(gray, &c.outer, family.bits(), code, yaw)
+            }
+            _ => None,
+        };
+    }
+
+    /// Position and normal from the outer edge, the two-fold ambiguity
+    /// decided by where the ring shows the marker's centre, else by the
+    /// normal this marker's track settled on, else by the inner white
+    /// edges; the rotation from the yaw. The flag says whether the normal
+    /// was settled (not left to the inner edges).
+    fn pose(
+        &mut self,
+        camera: &Camera,
+        radius_m: f64,
+        gray: Gray<'_>,
+        c: &Candidate,
+        outer: &Ellipse,
+        hints: PoseHints,
+    ) -> Option<(Pose, bool)> {
+        let PoseHints {
+            yaw,
+            axis_point,
+            centre_estimate,
+            settled_normal,
+        } = hints;
+        let candidates = pose::circle_poses_from_points(camera, &c.edge, radius_m)
+            .or_else(|| pose::try_circle_poses(camera, outer, radius_m))?;
+        let by_centre = centre_estimate
+            .and_then(|measured| pose::choose_by_centre_estimate(camera, &candidates, measured));
+        let by_track = || pose::choose_by_settled_normal(&candidates, &settled_normal?);
+        if let Some(k) = by_centre.or_else(by_track) {
+            let pose = pose::full_pose_from_ring(camera, &candidates[k], yaw, axis_point);
+            return Some((pose, true));
+        }
+        let mid = (c.black + c.white) / 2.0;
+        let inner_ratios = self.config.target.design().inner_edge_ratios();
+        let mut errors = [0.0f64; 2];
+        for &ratio in inner_ratios {
+            ellipse::inner_edge_points(gray, &c.outer, ratio, mid, &mut self.inner_scratch);
+            let found =
+                pose::inner_edge_errors(camera, &candidates, &self.inner_scratch, ratio * radius_m);
+            for (error, e) in errors.iter_mut().zip(found) {
+                *error += e;
+            }
+        }
+        let circle: &CirclePose = if errors[1] < errors[0] {
+            &candidates[1]
+        } else {
+            &candidates[0]
+        };
+        Some((
+            pose::full_pose_from_ring(camera, circle, yaw, axis_point),
+            false,
+        ))
+    }
+}

@@ -1,0 +1,165 @@
+//! Following tracked markers from frame to frame: where each should be now,
+//! found by its edges (or, failing that, by a flood fill from its predicted
+//! centre), and the tracks updated from what the frame showed.
+
+use nalgebra::Vector3;
+
+use super::segment::Gray;
+use super::threshold::ThresholdMap;
+use super::track::Track;
+use super::{ellipse, Candidate, Detection, Detector};
+use crate::math::Ellipse;
+
+impl Detector {
+    /// Looks for a tracked marker where it should be now. First the cheap
+    /// way: edge points around the predicted outline, a conic fit, and a
+    /// check that the centre is white and the annulus black (a few hundred
+    /// pixels). If that fails, the paper's way: from the predicted centre
+    /// (inside the white centre) along the row to the first dark pixel,
+    /// which starts the marker's dark segment and the full tests.
+    pub(super) fn follow(&mut self, gray: Gray<'_>, index: usize) -> Option<Candidate> {
+        let track = self.tracks[index].clone();
+        let (pu, pv) = track.predicted();
+        if let Some(c) = self.follow_edges(gray, &track) {
+            return Some(c);
+        }
+        let (x, y) = (pu.round(), pv.round());
+        if !(x >= 0.0 && y >= 0.0 && (x as usize) < gray.width && (y as usize) < gray.height) {
+            return None;
+        }
+        let (x, y) = (x as usize, y as usize);
+        let reach = (1.5 * track.a + 2.0) as usize;
+        let row = y * gray.width;
+        let end = (x + reach).min(gray.width - 1);
+        let seed = (x..=end).find(|&xx| gray.pixels[row + xx] < track.threshold)?;
+        if self.labels.is_dark_visited(row + seed) {
+            return None;
+        }
+        let map = ThresholdMap::constant(track.threshold);
+        self.follow_filled = true;
+        let c = self.evaluate(gray, &map, (seed as u32, y as u32))?;
+        let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
+        let same_size = (c.outer.semi_major / track.a - 1.0).abs() < 0.3;
+        (moved < track.a.max(4.0) && same_size).then_some(c)
+    }
+
+    fn follow_edges(&mut self, gray: Gray<'_>, track: &Track) -> Option<Candidate> {
+        let (pu, pv) = track.predicted();
+        let guess = Ellipse {
+            u: pu,
+            v: pv,
+            semi_major: track.a,
+            semi_minor: track.b,
+            angle: track.angle,
+        };
+        let mid = (track.black + track.white) / 2.0;
+        let window = (3.5 + 0.03 * track.a).min(23.0);
+        let rays = ellipse::scanline_edge_points(
+            gray,
+            &guess,
+            mid,
+            track.white - track.black,
+            window,
+            &mut self.edge_scratch,
+        );
+        if self.edge_scratch.len() * 5 < rays * 4 {
+            return None;
+        }
+        let fitted = Ellipse::fit_near(&self.edge_scratch, (pu, pv), track.a)?;
+        let rms = (self
+            .edge_scratch
+            .iter()
+            .map(|&(x, y)| fitted.radial_distance(x, y).powi(2))
+            .sum::<f64>()
+            / self.edge_scratch.len() as f64)
+            .sqrt();
+        let consistent = rms < 0.3 + 0.01 * track.a
+            && (fitted.semi_major / track.a - 1.0).abs() < 0.1
+            && (fitted.semi_minor / track.b - 1.0).abs() < 0.1
+            && (fitted.u - pu).hypot(fitted.v - pv) < window;
+        if !consistent {
+            return None;
+        }
+        // Inside: white at the centre, black across the annulus.
+        let white_ratio = self.config.target.design().centre_white_ratio();
+        let (mut white_sum, mut black_sum) = (0.0, 0.0);
+        const PROBES: usize = 8;
+        for k in 0..PROBES {
+            let t = std::f64::consts::TAU * k as f64 / PROBES as f64;
+            let inner = fitted.scaled(0.6 * white_ratio).point_at(t);
+            let annulus = fitted.scaled(0.8).point_at(t);
+            let w = ellipse::sample(gray, inner.0, inner.1)?;
+            let b = ellipse::sample(gray, annulus.0, annulus.1)?;
+            if w < mid || b >= mid {
+                return None;
+            }
+            white_sum += w;
+            black_sum += b;
+        }
+        let (white, black) = (white_sum / PROBES as f64, black_sum / PROBES as f64);
+        Some(Candidate {
+            outer: fitted,
+            edge: self.edge_scratch.clone(),
+            black,
+            white,
+            ratio: self.ratio.expected,
+            roundness: 0.0,
+            area_error: 0.0,
+            tested: false,
+            track: None,
+        })
+    }
+
+    pub(super) fn update_tracks(
+        &mut self,
+        found: &[Candidate],
+        detections: &[Detection],
+        settled_normals: &[Option<Vector3<f64>>],
+    ) {
+        let mut next: Vec<Track> = Vec::with_capacity(found.len());
+        let mut taken = vec![false; self.tracks.len()];
+        for c in found {
+            if let Some(i) = c.track {
+                taken[i] = true;
+            }
+        }
+        for ((c, d), settled) in found.iter().zip(detections).zip(settled_normals) {
+            let threshold = ((c.black + c.white) / 2.0).round().clamp(1.0, 255.0) as u8;
+            let (u, v, a, b) = (c.outer.u, c.outer.v, c.outer.semi_major, c.outer.semi_minor);
+            let index = c.track.or_else(|| {
+                let i =
+                    (0..self.tracks.len()).find(|&i| !taken[i] && self.tracks[i].matches(u, v))?;
+                taken[i] = true;
+                Some(i)
+            });
+            match index {
+                Some(i) => {
+                    let mut t = self.tracks[i].clone();
+                    if c.track.is_none() {
+                        // Found again by the scan rather than followed: its
+                        // reading has not been filtered yet.
+                        if let Some(family) = self.config.target.family() {
+                            t.observe_reading(family.len(), d);
+                        }
+                    }
+                    t.update(u, v, a, b, threshold);
+                    t.observe_appearance(c.outer.angle, c.black, c.white);
+                    t.observe_identity(d);
+                    t.normal = settled.or(t.normal);
+                    next.push(t);
+                }
+                None => {
+                    let mut t = Track::new(u, v, a, b, threshold);
+                    t.observe_appearance(c.outer.angle, c.black, c.white);
+                    if let Some(family) = self.config.target.family() {
+                        t.observe_reading(family.len(), d);
+                    }
+                    t.observe_identity(d);
+                    t.normal = *settled;
+                    next.push(t);
+                }
+            }
+        }
+        self.tracks = next;
+    }
+}

@@ -1,0 +1,208 @@
+//! The scan for new markers and the tests a dark segment must pass to be
+//! one (paper section 4.1, eq. 1 and 4): roundness, the white inside, the
+//! area ratio, concentricity, the moment ellipse's area and a tight
+//! sub-pixel outline.
+
+use std::f64::consts::PI;
+
+use super::segment::{Fill, Gray, Stats};
+use super::threshold::ThresholdMap;
+use super::{ellipse, Candidate, Detector, SCAN_CHUNK};
+use crate::geometry::Design;
+
+/// Slack of the concentricity test, in outer radii: WhyCode's white region
+/// has its ring sectors on one side or the other, so its centroid wanders.
+fn concentricity_tolerance(design: Design) -> f64 {
+    match design {
+        Design::WhyCode => 0.2,
+        Design::WhyCon => 0.08,
+    }
+}
+
+impl Detector {
+    /// Marks the tiles that markers followed this frame cover, so that the
+    /// scan does not flood-fill them again.
+    pub(super) fn mark_followed(&mut self, found: &[Candidate], width: usize, height: usize) {
+        let cols = width.div_ceil(SCAN_CHUNK);
+        let rows = height.div_ceil(SCAN_CHUNK);
+        self.occupied.clear();
+        if found.is_empty() {
+            return;
+        }
+        self.occupied.resize(cols * rows, false);
+        for c in found {
+            let reach = c.outer.semi_major + 2.0;
+            let x0 = ((c.outer.u - reach).max(0.0) as usize) / SCAN_CHUNK;
+            let x1 = ((c.outer.u + reach).max(0.0) as usize / SCAN_CHUNK).min(cols - 1);
+            let y0 = ((c.outer.v - reach).max(0.0) as usize) / SCAN_CHUNK;
+            let y1 = ((c.outer.v + reach).max(0.0) as usize / SCAN_CHUNK).min(rows - 1);
+            for ty in y0..=y1 {
+                self.occupied[ty * cols + x0.min(x1)..=ty * cols + x1].fill(true);
+            }
+        }
+    }
+
+    /// Scans the rows for dark pixels not yet visited and tests the
+    /// segment each one starts.
+    pub(super) fn scan(
+        &mut self,
+        gray: Gray<'_>,
+        map: &ThresholdMap,
+        rows: std::ops::Range<usize>,
+        found: &mut Vec<Candidate>,
+        limit: usize,
+    ) {
+        const CHUNK: usize = SCAN_CHUNK;
+        let shift = map.shift();
+        let margin = map.seed_margin();
+        let cols = gray.width.div_ceil(CHUNK);
+        for y in rows {
+            if found.len() >= limit {
+                return;
+            }
+            let row_start = y * gray.width;
+            let row = &gray.pixels[row_start..row_start + gray.width];
+            let thresholds = map.row(y);
+            for (k, chunk) in row.chunks(CHUNK).enumerate() {
+                let x0 = k * CHUNK;
+                if !self.occupied.is_empty() && self.occupied[(y / CHUNK) * cols + k] {
+                    continue;
+                }
+                let t = thresholds[x0 >> shift].saturating_sub(margin);
+                if chunk.iter().copied().min().unwrap_or(255) >= t || map.is_floor(x0, y) {
+                    continue;
+                }
+                for (j, &p) in chunk.iter().enumerate() {
+                    if p < t && !self.labels.is_dark_visited(row_start + x0 + j) {
+                        if let Some(c) = self.evaluate(gray, map, ((x0 + j) as u32, y as u32)) {
+                            found.push(c);
+                            if found.len() >= limit {
+                                return;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Runs the tests on the dark segment that contains `seed`.
+    pub(super) fn evaluate(
+        &mut self,
+        gray: Gray<'_>,
+        map: &ThresholdMap,
+        seed: (u32, u32),
+    ) -> Option<Candidate> {
+        let design = self.config.target.design();
+        let dark = self
+            .filler
+            .fill(gray, map, &mut self.labels, seed, Fill::Dark);
+        if dark.escaped {
+            return None;
+        }
+        let dark = dark.stats;
+        let white_fraction = self.ratio.expected;
+        let dark_fraction = 1.0 - white_fraction;
+        let min_d = self.config.min_diameter_px;
+        let n = dark.count as f64;
+        if n < 0.5 * dark_fraction * PI / 4.0 * min_d * min_d {
+            return None;
+        }
+        let (bw, bh) = (f64::from(dark.width()), f64::from(dark.height()));
+        if bw < 4.0 || bh < 4.0 {
+            return None;
+        }
+        // Eq. 1: the dark pixels fill the expected share of the bounding
+        // box's inscribed ellipse.
+        let roundness = n / (PI / 4.0 * bw * bh * dark_fraction) - 1.0;
+        if roundness.abs() >= self.roundness.tolerance() {
+            return None;
+        }
+        let (cu, cv) = dark.centroid();
+        let bounds = [dark.min_u, dark.min_v, dark.max_u, dark.max_v];
+        let max_count = (n * white_fraction / dark_fraction * 2.5) as u64 + 16;
+        let white = self.fill_inside(gray, map, (cu, cv), bounds, max_count)?;
+        let total = dark.merged(&white);
+        let ratio = white.count as f64 / total.count as f64;
+        let coarse = ellipse::from_moments(&total);
+        let accepted = self.ratio.accepts(ratio)
+            && coarse.is_some_and(|e| {
+                let (wu, wv) = white.centroid();
+                let radius = (e.semi_major * e.semi_minor).sqrt();
+                (wu - e.u).hypot(wv - e.v) < concentricity_tolerance(design) * radius + 1.0
+                    && 2.0 * e.semi_minor >= min_d
+            });
+        let coarse = match coarse {
+            Some(e) if accepted => e,
+            _ => {
+                self.filler.undo_last(&mut self.labels, gray.width);
+                return None;
+            }
+        };
+        // Eq. 4 on the whole disc. Pixel counts of small discs carry a
+        // boundary quantisation error of about 1/(2b) of the area.
+        let area_error = coarse.area() / total.count as f64 - 1.0;
+        if area_error.abs() >= self.area.tolerance() + 0.5 / coarse.semi_minor {
+            return None;
+        }
+        let black = dark.mean_intensity();
+        let white_level = white.mean_intensity();
+        if white_level - black < map.min_contrast() {
+            return None;
+        }
+        // The outline must be an ellipse along the whole edge: squares and
+        // blobs pass the moment tests (a square's area is within 5 % of its
+        // moment ellipse's) but not this.
+        let refined = ellipse::refine(gray, &coarse, &mut self.edge_scratch)?;
+        if refined.support < 0.75 || refined.rms > 0.35 + 0.015 * coarse.semi_major {
+            return None;
+        }
+        let outer = refined.ellipse;
+        Some(Candidate {
+            outer,
+            edge: self.edge_scratch.clone(),
+            black,
+            white: white_level,
+            ratio,
+            roundness,
+            area_error: area_error.abs(),
+            tested: true,
+            track: None,
+        })
+    }
+
+    /// Fills the white region around the dark segment's centroid (or a
+    /// neighbouring pixel when rounding lands on the ring); None when it is
+    /// not enclosed by the segment.
+    fn fill_inside(
+        &mut self,
+        gray: Gray<'_>,
+        map: &ThresholdMap,
+        centre: (f64, f64),
+        bounds: [u32; 4],
+        max_count: u64,
+    ) -> Option<Stats> {
+        let (cx, cy) = (centre.0.round() as i64, centre.1.round() as i64);
+        for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)] {
+            let (x, y) = (cx + dx, cy + dy);
+            if x <= i64::from(bounds[0]) || y <= i64::from(bounds[1]) {
+                continue;
+            }
+            let result = self.filler.fill(
+                gray,
+                map,
+                &mut self.labels,
+                (x as u32, y as u32),
+                Fill::White { bounds, max_count },
+            );
+            if result.escaped {
+                self.filler.undo_last(&mut self.labels, gray.width);
+                return None;
+            }
+            if result.stats.count > 0 {
+                return Some(result.stats);
+            }
+        }
+        None
+    }
+}

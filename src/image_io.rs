@@ -1,0 +1,142 @@
+//! Grey image files in and out: what the detector and validation read, what
+//! the simulator writes. Readers refuse absurd sizes before decoding and
+//! truncated JPEGs; writers replace a file whole or not at all.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use image::GrayImage;
+
+/// Largest image side accepted by [`load_gray`].
+pub const MAX_SIDE: u32 = 30_000;
+/// Largest image area accepted by [`load_gray`], pixels.
+pub const MAX_PIXELS: u64 = 400_000_000;
+
+/// Reads an image file (PNG, JPEG, PGM/PPM, BMP; 8 or 16 bit; grey or
+/// colour) as 8-bit grey. Refuses absurd dimensions before decoding.
+pub fn load_gray(path: &Path) -> Result<GrayImage> {
+    let name = || path.display().to_string();
+    let open = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>> {
+        Ok(image::ImageReader::open(path)?.with_guessed_format()?)
+    };
+    let (width, height) = open()
+        .and_then(|r| Ok(r.into_dimensions()?))
+        .with_context(name)?;
+    if width > MAX_SIDE || height > MAX_SIDE || u64::from(width) * u64::from(height) > MAX_PIXELS {
+        anyhow::bail!(
+            "{}: image of {width}x{height} pixels is larger than the supported {MAX_SIDE} px a side and {} megapixels",
+            name(),
+            MAX_PIXELS / 1_000_000
+        );
+    }
+    let mut reader = open().with_context(name)?;
+    let mut limits = image::Limits::no_limits();
+    limits.max_image_width = Some(MAX_SIDE);
+    limits.max_image_height = Some(MAX_SIDE);
+    reader.limits(limits);
+    let format = reader.format();
+    let decoded = reader.decode().with_context(name)?;
+    if format == Some(image::ImageFormat::Jpeg) {
+        check_jpeg_complete(path).with_context(name)?;
+    }
+    Ok(match decoded {
+        image::DynamicImage::ImageLuma8(g) => g,
+        image::DynamicImage::ImageLuma16(_)
+        | image::DynamicImage::ImageLumaA16(_)
+        | image::DynamicImage::ImageRgb16(_)
+        | image::DynamicImage::ImageRgba16(_) => stretched_to_8_bits(decoded.into_luma16()),
+        other => other.into_luma8(),
+    })
+}
+
+/// Many cameras write 10- or 12-bit data into 16-bit files, which a plain
+/// division by 257 squeezes into a handful of grey levels. The brightest
+/// value present becomes 255 instead (the detector's thresholds are local,
+/// so a linear stretch changes nothing else).
+fn stretched_to_8_bits(wide: image::ImageBuffer<image::Luma<u16>, Vec<u16>>) -> GrayImage {
+    let brightest = wide.pixels().map(|p| p.0[0]).max().unwrap_or(0).max(1);
+    let scale = 255.0 / f64::from(brightest);
+    GrayImage::from_fn(wide.width(), wide.height(), |x, y| {
+        image::Luma([(f64::from(wide.get_pixel(x, y).0[0]) * scale).round() as u8])
+    })
+}
+
+/// The JPEG decoder fills a truncated file's missing part with grey and
+/// reports no error, which would read as "no markers here". A complete
+/// file has an end-of-image marker after its last scan (a thumbnail's EOI
+/// comes before the main image's scans; entropy-coded data never holds FF D9).
+fn check_jpeg_complete(path: &Path) -> Result<()> {
+    let bytes = std::fs::read(path)?;
+    let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
+    let ends = last_scan.is_some_and(|k| bytes[k..].windows(2).any(|w| w == [0xFF, 0xD9]));
+    if !ends {
+        anyhow::bail!("JPEG file is truncated (no end-of-image marker after its image data)");
+    }
+    Ok(())
+}
+
+/// Image file formats written, chosen by file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageFormat {
+    Png,
+    Jpeg,
+    Pgm,
+    Bmp,
+}
+
+impl ImageFormat {
+    pub fn from_path(path: &Path) -> Result<ImageFormat> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or_default()
+            .to_ascii_lowercase();
+        Ok(match ext.as_str() {
+            "png" => ImageFormat::Png,
+            "jpg" | "jpeg" => ImageFormat::Jpeg,
+            "pgm" | "pnm" => ImageFormat::Pgm,
+            "bmp" => ImageFormat::Bmp,
+            _ => anyhow::bail!(
+                "{}: unknown image type (use .png, .jpg, .pgm or .bmp)",
+                path.display()
+            ),
+        })
+    }
+}
+
+/// Writes a grey image whole or not at all, in the format of the path's
+/// extension (JPEG at `jpeg_quality`).
+#[cfg(feature = "files")]
+pub fn save_image(path: &Path, image: &GrayImage, jpeg_quality: u8) -> Result<()> {
+    use image::ImageEncoder;
+    let format = ImageFormat::from_path(path)?;
+    let (w, h) = image.dimensions();
+    let mut bytes = Vec::new();
+    let colour = image::ExtendedColorType::L8;
+    let result = match format {
+        ImageFormat::Png => image::codecs::png::PngEncoder::new(&mut bytes).write_image(
+            image.as_raw(),
+            w,
+            h,
+            colour,
+        ),
+        ImageFormat::Jpeg => image::codecs::jpeg::JpegEncoder::new_with_quality(
+            &mut bytes,
+            jpeg_quality.clamp(1, 100),
+        )
+        .write_image(image.as_raw(), w, h, colour),
+        ImageFormat::Pgm => image::codecs::pnm::PnmEncoder::new(&mut bytes)
+            .with_subtype(image::codecs::pnm::PnmSubtype::Graymap(
+                image::codecs::pnm::SampleEncoding::Binary,
+            ))
+            .write_image(image.as_raw(), w, h, colour),
+        ImageFormat::Bmp => image::codecs::bmp::BmpEncoder::new(&mut bytes).write_image(
+            image.as_raw(),
+            w,
+            h,
+            colour,
+        ),
+    };
+    result.map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", path.display()))?;
+    crate::io::write_atomic(path, &bytes)
+}

@@ -1,0 +1,159 @@
+//! The one bilinear sampler, with pixel centres at integer coordinates and an
+//! explicit policy for what happens near the image border.
+//!
+//! The policies differ on purpose: the detector must not invent grey levels
+//! beyond the last pixel (a ray leaving the image ends there), the paper-edge
+//! search of `validate` may land exactly on the last row or column, and the
+//! simulator's blur smears the border outwards like a real lens does.
+
+/// A row-major grey plane borrowed from an image buffer.
+#[derive(Debug, Clone, Copy)]
+pub struct Plane<'a, T> {
+    pub pixels: &'a [T],
+    pub width: usize,
+    pub height: usize,
+}
+
+/// What [`Plane::at`] does near the border.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Border {
+    /// `None` unless the whole 2×2 neighbourhood lies in the image (the
+    /// last row and column are only reached from inside).
+    Interior,
+    /// `None` outside the rectangle of pixel centres [0, w-1] × [0, h-1];
+    /// on the last row or column the missing neighbour has weight zero.
+    Closed,
+    /// Coordinates clamped to the rectangle of pixel centres: the border
+    /// extends outwards. `None` only for an empty plane.
+    Clamp,
+}
+
+/// A pixel type the sampler can blend, and the precision it blends in.
+pub trait Texel: Copy {
+    type Value: Copy;
+    /// Interpolates between `a` (t = 0) and `b` (t = 1).
+    fn blend(a: Self, b: Self, t: f64) -> Self::Value;
+    /// Interpolates between two already blended values.
+    fn blend_values(a: Self::Value, b: Self::Value, t: f64) -> Self::Value;
+}
+
+/// 8-bit photos blend in f64 as a + t (b - a).
+impl Texel for u8 {
+    type Value = f64;
+    #[inline]
+    fn blend(a: u8, b: u8, t: f64) -> f64 {
+        Self::blend_values(f64::from(a), f64::from(b), t)
+    }
+    #[inline]
+    fn blend_values(a: f64, b: f64, t: f64) -> f64 {
+        a + t * (b - a)
+    }
+}
+
+/// The simulator's linear-light planes blend in f32 as a (1 - t) + b t:
+/// its rendered image bytes depend on this exact arithmetic.
+impl Texel for f32 {
+    type Value = f32;
+    #[inline]
+    fn blend(a: f32, b: f32, t: f64) -> f32 {
+        Self::blend_values(a, b, t)
+    }
+    #[inline]
+    fn blend_values(a: f32, b: f32, t: f64) -> f32 {
+        let t = t as f32;
+        a * (1.0 - t) + b * t
+    }
+}
+
+impl<'a, T: Texel> Plane<'a, T> {
+    pub fn new(pixels: &'a [T], width: usize, height: usize) -> Plane<'a, T> {
+        debug_assert!(pixels.len() >= width * height);
+        Plane {
+            pixels,
+            width,
+            height,
+        }
+    }
+
+    /// Bilinear value at (x, y) under the `border` policy.
+    #[inline]
+    pub fn at(&self, x: f64, y: f64, border: Border) -> Option<T::Value> {
+        let (w, h) = (self.width, self.height);
+        let (x0, y0, x1, y1, fx, fy) = match border {
+            Border::Interior => {
+                if !(x >= 0.0 && y >= 0.0) {
+                    return None;
+                }
+                // Non-negative, so truncation is floor.
+                let (x0, y0) = (x as usize, y as usize);
+                if x0 + 1 >= w || y0 + 1 >= h {
+                    return None;
+                }
+                (x0, y0, x0 + 1, y0 + 1, x - x0 as f64, y - y0 as f64)
+            }
+            Border::Closed | Border::Clamp => {
+                if w == 0 || h == 0 {
+                    return None;
+                }
+                let (max_x, max_y) = ((w - 1) as f64, (h - 1) as f64);
+                let (x, y) = if border == Border::Clamp {
+                    (x.clamp(0.0, max_x), y.clamp(0.0, max_y))
+                } else if x >= 0.0 && y >= 0.0 && x <= max_x && y <= max_y {
+                    (x, y)
+                } else {
+                    return None;
+                };
+                let (x0, y0) = (x.floor() as usize, y.floor() as usize);
+                let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+                (x0, y0, x1, y1, x - x0 as f64, y - y0 as f64)
+            }
+        };
+        let p = self.pixels;
+        let top = T::blend(p[y0 * w + x0], p[y0 * w + x1], fx);
+        let bottom = T::blend(p[y1 * w + x0], p[y1 * w + x1], fx);
+        Some(T::blend_values(top, bottom, fy))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    // 3×2 image:  0  10  20
+    //            30  40  50
+    const PIXELS: [u8; 6] = [0, 10, 20, 30, 40, 50];
+
+    #[test]
+    fn interior_needs_the_whole_neighbourhood() {
+        let plane = Plane::new(&PIXELS, 3, 2);
+        assert_eq!(plane.at(0.5, 0.5, Border::Interior), Some(20.0));
+        assert_eq!(plane.at(1.25, 0.0, Border::Interior), Some(12.5));
+        assert_eq!(plane.at(2.0, 0.0, Border::Interior), None);
+        assert_eq!(plane.at(0.0, 1.0, Border::Interior), None);
+        assert_eq!(plane.at(-0.1, 0.0, Border::Interior), None);
+        assert_eq!(plane.at(f64::NAN, 0.0, Border::Interior), None);
+    }
+
+    #[test]
+    fn closed_reaches_the_last_pixel_centres() {
+        let plane = Plane::new(&PIXELS, 3, 2);
+        assert_eq!(plane.at(2.0, 1.0, Border::Closed), Some(50.0));
+        assert_eq!(plane.at(1.5, 1.0, Border::Closed), Some(45.0));
+        assert_eq!(plane.at(2.01, 0.0, Border::Closed), None);
+        assert_eq!(plane.at(0.0, -0.01, Border::Closed), None);
+    }
+
+    #[test]
+    fn clamp_extends_the_border() {
+        let plane = Plane::new(&PIXELS, 3, 2);
+        assert_eq!(plane.at(-5.0, -5.0, Border::Clamp), Some(0.0));
+        assert_eq!(plane.at(9.0, 0.5, Border::Clamp), Some(35.0));
+        let light = [0.0f32, 1.0, 0.5, 0.25];
+        let plane = Plane::new(&light, 2, 2);
+        assert_eq!(plane.at(0.5, 0.5, Border::Clamp), Some(0.4375));
+        assert_eq!(
+            Plane::<u8>::new(&[], 0, 0).at(0.0, 0.0, Border::Clamp),
+            None
+        );
+    }
+}
