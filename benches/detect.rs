@@ -7,17 +7,18 @@
 //! whole process under 3x the image size, i.e. under 2x on top of it).
 //! Run with `cargo bench --bench detect`.
 
-#[path = "../tests/detect_common/mod.rs"]
-mod detect_common;
+#[path = "../tests/integration/support/scenes.rs"]
+mod scenes;
 
 use std::sync::OnceLock;
 
-use detect_common::{render, scatter, Look, Pinhole, Rng};
 use divan::{black_box, AllocProfiler, Bencher};
 use image::GrayImage;
+use scenes::{render, scatter, Look, Pinhole};
 use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
+use whycode::math::Pcg32;
 
 #[global_allocator]
 static ALLOC: AllocProfiler = AllocProfiler::system();
@@ -41,7 +42,7 @@ fn big_scene() -> &'static GrayImage {
             cx: 2500.0,
             cy: 2500.0,
         };
-        let mut rng = Rng(5000);
+        let mut rng = Pcg32::new(5000, 0);
         let placements = scatter(
             &mut rng,
             &camera,
@@ -71,7 +72,7 @@ fn small_scene() -> &'static GrayImage {
             cx: 320.0,
             cy: 240.0,
         };
-        let mut rng = Rng(640);
+        let mut rng = Pcg32::new(640, 0);
         let placements = scatter(&mut rng, &camera, 640, 480, 4, (40.0, 90.0), &mut |k| {
             Marker::whycode(8, codes[k % codes.len()], 100.0)
         });

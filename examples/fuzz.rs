@@ -7,7 +7,7 @@
 //! Prints how many inputs each target tried; exits 1 on a panic, a hang,
 //! detection slower than 1 s for a 2-megapixel image, or invalid JSON.
 
-#[path = "../tests/fuzz_support/mod.rs"]
+#[path = "../tests/integration/support/fuzz.rs"]
 mod fuzz_support;
 
 use std::time::Duration;

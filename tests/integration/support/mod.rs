@@ -1,0 +1,135 @@
+//! Shared by every integration test: running the real binary, angle
+//! differences, and the scenes the tests draw (`scenes` for the detector,
+//! `ring_view` for ring reading, `sheets` for validation), plus the stored
+//! reference files of `tests/data/`.
+#![allow(dead_code)]
+
+pub mod fuzz;
+pub mod reference;
+pub mod ring_view;
+pub mod scenes;
+pub mod sheets;
+
+use std::f64::consts::TAU;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use nalgebra::Vector3;
+use whycode::camera::Camera;
+use whycode::geometry::Marker;
+/// The library's seeded generator, so test scenes draw like the simulator.
+pub use whycode::math::Pcg32;
+use whycode::simulate::{self, LooseMarker, Placement, Scene, SceneObject, TrueMarker};
+
+/// Runs the `whycode` binary built for this test run.
+pub fn whycode(args: &[&str]) -> Output {
+    whycode_command(args)
+        .output()
+        .expect("the whycode binary runs")
+}
+
+/// Runs whycode with `dir` as its working folder, where outputs named
+/// without a folder (a sheet's default swarm.pdf) land.
+pub fn whycode_in(dir: &Path, args: &[&str]) -> Output {
+    whycode_command(args)
+        .current_dir(dir)
+        .output()
+        .expect("the whycode binary runs")
+}
+
+fn whycode_command(args: &[&str]) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_whycode"));
+    command.args(args);
+    command
+}
+
+/// Runs a command that must succeed; returns its standard output.
+pub fn run_ok(args: &[&str]) -> String {
+    ok_stdout(args, whycode(args))
+}
+
+/// [`run_ok`] with `dir` as the working folder.
+pub fn run_ok_in(dir: &Path, args: &[&str]) -> String {
+    ok_stdout(args, whycode_in(dir, args))
+}
+
+fn ok_stdout(args: &[&str], out: Output) -> String {
+    assert!(
+        out.status.success(),
+        "whycode {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).expect("stdout is UTF-8")
+}
+
+/// Runs a command that must fail with exactly one line on stderr and nothing
+/// on stdout; returns that line.
+pub fn run_err(args: &[&str]) -> String {
+    let out = whycode(args);
+    assert!(!out.status.success(), "whycode {args:?} succeeded");
+    assert!(
+        out.stdout.is_empty(),
+        "whycode {args:?} printed output: {}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let stderr = String::from_utf8(out.stderr).expect("stderr is UTF-8");
+    assert_eq!(
+        stderr.lines().count(),
+        1,
+        "whycode {args:?} should fail with one line, got: {stderr}"
+    );
+    stderr.trim_end().to_string()
+}
+
+pub fn stdout(out: &Output) -> String {
+    String::from_utf8(out.stdout.clone()).expect("stdout is UTF-8")
+}
+
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8(out.stderr.clone()).expect("stderr is UTF-8")
+}
+
+/// Difference `a - b` wrapped into (-π, π].
+pub fn wrap_angle(d: f64) -> f64 {
+    let w = d.rem_euclid(TAU);
+    if w > TAU / 2.0 {
+        w - TAU
+    } else {
+        w
+    }
+}
+
+/// Smallest unsigned difference between two angles, radians (0..=π).
+pub fn angle_diff(a: f64, b: f64) -> f64 {
+    wrap_angle(a - b).abs()
+}
+
+/// Smallest difference between two axis directions (angles modulo π).
+pub fn axis_angle_diff(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(TAU / 2.0);
+    d.min(TAU / 2.0 - d)
+}
+
+/// A face-on photo of one marker, `diameter_px` across, turned by `roll`
+/// about the line of sight, its centre a fraction of a pixel off the image
+/// centre, with a light focus blur; and the simulator's truth about it.
+pub fn marker_photo(
+    marker: Marker,
+    id: u32,
+    diameter_px: f64,
+    roll: f64,
+) -> (image::GrayImage, TrueMarker) {
+    let side = (diameter_px * 1.8).ceil() as u32 + 12;
+    let camera = Camera::ideal(side, side, 60.0);
+    let z = camera.fx * marker.diameter_mm / 1000.0 / diameter_px;
+    let (x, y) = camera.undistort(camera.cx + 0.37, camera.cy + 0.21);
+    let placement = Placement::viewed(Vector3::new(x * z, y * z, z), 0.0, 0.0, roll);
+    let mut scene = Scene::new(camera);
+    scene
+        .objects
+        .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+    scene.focus_blur_px = 0.6;
+    let (image, truth) = simulate::render(&scene);
+    (image, truth.markers[0].clone())
+}
