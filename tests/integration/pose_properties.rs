@@ -41,6 +41,10 @@ fn boundary(camera: &Camera, pose: &Pose, radius: f64) -> Option<Vec<(f64, f64)>
         .collect()
 }
 
+/// How far (pixels) a distorted outline may stray from its fitted ellipse
+/// for the pose read from that ellipse to be held to one degree.
+const MISFIT_PX: f64 = 0.05;
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
 
@@ -73,13 +77,20 @@ proptest! {
         }
         let errors = candidates.map(|c| c.normal.angle(&truth.normal()).to_degrees());
         let best = if errors[0] <= errors[1] { 0 } else { 1 };
-        let scale = outer.semi_minor.min(50.0);
         // Without distortion the fitted ellipse is exact; with distortion it
-        // approximates the image curve, better the smaller the marker looks.
-        if !camera.has_distortion() || scale > 3.0 {
+        // only approximates the image curve (a large marker near the edge of
+        // a strongly distorted frame bends visibly away from any ellipse),
+        // and the pose can be no better than that approximation: the normal
+        // must be right wherever the outline is an ellipse to a small
+        // fraction of a pixel.
+        let misfit = points
+            .iter()
+            .map(|&(x, y)| outer.radial_distance(x, y))
+            .fold(0.0, f64::max);
+        if !camera.has_distortion() || (outer.semi_minor > 3.0 && misfit < MISFIT_PX) {
             let position_error =
                 (candidates[best].center - truth.position).norm() / truth.position.norm();
-            prop_assert!(errors[best] < 1.0, "normal off by {}°", errors[best]);
+            prop_assert!(errors[best] < 1.0, "normal off by {}° (outline off any ellipse by {misfit} px)", errors[best]);
             prop_assert!(position_error < 0.01, "position off by {}", position_error);
         }
         if let Some(inner_points) = boundary(&camera, &truth, WHYCON_WHITE_RATIO * radius) {
