@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! whycode: WhyCode circular fiducial markers. ID families, print-ready
 //! rendering, detection, pose and validation.
 //!

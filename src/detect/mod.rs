@@ -30,13 +30,13 @@ mod describe;
 pub mod ellipse;
 mod follow;
 pub mod idfilter;
-pub mod rectify;
+pub(crate) mod rectify;
 pub mod report;
 pub mod ring;
 mod scan;
-pub mod segment;
-pub mod threshold;
-pub mod track;
+pub(crate) mod segment;
+pub(crate) mod threshold;
+pub(crate) mod track;
 
 use image::GrayImage;
 
