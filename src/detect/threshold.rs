@@ -132,6 +132,14 @@ impl ThresholdMap {
         self.shift
     }
 
+    /// The threshold for pixel (x, y); the detector reads whole rows, tests
+    /// check single pixels.
+    #[cfg(test)]
+    #[inline]
+    pub fn at(&self, x: usize, y: usize) -> u8 {
+        self.row(y)[x >> self.shift]
+    }
+
     /// The local map of an 8-bit image stored row-major without padding.
     pub fn adaptive(pixels: &[u8], width: usize, height: usize) -> ThresholdMap {
         ThresholdMap::adaptive_rows(pixels, width, height, 0..height)

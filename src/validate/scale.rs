@@ -20,7 +20,7 @@ pub const SCALE_ERROR: f64 = 0.03;
 
 /// Maps between image pixels and ideal (distortion-free) pixels.
 #[derive(Debug, Clone, Copy)]
-pub struct PixelModel {
+pub(crate) struct PixelModel {
     camera: Option<Camera>,
 }
 
@@ -127,7 +127,7 @@ impl EdgeLine {
 /// Measures the printed scale of one page. `markers` are the page's
 /// markers as (x, y, radius) in manifest millimetres; the search keeps
 /// clear of them so that a disc's edge is not taken for the paper's.
-pub fn measure(
+pub(crate) fn measure(
     image: &GrayImage,
     model: &PixelModel,
     homography: &Homography,
@@ -233,7 +233,7 @@ impl ScaleMeasurement {
 
 /// A printed disc as the photo shows it, for [`measure_discs`].
 #[derive(Debug, Clone, Copy)]
-pub struct DiscView {
+pub(crate) struct DiscView {
     /// The disc's outline in the photo (image pixels).
     pub outline: Ellipse,
     /// The radius it was meant to have, mm.
@@ -245,7 +245,7 @@ pub struct DiscView {
 /// [`measure`], map the photo onto the paper exactly (it is the paper's own
 /// outline), and each disc's outline mapped there is a circle whose radius
 /// is the printed one.
-pub fn measure_discs(
+pub(crate) fn measure_discs(
     paper: &ScaleMeasurement,
     model: &PixelModel,
     page_size_mm: [f64; 2],
