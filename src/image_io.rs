@@ -78,13 +78,18 @@ fn check_jpeg_complete(path: &Path) -> Result<()> {
 /// Image file formats written, chosen by file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImageFormat {
+    /// PNG, lossless.
     Png,
+    /// JPEG, lossy: what cameras deliver.
     Jpeg,
+    /// Binary PGM, for tools that read nothing else.
     Pgm,
+    /// BMP, uncompressed.
     Bmp,
 }
 
 impl ImageFormat {
+    /// The format named by the file's extension, or an error naming the file.
     pub fn from_path(path: &Path) -> Result<ImageFormat> {
         let ext = path
             .extension()

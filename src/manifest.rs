@@ -11,11 +11,13 @@ use std::path::Path;
 pub const MANIFEST_VERSION: u32 = 1;
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// What a sheet printed where: the contract between the renderer that writes it, the simulator that photographs it and the validator that checks photos of the print.
 pub struct Manifest {
     /// Format name, always "whycode-sheet".
     #[serde(default = "format_name")]
     pub format: String,
     #[serde(default = "version_one")]
+    /// Format version, [`MANIFEST_VERSION`] when written.
     pub version: u32,
     /// The tool that wrote it, e.g. "whycode 0.1.0".
     #[serde(default)]
@@ -23,19 +25,25 @@ pub struct Manifest {
     /// The family the IDs belong to; absent for legacy WhyCon sheets.
     pub family: Option<FamilyRef>,
     #[serde(default)]
+    /// True for a sheet of legacy WhyCon circles.
     pub legacy: bool,
     /// Name of the page template.
     #[serde(default)]
     pub template: String,
     /// Page width and height in millimetres.
     pub page_size_mm: [f64; 2],
+    /// Number of pages.
     pub pages: u32,
+    /// Every printed marker, in print order.
     pub markers: Vec<PrintedMarker>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+/// The family a sheet's IDs belong to: enough to generate it again.
 pub struct FamilyRef {
+    /// Code length.
     pub bits: u32,
+    /// Minimum cyclic Hamming distance.
     pub distance: u32,
 }
 
@@ -49,8 +57,11 @@ pub struct PrintedMarker {
     pub code: u32,
     /// Page number, from 1.
     pub page: u32,
+    /// Centre, mm from the page's left edge.
     pub x_mm: f64,
+    /// Centre, mm from the page's top edge.
     pub y_mm: f64,
+    /// Diameter of the black disc as intended, mm.
     pub diameter_mm: f64,
 }
 
@@ -63,6 +74,7 @@ fn version_one() -> u32 {
 }
 
 impl Manifest {
+    /// Reads and checks a manifest file; errors name the file.
     pub fn load(path: &Path) -> Result<Manifest> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("cannot read manifest {}", path.display()))?;
@@ -123,6 +135,7 @@ impl Manifest {
         Ok(())
     }
 
+    /// The manifest as the JSON the `sheet` command writes (stable field order).
     pub fn to_json(&self) -> String {
         let mut s = serde_json::to_string_pretty(self).expect("manifest serialises");
         s.push('\n');
@@ -130,6 +143,7 @@ impl Manifest {
     }
 
     #[cfg(feature = "files")]
+    /// Writes the manifest whole or not at all.
     pub fn save(&self, path: &Path) -> Result<()> {
         crate::io::write_atomic(path, self.to_json().as_bytes())
     }

@@ -14,13 +14,19 @@ use nalgebra::{Matrix2, Vector2, Vector3};
 /// Intrinsic calibration of one camera.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Camera {
+    /// Focal length along x, pixels.
     pub fx: f64,
+    /// Focal length along y, pixels.
     pub fy: f64,
+    /// Principal point x, pixels (origin at the top-left pixel's centre).
     pub cx: f64,
+    /// Principal point y, pixels.
     pub cy: f64,
     /// k1, k2, p1, p2, k3 (OpenCV order, "plumb_bob" in ROS).
     pub distortion: [f64; 5],
+    /// Image width the calibration was made for, pixels: an image of another size needs [`Camera::for_image`].
     pub width: u32,
+    /// Image height the calibration was made for, pixels.
     pub height: u32,
 }
 

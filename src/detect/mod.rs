@@ -99,6 +99,7 @@ pub enum Target {
 }
 
 impl Target {
+    /// The marker design to look for, whose proportions the tests use.
     pub fn design(&self) -> Design {
         match self {
             Target::WhyCon => Design::WhyCon,
@@ -127,6 +128,7 @@ pub struct Detection {
     /// otherwise the centre of the outer ellipse (which perspective moves
     /// off the true centre by up to a pixel or two on large tilted markers).
     pub u: f64,
+    /// Row of the centre, pixels (see `u`).
     pub v: f64,
     /// Direction of the marker's +x axis in the image, atan2(dv, du);
     /// `None` when it could not be told (legacy markers, unreadable rings).
@@ -190,6 +192,7 @@ const SCAN_CHUNK: usize = 16;
 const DISCOVERY_BANDS: u64 = 8;
 
 impl Detector {
+    /// A detector with no state yet; the first frame is scanned whole.
     pub fn new(config: DetectorConfig) -> Detector {
         let reader = config
             .target
@@ -214,6 +217,7 @@ impl Detector {
         }
     }
 
+    /// The settings the detector was made with.
     pub fn config(&self) -> &DetectorConfig {
         &self.config
     }

@@ -148,6 +148,7 @@ fn sample_radii() -> [f64; 5] {
 }
 
 impl RingReader {
+    /// A reader that decodes rings with `decoder`, or only measures them without one.
     pub fn new(decoder: Option<Decoder>) -> RingReader {
         RingReader {
             decoder,
@@ -161,6 +162,7 @@ impl RingReader {
         self
     }
 
+    /// The decoder the reader uses, if any.
     pub fn decoder(&self) -> Option<&Decoder> {
         self.decoder.as_ref()
     }

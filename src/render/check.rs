@@ -42,6 +42,7 @@ fn resolutions_for(markers: &[PrintedMarker]) -> Vec<f64> {
 /// What the check did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CheckReport {
+    /// Print resolutions the pages were rendered at, dpi.
     pub resolutions: Vec<f64>,
     /// Marker readings checked (markers x resolutions).
     pub readings: usize,

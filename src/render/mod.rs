@@ -27,12 +27,16 @@ use std::path::{Path, PathBuf};
 /// Output file formats, chosen by file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
+    /// SVG, for editing and the web.
     Svg,
+    /// PDF, for printing at exact size.
     Pdf,
+    /// PNG at print resolution.
     Png,
 }
 
 impl Format {
+    /// The format named by the file's extension, or an error naming the file.
     pub fn from_path(path: &Path) -> Result<Format> {
         let ext = path
             .extension()
