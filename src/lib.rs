@@ -63,13 +63,13 @@ pub mod simulate;
 pub mod units;
 pub mod validate;
 
-pub use camera::Camera;
+pub use camera::{Camera, CameraError};
 pub use detect::report::FrameReport;
 pub use detect::{Detection, Detector, DetectorConfig, Target};
 pub use family::{Decoded, Decoder, Family, FamilyError, MatchStatus};
 pub use geometry::{Design, Marker, MarkerKind};
-pub use image_io::load_gray;
-pub use manifest::Manifest;
+pub use image_io::{load_gray, ImageError};
+pub use manifest::{Manifest, ManifestError};
 pub use math::Ellipse;
 pub use pose::Pose;
 pub use render::{Format, MarkerOptions, Sheet, SheetMarker, SheetSpec, Template};

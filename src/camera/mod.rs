@@ -9,6 +9,8 @@
 
 mod calibration;
 
+pub use calibration::CameraError;
+
 use nalgebra::{Matrix2, Vector2, Vector3};
 
 /// Intrinsic calibration of one camera.
