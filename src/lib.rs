@@ -49,6 +49,7 @@
 
 pub mod camera;
 pub mod detect;
+mod error;
 pub mod family;
 pub mod geometry;
 pub mod image_io;
@@ -66,7 +67,7 @@ pub mod validate;
 pub use camera::{Camera, CameraError};
 pub use detect::report::FrameReport;
 pub use detect::{Detection, Detector, DetectorConfig, Target};
-pub use family::{Decoded, Decoder, Family, FamilyError, MatchStatus};
+pub use family::{Decoded, Decoder, Family, FamilyError, FamilyFileError, MatchStatus};
 pub use geometry::{Design, Marker, MarkerKind};
 pub use image_io::{load_gray, ImageError};
 pub use manifest::{Manifest, ManifestError};

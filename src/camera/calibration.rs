@@ -57,23 +57,9 @@ impl Camera {
     pub fn parse(text: &str) -> std::result::Result<Camera, CameraError> {
         parse_calibration(text).map_err(|err| CameraError::Invalid {
             path: None,
-            problem: chain_on_one_line(&err),
+            problem: crate::error::chain_on_one_line(&err),
         })
     }
-}
-
-/// The causes of a parse error joined with ": ", as the command line
-/// prints an error chain (a cause its parent already quotes is left out).
-fn chain_on_one_line(err: &anyhow::Error) -> String {
-    let mut parts: Vec<String> = Vec::new();
-    for cause in err.chain() {
-        let text = cause.to_string();
-        if text.is_empty() || parts.last().is_some_and(|p| p.contains(&text)) {
-            continue;
-        }
-        parts.push(text);
-    }
-    parts.join(": ")
 }
 
 fn parse_calibration(text: &str) -> Result<Camera> {

@@ -119,7 +119,7 @@ impl FamilyArgs {
     /// The family these flags name.
     pub fn resolve(&self) -> Result<Family> {
         match &self.family {
-            Some(path) => Family::load(path),
+            Some(path) => Ok(Family::load(path)?),
             None => Ok(Family::generate(self.bits, self.hamming()?)?),
         }
     }
