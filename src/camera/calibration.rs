@@ -8,8 +8,8 @@ use serde_yaml::Value;
 
 use super::Camera;
 
-/// Why a calibration could not be read. Each message is one line; from a
-/// file it starts with the file's name.
+/// Why a calibration could not be read or used. Each message is one line;
+/// from a file it starts with the file's name.
 #[derive(Debug, thiserror::Error)]
 pub enum CameraError {
     /// The file could not be read.
@@ -29,6 +29,21 @@ pub enum CameraError {
         path: Option<PathBuf>,
         /// What is wrong or missing, in words.
         problem: String,
+    },
+    /// An image whose aspect ratio differs from the calibration's: another
+    /// camera or a crop, for which no rescaled calibration is right.
+    #[error(
+        "image is {}x{} but the camera calibration is for {}x{}",
+        image[0],
+        image[1],
+        calibration[0],
+        calibration[1]
+    )]
+    OtherCamera {
+        /// The image's width and height, pixels.
+        image: [u32; 2],
+        /// The width and height the calibration was made for, pixels.
+        calibration: [u32; 2],
     },
 }
 

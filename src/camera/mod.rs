@@ -85,7 +85,7 @@ impl Camera {
     /// rescaled when the image is the same sensor at another resolution. A
     /// different aspect ratio means another camera or a crop, for which no
     /// rescaling is right, and is refused.
-    pub fn for_image(&self, width: u32, height: u32) -> Result<Camera, String> {
+    pub fn for_image(&self, width: u32, height: u32) -> Result<Camera, CameraError> {
         if self.width == width && self.height == height {
             return Ok(*self);
         }
@@ -94,10 +94,10 @@ impl Camera {
             || self.height == 0
             || (aspect(self.width, self.height) / aspect(width, height) - 1.0).abs() > 0.01
         {
-            return Err(format!(
-                "image is {width}x{height} but the camera calibration is for {}x{}",
-                self.width, self.height
-            ));
+            return Err(CameraError::OtherCamera {
+                image: [width, height],
+                calibration: [self.width, self.height],
+            });
         }
         Ok(self.with_resolution(width, height))
     }
