@@ -9,7 +9,7 @@
 //! tests, not this). With a family, the ring is read ([`ring`]); with a
 //! camera and a diameter, the pose comes from the edge points, the normal
 //! ambiguity is settled by the inner white edges and the yaw is measured on
-//! the rectified ring ([`rectify`]).
+//! the rectified ring (`rectify.rs`).
 //!
 //! With tracking on, each known marker is first followed where it should
 //! be (last position plus velocity) by its edges along a few dozen scan
