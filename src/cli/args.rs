@@ -11,13 +11,14 @@ use whycode::units::{format_number, Length};
 /// from a family file.
 #[derive(Debug, clap::Args)]
 pub struct FamilyArgs {
-    /// Code length of the ID family, 2 to 24 bits
+    /// Code length of the ID family, 2 to 24 bits; `detect` also takes
+    /// `auto`: each ring's bit count (4-24) read from the ring
     #[arg(
         long,
         short = 'b',
         value_name = "BITS",
         default_value_t = DEFAULT_BITS,
-        value_parser = whole_number,
+        value_parser = bits_or_auto,
         allow_hyphen_values = true,
         conflicts_with = "family"
     )]
@@ -79,6 +80,17 @@ fn parse_distance(text: &str) -> Result<DistanceArg, String> {
 
 /// A whole number, refused with one message whatever the typo (a sign, a
 /// fraction, a huge value).
+/// `--bits auto` (stands for no fixed count).
+pub const AUTO_BITS: u32 = 0;
+
+fn bits_or_auto(text: &str) -> Result<u32, String> {
+    if text.trim().eq_ignore_ascii_case("auto") {
+        Ok(AUTO_BITS)
+    } else {
+        whole_number(text)
+    }
+}
+
 pub fn whole_number(text: &str) -> Result<u32, String> {
     let t = text.trim();
     t.parse::<u32>().map_err(|_| {
@@ -120,6 +132,9 @@ impl FamilyArgs {
     pub fn resolve(&self) -> Result<Family> {
         match &self.family {
             Some(path) => Ok(Family::load(path)?),
+            None if self.bits == AUTO_BITS => {
+                bail!("--bits auto reads each marker's bit count from its ring: only `detect` takes it")
+            }
             None => Ok(Family::generate(self.bits, self.hamming()?)?),
         }
     }
@@ -143,6 +158,17 @@ impl MarkerKindArgs {
     pub fn resolve(&self) -> Result<Target> {
         if self.legacy {
             Ok(Target::WhyCon)
+        } else if self.family.bits == AUTO_BITS && self.family.family.is_none() {
+            let distance = match self.family.distance {
+                Some(_) => {
+                    let d = self.family.hamming()?;
+                    // A distance no bit count accepts is refused up front.
+                    Family::generate(DEFAULT_BITS.max(d), d)?;
+                    Some(d)
+                }
+                None => None,
+            };
+            Ok(Target::AnyBits { distance })
         } else {
             self.family.resolve().map(Target::WhyCode)
         }

@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 use whycode::camera::Camera;
+use whycode::detect::family_check::FamilyCheck;
 use whycode::detect::report::{FrameReport, CSV_HEADER};
-use whycode::detect::{Detector, DetectorConfig};
+use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::image_io::load_gray;
 use whycode::units::Length;
 
@@ -20,6 +21,8 @@ Examples:
   whycode detect --bits 8 --distance 1 --format json sheet.png
   whycode detect --family family.json --diameter 122mm --camera cam.yaml --format json frames/
   whycode detect --legacy --annotate out/ many.png
+  whycode detect --bits auto photo.jpg               # each ring's bit count and code
+  whycode detect --bits auto --distance 2 photo.jpg  # and its ID in that family
 
 Formats: table (for reading), csv (one row per marker) or json (one object
 per image and line).
@@ -77,6 +80,11 @@ pub struct DetectArgs {
     /// processed in parallel)
     #[arg(long)]
     no_tracking: bool,
+
+    /// Also report round candidates whose ring shows no code structure
+    /// (marked "unreadable"); by default they are not taken for markers
+    #[arg(long, conflicts_with = "legacy")]
+    unreadable: bool,
 }
 
 fn parse_diameter(text: &str) -> Result<Length, String> {
@@ -96,8 +104,16 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         target,
         diameter_m: args.diameter.map(Length::m),
         camera,
+        report_unreadable: args.unreadable,
         ..DetectorConfig::default()
     };
+    let family_bits = config.target.family().map(|f| f.bits());
+    // In auto mode with a distance the IDs are there already; legacy
+    // circles carry no ring.
+    let wants_note = matches!(
+        config.target,
+        Target::WhyCode(_) | Target::AnyBits { distance: None }
+    );
     if let Some(n) = args.max_markers {
         config.max_markers = n;
     }
@@ -156,13 +172,17 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     if args.format.format == Format::Csv {
         writeln!(out, "{CSV_HEADER}")?;
     }
+    let mut check = FamilyCheck::new(family_bits);
     for result in results.into_iter().flatten() {
         match result {
-            Ok(frame) => match args.format.format {
-                Format::Json => writeln!(out, "{}", frame.to_json())?,
-                Format::Csv => out.write_all(frame.to_csv_rows().as_bytes())?,
-                Format::Table => out.write_all(frame.to_table(several).as_bytes())?,
-            },
+            Ok(frame) => {
+                check.observe(&frame.markers);
+                match args.format.format {
+                    Format::Json => writeln!(out, "{}", frame.to_json())?,
+                    Format::Csv => out.write_all(frame.to_csv_rows().as_bytes())?,
+                    Format::Table => out.write_all(frame.to_table(several).as_bytes())?,
+                }
+            }
             Err(err) => {
                 out.flush()?;
                 eprintln!("whycode: error: {}", super::one_line(&err));
@@ -171,6 +191,11 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         }
     }
     out.flush()?;
+    if wants_note {
+        if let Some(note) = check.note() {
+            eprintln!("whycode: note: {note}");
+        }
+    }
     Ok(if failures > 0 {
         ExitCode::FAILURE
     } else {

@@ -2,12 +2,16 @@
 //! followed from the track's known code), the ID filter of tracked
 //! markers, and its pose.
 
-use image::GrayImage;
+use image::{ImageBuffer, Luma};
 use nalgebra::Vector3;
+use std::ops::Deref;
 
+use super::manchester::{self, RingEvidence};
 use super::segment::Gray;
-use super::{ellipse, rectify, Candidate, Detection, Detector};
+use super::{ellipse, legacy, rectify, ring_model, Candidate, Detection, Detector};
 use crate::camera::Camera;
+use crate::family::{Family, MatchStatus};
+use crate::geometry::Design;
 use crate::math::Ellipse;
 use crate::pose::{self, CirclePose, Pose};
 
@@ -23,9 +27,9 @@ struct PoseHints {
 impl Detector {
     /// The detection of a candidate, and its normal when that was told
     /// apart from the other pose candidate with confidence (for the track).
-    pub(super) fn describe(
+    pub(super) fn describe<C: Deref<Target = [u8]>>(
         &mut self,
-        image: &GrayImage,
+        image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,
     ) -> (Detection, Option<Vector3<f64>>) {
@@ -42,6 +46,8 @@ impl Detector {
             confidence: (0.5 + 0.5 * quality).clamp(0.0, 1.0),
             status: None,
             pose: None,
+            bits: None,
+            unreadable: false,
         };
         let mut axis_point = None;
         let mut centre_estimate = None;
@@ -69,15 +75,88 @@ impl Detector {
             d.status = t.status;
             d.yaw = Some(yaw);
             d.confidence = t.confidence;
-        } else if let Some(reader) = &self.reader {
-            let reading = reader.read(image, &outer, c.black, c.white);
-            d.id = reading.id;
-            d.code = reading.decoded.filter(|x| x.is_member()).map(|x| x.code);
-            d.status = reading.decoded.map(|x| x.status);
-            d.yaw = reading.yaw;
-            d.confidence = reading.confidence;
-            axis_point = reading.axis_point;
-            centre_estimate = reading.centre_estimate;
+        } else if self.config.target.design() == Design::WhyCode {
+            let family_bits = self.config.target.family().map(Family::bits);
+            let settled = c
+                .track
+                .is_some_and(|i| self.tracks[i].id != 0 && self.tracks[i].id_streak >= 3);
+            let evidence = ring_evidence(image, &outer, c, family_bits);
+            // Rings whose sectors are a pixel or two wide: compare with the
+            // rendered members instead (also the ring test when too small
+            // for the sector test).
+            let small = match (self.config.target.family(), evidence) {
+                (Some(family), RingEvidence::TooSmall) => {
+                    ring_model::read_small_ring(image, &outer, family)
+                }
+                _ => None,
+            };
+            let reader = match evidence {
+                RingEvidence::Manchester(ring) => {
+                    d.bits = Some(ring.bits);
+                    if Some(ring.bits) == family_bits {
+                        self.reader.as_ref()
+                    } else {
+                        // Not this family's ring (or no family given): the
+                        // code is what the ring says, the ID only from a
+                        // family of the ring's own bit count.
+                        d.code = Some(ring.code);
+                        d.confidence *= ring.fit;
+                        self.auto_reader(ring.bits)
+                    }
+                }
+                RingEvidence::Absent => {
+                    // A settled track whose ring blurs is still the marker.
+                    d.unreadable = !settled;
+                    None
+                }
+                // Auto mode cannot name the bit count of a ring too small
+                // to count its sectors: no evidence it is a marker.
+                RingEvidence::TooSmall if family_bits.is_none() => {
+                    d.unreadable = !settled;
+                    None
+                }
+                RingEvidence::TooSmall => self.reader.as_ref(),
+            };
+            let reader = match small {
+                Some(ring) if !ring.structured => {
+                    // The rendered model ignores perspective, which a steep
+                    // view of a large marker cannot: there it names no ID
+                    // but refutes nothing either.
+                    let steep = outer.semi_major > 2.0 * outer.semi_minor
+                        && outer.semi_major > ring_model::MAX_AFFINE_SEMI_MAJOR;
+                    d.unreadable = !settled && !steep;
+                    None
+                }
+                Some(ring) if ring.id != 0 => {
+                    d.id = ring.id;
+                    d.code = Some(ring.code);
+                    d.status = Some(MatchStatus::Exact);
+                    d.yaw = ring.yaw;
+                    d.confidence = (1.0 - 1.0 / ring.margin).clamp(0.0, 1.0);
+                    None
+                }
+                Some(_) => None,
+                None => reader,
+            };
+            if let Some(reader) = reader {
+                let reading = reader.read(image, &outer, c.black, c.white);
+                d.id = reading.id;
+                d.code = reading
+                    .decoded
+                    .filter(|x| x.is_member())
+                    .map(|x| x.code)
+                    .or(d.code);
+                d.status = reading.decoded.map(|x| x.status);
+                d.yaw = reading.yaw;
+                d.confidence = reading.confidence;
+                axis_point = reading.axis_point;
+                centre_estimate = reading.centre_estimate;
+            }
+        } else {
+            let disc = legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
+                && legacy::white_margin(gray, &c.outer, c.black, c.white);
+            // A marker followed for a while stays one when its inside blurs.
+            d.unreadable = !disc && !c.track.is_some_and(|i| self.tracks[i].hits >= 3);
         }
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed_yaw.is_some());
@@ -98,8 +177,11 @@ impl Detector {
                 .pose
                 .filter(|_| settled)
                 .map(|p| p.rotation.column(2).into_owned());
+            let member_code = d.code.filter(|_| {
+                d.bits.is_none() || d.bits == self.config.target.family().map(Family::bits)
+            });
             if let (Some(pose), Some(code), Some(family)) =
-                (&d.pose, d.code, self.config.target.family())
+                (&d.pose, member_code, self.config.target.family())
             {
                 let bits = family.bits();
                 if let Some(better) =
@@ -210,5 +292,32 @@ impl Detector {
             pose::full_pose_from_ring(camera, circle, yaw, axis_point),
             false,
         ))
+    }
+}
+
+/// What the candidate's ring shows: the family's bit count is tried first
+/// (the common case), then every other count, so that a ring of another
+/// family is told apart from no ring at all.
+fn ring_evidence<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    outer: &Ellipse,
+    c: &Candidate,
+    family_bits: Option<u32>,
+) -> RingEvidence {
+    match family_bits {
+        Some(bits) if !manchester::testable(outer, bits) => RingEvidence::TooSmall,
+        Some(bits) => {
+            // Counts too long to test on this ring are no evidence against
+            // the family's.
+            let others = manchester::BITS.filter(|&n| n != bits && manchester::testable(outer, n));
+            manchester::examine(
+                image,
+                outer,
+                c.black,
+                c.white,
+                std::iter::once(bits).chain(others),
+            )
+        }
+        None => manchester::examine(image, outer, c.black, c.white, manchester::BITS),
     }
 }

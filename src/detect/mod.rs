@@ -28,17 +28,21 @@
 pub mod annotate;
 mod describe;
 pub mod ellipse;
+pub mod family_check;
 mod follow;
 pub mod idfilter;
+pub mod legacy;
+pub mod manchester;
 pub(crate) mod rectify;
 pub mod report;
 pub mod ring;
+pub mod ring_model;
 mod scan;
 pub(crate) mod segment;
 pub(crate) mod threshold;
 pub(crate) mod track;
 
-use image::GrayImage;
+use std::collections::BTreeMap;
 
 use crate::camera::Camera;
 use crate::family::{Decoder, Family, MatchStatus};
@@ -71,6 +75,9 @@ pub struct DetectorConfig {
     pub area_tolerance: f64,
     /// Relative tolerance on the white-to-disc pixel ratio.
     pub ratio_tolerance: f64,
+    /// Also report round candidates whose ring shows no Manchester code
+    /// structure (flagged `unreadable`); by default they are not markers.
+    pub report_unreadable: bool,
 }
 
 impl Default for DetectorConfig {
@@ -85,6 +92,7 @@ impl Default for DetectorConfig {
             roundness_tolerance: 0.4,
             area_tolerance: 0.12,
             ratio_tolerance: 0.5,
+            report_unreadable: false,
         }
     }
 }
@@ -96,6 +104,13 @@ pub enum Target {
     WhyCon,
     /// WhyCode markers of one family: the ring is read and decoded to its IDs.
     WhyCode(Family),
+    /// WhyCode markers of any bit count (4-24): each ring's count is read
+    /// from the ring and reported with its code; with a distance, the ID
+    /// in the family of that count and that distance.
+    AnyBits {
+        /// The families' minimum distance, when IDs are wanted.
+        distance: Option<u32>,
+    },
 }
 
 impl Target {
@@ -103,14 +118,14 @@ impl Target {
     pub fn design(&self) -> Design {
         match self {
             Target::WhyCon => Design::WhyCon,
-            Target::WhyCode(_) => Design::WhyCode,
+            Target::WhyCode(_) | Target::AnyBits { .. } => Design::WhyCode,
         }
     }
 
     /// The family whose codes the rings carry.
     pub fn family(&self) -> Option<&Family> {
         match self {
-            Target::WhyCon => None,
+            Target::WhyCon | Target::AnyBits { .. } => None,
             Target::WhyCode(family) => Some(family),
         }
     }
@@ -145,6 +160,13 @@ pub struct Detection {
     /// markers (no yaw) the in-plane rotation is arbitrary: +x is the
     /// image +u direction projected onto the marker plane.
     pub pose: Option<Pose>,
+    /// Bit count of the code ring as the ring itself shows it (WhyCode
+    /// markers whose sectors are wide enough to count); a count other than
+    /// the family's means the marker is not of this family (ID 0).
+    pub bits: Option<u32>,
+    /// A round candidate whose ring shows no Manchester code structure:
+    /// reported only with [`DetectorConfig::report_unreadable`].
+    pub unreadable: bool,
 }
 
 /// The detector: configuration, tracking state and reusable buffers.
@@ -162,6 +184,10 @@ pub struct Detector {
     /// A follow of this frame fell back to the flood fill.
     follow_filled: bool,
     tracks: Vec<Track>,
+    /// Readers for rings of each bit count, in auto mode with a distance.
+    auto_readers: BTreeMap<u32, Option<RingReader>>,
+    /// How this detector's markers decoded so far.
+    check: family_check::FamilyCheck,
     search: ThresholdSearch,
     ratio: Adaptive,
     roundness: Adaptive,
@@ -199,6 +225,7 @@ impl Detector {
             .family()
             .map(|family| RingReader::new(Some(Decoder::new(family))));
         let white = config.target.design().white_fraction();
+        let check = family_check::FamilyCheck::new(config.target.family().map(Family::bits));
         Detector {
             ratio: Adaptive::new(white, config.ratio_tolerance),
             roundness: Adaptive::new(0.0, config.roundness_tolerance),
@@ -212,6 +239,8 @@ impl Detector {
             occupied: Vec::new(),
             follow_filled: false,
             tracks: Vec::new(),
+            auto_readers: BTreeMap::new(),
+            check,
             search: ThresholdSearch::default(),
             frame: 0,
         }
@@ -220,6 +249,30 @@ impl Detector {
     /// The settings the detector was made with.
     pub fn config(&self) -> &DetectorConfig {
         &self.config
+    }
+
+    /// How the markers of every frame so far decoded: rings of other bit
+    /// counts, and IDs that needed error correction (see
+    /// [`family_check::FamilyCheck::note`] for a warning to show).
+    pub fn family_check(&self) -> &family_check::FamilyCheck {
+        &self.check
+    }
+
+    /// The reader for rings of `bits` bits in auto mode with a distance
+    /// (families are generated on first use); None without.
+    fn auto_reader(&mut self, bits: u32) -> Option<&RingReader> {
+        let Target::AnyBits {
+            distance: Some(distance),
+        } = self.config.target
+        else {
+            return None;
+        };
+        let reader = self.auto_readers.entry(bits).or_insert_with(|| {
+            Family::generate(bits, distance)
+                .ok()
+                .map(|family| RingReader::new(Some(Decoder::new(&family))))
+        });
+        reader.as_ref()
     }
 
     /// Forgets tracks and adapted tolerances.
@@ -232,7 +285,14 @@ impl Detector {
 
     /// Finds the markers in one frame. With tracking on, state carries over
     /// to the next call.
-    pub fn detect(&mut self, image: &GrayImage) -> Vec<Detection> {
+    ///
+    /// Takes any 8-bit grey buffer: an owned [`image::GrayImage`] or a view of
+    /// borrowed pixels (`ImageBuffer<Luma<u8>, &[u8]>`), so callers that
+    /// hold frames in their own memory (Python's numpy arrays) need no copy.
+    pub fn detect<C: std::ops::Deref<Target = [u8]>>(
+        &mut self,
+        image: &image::ImageBuffer<image::Luma<u8>, C>,
+    ) -> Vec<Detection> {
         let (width, height) = (image.width() as usize, image.height() as usize);
         if width < 3 || height < 3 {
             self.tracks.clear();
@@ -344,6 +404,16 @@ impl Detector {
             detections.push(d);
             settled_normals.push(settled);
         }
+        if !self.config.report_unreadable {
+            // Round things without a code ring are not markers (and get no
+            // track either).
+            let keep: Vec<bool> = detections.iter().map(|d| !d.unreadable).collect();
+            let mut k = 0;
+            found.retain(|_| (keep[k], k += 1).0);
+            let mut k = 0;
+            settled_normals.retain(|_| (keep[k], k += 1).0);
+            detections.retain(|d| !d.unreadable);
+        }
         if tracking {
             self.update_tracks(&found, &detections, &settled_normals);
             for c in found.iter().filter(|c| c.tested) {
@@ -353,6 +423,7 @@ impl Detector {
             }
         }
         detections.sort_by(|a, b| a.v.total_cmp(&b.v).then(a.u.total_cmp(&b.u)));
+        self.check.observe(&detections);
         detections
     }
 }

@@ -23,7 +23,7 @@ pub struct FrameReport {
 /// The CSV header line (without its newline); [`FrameReport::to_csv_rows`]
 /// writes the rows under it.
 pub const CSV_HEADER: &str =
-    "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw";
+    "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw,bits,unreadable";
 
 fn round(x: f64, decimals: i32) -> f64 {
     let k = 10f64.powi(decimals);
@@ -44,6 +44,10 @@ struct FrameRecord<'a> {
 struct MarkerRecord {
     id: u32,
     code: Option<u32>,
+    /// The ring's bit count as read from the ring.
+    bits: Option<u32>,
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    unreadable: bool,
     u: f64,
     v: f64,
     yaw: Option<f64>,
@@ -67,6 +71,8 @@ impl FrameReport {
                 MarkerRecord {
                     id: m.id,
                     code: m.code,
+                    bits: m.bits,
+                    unreadable: m.unreadable,
                     u: round(m.u, 3),
                     v: round(m.v, 3),
                     yaw: m.yaw.map(|y| round(y, 5)),
@@ -108,7 +114,7 @@ impl FrameReport {
             let pose = m.pose.as_ref();
             let _ = writeln!(
                 out,
-                "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 m.id,
                 m.code.map_or(String::new(), |c| c.to_string()),
                 round(m.u, 3),
@@ -124,6 +130,8 @@ impl FrameReport {
                 opt(pose.map(|p| round(p.quaternion[1], 6))),
                 opt(pose.map(|p| round(p.quaternion[2], 6))),
                 opt(pose.map(|p| round(p.quaternion[3], 6))),
+                m.bits.map_or(String::new(), |b| b.to_string()),
+                u8::from(m.unreadable),
             );
         }
         out
@@ -169,7 +177,12 @@ impl FrameReport {
             } else {
                 m.id.to_string()
             };
-            let code = m.code.map_or("-".to_string(), |c| c.to_string());
+            // A ring's code without an ID names its bit count too.
+            let code = match (m.code, m.bits) {
+                (Some(c), Some(b)) if m.id == 0 => format!("{c}/{b}b"),
+                (Some(c), _) => c.to_string(),
+                _ => "-".to_string(),
+            };
             let yaw = m
                 .yaw
                 .map_or("-".to_string(), |y| format!("{:.1}", y.to_degrees()));
@@ -179,6 +192,9 @@ impl FrameReport {
                 "{id:>5} {code:>6} {:>9.2} {:>9.2} {yaw:>8} {axes:>15} {:>5.2}",
                 m.u, m.v, m.confidence
             );
+            if m.unreadable {
+                out.push_str(" unreadable");
+            }
             if let Some(p) = m.pose.as_ref() {
                 let _ = write!(
                     out,
@@ -232,6 +248,8 @@ mod tests {
             confidence: 0.9876,
             status: None,
             pose: None,
+            bits: (id > 0).then_some(8),
+            unreadable: false,
         }
     }
 
@@ -241,7 +259,7 @@ mod tests {
         assert_eq!(
             json,
             "{\"image\":\"a.png\",\"width\":640,\"height\":480,\"elapsed_ms\":1.235,\
-\"markers\":[{\"id\":3,\"code\":7,\"u\":10.123,\"v\":20.5,\"yaw\":0.12346,\
+\"markers\":[{\"id\":3,\"code\":7,\"bits\":8,\"u\":10.123,\"v\":20.5,\"yaw\":0.12346,\
 \"axes\":[30.0,29.0],\"confidence\":0.988,\"position\":null,\"rotation\":null,\"quaternion\":null}]}"
         );
     }
@@ -251,7 +269,7 @@ mod tests {
         let rows = frame("a,\"b\".png", vec![marker(0)]).to_csv_rows();
         assert_eq!(
             rows,
-            "\"a,\"\"b\"\".png\",0,,10.123,20.5,,30,29,0.988,,,,,,,\n"
+            "\"a,\"\"b\"\".png\",0,,10.123,20.5,,30,29,0.988,,,,,,,,,0\n"
         );
     }
 

@@ -39,7 +39,8 @@
 
 use crate::family::{Decoded, Decoder, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
-use image::GrayImage;
+use image::{ImageBuffer, Luma};
+use std::ops::Deref;
 
 use crate::math::sample::{Border, Plane};
 use crate::math::Ellipse;
@@ -142,7 +143,7 @@ pub struct RingReader {
 
 /// Radii (relative to R) averaged for each angular sample: the middle two
 /// thirds of the ring 0.343..0.6, away from the white discs on both sides.
-fn sample_radii() -> [f64; 5] {
+pub(super) fn sample_radii() -> [f64; 5] {
     let width = WHYCODE_WHITE_RATIO - RING_INNER_RATIO;
     [1.0, 2.0, 3.0, 4.0, 5.0].map(|k| RING_INNER_RATIO + width * k / 6.0)
 }
@@ -170,9 +171,9 @@ impl RingReader {
     /// Reads the ring inside the outer ellipse `outer`. `black_level` and
     /// `white_level` are the grey levels of the marker's black disc and white
     /// disc as the detector measured them.
-    pub fn read(
+    pub fn read<C: Deref<Target = [u8]>>(
         &self,
-        image: &GrayImage,
+        image: &ImageBuffer<Luma<u8>, C>,
         outer: &Ellipse,
         black_level: f64,
         white_level: f64,
@@ -462,7 +463,7 @@ fn logistic(x: f64) -> f64 {
 /// direction is the major one turned by -90°, which makes t run visually
 /// counter-clockwise.
 #[derive(Debug, Clone, Copy)]
-struct EllipseFrame {
+pub(super) struct EllipseFrame {
     /// Ellipse centre and scale (the semi-major axis) of the normalised
     /// coordinates the homography works in.
     centre: (f64, f64),
@@ -478,7 +479,7 @@ struct EllipseFrame {
 }
 
 impl EllipseFrame {
-    fn new(e: &Ellipse) -> EllipseFrame {
+    pub(super) fn new(e: &Ellipse) -> EllipseFrame {
         let (s, c) = e.angle.sin_cos();
         let k = e.semi_minor / e.semi_major;
         EllipseFrame {
@@ -495,7 +496,7 @@ impl EllipseFrame {
     /// The frame in which `p` is the projection of the marker centre;
     /// `None` when that is inconsistent with the ellipse (p outside it, or
     /// a degenerate rectification).
-    fn with_projected_centre(e: &Ellipse, p: (f64, f64)) -> Option<EllipseFrame> {
+    pub(super) fn with_projected_centre(e: &Ellipse, p: (f64, f64)) -> Option<EllipseFrame> {
         let a = e.semi_major;
         let (s, c) = e.angle.sin_cos();
         let q = 1.0 / (e.semi_minor / a).powi(2);
@@ -628,8 +629,8 @@ impl EllipseFrame {
 
 /// Mean grey level over the given radii at `count` equally spaced
 /// parameters; `None` when the ring leaves the image.
-fn sample_profile(
-    image: &GrayImage,
+pub(super) fn sample_profile<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
     frame: &EllipseFrame,
     radii: &[f64],
     count: usize,
@@ -660,8 +661,8 @@ fn sample_profile(
 /// way perspective shifts concentric circles), so it is crossed at
 /// ρ + (1 - ρ²)·D·u(t); a scale and a constant term absorb ellipse size
 /// errors and blur. `None` when the rays do not show the ring's structure.
-fn refined_centre(
-    image: &GrayImage,
+pub(super) fn refined_centre<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
     frame: &EllipseFrame,
     phase: f64,
     bits: u32,
@@ -784,7 +785,7 @@ fn edge_phase(profile: &[f64], bits: u32, per_sector: usize) -> f64 {
 
 /// Mean grey level of the central part of each of the 2n half-bit sectors,
 /// the first one starting at parameter `start`.
-fn half_sector_means(profile: &[f64], bits: u32, start: f64) -> Vec<f64> {
+pub(super) fn half_sector_means(profile: &[f64], bits: u32, start: f64) -> Vec<f64> {
     let count = profile.len() as f64;
     let sector = PI / f64::from(bits);
     // The central 60 % of each sector, away from blurred edges.
@@ -809,6 +810,6 @@ fn half_sector_means(profile: &[f64], bits: u32, start: f64) -> Vec<f64> {
 
 /// First half minus second half of every bit: positive means white then
 /// black, a 1 bit.
-fn bit_differences(halves: &[f64]) -> Vec<f64> {
+pub(super) fn bit_differences(halves: &[f64]) -> Vec<f64> {
     halves.chunks_exact(2).map(|h| h[0] - h[1]).collect()
 }

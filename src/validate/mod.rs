@@ -39,6 +39,8 @@ pub fn detector_for(manifest: &Manifest) -> anyhow::Result<crate::detect::Detect
             target: crate::detect::Target::WhyCode(family),
             max_markers: manifest.markers.len() * 2 + 64,
             tracking: false,
+            // A damaged ring is what validation is there to report.
+            report_unreadable: true,
             ..Default::default()
         },
     ))

@@ -1,0 +1,220 @@
+//! Python bindings for whycode: `import whycode`.
+//!
+//! Every entry point runs its Rust work inside [`guard`], so a bug that
+//! panics becomes a `whycode.WhycodeError` rather than a dead interpreter,
+//! and errors keep the command line's one-line messages.
+
+use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyDict, PyTuple, PyType};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+mod camera;
+mod detector;
+mod family;
+mod pixels;
+mod render;
+mod simulate;
+mod validate;
+
+static WHYCODE_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+static VALUE_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+static OS_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+
+/// An error on its way to Python: bad input (ValueError) or a file that
+/// could not be read or written (OSError), with its one-line message.
+#[derive(Debug)]
+pub(crate) enum Error {
+    Value(String),
+    Os(String),
+    Internal(String),
+}
+
+impl Error {
+    pub(crate) fn value(message: impl Into<String>) -> Error {
+        Error::Value(message.into())
+    }
+
+    /// A file-system problem the library reports without an `io::Error`
+    /// (a missing output folder).
+    pub(crate) fn os(err: anyhow::Error) -> Error {
+        Error::Os(one_line(&err))
+    }
+}
+
+impl From<anyhow::Error> for Error {
+    fn from(err: anyhow::Error) -> Error {
+        let message = one_line(&err);
+        if err.chain().any(|c| c.is::<std::io::Error>()) {
+            Error::Os(message)
+        } else {
+            Error::Value(message)
+        }
+    }
+}
+
+impl From<whycode::family::FamilyError> for Error {
+    fn from(err: whycode::family::FamilyError) -> Error {
+        Error::Value(err.to_string())
+    }
+}
+
+impl From<Error> for PyErr {
+    fn from(err: Error) -> PyErr {
+        Python::attach(|py| {
+            let (cell, message) = match err {
+                Error::Value(m) => (&VALUE_ERROR, m),
+                Error::Os(m) => (&OS_ERROR, m),
+                Error::Internal(m) => (&WHYCODE_ERROR, m),
+            };
+            match cell.get(py) {
+                Some(ty) => PyErr::from_type(ty.bind(py).clone(), message),
+                None => pyo3::exceptions::PyRuntimeError::new_err(message),
+            }
+        })
+    }
+}
+
+pub(crate) type Result<T> = std::result::Result<T, Error>;
+
+/// The error's causes joined with ": " on one line, as the CLI prints them;
+/// a cause its parent already quotes is left out.
+fn one_line(err: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in err.chain() {
+        let text = cause
+            .to_string()
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
+        if text.is_empty() || parts.last().is_some_and(|p| p.contains(&text)) {
+            continue;
+        }
+        parts.push(text);
+    }
+    parts.join(": ")
+}
+
+/// Runs `f`, turning a panic into an error: a Python caller must never lose
+/// its interpreter to a bug here.
+pub(crate) fn guard<T>(f: impl FnOnce() -> Result<T>) -> Result<T> {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(result) => result,
+        Err(payload) => {
+            let what = payload
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| payload.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown panic".to_string());
+            Err(Error::Internal(format!(
+                "internal error (please report it): {what}"
+            )))
+        }
+    }
+}
+
+/// Parses JSON text into Python objects with the standard `json` module, so
+/// floats come out exactly as `json.loads` of the CLI's output would.
+pub(crate) fn json_to_py<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyAny>> {
+    py.import("json")?.call_method1("loads", (text,))
+}
+
+/// A length argument: a number in metres, or text with a unit ("50mm"),
+/// parsed as the CLI parses it.
+pub(crate) fn length(value: &Bound<'_, PyAny>, what: &str) -> PyResult<whycode::units::Length> {
+    use whycode::units::Length;
+    let length = if let Ok(text) = value.extract::<String>() {
+        Length::parse_with_default_unit(&text, "m")
+            .map_err(|e| Error::value(format!("{what}: {e}")))?
+    } else {
+        let m: f64 = value.extract().map_err(|_| {
+            Error::value(format!(
+                "{what}: expected a number of metres or text with a unit like '50mm'"
+            ))
+        })?;
+        Length::from_m(m)
+    };
+    if !(length.mm().is_finite() && length.mm() > 0.0) {
+        return Err(Error::value(format!("{what}: must be a positive length")).into());
+    }
+    Ok(length)
+}
+
+fn exception_type<'py>(
+    py: Python<'py>,
+    name: &str,
+    bases: Vec<Bound<'py, PyAny>>,
+    doc: &str,
+) -> PyResult<Bound<'py, PyType>> {
+    let namespace = PyDict::new(py);
+    namespace.set_item("__module__", "whycode")?;
+    namespace.set_item("__doc__", doc)?;
+    let ty = py.import("builtins")?.getattr("type")?.call1((
+        name,
+        PyTuple::new(py, bases)?,
+        namespace,
+    ))?;
+    Ok(ty.cast_into::<PyType>()?)
+}
+
+#[pymodule]
+fn _whycode(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    let base = exception_type(
+        py,
+        "WhycodeError",
+        vec![py.get_type::<pyo3::exceptions::PyException>().into_any()],
+        "Base of every error whycode raises.",
+    )?;
+    let value = exception_type(
+        py,
+        "WhycodeValueError",
+        vec![
+            base.clone().into_any(),
+            py.get_type::<pyo3::exceptions::PyValueError>().into_any(),
+        ],
+        "Bad input: an argument, an array or a file's contents.",
+    )?;
+    let os = exception_type(
+        py,
+        "WhycodeOSError",
+        vec![
+            base.clone().into_any(),
+            py.get_type::<pyo3::exceptions::PyOSError>().into_any(),
+        ],
+        "A file could not be read or written.",
+    )?;
+    m.add("WhycodeError", &base)?;
+    m.add("WhycodeValueError", &value)?;
+    m.add("WhycodeOSError", &os)?;
+    let _ = WHYCODE_ERROR.set(py, base.unbind());
+    let _ = VALUE_ERROR.set(py, value.unbind());
+    let _ = OS_ERROR.set(py, os.unbind());
+
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    family::register(m)?;
+    camera::register(m)?;
+    detector::register(m)?;
+    render::register(m)?;
+    validate::register(m)?;
+    simulate::register(m)?;
+    Ok(())
+}
+
+/// The library's typed load errors go the anyhow way: an I/O cause makes an
+/// OSError, anything else a ValueError, with the same one-line message.
+macro_rules! from_library_error {
+    ($($t:ty),*) => {$(
+        impl From<$t> for Error {
+            fn from(err: $t) -> Error {
+                Error::from(anyhow::Error::from(err))
+            }
+        }
+    )*};
+}
+from_library_error!(
+    whycode::CameraError,
+    whycode::FamilyFileError,
+    whycode::ImageError,
+    whycode::ManifestError
+);

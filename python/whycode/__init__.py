@@ -1,0 +1,49 @@
+"""WhyCode circular fiducial markers: ID families, print-ready rendering,
+detection with 6-DoF pose, validation of printed sheets and simulation.
+
+Fields and messages are those of the ``whycode`` command line: a marker's
+``as_dict()`` is the object ``whycode detect --format json`` prints, and
+``validate()`` returns the report ``whycode validate --format json`` prints.
+"""
+
+from ._whycode import (
+    Camera,
+    Code,
+    Decoded,
+    Detector,
+    Family,
+    Marker,
+    WhycodeError,
+    WhycodeOSError,
+    WhycodeValueError,
+    __version__,
+    family_counts,
+    load_image,
+    render_marker,
+    render_marker_image,
+    render_sheet,
+    simulate,
+    templates,
+    validate,
+)
+
+__all__ = [
+    "Camera",
+    "Code",
+    "Decoded",
+    "Detector",
+    "Family",
+    "Marker",
+    "WhycodeError",
+    "WhycodeOSError",
+    "WhycodeValueError",
+    "__version__",
+    "family_counts",
+    "load_image",
+    "render_marker",
+    "render_marker_image",
+    "render_sheet",
+    "simulate",
+    "templates",
+    "validate",
+]

@@ -1,0 +1,244 @@
+"""Type stubs of the compiled whycode module."""
+
+import os
+from typing import Any, Iterator, Literal, Optional, Sequence, Union, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+StrPath = Union[str, "os.PathLike[str]"]
+Length = Union[float, str]
+"""A length: a number in metres, or text with a unit ("50mm", "2in")."""
+ImageArray = Union[npt.NDArray[np.uint8], npt.NDArray[np.uint16]]
+"""HxW grey, HxWx3 BGR or HxWx4 BGRA, uint8 or uint16."""
+
+class WhycodeError(Exception):
+    """Base of every error whycode raises."""
+
+class WhycodeValueError(WhycodeError, ValueError):
+    """Bad input: an argument, an array or a file's contents."""
+
+class WhycodeOSError(WhycodeError, OSError):
+    """A file could not be read or written."""
+
+class Code:
+    """One ID of a family, with the fields of ``whycode ids``."""
+
+    @property
+    def id(self) -> int: ...
+    @property
+    def code(self) -> int: ...
+    @property
+    def binary(self) -> str: ...
+    @property
+    def self_distance(self) -> int: ...
+
+class Decoded:
+    """A decoded ring reading."""
+
+    @property
+    def id(self) -> int: ...
+    @property
+    def code(self) -> int: ...
+    @property
+    def rotation(self) -> int: ...
+    @property
+    def rotation_ambiguous(self) -> bool: ...
+    @property
+    def errors(self) -> int: ...
+    @property
+    def status(self) -> Literal["exact", "corrected", "ambiguous", "rejected"]: ...
+
+class Family:
+    """A family of WhyCode IDs (rotation-free necklace codes)."""
+
+    def __init__(self, bits: int = 8, distance: int = 2) -> None: ...
+    @staticmethod
+    def load(path: StrPath) -> Family: ...
+    @staticmethod
+    def from_json(text: str) -> Family: ...
+    @property
+    def bits(self) -> int: ...
+    @property
+    def distance(self) -> int: ...
+    @property
+    def min_distance(self) -> Optional[int]: ...
+    def __len__(self) -> int: ...
+    def __iter__(self) -> Iterator[Code]: ...
+    def __getitem__(self, id: int) -> Code: ...
+    def decode(self, word: int) -> Decoded: ...
+    def to_json(self) -> str: ...
+    def save(self, path: StrPath) -> None: ...
+    def __eq__(self, other: object) -> bool: ...
+    def __hash__(self) -> int: ...
+
+def family_counts(bits: Sequence[int], distances: Sequence[int]) -> dict[tuple[int, int], int]:
+    """Number of IDs for every (bits, distance) with distance <= bits."""
+
+class Camera:
+    """A calibrated pinhole camera with plumb_bob distortion."""
+
+    @staticmethod
+    def load(path: StrPath) -> Camera: ...
+    @staticmethod
+    def from_opencv(
+        camera_matrix: npt.ArrayLike,
+        dist_coeffs: Optional[npt.ArrayLike],
+        image_size: tuple[int, int],
+    ) -> Camera: ...
+    @staticmethod
+    def ideal(width: int, height: int, fov_deg: float = 60.0) -> Camera: ...
+    @property
+    def fx(self) -> float: ...
+    @property
+    def fy(self) -> float: ...
+    @property
+    def cx(self) -> float: ...
+    @property
+    def cy(self) -> float: ...
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def distortion(self) -> tuple[float, float, float, float, float]: ...
+    @property
+    def camera_matrix(self) -> npt.NDArray[np.float64]: ...
+    def to_ros_yaml(self, camera_name: str = "camera") -> str: ...
+    def __eq__(self, other: object) -> bool: ...
+
+class Marker:
+    """One marker found in a frame (attributes at full precision)."""
+
+    @property
+    def id(self) -> int:
+        """The marker's ID; 0 means unknown."""
+    @property
+    def code(self) -> Optional[int]: ...
+    @property
+    def u(self) -> float: ...
+    @property
+    def v(self) -> float: ...
+    @property
+    def yaw(self) -> Optional[float]: ...
+    @property
+    def axes(self) -> tuple[float, float]: ...
+    @property
+    def confidence(self) -> float: ...
+    @property
+    def position(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def rotation(self) -> Optional[npt.NDArray[np.float64]]: ...
+    @property
+    def quaternion(self) -> Optional[tuple[float, float, float, float]]: ...
+    def as_dict(self) -> dict[str, Any]:
+        """The object ``whycode detect --format json`` prints for this marker."""
+
+class Detector:
+    """Finds WhyCode markers (or legacy WhyCon circles) in frames."""
+
+    def __init__(
+        self,
+        family: Optional[Family] = None,
+        *,
+        legacy: bool = False,
+        diameter: Optional[Length] = None,
+        camera: Optional[Camera] = None,
+        tracking: bool = False,
+        max_markers: Optional[int] = None,
+    ) -> None: ...
+    def detect(self, image: ImageArray) -> list[Marker]: ...
+    def reset(self) -> None: ...
+    @property
+    def tracking(self) -> bool: ...
+    @property
+    def family(self) -> Optional[Family]: ...
+
+def load_image(path: StrPath) -> npt.NDArray[np.uint8]:
+    """An image file as the HxW uint8 grey array the CLI's loader makes."""
+
+def render_marker(
+    id: Optional[int] = None,
+    *,
+    diameter: Length,
+    family: Optional[Family] = None,
+    legacy: bool = False,
+    format: Optional[str] = None,
+    output: Optional[StrPath] = None,
+    margin: Optional[Length] = None,
+    dpi: float = 300.0,
+    cross: bool = False,
+    cut_guide: bool = False,
+    label: bool = False,
+    check: bool = True,
+) -> bytes: ...
+def render_sheet(
+    ids: Optional[Sequence[int]] = None,
+    *,
+    family: Optional[Family] = None,
+    legacy: bool = False,
+    count: Optional[int] = None,
+    diameter: Optional[Length] = None,
+    template: str = "a4",
+    format: Optional[str] = None,
+    output: Optional[StrPath] = None,
+    name: Optional[str] = None,
+    dpi: float = 300.0,
+    check: bool = True,
+) -> tuple[list[bytes], dict[str, Any]]: ...
+def render_marker_image(
+    id: Optional[int] = None,
+    *,
+    family: Optional[Family] = None,
+    legacy: bool = False,
+    diameter_px: float = 100.0,
+    margin_px: Optional[float] = None,
+) -> npt.NDArray[np.uint8]: ...
+def templates() -> list[tuple[str, float, float, float, str]]: ...
+@overload
+def validate(
+    manifest: StrPath,
+    images: Sequence[Union[StrPath, ImageArray]],
+    camera: Optional[Camera] = None,
+    *,
+    annotate: Literal[False] = False,
+) -> dict[str, Any]: ...
+@overload
+def validate(
+    manifest: StrPath,
+    images: Sequence[Union[StrPath, ImageArray]],
+    camera: Optional[Camera] = None,
+    *,
+    annotate: Literal[True],
+) -> tuple[dict[str, Any], list[npt.NDArray[np.uint8]]]: ...
+def simulate(
+    *,
+    manifest: Optional[StrPath] = None,
+    page: int = 1,
+    print_scale: float = 1.0,
+    family: Optional[Family] = None,
+    ids: Optional[Sequence[int]] = None,
+    diameter: Optional[Length] = None,
+    layout: Literal["grid", "scatter"] = "grid",
+    camera: Optional[Camera] = None,
+    size: tuple[int, int] = (1920, 1080),
+    fov: float = 60.0,
+    camera_distance: Optional[Length] = None,
+    tilt: float = 0.0,
+    pan: float = 0.0,
+    roll: float = 0.0,
+    background: Optional[Literal["grey", "table", "clutter"]] = None,
+    gradient: float = 1.0,
+    gradient_angle: float = 0.0,
+    exposure: Optional[float] = None,
+    dark: bool = False,
+    blur: float = 0.0,
+    motion_blur: float = 0.0,
+    motion_angle: float = 0.0,
+    noise: float = 0.0,
+    jpeg: Optional[int] = None,
+    blot: Sequence[int] = (),
+    seed: int = 1,
+) -> tuple[npt.NDArray[np.uint8], dict[str, Any]]: ...

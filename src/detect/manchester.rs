@@ -1,0 +1,390 @@
+//! Does a round candidate carry a WhyCode ring, and of how many bits?
+//!
+//! A dark disc with a light middle is common on a desk (washers, letters,
+//! rings, stickers); what only a WhyCode marker has is the Manchester code
+//! ring (spec section 2): 2n equal sectors where every bit is one black and
+//! one white half-sector, so there is an edge in the middle of every bit and
+//! nowhere but on sector boundaries. The test reads the ring's angular
+//! profile for a bit count n:
+//!
+//! 1. the phase of the sector boundaries from the 2n-th harmonic of the
+//!    profile's gradient magnitude, and the pairing of half-sectors into
+//!    bits under which the bits are most clearly Manchester;
+//! 2. the contrast between the bright and the dark half of every bit: the
+//!    ring must show real contrast and every bit (all but a smudged one on
+//!    long codes) must have its mid-bit edge;
+//! 3. how much of the profile's variance the n-bit Manchester square wave,
+//!    blurred as much as fits best, explains: a ring of another bit count
+//!    puts edges inside the sectors, and a washer or a letter has no
+//!    sector structure at all.
+//!
+//! A ring of n bits fails the test for 2n bits (the aligned pairing puts
+//! both halves in one sector) and for n/2 bits (every sector holds a
+//! mid-bit edge), so the bit count a ring passes for is the one printed.
+
+use std::f64::consts::PI;
+use std::ops::RangeInclusive;
+
+use std::ops::Deref;
+
+use image::{ImageBuffer, Luma};
+
+use super::ring::{
+    bit_differences, half_sector_means, refined_centre, sample_profile, sample_radii, EllipseFrame,
+};
+use crate::family::necklace;
+use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
+use crate::math::Ellipse as ImageEllipse;
+
+/// Bit counts a ring may carry (the family generator's range).
+pub const BITS: RangeInclusive<u32> = 4..=24;
+
+/// Sector width (pixels, at the middle of the ring along the minor axis)
+/// below which the sector structure is not tested: the ring blurs into a
+/// grey band.
+pub const MIN_TESTABLE_PIXELS: f64 = 1.3;
+
+/// Least bright-minus-dark difference of the ring's half-sectors, relative
+/// to the disc's black-white contrast.
+const MIN_CONTRAST: f64 = 0.2;
+
+/// A bit whose halves differ by less than this fraction of the ring's
+/// contrast has no mid-bit edge.
+const MIN_BIT_EDGE: f64 = 0.3;
+
+/// Least share of the profile's variance the blurred Manchester model must
+/// explain (squared correlation).
+const MIN_FIT: f64 = 0.7;
+
+/// A fit of the first count tried at least this good settles the count.
+const SURE_FIT: f64 = 0.9;
+
+/// What the ring of one candidate shows.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RingEvidence {
+    /// A Manchester ring of this many bits.
+    Manchester(RingStructure),
+    /// Sharp enough to show sectors, and it shows none of any bit count tried.
+    Absent,
+    /// Too small (or too blurred by its size) to test for the bit counts tried.
+    TooSmall,
+}
+
+/// A Manchester ring as read by the structure test.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RingStructure {
+    /// The bit count the ring shows.
+    pub bits: u32,
+    /// The necklace read, as its smallest rotation (the form family tables
+    /// list codes in).
+    pub code: u32,
+    /// Bright minus dark half-sector level, relative to the disc's contrast.
+    pub contrast: f64,
+    /// Squared correlation of the profile with the blurred model.
+    pub fit: f64,
+    /// The weakest bit's mid-edge relative to the ring's contrast.
+    pub weakest_bit: f64,
+}
+
+/// True when the ring inside `outer` is large enough to show the sector
+/// structure of `bits` bits.
+pub fn testable(outer: &ImageEllipse, bits: u32) -> bool {
+    let mid_ratio = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
+    outer.semi_minor * mid_ratio * PI / f64::from(bits) >= MIN_TESTABLE_PIXELS
+}
+
+/// Tests the ring inside `outer` for Manchester structure with each bit
+/// count in `bits`; of the counts that pass, the one whose model fits best
+/// wins (a ring of n bits can pass for n ± 1 when its profile is short).
+/// When none passes, the ring is `Absent` only if every count could be
+/// tested.
+pub fn examine<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    outer: &ImageEllipse,
+    black_level: f64,
+    white_level: f64,
+    bits: impl IntoIterator<Item = u32>,
+) -> RingEvidence {
+    let contrast = white_level - black_level;
+    let valid = [outer.u, outer.v, outer.semi_major, outer.semi_minor]
+        .iter()
+        .all(|x| x.is_finite())
+        && outer.semi_minor > 0.0
+        && contrast.is_finite()
+        && contrast > 4.0;
+    if !valid {
+        return RingEvidence::Absent;
+    }
+    let mid_ratio = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
+    let (counts, untestable): (Vec<u32>, Vec<u32>) =
+        bits.into_iter().partition(|&n| testable(outer, n));
+    let absent = if untestable.is_empty() {
+        RingEvidence::Absent
+    } else {
+        RingEvidence::TooSmall
+    };
+    if counts.is_empty() {
+        return RingEvidence::TooSmall;
+    }
+    let radii = sample_radii();
+    let radii: &[f64] = if outer.semi_minor < 20.0 {
+        &radii
+    } else {
+        &[radii[0], radii[2], radii[4]]
+    };
+    // Two samples per pixel along the outer sample radius, and at least
+    // eight per sector of the longest code.
+    let arc = 2.0 * PI * radii[radii.len() - 1] * outer.semi_major;
+    let count = ((2.0 * arc).ceil() as usize).clamp(16 * 24, 2048);
+    let pixels_per_sample =
+        2.0 * PI * mid_ratio * (outer.semi_major * outer.semi_minor).sqrt() / count as f64;
+    let test = |frame: &EllipseFrame, counts: &[u32]| -> Option<Vec<Tested>> {
+        let profile = sample_profile(image, frame, radii, count)?;
+        let gradient: Vec<f64> = (0..count)
+            .map(|j| (profile[(j + 1) % count] - profile[j]).abs())
+            .collect();
+        Some(
+            counts
+                .iter()
+                .map(|&n| test_bits(&profile, &gradient, n, contrast, pixels_per_sample))
+                .collect(),
+        )
+    };
+    let best = |tested: &[Tested]| {
+        if std::env::var("WHY_DEBUG").is_ok() {
+            for t in tested {
+                if let Some(r) = t.ring {
+                    eprintln!(
+                        "  {} coh {:.2} fit {:.3} weakest {:.2} contrast {:.2}",
+                        r.bits, t.coherence, r.fit, r.weakest_bit, r.contrast
+                    );
+                }
+            }
+            eprintln!("  --");
+        }
+        tested
+            .iter()
+            .filter_map(|t| t.ring)
+            .filter(|r| r.fit >= MIN_FIT)
+            .max_by(|a, b| a.fit.total_cmp(&b.fit))
+    };
+    let frame = EllipseFrame::new(outer);
+    // The expected count first (a family's): a ring that fits it this
+    // well fits no other count nearly as well (a neighbouring count drifts
+    // half a sector around the ring), so the rest need no look.
+    if let Some(ring) = test(&frame, &counts[..1])
+        .and_then(|t| best(&t))
+        .filter(|r| r.fit >= SURE_FIT)
+    {
+        return RingEvidence::Manchester(ring);
+    }
+    // Cut by the image border: nothing to test, nothing to refute.
+    let Some(tested) = test(&frame, &counts) else {
+        return RingEvidence::TooSmall;
+    };
+    if let Some(ring) = best(&tested) {
+        return RingEvidence::Manchester(ring);
+    }
+    // Perspective: the outer ellipse's parameter does not space the ring's
+    // sectors evenly on a steep view, which spoils the model's fit. The
+    // ring's own radial edges show where the marker's centre projects;
+    // read again through that exact rectification.
+    // The count whose boundaries the edges follow best sets the rays.
+    let Some((nearest, bits)) = tested
+        .iter()
+        .zip(&counts)
+        .max_by(|a, b| a.0.coherence.total_cmp(&b.0.coherence))
+    else {
+        return absent;
+    };
+    let centre = refined_centre(
+        image,
+        &frame,
+        nearest.phase,
+        *bits,
+        0.5 * (black_level + white_level),
+    );
+    let rectified = centre.and_then(|p| EllipseFrame::with_projected_centre(outer, p));
+    rectified
+        .and_then(|frame| test(&frame, &counts))
+        .and_then(|tested| best(&tested))
+        .map_or(absent, RingEvidence::Manchester)
+}
+
+/// One count tried: the ring read, if it passed the contrast and mid-bit
+/// edge tests (its fit still to be judged), and where and how clearly the
+/// profile's edges fall on that count's sector boundaries.
+struct Tested {
+    ring: Option<RingStructure>,
+    phase: f64,
+    coherence: f64,
+}
+
+/// The structure test for `bits` bits on a profile of the ring.
+fn test_bits(
+    profile: &[f64],
+    gradient: &[f64],
+    bits: u32,
+    disc_contrast: f64,
+    pixels_per_sample: f64,
+) -> Tested {
+    let sector = PI / f64::from(bits);
+    let (phase, coherence) = boundary_phase(gradient, bits);
+    // Which boundaries are the mid-bit ones is clear from a varied code,
+    // but a code with long runs of equal bits reads almost as well paired
+    // the other way: both pairings are judged.
+    let ring = [phase, phase + sector]
+        .into_iter()
+        .filter_map(|start| pairing(profile, bits, start, disc_contrast, pixels_per_sample))
+        .max_by(|a, b| a.fit.total_cmp(&b.fit));
+    Tested {
+        ring,
+        phase,
+        coherence,
+    }
+}
+
+/// The structure test for one pairing of half-sectors into bits, the first
+/// bit starting at `start`.
+fn pairing(
+    profile: &[f64],
+    bits: u32,
+    start: f64,
+    disc_contrast: f64,
+    pixels_per_sample: f64,
+) -> Option<RingStructure> {
+    let halves = half_sector_means(profile, bits, start);
+    let diffs = bit_differences(&halves);
+    let (mut bright, mut dark) = (0.0, 0.0);
+    for pair in halves.chunks_exact(2) {
+        bright += pair[0].max(pair[1]);
+        dark += pair[0].min(pair[1]);
+    }
+    let ring_contrast = (bright - dark) / f64::from(bits);
+    if ring_contrast < MIN_CONTRAST * disc_contrast {
+        return None;
+    }
+    let edges: Vec<f64> = diffs.iter().map(|d| d.abs() / ring_contrast).collect();
+    let weak = edges.iter().filter(|&&e| e < MIN_BIT_EDGE).count() as u32;
+    // A smudge or a glint may hide one bit's edge of a long code; a ring
+    // of the wrong bit count loses many.
+    if weak > bits / 16 {
+        return None;
+    }
+    let weakest_bit = edges.iter().copied().fold(f64::INFINITY, f64::min);
+    let mut word = 0u32;
+    for (j, d) in diffs.iter().enumerate() {
+        if *d > 0.0 {
+            word |= 1 << (bits as usize - 1 - j);
+        }
+    }
+    // No family holds a word equal to one of its rotations, but printed
+    // sets do (the reference prints every word; tags_35.pdf has five, read
+    // as unknown), so long ones are kept. A short code's periodic word is
+    // a pattern of two or four lobes, what a letter or a squashed blob
+    // shows around its hole.
+    if bits < 8 && necklace::is_periodic(word, bits) {
+        return None;
+    }
+    let fit = model_fit(profile, bits, start, word, pixels_per_sample);
+    Some(RingStructure {
+        bits,
+        code: necklace::min_rotation(word, bits).0,
+        contrast: ring_contrast / disc_contrast,
+        fit,
+        weakest_bit,
+    })
+}
+
+/// Parameter (radians, within one sector) of the sector boundaries: the
+/// phase of the 2n-th harmonic of the gradient magnitude, where every edge
+/// of a Manchester ring sits; and how much of the gradient that harmonic
+/// holds (1 when every edge sits on an n-bit boundary).
+fn boundary_phase(gradient: &[f64], bits: u32) -> (f64, f64) {
+    let count = gradient.len() as f64;
+    let harmonic = f64::from(2 * bits);
+    let (mut re, mut im) = (0.0, 0.0);
+    // exp(i·h·t) at t = 2π(j + 0.5)/count (the gradient between samples j
+    // and j+1), advanced by one rotation per sample instead of a sine and
+    // a cosine each.
+    let (step_sin, step_cos) = (harmonic * 2.0 * PI / count).sin_cos();
+    let (mut s, mut c) = (harmonic * PI / count).sin_cos();
+    for g in gradient {
+        re += g * c;
+        im -= g * s;
+        (s, c) = (s * step_cos + c * step_sin, c * step_cos - s * step_sin);
+    }
+    let phase = -im.atan2(re) / harmonic;
+    let total: f64 = gradient.iter().sum();
+    let coherence = if total > 0.0 {
+        re.hypot(im) / total
+    } else {
+        0.0
+    };
+    (phase.rem_euclid(PI / f64::from(bits)), coherence)
+}
+
+/// Best squared correlation of the profile with the Manchester square wave
+/// of `word` (bit 0 from `start`), blurred by one of a few Gaussian widths.
+fn model_fit(profile: &[f64], bits: u32, start: f64, word: u32, pixels_per_sample: f64) -> f64 {
+    let count = profile.len();
+    let sector = PI / f64::from(bits);
+    let square: Vec<f64> = (0..count)
+        .map(|j| {
+            let t = 2.0 * PI * j as f64 / count as f64;
+            let k = ((t - start) / sector)
+                .floor()
+                .rem_euclid(f64::from(2 * bits)) as u32;
+            let bit = word >> (bits - 1 - k / 2) & 1;
+            // A 1 is white then black.
+            let white = (bit == 1) == (k % 2 == 0);
+            f64::from(u8::from(white))
+        })
+        .collect();
+    [0.4, 0.8, 1.4]
+        .iter()
+        .map(|&sigma_px| {
+            let blurred = circular_blur(&square, sigma_px / pixels_per_sample);
+            correlation(profile, &blurred).powi(2)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// Gaussian blur of a circular signal, `sigma` in samples.
+fn circular_blur(signal: &[f64], sigma: f64) -> Vec<f64> {
+    let count = signal.len();
+    let reach = ((3.0 * sigma).ceil() as usize).min(count / 2);
+    if reach == 0 {
+        return signal.to_vec();
+    }
+    let kernel: Vec<f64> = (0..=reach)
+        .map(|k| (-0.5 * (k as f64 / sigma).powi(2)).exp())
+        .collect();
+    let norm = kernel[0] + 2.0 * kernel[1..].iter().sum::<f64>();
+    (0..count)
+        .map(|j| {
+            let mut sum = kernel[0] * signal[j];
+            for (k, w) in kernel.iter().enumerate().skip(1) {
+                sum += w * (signal[(j + k) % count] + signal[(j + count - k) % count]);
+            }
+            sum / norm
+        })
+        .collect()
+}
+
+fn correlation(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        let (dx, dy) = (x - ma, y - mb);
+        ab += dx * dy;
+        aa += dx * dx;
+        bb += dy * dy;
+    }
+    if aa <= 0.0 || bb <= 0.0 {
+        0.0
+    } else {
+        ab / (aa * bb).sqrt()
+    }
+}

@@ -1,0 +1,325 @@
+//! Reading rings too small for sector sampling (paper section 5, issue 9).
+//!
+//! At 12 px across an 8-bit marker's half-bit sector is about a pixel of
+//! ring: the blur of the lens and the pixel's own area mix neighbouring
+//! sectors, so no sample reads one sector. Instead every family member at
+//! every rotation is rendered as the camera would see it (the fitted outer
+//! ellipse, each pixel's footprint blurred by a Gaussian) and compared with
+//! the pixels; the member that explains them best is the ID, unless another
+//! member explains them almost as well (then unknown). The same comparison
+//! against a ring without angular structure (any grey, any radial profile
+//! of the marker's discs) tells a tiny marker from a round blob.
+//!
+//! Each pixel's model value is linear in the 2n half-sector colours, so the
+//! pixel sums that the least-squares comparison needs are formed once per
+//! blur and phase; each member rotation then costs O(n²).
+
+use std::f64::consts::PI;
+
+use std::ops::Deref;
+
+use image::{ImageBuffer, Luma};
+
+use crate::family::{necklace, Family};
+use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
+use crate::math::Ellipse as ImageEllipse;
+
+/// Semi-major axis (pixels) up to which a steep view of the marker is
+/// still close enough to an affine one for the model to be trusted.
+pub const MAX_AFFINE_SEMI_MAJOR: f64 = 15.0;
+
+/// Most member rotations compared per ring (bounds the cost on families of
+/// long codes, whose sectors are too narrow at these sizes anyway).
+const MAX_MODELS: usize = 4096;
+
+/// Pixels up to this radius (relative to R) are compared: the centre disc,
+/// the ring and the inner part of the black annulus, away from whatever
+/// lies beyond the marker's white margin.
+const COMPARED_RADIUS: f64 = 0.85;
+
+/// Steps of the ring's phase per bit (two sectors).
+const PHASE_STEPS: usize = 8;
+
+/// Blur (Gaussian sigma, pixels, on top of the pixel's own area) tried.
+const BLURS: [f64; 3] = [0.35, 0.7, 1.05];
+
+/// The best member must leave at most this share of the residual of the
+/// best ring without angular structure.
+const MAX_STRUCTURE_RATIO: f64 = 0.5;
+
+/// The runner-up member's residual must exceed the best one's by this
+/// factor for the ID to be named.
+const MIN_ID_MARGIN: f64 = 1.6;
+
+/// What the pixels of a small ring say.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SmallRing {
+    /// The pixels show a code ring (a member explains them much better than
+    /// any ring without angular structure).
+    pub structured: bool,
+    /// The member named, 0 when two members explain the pixels about as well.
+    pub id: u32,
+    /// The named member's code.
+    pub code: u32,
+    /// Image direction of the marker's +x axis, with an ID.
+    pub yaw: Option<f64>,
+    /// Residual of the runner-up member over the best one's (≥ 1).
+    pub margin: f64,
+    /// Residual of the best member over the best structureless ring's.
+    pub structure_ratio: f64,
+}
+
+/// Compares the pixels inside `outer` with every member of `family` at
+/// every rotation. `None` when the family is too large to compare or the
+/// ring leaves the image.
+pub fn read_small_ring<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    outer: &ImageEllipse,
+    family: &Family,
+) -> Option<SmallRing> {
+    let bits = family.bits();
+    let members = family.len();
+    if members == 0 || members * bits as usize > MAX_MODELS {
+        return None;
+    }
+    let sectors = 2 * bits as usize;
+    let sector = PI / f64::from(bits);
+    let (s, c) = outer.angle.sin_cos();
+    let (a, b) = (outer.semi_major, outer.semi_minor);
+    if !(a.is_finite() && b > 1.0 && outer.u.is_finite() && outer.v.is_finite()) {
+        return None;
+    }
+    // Marker coordinates of an image point: p along the major axis, q along
+    // the minor one turned so that the parameter runs visually
+    // counter-clockwise (as in the ring reader's frame).
+    let to_marker = |x: f64, y: f64| {
+        let (dx, dy) = (x - outer.u, y - outer.v);
+        ((dx * c + dy * s) / a, (dx * s - dy * c) / b)
+    };
+    let (width, height) = image.dimensions();
+    let reach = a * COMPARED_RADIUS + 1.0;
+    let (x0, x1) = ((outer.u - reach).floor(), (outer.u + reach).ceil());
+    let (y0, y1) = ((outer.v - reach).floor(), (outer.v + reach).ceil());
+    if x0 < 0.0 || y0 < 0.0 || x1 >= f64::from(width) || y1 >= f64::from(height) {
+        return None;
+    }
+    let mut pixels: Vec<(f64, f64, f64)> = Vec::new();
+    for y in y0 as u32..=y1 as u32 {
+        for x in x0 as u32..=x1 as u32 {
+            let (p, q) = to_marker(f64::from(x), f64::from(y));
+            if p.hypot(q) <= COMPARED_RADIUS {
+                pixels.push((
+                    f64::from(x),
+                    f64::from(y),
+                    f64::from(image.get_pixel(x, y).0[0]),
+                ));
+            }
+        }
+    }
+    let count = pixels.len() as f64;
+    if count < 12.0 {
+        return None;
+    }
+    let sum_y: f64 = pixels.iter().map(|p| p.2).sum();
+    let syy = pixels.iter().map(|p| p.2 * p.2).sum::<f64>() - sum_y * sum_y / count;
+    if syy <= 0.0 {
+        return None;
+    }
+    let codes: Vec<u32> = (1..=members as u32)
+        .filter_map(|id| family.code(id))
+        .collect();
+    // Sector colours of every member rotation: bit i owns sectors 2i, 2i+1;
+    // a 1 is white then black.
+    let patterns: Vec<(u32, u32, Vec<usize>)> = codes
+        .iter()
+        .enumerate()
+        .flat_map(|(k, &code)| {
+            (0..bits).map(move |r| {
+                let word = necklace::rotl(code, bits, r);
+                let white: Vec<usize> = (0..bits as usize)
+                    .map(|i| {
+                        let bit = word >> (bits as usize - 1 - i) & 1;
+                        if bit == 1 {
+                            2 * i
+                        } else {
+                            2 * i + 1
+                        }
+                    })
+                    .collect();
+                (k as u32 + 1, r, white)
+            })
+        })
+        .collect();
+
+    struct Best {
+        sse: f64,
+        id: u32,
+        rotation: u32,
+        phase: f64,
+    }
+    let mut best: Option<Best> = None;
+    // Best residual of every member (any rotation, phase and blur).
+    let mut per_member = vec![f64::INFINITY; codes.len() + 1];
+    let mut best_null = f64::INFINITY;
+    let mut weights = vec![0.0f64; sectors];
+    let mut touched: Vec<usize> = Vec::with_capacity(sectors);
+    for blur in BLURS {
+        let sigma = (blur * blur + 1.0 / 12.0).sqrt();
+        // A 5x5 grid of sub-samples, Gaussian-weighted, covers the footprint.
+        let offsets: Vec<(f64, f64, f64)> = (-2..=2)
+            .flat_map(|i| (-2..=2).map(move |j| (i, j)))
+            .map(|(i, j)| {
+                let (dx, dy) = (f64::from(i) * 0.8 * sigma, f64::from(j) * 0.8 * sigma);
+                (dx, dy, (-(dx * dx + dy * dy) / (2.0 * sigma * sigma)).exp())
+            })
+            .collect();
+        let total: f64 = offsets.iter().map(|o| o.2).sum();
+        // Per pixel: white weight outside the ring, and (angle, weight) of
+        // sub-samples inside it.
+        let mut fixed = Vec::with_capacity(pixels.len());
+        let mut ring_samples: Vec<Vec<(f64, f64)>> = Vec::with_capacity(pixels.len());
+        for &(x, y, _) in &pixels {
+            let mut white = 0.0;
+            let mut inside = Vec::new();
+            for &(dx, dy, w) in &offsets {
+                let (p, q) = to_marker(x + dx, y + dy);
+                let rho = p.hypot(q);
+                let w = w / total;
+                if !(RING_INNER_RATIO..1.0).contains(&rho) {
+                    white += w;
+                } else if rho < WHYCODE_WHITE_RATIO {
+                    inside.push((q.atan2(p).rem_euclid(2.0 * PI), w));
+                }
+            }
+            fixed.push(white);
+            ring_samples.push(inside);
+        }
+        // Structureless ring: y ≈ α + β·fixed + γ·ring coverage.
+        let coverage: Vec<f64> = ring_samples
+            .iter()
+            .map(|v| v.iter().map(|s| s.1).sum())
+            .collect();
+        best_null = best_null.min(residual_of_two(&pixels, &fixed, &coverage));
+        let sum_fixed: f64 = fixed.iter().sum();
+        let ff: f64 = fixed.iter().map(|f| f * f).sum();
+        let yf: f64 = pixels.iter().zip(&fixed).map(|(p, f)| p.2 * f).sum();
+        for step in 0..PHASE_STEPS {
+            let phase = 2.0 * sector * step as f64 / PHASE_STEPS as f64;
+            // Sums over pixels of W (pixel x sector weights).
+            let mut gram = vec![0.0f64; sectors * sectors];
+            let mut w_sum = vec![0.0f64; sectors];
+            let mut w_fixed = vec![0.0f64; sectors];
+            let mut w_y = vec![0.0f64; sectors];
+            for (k, samples) in ring_samples.iter().enumerate() {
+                if samples.is_empty() {
+                    continue;
+                }
+                // A footprint covers a few sectors: keep only those.
+                touched.clear();
+                for &(t, w) in samples {
+                    let index = (((t - phase) / sector).floor() as i64).rem_euclid(sectors as i64);
+                    let index = index as usize;
+                    if weights[index] == 0.0 {
+                        touched.push(index);
+                    }
+                    weights[index] += w;
+                }
+                let y = pixels[k].2;
+                for &i in &touched {
+                    let wi = weights[i];
+                    w_sum[i] += wi;
+                    w_fixed[i] += wi * fixed[k];
+                    w_y[i] += wi * y;
+                    for &j in &touched {
+                        gram[i * sectors + j] += wi * weights[j];
+                    }
+                }
+                for &i in &touched {
+                    weights[i] = 0.0;
+                }
+            }
+            for (id, rotation, white) in &patterns {
+                let mut sm = sum_fixed;
+                let mut smm = ff;
+                let mut sym = yf;
+                for &i in white {
+                    sm += w_sum[i];
+                    smm += 2.0 * w_fixed[i];
+                    sym += w_y[i];
+                    for &j in white {
+                        smm += gram[i * sectors + j];
+                    }
+                }
+                let sym_c = sym - sum_y * sm / count;
+                let smm_c = smm - sm * sm / count;
+                if sym_c <= 0.0 || smm_c <= 0.0 {
+                    continue;
+                }
+                let sse = syy - sym_c * sym_c / smm_c;
+                let slot = &mut per_member[*id as usize];
+                *slot = slot.min(sse);
+                if best.as_ref().map_or(true, |b| sse < b.sse) {
+                    best = Some(Best {
+                        sse,
+                        id: *id,
+                        rotation: *rotation,
+                        phase,
+                    });
+                }
+            }
+        }
+    }
+    let best = best?;
+    let runner_up = per_member
+        .iter()
+        .enumerate()
+        .filter(|&(id, _)| id as u32 != best.id)
+        .map(|(_, &sse)| sse)
+        .fold(f64::INFINITY, f64::min);
+    let floor = 1e-6 * syy;
+    let margin = runner_up.max(floor) / best.sse.max(floor);
+    let structure_ratio = best.sse / best_null.max(floor);
+    let structured = structure_ratio <= MAX_STRUCTURE_RATIO;
+    let named = structured && margin >= MIN_ID_MARGIN;
+    let code = codes[best.id as usize - 1];
+    // Sector 0 of the word seen sits at `phase`; the word is the code
+    // rotated left by `rotation`, so the code's own bit 0 (the +x axis)
+    // lies `rotation` bits earlier.
+    let x_axis_t = best.phase - 2.0 * sector * f64::from(best.rotation);
+    let (st, ct) = x_axis_t.sin_cos();
+    let (ax, ay) = (a * ct * c + b * st * s, a * ct * s - b * st * c);
+    Some(SmallRing {
+        structured,
+        id: if named { best.id } else { 0 },
+        code,
+        yaw: named.then(|| ay.atan2(ax)),
+        margin,
+        structure_ratio,
+    })
+}
+
+/// Least-squares residual of y ≈ α + β·u + γ·v over the pixels.
+fn residual_of_two(pixels: &[(f64, f64, f64)], u: &[f64], v: &[f64]) -> f64 {
+    let n = pixels.len() as f64;
+    let mean = |f: &dyn Fn(usize) -> f64| (0..pixels.len()).map(f).sum::<f64>() / n;
+    let (my, mu, mv) = (mean(&|k| pixels[k].2), mean(&|k| u[k]), mean(&|k| v[k]));
+    let (mut suu, mut svv, mut suv, mut syu, mut syv, mut syy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    for k in 0..pixels.len() {
+        let (y, a, b) = (pixels[k].2 - my, u[k] - mu, v[k] - mv);
+        suu += a * a;
+        svv += b * b;
+        suv += a * b;
+        syu += y * a;
+        syv += y * b;
+        syy += y * y;
+    }
+    let det = suu * svv - suv * suv;
+    if det.abs() < 1e-12 {
+        // Degenerate: fit the better single regressor.
+        let one = |sxx: f64, syx: f64| if sxx > 0.0 { syx * syx / sxx } else { 0.0 };
+        return syy - one(suu, syu).max(one(svv, syv));
+    }
+    let beta = (syu * svv - syv * suv) / det;
+    let gamma = (syv * suu - syu * suv) / det;
+    syy - beta * syu - gamma * syv
+}

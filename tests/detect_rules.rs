@@ -1,0 +1,240 @@
+//! The detector's reporting rules (issue 9), as round trips through the
+//! simulator: no marker where there is none, no ID from a family of
+//! another bit count, the bit count read from the ring in auto mode, and
+//! IDs of 8-bit markers down to 12 px.
+
+use std::f64::consts::PI;
+
+use nalgebra::Vector3;
+use whycode::camera::Camera;
+use whycode::detect::{Detection, Detector, DetectorConfig, Target};
+use whycode::family::{necklace, Family};
+use whycode::geometry::Marker;
+use whycode::math::Pcg32;
+use whycode::simulate::{
+    render, Background, GroundTruth, LooseMarker, Placement, Scene, SceneObject,
+};
+
+const DIAMETER_M: f64 = 0.05;
+
+fn camera() -> Camera {
+    Camera::ideal(640, 480, 60.0)
+}
+
+/// A marker centred on (u, v), `diameter_px` across face-on, tilted.
+fn placement(
+    cam: &Camera,
+    (u, v): (f64, f64),
+    diameter_px: f64,
+    tilt: f64,
+    roll: f64,
+) -> Placement {
+    let z = cam.fx * DIAMETER_M / diameter_px;
+    let (x, y) = cam.undistort(u, v);
+    Placement::viewed(Vector3::new(x * z, y * z, z), tilt, 0.0, roll)
+}
+
+/// One frame of markers: (bits, code, id) each, on a grid.
+fn frame(
+    markers: &[(u32, u32, u32)],
+    diameter_px: f64,
+    seed: u64,
+) -> (image::GrayImage, GroundTruth) {
+    let cam = camera();
+    let mut rng = Pcg32::new(seed, 7);
+    let mut scene = Scene::new(cam);
+    let cols = 4;
+    let rows = markers.len().div_ceil(cols);
+    for (k, &(bits, code, id)) in markers.iter().enumerate() {
+        let u = (k % cols) as f64 * 640.0 / cols as f64 + 80.0;
+        let v = (k / cols) as f64 * 480.0 / rows as f64 + 240.0 / rows as f64;
+        let tilt = rng.range(0.0, 40.0) * PI / 180.0;
+        let roll = rng.range(0.0, 2.0 * PI);
+        let marker = Marker::whycode(bits, code, DIAMETER_M * 1000.0);
+        let p = placement(&cam, (u, v), diameter_px, tilt, roll);
+        scene
+            .objects
+            .push(SceneObject::Marker(LooseMarker::new(marker, id, p)));
+    }
+    scene.noise = 2.0;
+    scene.seed = seed;
+    render(&scene)
+}
+
+fn detector(config: DetectorConfig) -> Detector {
+    Detector::new(config)
+}
+
+fn with_family(family: &Family) -> Detector {
+    detector(DetectorConfig {
+        target: Target::WhyCode(family.clone()),
+        ..Default::default()
+    })
+}
+
+fn nearest(found: &[Detection], u: f64, v: f64, reach: f64) -> Option<&Detection> {
+    found.iter().find(|d| (d.u - u).hypot(d.v - v) < reach)
+}
+
+#[test]
+fn clutter_without_markers_gives_no_report() {
+    let cam = Camera::ideal(1280, 720, 60.0);
+    let family = Family::generate(8, 2).unwrap();
+    for seed in 1..=3 {
+        let mut scene = Scene::new(cam);
+        scene.background = Background::Clutter { density: 2.0 };
+        scene.noise = 2.0;
+        scene.seed = seed;
+        let (image, _) = render(&scene);
+        let found = with_family(&family).detect(&image);
+        assert!(found.is_empty(), "seed {seed}, 8-bit family: {found:?}");
+        let found = detector(DetectorConfig {
+            target: Target::AnyBits { distance: None },
+            ..Default::default()
+        })
+        .detect(&image);
+        assert!(found.is_empty(), "seed {seed}, auto bits: {found:?}");
+    }
+}
+
+#[test]
+fn a_dark_disc_with_a_light_middle_is_reported_only_on_request_and_marked() {
+    // A legacy WhyCon marker is exactly such a disc: no code ring.
+    let cam = camera();
+    let mut scene = Scene::new(cam);
+    let p = placement(&cam, (320.0, 240.0), 80.0, 0.3, 0.0);
+    scene.objects.push(SceneObject::Marker(LooseMarker::new(
+        Marker::whycon(DIAMETER_M * 1000.0),
+        0,
+        p,
+    )));
+    let (image, _) = render(&scene);
+    let family = Family::generate(8, 2).unwrap();
+    assert!(with_family(&family).detect(&image).is_empty());
+    let found = detector(DetectorConfig {
+        target: Target::WhyCode(family),
+        report_unreadable: true,
+        ..Default::default()
+    })
+    .detect(&image);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].unreadable && found[0].id == 0, "{found:?}");
+    // And legacy settings take it for what it is.
+    let legacy = detector(DetectorConfig::default()).detect(&image);
+    assert_eq!(legacy.len(), 1);
+    assert!(!legacy[0].unreadable);
+}
+
+#[test]
+fn no_family_of_another_bit_count_names_a_marker() {
+    let bit_counts = [4, 6, 8, 10, 12, 14, 16];
+    let families: Vec<Family> = bit_counts
+        .iter()
+        .flat_map(|&bits| (1..=3).map(move |d| Family::generate(bits, d).unwrap()))
+        .collect();
+    for printed in &families {
+        let ids: Vec<u32> = (1..=printed.len().min(3) as u32).collect();
+        let markers: Vec<(u32, u32, u32)> = ids
+            .iter()
+            .map(|&id| (printed.bits(), printed.code(id).unwrap(), id))
+            .collect();
+        let seed = u64::from(printed.bits() * 10 + printed.distance());
+        let (image, truth) = frame(&markers, 90.0, seed);
+        // Its own family names them (so the images are readable).
+        let own = with_family(printed).detect(&image);
+        for m in &truth.markers {
+            let d = nearest(&own, m.u, m.v, 5.0);
+            assert_eq!(
+                d.map(|d| d.id),
+                Some(m.id),
+                "{}-bit d={} read with its own family: {own:?}",
+                printed.bits(),
+                printed.distance()
+            );
+        }
+        for other in families.iter().filter(|f| f.bits() != printed.bits()) {
+            let found = with_family(other).detect(&image);
+            for d in &found {
+                assert_eq!(
+                    d.id,
+                    0,
+                    "{}-bit d={} read as {}-bit d={}: {d:?}",
+                    printed.bits(),
+                    printed.distance(),
+                    other.bits(),
+                    other.distance()
+                );
+                assert_eq!(d.bits, Some(printed.bits()), "{d:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn auto_mode_names_the_bit_count_of_every_marker_in_a_mixed_frame() {
+    let mut markers = Vec::new();
+    let mut families = Vec::new();
+    for bits in [4, 5, 6, 8, 10, 12, 14, 16] {
+        let family = Family::generate(bits, 2).unwrap();
+        let id = family.len() as u32;
+        markers.push((bits, family.code(id).unwrap(), id));
+        families.push(family);
+    }
+    let (image, truth) = frame(&markers, 90.0, 5);
+    let found = detector(DetectorConfig {
+        target: Target::AnyBits { distance: None },
+        ..Default::default()
+    })
+    .detect(&image);
+    assert_eq!(found.len(), truth.markers.len(), "{found:?}");
+    for m in &truth.markers {
+        let d = nearest(&found, m.u, m.v, 5.0).expect("found");
+        assert_eq!(d.bits, Some(m.bits), "{d:?}");
+        assert_eq!(
+            d.code,
+            Some(necklace::min_rotation(m.code, m.bits).0),
+            "{d:?}"
+        );
+        assert_eq!(d.id, 0, "no distance given: {d:?}");
+    }
+    // With a distance, each ring's ID in the family of its own length.
+    let named = detector(DetectorConfig {
+        target: Target::AnyBits { distance: Some(2) },
+        ..Default::default()
+    })
+    .detect(&image);
+    for m in &truth.markers {
+        let d = nearest(&named, m.u, m.v, 5.0).expect("found");
+        assert_eq!((d.bits, d.id), (Some(m.bits), m.id), "{d:?}");
+        assert!(d.yaw.is_some(), "{d:?}");
+    }
+}
+
+#[test]
+fn eight_bit_ids_are_read_at_12_px_and_never_wrong() {
+    let family = Family::generate(8, 2).unwrap();
+    let mut rng = Pcg32::new(12, 1);
+    let (mut named, mut total) = (0, 0);
+    for seed in 0..2 {
+        let markers: Vec<(u32, u32, u32)> = (0..16)
+            .map(|_| {
+                let id = 1 + rng.next_u32() % family.len() as u32;
+                (8, family.code(id).unwrap(), id)
+            })
+            .collect();
+        let (image, truth) = frame(&markers, 12.0, 100 + seed);
+        let found = with_family(&family).detect(&image);
+        for m in &truth.markers {
+            total += 1;
+            if let Some(d) = nearest(&found, m.u, m.v, 3.0) {
+                assert!(
+                    d.id == 0 || d.id == m.id,
+                    "wrong ID at 12 px: {d:?} for {}",
+                    m.id
+                );
+                named += usize::from(d.id == m.id);
+            }
+        }
+    }
+    assert!(named * 10 >= total * 9, "{named} of {total} named at 12 px");
+}

@@ -1,0 +1,64 @@
+// The whycode engine off the page's thread: every call that can take time
+// (family generation, sheet layout and self-check, photo checks, live
+// frames) runs here, so the page stays responsive, and a job that runs too
+// long can be ended by terminating the worker.
+import init, * as wc from "./pkg/whycode_web.js";
+
+const ready = init({ module_or_path: new URL("./pkg/whycode_web_bg.wasm", import.meta.url) });
+let validation = null;
+let live = null;
+
+function files(out) {
+  const list = [];
+  for (let k = 0; k < out.count(); k++) list.push({ name: out.name(k), bytes: out.bytes(k) });
+  const notes = out.notes();
+  out.free();
+  return { files: list, notes };
+}
+
+const handlers = {
+  hello: () => ({ version: wc.version(), templates: JSON.parse(wc.templates()) }),
+  familyTable: ({ bits, distance, limit }) => JSON.parse(wc.familyTable(bits, distance, limit)),
+  familyJson: ({ bits, distance }) => wc.familyJson(bits, distance),
+  counts: ({ bits, distances }) =>
+    JSON.parse(wc.counts(Uint32Array.from(bits), Uint32Array.from(distances))),
+  sheet: (options) => files(wc.sheet(JSON.stringify(options))),
+  marker: (options) => files(wc.marker(JSON.stringify(options))),
+  validateStart: ({ name, text }) => {
+    if (validation) validation.free();
+    validation = null;
+    validation = new wc.Validation(name, text);
+    return true;
+  },
+  validatePhoto: ({ name, bytes }) => validation.addPhoto(name, new Uint8Array(bytes)),
+  validateReport: () => ({ json: validation.reportJson(), table: validation.reportTable() }),
+  liveStart: ({ bits, distance, legacy }) => {
+    if (live) live.free();
+    live = null;
+    live = new wc.Live(bits, distance, legacy);
+    return wc.liveStride();
+  },
+  liveFrame: ({ data, width, height }) => {
+    const t0 = performance.now();
+    const out = live.detectRgba(new Uint8Array(data), width, height);
+    return { detections: out, ms: performance.now() - t0, buffer: data };
+  },
+};
+
+self.onmessage = async (event) => {
+  const { id, op, args } = event.data;
+  try {
+    await ready;
+    const result = handlers[op](args);
+    const transfer = [];
+    if (result instanceof Uint8Array) transfer.push(result.buffer);
+    if (result && result.buffer instanceof ArrayBuffer && op === "liveFrame") transfer.push(result.buffer);
+    if (result && Array.isArray(result.files)) for (const f of result.files) transfer.push(f.bytes.buffer);
+    self.postMessage({ id, ok: true, result }, transfer);
+  } catch (err) {
+    // A Rust panic surfaces as a RuntimeError ("unreachable"); the engine's
+    // state is then unusable, which the page learns from `fatal`.
+    const fatal = err instanceof WebAssembly.RuntimeError;
+    self.postMessage({ id, ok: false, error: String(err && err.message ? err.message : err), fatal });
+  }
+};

@@ -1,0 +1,649 @@
+//! The whycode library for the browser page in `web/`: thin wasm-bindgen
+//! wrappers that take the CLI's options, call the same library functions
+//! the CLI calls, and hand back the same bytes. Nothing here draws, decodes
+//! or lays out on its own; argument checks mirror the CLI's so that the page
+//! refuses what `whycode` refuses, with the same words.
+
+use std::path::Path;
+
+use anyhow::{bail, Context, Result};
+use image::GrayImage;
+use serde::Deserialize;
+use wasm_bindgen::prelude::*;
+use whycode::detect::{Detector, DetectorConfig, Target};
+use whycode::family::{
+    parse_id_list, Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MAX_LISTED_IDS, MIN_BITS,
+};
+use whycode::geometry::Marker;
+use whycode::manifest::{FamilyRef, Manifest};
+use whycode::render::check::{check_marker_page, check_sheet, check_sheet_png};
+use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
+use whycode::render::sheet::{family_markers, id_range_error, layout, legacy_markers, SheetSpec};
+use whycode::render::template::{builtin_names, Template};
+use whycode::render::{encode_pages, Format};
+use whycode::units::{trim_float, Length};
+use whycode::validate::{self, annotate, PhotoReport};
+
+/// PNG resolutions the CLI accepts (`--dpi`), for pages and single markers.
+const DPI_RANGE: std::ops::RangeInclusive<f64> = 10.0..=1200.0;
+
+/// Largest photo the page decodes, pixels: a phone's 50 MP still fits, and
+/// the decoded copies stay well inside a tab's memory.
+const MAX_PHOTO_PIXELS: u64 = 60_000_000;
+/// Largest photo side the page decodes.
+const MAX_PHOTO_SIDE: u32 = 12_000;
+
+fn js_error(err: anyhow::Error) -> JsError {
+    JsError::new(&one_line(&err))
+}
+
+/// The error chain on one line, as the CLI prints it.
+fn one_line(err: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in err.chain() {
+        let text = cause
+            .to_string()
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .join(" ");
+        if text.is_empty() || parts.last().is_some_and(|p| p.contains(&text)) {
+            continue;
+        }
+        parts.push(text);
+    }
+    parts.join(": ")
+}
+
+/// The library version, shown in the page footer.
+#[wasm_bindgen]
+pub fn version() -> String {
+    env!("CARGO_PKG_VERSION").to_string()
+}
+
+/// The built-in page templates as JSON: name, description and size.
+#[wasm_bindgen]
+pub fn templates() -> String {
+    let list: Vec<serde_json::Value> = Template::all_builtin()
+        .iter()
+        .map(|t| {
+            serde_json::json!({
+                "name": t.name,
+                "description": t.description,
+                "width_mm": t.page_width_mm,
+                "height_mm": t.page_height_mm,
+                "margin_mm": t.margin_mm,
+                "gap_mm": t.gap_mm,
+                "label_size_pt": t.label_size_pt,
+                "cut_guides": t.cut_guides,
+                "scale_bar_mm": t.scale_bar_mm,
+            })
+        })
+        .collect();
+    serde_json::Value::Array(list).to_string()
+}
+
+fn generate(bits: u32, distance: u32) -> Result<Family> {
+    Ok(Family::generate(bits, distance)?)
+}
+
+/// The family file, byte for byte what `whycode ids --format json` writes.
+#[wasm_bindgen(js_name = familyJson)]
+pub fn family_json(bits: u32, distance: u32) -> Result<String, JsError> {
+    Ok(generate(bits, distance).map_err(js_error)?.to_json())
+}
+
+/// The family's ID table as JSON for display: the first `limit` rows of
+/// ID, code, binary and self-distance, plus the family's size and minimum
+/// distance.
+#[wasm_bindgen(js_name = familyTable)]
+pub fn family_table(bits: u32, distance: u32, limit: usize) -> Result<String, JsError> {
+    let family = generate(bits, distance).map_err(js_error)?;
+    let width = family.bits() as usize;
+    let self_distances = family.self_distances();
+    let rows: Vec<serde_json::Value> = family
+        .codes()
+        .iter()
+        .zip(&self_distances)
+        .take(limit)
+        .enumerate()
+        .map(|(k, (&code, sd))| serde_json::json!([k + 1, code, format!("{code:0width$b}"), sd]))
+        .collect();
+    Ok(serde_json::json!({
+        "bits": family.bits(),
+        "distance": family.distance(),
+        "len": family.len(),
+        "min_distance": family.min_distance(),
+        "worst_self_distance": self_distances.iter().min(),
+        "rows": rows,
+    })
+    .to_string())
+}
+
+/// Number of IDs for every bit length and distance, as JSON rows (one per
+/// distance, `null` where the distance exceeds the bit count): the matrix of
+/// `whycode ids --counts`.
+#[wasm_bindgen]
+pub fn counts(bits: &[u32], distances: &[u32]) -> Result<String, JsError> {
+    let inner = || -> Result<String> {
+        for &n in bits {
+            if !(MIN_BITS..=MAX_BITS).contains(&n) {
+                bail!("--bits: {n} is outside {MIN_BITS}..{MAX_BITS}");
+            }
+        }
+        let max_bits = bits.iter().max().copied().unwrap_or(0);
+        let mut rows = Vec::new();
+        for &d in distances {
+            if d == 0 || d > max_bits {
+                bail!("--distance: {d} is outside 1..{max_bits} (1 to the largest bit count)");
+            }
+            let mut row = Vec::new();
+            for &n in bits {
+                row.push(if d <= n {
+                    Some(Family::generate(n, d)?.len())
+                } else {
+                    None
+                });
+            }
+            rows.push(row);
+        }
+        Ok(serde_json::json!({ "bits": bits, "distances": distances, "counts": rows }).to_string())
+    };
+    inner().map_err(js_error)
+}
+
+/// Files made by one call: names as the CLI would write them, bytes, and
+/// the lines the CLI prints on standard error.
+#[wasm_bindgen]
+pub struct Files {
+    files: Vec<(String, Vec<u8>)>,
+    notes: Vec<String>,
+}
+
+#[wasm_bindgen]
+impl Files {
+    pub fn count(&self) -> usize {
+        self.files.len()
+    }
+
+    pub fn name(&self, index: usize) -> String {
+        self.files
+            .get(index)
+            .map(|f| f.0.clone())
+            .unwrap_or_default()
+    }
+
+    pub fn bytes(&self, index: usize) -> Vec<u8> {
+        self.files
+            .get(index)
+            .map(|f| f.1.clone())
+            .unwrap_or_default()
+    }
+
+    pub fn notes(&self) -> String {
+        self.notes.join("\n")
+    }
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+fn check_dpi(dpi: f64) -> Result<()> {
+    if !(dpi.is_finite() && DPI_RANGE.contains(&dpi)) {
+        bail!(
+            "--dpi: {dpi} dpi is outside {} to {} dpi",
+            DPI_RANGE.start(),
+            DPI_RANGE.end()
+        );
+    }
+    Ok(())
+}
+
+fn length(option: &str, text: &str) -> Result<f64> {
+    text.parse::<Length>()
+        .map(Length::mm)
+        .map_err(|e| anyhow::anyhow!("{option}: {e}"))
+}
+
+/// The options of `whycode sheet`, as the page's form sends them.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SheetOptions {
+    bits: Option<u32>,
+    distance: Option<u32>,
+    ids: Option<String>,
+    #[serde(default)]
+    legacy: bool,
+    count: Option<usize>,
+    diameter: String,
+    /// A built-in template's name, or the name a custom template is saved
+    /// under (with `template_toml` holding its text).
+    template: String,
+    template_toml: Option<String>,
+    dpi: Option<f64>,
+    /// Output file name with extension: "swarm.pdf", "swarm.svg" or "swarm.png".
+    output: String,
+    #[serde(default)]
+    no_check: bool,
+}
+
+/// `whycode sheet`: the page files and the manifest, as the CLI writes them
+/// for the same options. `options` is JSON (see [`SheetOptions`]).
+#[wasm_bindgen]
+pub fn sheet(options: &str) -> Result<Files, JsError> {
+    sheet_files(options).map_err(js_error)
+}
+
+fn sheet_files(options: &str) -> Result<Files> {
+    let args: SheetOptions = serde_json::from_str(options).context("sheet options")?;
+    let output = Path::new(&args.output);
+    let format = Format::from_path(output)?;
+    let dpi = args.dpi.unwrap_or(300.0);
+    check_dpi(dpi)?;
+    let diameter = length("--diameter", &args.diameter)?;
+    let template = match &args.template_toml {
+        Some(text) => Template::parse(&args.template, text)
+            .with_context(|| format!("template {}", args.template))?,
+        None => Template::builtin(&args.template)?,
+    };
+    let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
+    let target = if args.legacy {
+        Target::WhyCon
+    } else {
+        Target::WhyCode(Family::generate(
+            args.bits.unwrap_or(DEFAULT_BITS),
+            distance,
+        )?)
+    };
+    let (markers, family) = match target.family() {
+        None => {
+            let count = args.count.unwrap_or(0);
+            if count == 0 || count > MAX_LISTED_IDS {
+                bail!("--count must be between 1 and 100000, got {count}");
+            }
+            (legacy_markers(count, diameter), None)
+        }
+        Some(family) => {
+            let bits = family.bits();
+            let ids: Vec<u32> = match args.ids.as_deref().map(str::trim) {
+                Some(list) if !list.is_empty() => parse_id_list(list).context("--ids")?,
+                _ if family.len() > MAX_LISTED_IDS => bail!(
+                    "the {bits}-bit family with distance {distance} has {} IDs, too many to print at once; choose some with --ids (at most {MAX_LISTED_IDS})",
+                    family.len(),
+                ),
+                _ => (1..=family.len() as u32).collect(),
+            };
+            let markers = family_markers(family, &ids, diameter)?;
+            (markers, Some(FamilyRef { bits, distance }))
+        }
+    };
+    let name = output
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let spec = SheetSpec {
+        markers,
+        template,
+        name: name.clone(),
+        family,
+        legacy: args.legacy,
+    };
+    let sheet = layout(&spec)?;
+    let mut notes = Vec::new();
+    if args.no_check {
+        notes.push("self-check skipped: the markers were not read back".to_string());
+    } else {
+        let report = if format == Format::Png {
+            check_sheet_png(&sheet, &target, dpi)?
+        } else {
+            check_sheet(&sheet, &target)?
+        };
+        let dpis: Vec<String> = report.resolutions.iter().map(|d| format!("{d}")).collect();
+        let what = if args.legacy {
+            "found in place"
+        } else {
+            "read back as its own ID, upright,"
+        };
+        let dpis = match dpis.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+            _ => dpis.join(""),
+        };
+        notes.push(format!(
+            "self-check passed: every marker {what} at {dpis} dpi"
+        ));
+    }
+    let mut files: Vec<(String, Vec<u8>)> = encode_pages(&sheet.pages, output, &name, dpi)?
+        .into_iter()
+        .map(|(path, bytes)| (file_name(&path), bytes))
+        .collect();
+    files.push((
+        file_name(&output.with_extension("json")),
+        sheet.manifest.to_json().into_bytes(),
+    ));
+    notes.push(format!(
+        "{} markers on {} page{}",
+        sheet.manifest.markers.len(),
+        sheet.pages.len(),
+        if sheet.pages.len() == 1 { "" } else { "s" },
+    ));
+    Ok(Files { files, notes })
+}
+
+/// The options of `whycode marker`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MarkerArgs {
+    bits: Option<u32>,
+    distance: Option<u32>,
+    id: Option<u32>,
+    #[serde(default)]
+    legacy: bool,
+    diameter: String,
+    margin: Option<String>,
+    dpi: Option<f64>,
+    #[serde(default)]
+    cross: bool,
+    #[serde(default)]
+    cut_guide: bool,
+    #[serde(default)]
+    label: bool,
+    #[serde(default)]
+    no_check: bool,
+    output: String,
+}
+
+/// `whycode marker`: one marker file, as the CLI writes it.
+#[wasm_bindgen]
+pub fn marker(options: &str) -> Result<Files, JsError> {
+    marker_files(options).map_err(js_error)
+}
+
+fn marker_files(options: &str) -> Result<Files> {
+    let args: MarkerArgs = serde_json::from_str(options).context("marker options")?;
+    let output = Path::new(&args.output);
+    let format = Format::from_path(output)?;
+    let dpi = args.dpi.unwrap_or(300.0);
+    check_dpi(dpi)?;
+    let diameter = length("--diameter", &args.diameter)?;
+    let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
+    let target = if args.legacy {
+        Target::WhyCon
+    } else {
+        Target::WhyCode(Family::generate(
+            args.bits.unwrap_or(DEFAULT_BITS),
+            distance,
+        )?)
+    };
+    let (marker, title) = match target.family() {
+        None => (Marker::whycon(diameter), "WhyCon marker".to_string()),
+        Some(family) => {
+            let Some(id) = args.id else {
+                bail!("--id: choose the marker's ID");
+            };
+            let Some(code) = family.code(id) else {
+                bail!("{}", id_range_error(family, id));
+            };
+            (
+                Marker::whycode(family.bits(), code, diameter),
+                format!("WhyCode {}-bit d{distance} ID {id}", family.bits()),
+            )
+        }
+    };
+    let label = args.label.then(|| {
+        if args.legacy {
+            marker_label(&marker, None, None)
+        } else {
+            marker_label(&marker, args.id, Some(distance))
+        }
+    });
+    let margin_mm = match &args.margin {
+        Some(text) if !text.trim().is_empty() => Some(length("--margin", text)?),
+        _ => None,
+    };
+    let options = MarkerOptions {
+        margin_mm,
+        cross: args.cross,
+        cut_guide: args.cut_guide,
+        label,
+        label_size_pt: (diameter / 8.0).clamp(DEFAULT_LABEL_PT, 14.0),
+    };
+    let page = marker_page(&marker, &options)?;
+    let mut notes = Vec::new();
+    if args.no_check {
+        notes.push("self-check skipped: the marker was not read back".to_string());
+    } else {
+        let png_dpi = (format == Format::Png).then_some(dpi);
+        check_marker_page(&page, &marker, args.id.unwrap_or(0), &target, png_dpi)?;
+        notes.push("self-check passed: the marker reads back as itself".to_string());
+    }
+    let files = encode_pages(std::slice::from_ref(&page), output, &title, dpi)?
+        .into_iter()
+        .map(|(path, bytes)| (file_name(&path), bytes))
+        .collect();
+    Ok(Files { files, notes })
+}
+
+/// Decodes a photo's bytes to 8-bit grey the way `whycode validate` reads
+/// a file, after refusing sizes the page cannot hold.
+fn decode_gray(name: &str, bytes: &[u8]) -> Result<GrayImage> {
+    let reader = || -> Result<image::ImageReader<std::io::Cursor<&[u8]>>> {
+        Ok(image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format()?)
+    };
+    let probe = reader().with_context(|| name.to_string())?;
+    if probe.format().is_none() {
+        bail!("{name}: not an image this page reads (PNG, JPEG, PGM/PPM or BMP)");
+    }
+    let (width, height) = probe.into_dimensions().with_context(|| name.to_string())?;
+    if width > MAX_PHOTO_SIDE
+        || height > MAX_PHOTO_SIDE
+        || u64::from(width) * u64::from(height) > MAX_PHOTO_PIXELS
+    {
+        bail!(
+            "{name}: photo of {width}x{height} pixels is larger than the page handles ({} megapixels, {MAX_PHOTO_SIDE} px a side); scale it down or use the whycode command",
+            MAX_PHOTO_PIXELS / 1_000_000
+        );
+    }
+    let mut reader = reader()?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(MAX_PHOTO_SIDE);
+    limits.max_image_height = Some(MAX_PHOTO_SIDE);
+    limits.max_alloc = Some(1 << 30);
+    reader.limits(limits);
+    let format = reader.format();
+    let decoded = reader.decode().with_context(|| name.to_string())?;
+    if format == Some(image::ImageFormat::Jpeg) {
+        let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
+        let ends = last_scan.is_some_and(|k| bytes[k..].windows(2).any(|w| w == [0xFF, 0xD9]));
+        if !ends {
+            bail!("{name}: JPEG file is truncated (no end-of-image marker after its image data)");
+        }
+    }
+    Ok(match decoded {
+        image::DynamicImage::ImageLuma8(g) => g,
+        image::DynamicImage::ImageLuma16(_)
+        | image::DynamicImage::ImageLumaA16(_)
+        | image::DynamicImage::ImageRgb16(_)
+        | image::DynamicImage::ImageRgba16(_) => {
+            // As the CLI's loader: 10- or 12-bit data in 16-bit files is
+            // stretched so its brightest value becomes 255.
+            let wide = decoded.into_luma16();
+            let brightest = wide.pixels().map(|p| p.0[0]).max().unwrap_or(0).max(1);
+            let scale = 255.0 / f64::from(brightest);
+            GrayImage::from_fn(wide.width(), wide.height(), |x, y| {
+                image::Luma([(f64::from(wide.get_pixel(x, y).0[0]) * scale).round() as u8])
+            })
+        }
+        other => other.into_luma8(),
+    })
+}
+
+/// `whycode validate`: a manifest, then photos one at a time (so the page
+/// can show progress), then the report.
+#[wasm_bindgen]
+pub struct Validation {
+    manifest: Manifest,
+    detector: Detector,
+    photos: Vec<PhotoReport>,
+}
+
+#[wasm_bindgen]
+impl Validation {
+    /// `name` is the manifest's file name, used in error messages.
+    #[wasm_bindgen(constructor)]
+    pub fn new(name: &str, text: &str) -> Result<Validation, JsError> {
+        let manifest = Manifest::from_json(name, text).map_err(|e| js_error(e.into()))?;
+        let detector = validate::detector_for(&manifest)
+            .with_context(|| name.to_string())
+            .map_err(js_error)?;
+        Ok(Validation {
+            manifest,
+            detector,
+            photos: Vec::new(),
+        })
+    }
+
+    /// Checks one photo and returns its annotated copy as PNG bytes.
+    #[wasm_bindgen(js_name = addPhoto)]
+    pub fn add_photo(&mut self, name: &str, bytes: &[u8]) -> Result<Vec<u8>, JsError> {
+        let image = decode_gray(name, bytes).map_err(js_error)?;
+        let report = validate::check_image(name, &self.manifest, &image, None, &mut self.detector);
+        let picture = annotate::annotate(&image, &report);
+        self.photos.push(report);
+        encode_rgb_png(&picture).map_err(js_error)
+    }
+
+    /// The report over the photos added so far, as `whycode validate --format json`.
+    #[wasm_bindgen(js_name = reportJson)]
+    pub fn report_json(&self) -> String {
+        validate::summarise(&self.manifest, self.photos.clone()).to_json()
+    }
+
+    /// The same report as the CLI's table.
+    #[wasm_bindgen(js_name = reportTable)]
+    pub fn report_table(&self) -> String {
+        validate::summarise(&self.manifest, self.photos.clone()).to_table()
+    }
+}
+
+fn encode_rgb_png(picture: &image::RgbImage) -> Result<Vec<u8>> {
+    use image::ImageEncoder;
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes)
+        .write_image(
+            picture.as_raw(),
+            picture.width(),
+            picture.height(),
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| anyhow::anyhow!("cannot encode the annotated photo: {e}"))?;
+    Ok(bytes)
+}
+
+/// Live detection on camera frames, with tracking between frames.
+#[wasm_bindgen]
+pub struct Live {
+    detector: Detector,
+    grey: GrayImage,
+}
+
+/// Numbers per detection in [`Live::detect_rgba`]'s result.
+#[wasm_bindgen(js_name = liveStride)]
+pub fn live_stride() -> usize {
+    8
+}
+
+#[wasm_bindgen]
+impl Live {
+    /// A detector for a family (`legacy` for WhyCon circles without IDs).
+    #[wasm_bindgen(constructor)]
+    pub fn new(bits: u32, distance: u32, legacy: bool) -> Result<Live, JsError> {
+        let target = if legacy {
+            Target::WhyCon
+        } else {
+            Target::WhyCode(generate(bits, distance).map_err(js_error)?)
+        };
+        Ok(Live {
+            detector: Detector::new(DetectorConfig {
+                target,
+                tracking: true,
+                ..Default::default()
+            }),
+            grey: GrayImage::new(0, 0),
+        })
+    }
+
+    /// Detects markers in an RGBA frame (a canvas's ImageData). Returns
+    /// [`live_stride`] numbers per marker: id, u, v, semi-major, semi-minor,
+    /// angle, yaw (NaN when unknown), confidence.
+    #[wasm_bindgen(js_name = detectRgba)]
+    pub fn detect_rgba(
+        &mut self,
+        rgba: &[u8],
+        width: u32,
+        height: u32,
+    ) -> Result<Vec<f64>, JsError> {
+        let pixels = width as usize * height as usize;
+        if rgba.len() != pixels * 4 {
+            return Err(JsError::new(&format!(
+                "frame of {width}x{height} needs {} bytes, got {}",
+                pixels * 4,
+                rgba.len()
+            )));
+        }
+        if self.grey.dimensions() != (width, height) {
+            self.grey = GrayImage::new(width, height);
+            self.detector.reset();
+        }
+        // Rec. 709 weights, as the image crate's grey conversion of files.
+        for (g, px) in self.grey.iter_mut().zip(rgba.chunks_exact(4)) {
+            let sum = 2126 * u32::from(px[0]) + 7152 * u32::from(px[1]) + 722 * u32::from(px[2]);
+            *g = ((sum + 5000) / 10_000) as u8;
+        }
+        let detections = self.detector.detect(&self.grey);
+        let mut out = Vec::with_capacity(detections.len() * live_stride());
+        for d in &detections {
+            out.extend_from_slice(&[
+                f64::from(d.id),
+                d.u,
+                d.v,
+                d.axes[0],
+                d.axes[1],
+                d.angle,
+                d.yaw.unwrap_or(f64::NAN),
+                d.confidence,
+            ]);
+        }
+        Ok(out)
+    }
+
+    /// Forgets tracked markers (after a pause or a camera switch).
+    pub fn reset(&mut self) {
+        self.detector.reset();
+    }
+}
+
+/// Names of the built-in templates (for error messages in the page).
+#[wasm_bindgen(js_name = templateNames)]
+pub fn template_names() -> String {
+    builtin_names().join(", ")
+}
+
+/// A length as the CLI prints it, e.g. "40 mm" (for labels in the page).
+#[wasm_bindgen(js_name = lengthMm)]
+pub fn length_mm(text: &str) -> Result<String, JsError> {
+    let mm = length("diameter", text).map_err(js_error)?;
+    Ok(trim_float(mm))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_text_file_is_not_a_photo() {
+        let err = decode_gray("notes.txt", b"hello, not an image").unwrap_err();
+        assert!(one_line(&err).starts_with("notes.txt: not an image"));
+    }
+}

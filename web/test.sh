@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Browser tests of the page: builds the site (web/build.sh) and the CLI,
+# then drives Debian's Chromium with Playwright (from PyPI; Playwright's own
+# browser download is never used) through every panel and compares what the
+# page makes with what `whycode` makes. Screenshots go to $WEB_TEST_OUT
+# (default: target/web-test/screenshots). Ends with "N passed, N failed".
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+root=$(cd "$here/.." && pwd)
+cd "$root"
+target_dir=${CARGO_TARGET_DIR:-$root/target}
+
+if ! command -v chromium >/dev/null 2>&1; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq chromium >/dev/null
+fi
+if ! python3 -c "import playwright" 2>/dev/null; then
+    python3 -m pip install --quiet --disable-pip-version-check "playwright==1.65.2"
+fi
+
+# The binding crate is not a default member, so the workspace lint skips it.
+cargo clippy -p whycode-web --all-targets -- -D warnings
+"$here/build.sh"
+cargo build --release --bin whycode
+python3 "$here/test_web.py" --dist "$here/dist" --whycode "$target_dir/release/whycode" \
+    --out "${WEB_TEST_OUT:-$target_dir/web-test}" "$@"
