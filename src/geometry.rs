@@ -27,10 +27,16 @@ pub enum MarkerKind {
     /// Legacy WhyCon circle: black disc and white disc, no ID.
     WhyCon,
     /// WhyCode marker carrying an n-bit necklace code in its ring.
-    WhyCode { bits: u32, code: u32 },
+    WhyCode {
+        /// Code length n.
+        bits: u32,
+        /// The code, as its smallest rotation.
+        code: u32,
+    },
 }
 
 impl MarkerKind {
+    /// The design this kind is drawn in, whatever its code.
     pub fn design(self) -> Design {
         match self {
             MarkerKind::WhyCon => Design::WhyCon,
@@ -43,7 +49,9 @@ impl MarkerKind {
 /// that draws or looks for a marker takes from here.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Design {
+    /// Black disc with a white disc inside.
     WhyCon,
+    /// WhyCon's discs with the code ring between them.
     WhyCode,
 }
 
@@ -94,13 +102,23 @@ impl Design {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Shape {
     /// A full disc centred on the origin.
-    Disc { radius: f64, black: bool },
+    Disc {
+        /// Radius, mm.
+        radius: f64,
+        /// Black ink when true, white otherwise.
+        black: bool,
+    },
     /// An annular sector from angle `start` to `end` (radians, CCW, end > start).
     Sector {
+        /// Inner radius, mm.
         inner: f64,
+        /// Outer radius, mm.
         outer: f64,
+        /// Start angle, radians.
         start: f64,
+        /// End angle, radians.
         end: f64,
+        /// Black ink when true, white otherwise.
         black: bool,
     },
 }
@@ -108,12 +126,14 @@ pub enum Shape {
 /// A marker's shape at a physical size.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Marker {
+    /// Which design, and the code it carries.
     pub kind: MarkerKind,
     /// Diameter of the black disc, 2R, in millimetres.
     pub diameter_mm: f64,
 }
 
 impl Marker {
+    /// A WhyCode marker carrying `code` (a `bits`-bit family code), `diameter_mm` across its black disc.
     pub fn whycode(bits: u32, code: u32, diameter_mm: f64) -> Marker {
         Marker {
             kind: MarkerKind::WhyCode { bits, code },
@@ -121,6 +141,7 @@ impl Marker {
         }
     }
 
+    /// A legacy WhyCon circle, `diameter_mm` across its black disc.
     pub fn whycon(diameter_mm: f64) -> Marker {
         Marker {
             kind: MarkerKind::WhyCon,
@@ -128,6 +149,7 @@ impl Marker {
         }
     }
 
+    /// Radius R of the black disc, mm: the unit every ratio in this module is relative to.
     pub fn outer_radius(&self) -> f64 {
         self.diameter_mm / 2.0
     }

@@ -2,9 +2,9 @@
 //! the simulator writes. Readers refuse absurd sizes before decoding and
 //! truncated JPEGs; writers replace a file whole or not at all.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use image::GrayImage;
 
 /// Largest image side accepted by [`load_gray`].
@@ -12,32 +12,89 @@ pub const MAX_SIDE: u32 = 30_000;
 /// Largest image area accepted by [`load_gray`], pixels.
 pub const MAX_PIXELS: u64 = 400_000_000;
 
+/// Why an image file could not be read. Each message is one line that
+/// starts with the file's name; the cause, when there is one, is also the
+/// error's `source`.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    /// The file could not be opened or read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not an image the decoders understand, or is damaged.
+    #[error("{}: {source}", path.display())]
+    Decode {
+        /// The file.
+        path: PathBuf,
+        /// What the decoder said.
+        #[source]
+        source: image::ImageError,
+    },
+    /// The image is larger than [`MAX_SIDE`] or [`MAX_PIXELS`]: refused
+    /// before decoding, so a hostile header cannot exhaust memory.
+    #[error(
+        "{}: image of {width}x{height} pixels is larger than the supported {MAX_SIDE} px a side and {} megapixels",
+        path.display(),
+        MAX_PIXELS / 1_000_000
+    )]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// Width in the header, pixels.
+        width: u32,
+        /// Height in the header, pixels.
+        height: u32,
+    },
+    /// A JPEG file that ends before its image data does.
+    #[error(
+        "{}: JPEG file is truncated (no end-of-image marker after its image data)",
+        path.display()
+    )]
+    TruncatedJpeg {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
 /// Reads an image file (PNG, JPEG, PGM/PPM, BMP; 8 or 16 bit; grey or
 /// colour) as 8-bit grey. Refuses absurd dimensions before decoding.
-pub fn load_gray(path: &Path) -> Result<GrayImage> {
-    let name = || path.display().to_string();
-    let open = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>> {
-        Ok(image::ImageReader::open(path)?.with_guessed_format()?)
+pub fn load_gray(path: &Path) -> std::result::Result<GrayImage, ImageError> {
+    let io = |source| ImageError::Io {
+        path: path.to_path_buf(),
+        source,
     };
-    let (width, height) = open()
-        .and_then(|r| Ok(r.into_dimensions()?))
-        .with_context(name)?;
+    let decode = |source| ImageError::Decode {
+        path: path.to_path_buf(),
+        source,
+    };
+    let open = || -> std::result::Result<_, ImageError> {
+        image::ImageReader::open(path)
+            .map_err(io)?
+            .with_guessed_format()
+            .map_err(io)
+    };
+    let (width, height) = open()?.into_dimensions().map_err(decode)?;
     if width > MAX_SIDE || height > MAX_SIDE || u64::from(width) * u64::from(height) > MAX_PIXELS {
-        anyhow::bail!(
-            "{}: image of {width}x{height} pixels is larger than the supported {MAX_SIDE} px a side and {} megapixels",
-            name(),
-            MAX_PIXELS / 1_000_000
-        );
+        return Err(ImageError::TooLarge {
+            path: path.to_path_buf(),
+            width,
+            height,
+        });
     }
-    let mut reader = open().with_context(name)?;
+    let mut reader = open()?;
     let mut limits = image::Limits::no_limits();
     limits.max_image_width = Some(MAX_SIDE);
     limits.max_image_height = Some(MAX_SIDE);
     reader.limits(limits);
     let format = reader.format();
-    let decoded = reader.decode().with_context(name)?;
+    let decoded = reader.decode().map_err(decode)?;
     if format == Some(image::ImageFormat::Jpeg) {
-        check_jpeg_complete(path).with_context(name)?;
+        check_jpeg_complete(path)?;
     }
     Ok(to_gray(decoded))
 }
@@ -80,12 +137,17 @@ pub fn stretched_values(wide: &[u16]) -> Vec<u8> {
 /// reports no error, which would read as "no markers here". A complete
 /// file has an end-of-image marker after its last scan (a thumbnail's EOI
 /// comes before the main image's scans; entropy-coded data never holds FF D9).
-fn check_jpeg_complete(path: &Path) -> Result<()> {
-    let bytes = std::fs::read(path)?;
+fn check_jpeg_complete(path: &Path) -> std::result::Result<(), ImageError> {
+    let bytes = std::fs::read(path).map_err(|source| ImageError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
     let ends = last_scan.is_some_and(|k| bytes[k..].windows(2).any(|w| w == [0xFF, 0xD9]));
     if !ends {
-        anyhow::bail!("JPEG file is truncated (no end-of-image marker after its image data)");
+        return Err(ImageError::TruncatedJpeg {
+            path: path.to_path_buf(),
+        });
     }
     Ok(())
 }
@@ -93,13 +155,18 @@ fn check_jpeg_complete(path: &Path) -> Result<()> {
 /// Image file formats written, chosen by file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ImageFormat {
+    /// PNG, lossless.
     Png,
+    /// JPEG, lossy: what cameras deliver.
     Jpeg,
+    /// Binary PGM, for tools that read nothing else.
     Pgm,
+    /// BMP, uncompressed.
     Bmp,
 }
 
 impl ImageFormat {
+    /// The format named by the file's extension, or an error naming the file.
     pub fn from_path(path: &Path) -> Result<ImageFormat> {
         let ext = path
             .extension()

@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! whycode: WhyCode circular fiducial markers. ID families, print-ready
 //! rendering, detection, pose and validation.
 //!
@@ -12,26 +13,43 @@
 //! `whycode` command line (src/cli/, compiled into the binary only) is a
 //! thin layer over them.
 //!
-//! ```no_run
-//! use whycode::detect::{Detector, DetectorConfig, Target};
-//! use whycode::image_io::load_gray;
-//! use whycode::family::Family;
+//! The types most programs need are re-exported here, so a short program
+//! reads without the module paths: generate (or load) a family, draw a
+//! marker, and find it again in an image.
 //!
-//! # fn main() -> anyhow::Result<()> {
+//! ```
+//! use whycode::{Detector, DetectorConfig, Family, Marker, Target};
+//!
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! // The default family: 8-bit codes at least 2 bit flips apart.
 //! let family = Family::generate(8, 2)?;
+//! let id = 3;
+//! let code = family.code(id).expect("the family has an ID 3");
+//!
+//! // A 40 mm marker with 10 mm of white around it, rasterised at 300 dpi.
+//! let marker = Marker::whycode(family.bits(), code, 40.0);
+//! let image = whycode::render::render_marker(&marker, 10.0, 300.0)?;
+//!
 //! let mut detector = Detector::new(DetectorConfig {
 //!     target: Target::WhyCode(family),
 //!     ..Default::default()
 //! });
-//! for d in detector.detect(&load_gray("photo.png".as_ref())?) {
-//!     println!("ID {} at ({:.1}, {:.1}), yaw {:?}", d.id, d.u, d.v, d.yaw);
-//! }
+//! let found = detector.detect(&image);
+//! assert_eq!(found.len(), 1);
+//! assert_eq!(found[0].id, id);
 //! # Ok(())
 //! # }
 //! ```
+//!
+//! Photos come in through [`load_gray`]; with a [`Camera`] and the printed
+//! diameter in the [`DetectorConfig`], each [`Detection`] carries a
+//! [`Pose`]. A print [`Sheet`] records what it placed where in a
+//! [`Manifest`], against which [`validate`] checks photos of the print
+//! (its [`Report`]).
 
 pub mod camera;
 pub mod detect;
+mod error;
 pub mod family;
 pub mod geometry;
 pub mod image_io;
@@ -45,3 +63,17 @@ pub mod render;
 pub mod simulate;
 pub mod units;
 pub mod validate;
+
+pub use camera::{Camera, CameraError};
+pub use detect::report::FrameReport;
+pub use detect::{Detection, Detector, DetectorConfig, Target};
+pub use family::{Decoded, Decoder, Family, FamilyError, FamilyFileError, MatchStatus};
+pub use geometry::{Design, Marker, MarkerKind};
+pub use image_io::{load_gray, ImageError};
+pub use manifest::{Manifest, ManifestError};
+pub use math::Ellipse;
+pub use pose::Pose;
+pub use render::{Format, MarkerOptions, Sheet, SheetMarker, SheetSpec, Template};
+pub use simulate::{GroundTruth, Scene};
+pub use units::{Angle, Length};
+pub use validate::{PhotoReport, Report};

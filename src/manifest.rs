@@ -3,19 +3,63 @@
 //! out a photographed sheet from it and `validate` reads it to know which
 //! marker should be where.
 
-use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+
+/// Why a manifest could not be used. Each message is one line that starts
+/// with the file's name (or says which file it could not read).
+#[derive(Debug, thiserror::Error)]
+pub enum ManifestError {
+    /// The file could not be read.
+    #[error("cannot read manifest {name}: {source}")]
+    Io {
+        /// The file's name.
+        name: String,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The text is not JSON of a manifest's shape.
+    #[error("{name} is not a whycode sheet manifest: {source}")]
+    Json {
+        /// The file's name.
+        name: String,
+        /// What the JSON parser said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// Written by a newer whycode than this one.
+    #[error(
+        "{name}: manifest version {version} is newer than this tool reads ({MANIFEST_VERSION})"
+    )]
+    TooNew {
+        /// The file's name.
+        name: String,
+        /// The version the file declares.
+        version: u32,
+    },
+    /// Well-formed, but its content breaks what validation relies on
+    /// (no markers, a marker off its page, an ID listed twice, ...).
+    #[error("{name}: {problem}")]
+    Invalid {
+        /// The file's name.
+        name: String,
+        /// What is wrong, in words.
+        problem: String,
+    },
+}
 
 /// Current manifest format version.
 pub const MANIFEST_VERSION: u32 = 1;
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// What a sheet printed where: the contract between the renderer that writes it, the simulator that photographs it and the validator that checks photos of the print.
 pub struct Manifest {
     /// Format name, always "whycode-sheet".
     #[serde(default = "format_name")]
     pub format: String,
     #[serde(default = "version_one")]
+    /// Format version, [`MANIFEST_VERSION`] when written.
     pub version: u32,
     /// The tool that wrote it, e.g. "whycode 0.1.0".
     #[serde(default)]
@@ -23,19 +67,25 @@ pub struct Manifest {
     /// The family the IDs belong to; absent for legacy WhyCon sheets.
     pub family: Option<FamilyRef>,
     #[serde(default)]
+    /// True for a sheet of legacy WhyCon circles.
     pub legacy: bool,
     /// Name of the page template.
     #[serde(default)]
     pub template: String,
     /// Page width and height in millimetres.
     pub page_size_mm: [f64; 2],
+    /// Number of pages.
     pub pages: u32,
+    /// Every printed marker, in print order.
     pub markers: Vec<PrintedMarker>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+/// The family a sheet's IDs belong to: enough to generate it again.
 pub struct FamilyRef {
+    /// Code length.
     pub bits: u32,
+    /// Minimum cyclic Hamming distance.
     pub distance: u32,
 }
 
@@ -49,8 +99,11 @@ pub struct PrintedMarker {
     pub code: u32,
     /// Page number, from 1.
     pub page: u32,
+    /// Centre, mm from the page's left edge.
     pub x_mm: f64,
+    /// Centre, mm from the page's top edge.
     pub y_mm: f64,
+    /// Diameter of the black disc as intended, mm.
     pub diameter_mm: f64,
 }
 
@@ -63,26 +116,34 @@ fn version_one() -> u32 {
 }
 
 impl Manifest {
-    pub fn load(path: &Path) -> Result<Manifest> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read manifest {}", path.display()))?;
-        Manifest::from_json(&path.display().to_string(), &text)
+    /// Reads and checks a manifest file; errors name the file.
+    pub fn load(path: &Path) -> Result<Manifest, ManifestError> {
+        let name = path.display().to_string();
+        let text = match std::fs::read_to_string(path) {
+            Ok(text) => text,
+            Err(source) => return Err(ManifestError::Io { name, source }),
+        };
+        Manifest::from_json(&name, &text)
     }
 
     /// Parses and checks a manifest's text; `name` (the file's name) starts
     /// every error message. For callers without files, such as the browser.
-    pub fn from_json(name: &str, text: &str) -> Result<Manifest> {
-        let manifest: Manifest = serde_json::from_str(text)
-            .with_context(|| format!("{name} is not a whycode sheet manifest"))?;
+    pub fn from_json(name: &str, text: &str) -> Result<Manifest, ManifestError> {
+        let manifest: Manifest =
+            serde_json::from_str(text).map_err(|source| ManifestError::Json {
+                name: name.to_string(),
+                source,
+            })?;
         if manifest.version > MANIFEST_VERSION {
-            anyhow::bail!(
-                "{name}: manifest version {} is newer than this tool reads ({MANIFEST_VERSION})",
-                manifest.version
-            );
+            return Err(ManifestError::TooNew {
+                name: name.to_string(),
+                version: manifest.version,
+            });
         }
-        manifest
-            .check()
-            .map_err(|problem| anyhow::anyhow!("{name}: {problem}"))?;
+        manifest.check().map_err(|problem| ManifestError::Invalid {
+            name: name.to_string(),
+            problem,
+        })?;
         Ok(manifest)
     }
 
@@ -216,6 +277,7 @@ impl Manifest {
         Ok(())
     }
 
+    /// The manifest as the JSON the `sheet` command writes (stable field order).
     pub fn to_json(&self) -> String {
         let mut s = serde_json::to_string_pretty(self).expect("manifest serialises");
         s.push('\n');
@@ -223,7 +285,8 @@ impl Manifest {
     }
 
     #[cfg(feature = "files")]
-    pub fn save(&self, path: &Path) -> Result<()> {
+    /// Writes the manifest whole or not at all.
+    pub fn save(&self, path: &Path) -> anyhow::Result<()> {
         crate::io::write_atomic(path, self.to_json().as_bytes())
     }
 }

@@ -12,22 +12,27 @@ pub struct Length {
 }
 
 impl Length {
+    /// A length of `mm` millimetres.
     pub fn from_mm(mm: f64) -> Length {
         Length { mm }
     }
 
+    /// A length of `m` metres.
     pub fn from_m(m: f64) -> Length {
         Length { mm: m * 1000.0 }
     }
 
+    /// The length in millimetres.
     pub fn mm(self) -> f64 {
         self.mm
     }
 
+    /// The length in metres.
     pub fn m(self) -> f64 {
         self.mm / 1000.0
     }
 
+    /// The length in inches.
     pub fn inches(self) -> f64 {
         self.mm / 25.4
     }
@@ -123,16 +128,19 @@ pub struct Angle {
 }
 
 impl Angle {
+    /// An angle of `deg` degrees.
     pub fn from_degrees(deg: f64) -> Angle {
         Angle {
             rad: deg.to_radians(),
         }
     }
 
+    /// The angle in radians.
     pub fn radians(self) -> f64 {
         self.rad
     }
 
+    /// The angle in degrees.
     pub fn degrees(self) -> f64 {
         self.rad.to_degrees()
     }

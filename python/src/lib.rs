@@ -200,3 +200,21 @@ fn _whycode(m: &Bound<'_, PyModule>) -> PyResult<()> {
     simulate::register(m)?;
     Ok(())
 }
+
+/// The library's typed load errors go the anyhow way: an I/O cause makes an
+/// OSError, anything else a ValueError, with the same one-line message.
+macro_rules! from_library_error {
+    ($($t:ty),*) => {$(
+        impl From<$t> for Error {
+            fn from(err: $t) -> Error {
+                Error::from(anyhow::Error::from(err))
+            }
+        }
+    )*};
+}
+from_library_error!(
+    whycode::CameraError,
+    whycode::FamilyFileError,
+    whycode::ImageError,
+    whycode::ManifestError
+);

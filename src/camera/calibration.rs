@@ -1,12 +1,51 @@
 //! Calibration files: ROS `camera_info` YAML, OpenCV FileStorage YAML and
 //! XML, Kalibr camchain YAML in; ROS YAML out.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
 use serde_yaml::Value;
 
 use super::Camera;
+
+/// Why a calibration could not be read or used. Each message is one line;
+/// from a file it starts with the file's name.
+#[derive(Debug, thiserror::Error)]
+pub enum CameraError {
+    /// The file could not be read.
+    #[error("{}: cannot read camera calibration: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The text is not a calibration this crate reads, or its values are
+    /// impossible (a missing camera matrix, a negative focal length, ...).
+    #[error("{}{problem}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default())]
+    Invalid {
+        /// The file, when the text came from one.
+        path: Option<PathBuf>,
+        /// What is wrong or missing, in words.
+        problem: String,
+    },
+    /// An image whose aspect ratio differs from the calibration's: another
+    /// camera or a crop, for which no rescaled calibration is right.
+    #[error(
+        "image is {}x{} but the camera calibration is for {}x{}",
+        image[0],
+        image[1],
+        calibration[0],
+        calibration[1]
+    )]
+    OtherCamera {
+        /// The image's width and height, pixels.
+        image: [u32; 2],
+        /// The width and height the calibration was made for, pixels.
+        calibration: [u32; 2],
+    },
+}
 
 impl Camera {
     /// Read a calibration file: a ROS `camera_info` YAML (as written by
@@ -14,125 +53,27 @@ impl Camera {
     /// an OpenCV FileStorage YAML (`%YAML:1.0`, `!!opencv-matrix`) or XML,
     /// or a Kalibr camchain YAML (first camera, pinhole/radtan).
     /// Errors carry the file name as context and say what is missing.
-    pub fn load(path: impl AsRef<Path>) -> Result<Camera> {
+    pub fn load(path: impl AsRef<Path>) -> std::result::Result<Camera, CameraError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| anyhow!("cannot read camera calibration: {e}"))
-            .with_context(|| path.display().to_string())?;
-        Camera::parse(&text).with_context(|| path.display().to_string())
+        let text = std::fs::read_to_string(path).map_err(|source| CameraError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Camera::parse(&text).map_err(|err| match err {
+            CameraError::Invalid { problem, .. } => CameraError::Invalid {
+                path: Some(path.to_path_buf()),
+                problem,
+            },
+            other => other,
+        })
     }
 
     /// Parse the text of a calibration file (see [`Camera::load`]).
-    pub fn parse(text: &str) -> Result<Camera> {
-        let doc = if text.trim_start().starts_with("<?xml") || text.contains("<opencv_storage>") {
-            opencv_xml_to_value(text)?
-        } else {
-            let cleaned = strip_opencv_yaml(text);
-            serde_yaml::from_str(&cleaned)
-                .map_err(|e| anyhow!("not a readable calibration YAML: {}", one_line(&e)))?
-        };
-        let Value::Mapping(_) = doc else {
-            bail!("not a camera calibration (expected a YAML mapping)");
-        };
-        // Kalibr camchain files nest each camera under cam0, cam1, ...
-        let doc = match field(&doc, &["cam0"]) {
-            Some(cam0) if field(&doc, CAMERA_MATRIX_KEYS).is_none() => cam0.clone(),
-            _ => doc,
-        };
-
-        let k = matrix_field(&doc, CAMERA_MATRIX_KEYS)?
-            .ok_or_else(|| anyhow!("missing camera_matrix (or K)"))?;
-        let k = match k.len() {
-            9 => k,
-            // Kalibr: [fu, fv, pu, pv].
-            4 => vec![k[0], 0.0, k[2], 0.0, k[1], k[3], 0.0, 0.0, 1.0],
-            n => bail!("camera_matrix has {n} values, expected 9 (3x3)"),
-        };
-        let (fx, skew, cx, fy, cy) = (k[0], k[1], k[2], k[4], k[5]);
-        if !(fx > 0.0 && fy > 0.0 && fx.is_finite() && fy.is_finite()) {
-            bail!("camera_matrix has invalid focal lengths fx={fx}, fy={fy}");
-        }
-        if !cx.is_finite() || !cy.is_finite() {
-            bail!("camera_matrix has an invalid principal point");
-        }
-        if skew.abs() > 1e-6 * fx || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0 {
-            bail!("camera_matrix is not of the form [fx 0 cx; 0 fy cy; 0 0 1]");
-        }
-
-        if let Some(model) = field(&doc, &["distortion_model"]) {
-            let model = model.as_str().unwrap_or_default();
-            let supported = ["plumb_bob", "rational_polynomial", "radtan", "none", ""];
-            if !supported.contains(&model) {
-                bail!("unsupported distortion_model {model:?} (only plumb_bob)");
-            }
-        }
-        if let Some(model) = field(&doc, &["camera_model"]).and_then(Value::as_str) {
-            if model != "pinhole" {
-                bail!("unsupported camera_model {model:?} (only pinhole)");
-            }
-        }
-        let coefficients = matrix_field(
-            &doc,
-            &[
-                "distortion_coefficients",
-                "distortionCoefficients",
-                "dist_coeffs",
-                "distCoeffs",
-                "distortion_coeffs",
-                "D",
-                "d",
-            ],
-        )?
-        .unwrap_or_default();
-        let mut distortion = [0.0; 5];
-        for (slot, &value) in distortion.iter_mut().zip(&coefficients) {
-            *slot = value;
-        }
-        if coefficients.len() > 5 && coefficients[5..].iter().any(|&c| c != 0.0) {
-            bail!(
-                "distortion_coefficients has {} terms with non-zero k4.. ; only the 5-term \
-                 plumb_bob model (k1 k2 p1 p2 k3) is supported",
-                coefficients.len()
-            );
-        }
-        if distortion.iter().any(|c| !c.is_finite()) {
-            bail!("distortion_coefficients contains a non-finite value");
-        }
-
-        // Kalibr gives `resolution: [width, height]` instead.
-        let resolution = matrix_field(&doc, &["resolution"])?;
-        let from_resolution = |index: usize, name: &str| -> Result<Option<u32>> {
-            match &resolution {
-                Some(r) if r.len() == 2 => image_size(r[index], name).map(Some),
-                Some(_) => bail!("resolution must be [width, height]"),
-                None => Ok(None),
-            }
-        };
-        let width = match size_field(&doc, &["image_width", "imageWidth", "width"])? {
-            Some(w) => w,
-            None => {
-                from_resolution(0, "image_width")?.ok_or_else(|| anyhow!("missing image_width"))?
-            }
-        };
-        let height = match size_field(&doc, &["image_height", "imageHeight", "height"])? {
-            Some(h) => h,
-            None => from_resolution(1, "image_height")?
-                .ok_or_else(|| anyhow!("missing image_height"))?,
-        };
-
-        let camera = Camera {
-            fx,
-            fy,
-            cx,
-            cy,
-            distortion,
-            width,
-            height,
-        };
-        camera
-            .check_plausible()
-            .map_err(|problem| anyhow!(problem))?;
-        Ok(camera)
+    pub fn parse(text: &str) -> std::result::Result<Camera, CameraError> {
+        parse_calibration(text).map_err(|err| CameraError::Invalid {
+            path: None,
+            problem: crate::error::chain_on_one_line(&err),
+        })
     }
 
     /// Refuses calibrations no real lens gives, which would otherwise turn
@@ -225,6 +166,117 @@ impl Camera {
         }
         Ok(())
     }
+}
+
+fn parse_calibration(text: &str) -> Result<Camera> {
+    let doc = if text.trim_start().starts_with("<?xml") || text.contains("<opencv_storage>") {
+        opencv_xml_to_value(text)?
+    } else {
+        let cleaned = strip_opencv_yaml(text);
+        serde_yaml::from_str(&cleaned)
+            .map_err(|e| anyhow!("not a readable calibration YAML: {}", one_line(&e)))?
+    };
+    let Value::Mapping(_) = doc else {
+        bail!("not a camera calibration (expected a YAML mapping)");
+    };
+    // Kalibr camchain files nest each camera under cam0, cam1, ...
+    let doc = match field(&doc, &["cam0"]) {
+        Some(cam0) if field(&doc, CAMERA_MATRIX_KEYS).is_none() => cam0.clone(),
+        _ => doc,
+    };
+
+    let k = matrix_field(&doc, CAMERA_MATRIX_KEYS)?
+        .ok_or_else(|| anyhow!("missing camera_matrix (or K)"))?;
+    let k = match k.len() {
+        9 => k,
+        // Kalibr: [fu, fv, pu, pv].
+        4 => vec![k[0], 0.0, k[2], 0.0, k[1], k[3], 0.0, 0.0, 1.0],
+        n => bail!("camera_matrix has {n} values, expected 9 (3x3)"),
+    };
+    let (fx, skew, cx, fy, cy) = (k[0], k[1], k[2], k[4], k[5]);
+    if !(fx > 0.0 && fy > 0.0 && fx.is_finite() && fy.is_finite()) {
+        bail!("camera_matrix has invalid focal lengths fx={fx}, fy={fy}");
+    }
+    if !cx.is_finite() || !cy.is_finite() {
+        bail!("camera_matrix has an invalid principal point");
+    }
+    if skew.abs() > 1e-6 * fx || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0 {
+        bail!("camera_matrix is not of the form [fx 0 cx; 0 fy cy; 0 0 1]");
+    }
+
+    if let Some(model) = field(&doc, &["distortion_model"]) {
+        let model = model.as_str().unwrap_or_default();
+        let supported = ["plumb_bob", "rational_polynomial", "radtan", "none", ""];
+        if !supported.contains(&model) {
+            bail!("unsupported distortion_model {model:?} (only plumb_bob)");
+        }
+    }
+    if let Some(model) = field(&doc, &["camera_model"]).and_then(Value::as_str) {
+        if model != "pinhole" {
+            bail!("unsupported camera_model {model:?} (only pinhole)");
+        }
+    }
+    let coefficients = matrix_field(
+        &doc,
+        &[
+            "distortion_coefficients",
+            "distortionCoefficients",
+            "dist_coeffs",
+            "distCoeffs",
+            "distortion_coeffs",
+            "D",
+            "d",
+        ],
+    )?
+    .unwrap_or_default();
+    let mut distortion = [0.0; 5];
+    for (slot, &value) in distortion.iter_mut().zip(&coefficients) {
+        *slot = value;
+    }
+    if coefficients.len() > 5 && coefficients[5..].iter().any(|&c| c != 0.0) {
+        bail!(
+            "distortion_coefficients has {} terms with non-zero k4.. ; only the 5-term \
+                 plumb_bob model (k1 k2 p1 p2 k3) is supported",
+            coefficients.len()
+        );
+    }
+    if distortion.iter().any(|c| !c.is_finite()) {
+        bail!("distortion_coefficients contains a non-finite value");
+    }
+
+    // Kalibr gives `resolution: [width, height]` instead.
+    let resolution = matrix_field(&doc, &["resolution"])?;
+    let from_resolution = |index: usize, name: &str| -> Result<Option<u32>> {
+        match &resolution {
+            Some(r) if r.len() == 2 => image_size(r[index], name).map(Some),
+            Some(_) => bail!("resolution must be [width, height]"),
+            None => Ok(None),
+        }
+    };
+    let width = match size_field(&doc, &["image_width", "imageWidth", "width"])? {
+        Some(w) => w,
+        None => from_resolution(0, "image_width")?.ok_or_else(|| anyhow!("missing image_width"))?,
+    };
+    let height = match size_field(&doc, &["image_height", "imageHeight", "height"])? {
+        Some(h) => h,
+        None => {
+            from_resolution(1, "image_height")?.ok_or_else(|| anyhow!("missing image_height"))?
+        }
+    };
+
+    let camera = Camera {
+        fx,
+        fy,
+        cx,
+        cy,
+        distortion,
+        width,
+        height,
+    };
+    camera
+        .check_plausible()
+        .map_err(|problem| anyhow!(problem))?;
+    Ok(camera)
 }
 
 /// A number as a person writes it: 1e308 rather than 309 digits.

@@ -9,18 +9,26 @@
 
 mod calibration;
 
+pub use calibration::CameraError;
+
 use nalgebra::{Matrix2, Vector2, Vector3};
 
 /// Intrinsic calibration of one camera.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Camera {
+    /// Focal length along x, pixels.
     pub fx: f64,
+    /// Focal length along y, pixels.
     pub fy: f64,
+    /// Principal point x, pixels (origin at the top-left pixel's centre).
     pub cx: f64,
+    /// Principal point y, pixels.
     pub cy: f64,
     /// k1, k2, p1, p2, k3 (OpenCV order, "plumb_bob" in ROS).
     pub distortion: [f64; 5],
+    /// Image width the calibration was made for, pixels: an image of another size needs [`Camera::for_image`].
     pub width: u32,
+    /// Image height the calibration was made for, pixels.
     pub height: u32,
 }
 
@@ -77,7 +85,7 @@ impl Camera {
     /// rescaled when the image is the same sensor at another resolution. A
     /// different aspect ratio means another camera or a crop, for which no
     /// rescaling is right, and is refused.
-    pub fn for_image(&self, width: u32, height: u32) -> Result<Camera, String> {
+    pub fn for_image(&self, width: u32, height: u32) -> Result<Camera, CameraError> {
         if self.width == width && self.height == height {
             return Ok(*self);
         }
@@ -86,10 +94,10 @@ impl Camera {
             || self.height == 0
             || (aspect(self.width, self.height) / aspect(width, height) - 1.0).abs() > 0.01
         {
-            return Err(format!(
-                "image is {width}x{height} but the camera calibration is for {}x{}",
-                self.width, self.height
-            ));
+            return Err(CameraError::OtherCamera {
+                image: [width, height],
+                calibration: [self.width, self.height],
+            });
         }
         Ok(self.with_resolution(width, height))
     }

@@ -131,7 +131,7 @@ impl FamilyArgs {
     /// The family these flags name.
     pub fn resolve(&self) -> Result<Family> {
         match &self.family {
-            Some(path) => Family::load(path),
+            Some(path) => Ok(Family::load(path)?),
             None if self.bits == AUTO_BITS => {
                 bail!("--bits auto reads each marker's bit count from its ring: only `detect` takes it")
             }

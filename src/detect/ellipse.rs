@@ -293,6 +293,7 @@ pub fn scanline_edge_points(
 /// A refined outline and how well the edge fits it.
 #[derive(Debug, Clone, Copy)]
 pub struct Refined {
+    /// The fitted outline of the black disc.
     pub ellipse: Ellipse,
     /// RMS distance of the kept edge points from the ellipse, pixels.
     pub rms: f64,

@@ -27,6 +27,7 @@ pub struct FamilyCheck {
 }
 
 impl FamilyCheck {
+    /// A tally against a family of `family_bits` bits (`None`: any count).
     pub fn new(family_bits: Option<u32>) -> FamilyCheck {
         FamilyCheck {
             family_bits,

@@ -73,6 +73,7 @@ pub enum RingEvidence {
 /// A Manchester ring as read by the structure test.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RingStructure {
+    /// The bit count the ring shows.
     pub bits: u32,
     /// The necklace read, as its smallest rotation (the form family tables
     /// list codes in).

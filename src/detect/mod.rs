@@ -9,7 +9,7 @@
 //! tests, not this). With a family, the ring is read ([`ring`]); with a
 //! camera and a diameter, the pose comes from the edge points, the normal
 //! ambiguity is settled by the inner white edges and the yaw is measured on
-//! the rectified ring ([`rectify`]).
+//! the rectified ring (`rectify.rs`).
 //!
 //! With tracking on, each known marker is first followed where it should
 //! be (last position plus velocity) by its edges along a few dozen scan
@@ -33,14 +33,14 @@ mod follow;
 pub mod idfilter;
 pub mod legacy;
 pub mod manchester;
-pub mod rectify;
+pub(crate) mod rectify;
 pub mod report;
 pub mod ring;
 pub mod ring_model;
 mod scan;
-pub mod segment;
-pub mod threshold;
-pub mod track;
+pub(crate) mod segment;
+pub(crate) mod threshold;
+pub(crate) mod track;
 
 use std::collections::BTreeMap;
 
@@ -107,10 +107,14 @@ pub enum Target {
     /// WhyCode markers of any bit count (4-24): each ring's count is read
     /// from the ring and reported with its code; with a distance, the ID
     /// in the family of that count and that distance.
-    AnyBits { distance: Option<u32> },
+    AnyBits {
+        /// The families' minimum distance, when IDs are wanted.
+        distance: Option<u32>,
+    },
 }
 
 impl Target {
+    /// The marker design to look for, whose proportions the tests use.
     pub fn design(&self) -> Design {
         match self {
             Target::WhyCon => Design::WhyCon,
@@ -139,6 +143,7 @@ pub struct Detection {
     /// otherwise the centre of the outer ellipse (which perspective moves
     /// off the true centre by up to a pixel or two on large tilted markers).
     pub u: f64,
+    /// Row of the centre, pixels (see `u`).
     pub v: f64,
     /// Direction of the marker's +x axis in the image, atan2(dv, du);
     /// `None` when it could not be told (legacy markers, unreadable rings).
@@ -213,6 +218,7 @@ const SCAN_CHUNK: usize = 16;
 const DISCOVERY_BANDS: u64 = 8;
 
 impl Detector {
+    /// A detector with no state yet; the first frame is scanned whole.
     pub fn new(config: DetectorConfig) -> Detector {
         let reader = config
             .target
@@ -240,6 +246,7 @@ impl Detector {
         }
     }
 
+    /// The settings the detector was made with.
     pub fn config(&self) -> &DetectorConfig {
         &self.config
     }
@@ -248,7 +255,11 @@ impl Detector {
     /// [`Camera::for_image`] (rescaled for the same sensor at another
     /// resolution, refused for another aspect ratio), so that a calibration
     /// made for another image size never gives silently wrong poses.
-    pub fn fit_camera(&mut self, width: u32, height: u32) -> Result<(), String> {
+    pub fn fit_camera(
+        &mut self,
+        width: u32,
+        height: u32,
+    ) -> Result<(), crate::camera::CameraError> {
         if let Some(camera) = self.config.camera {
             self.config.camera = Some(camera.for_image(width, height)?);
         }

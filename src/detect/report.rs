@@ -9,11 +9,14 @@ use std::fmt::Write as _;
 pub struct FrameReport {
     /// The image's name as the caller wants it reported (usually its path).
     pub image: String,
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
     /// Detection time the caller measured (0 when not measured: the library
     /// has no clock on every target).
     pub elapsed_ms: f64,
+    /// What was found, in the detector's order.
     pub markers: Vec<Detection>,
 }
 

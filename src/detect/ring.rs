@@ -149,6 +149,7 @@ pub(super) fn sample_radii() -> [f64; 5] {
 }
 
 impl RingReader {
+    /// A reader that decodes rings with `decoder`, or only measures them without one.
     pub fn new(decoder: Option<Decoder>) -> RingReader {
         RingReader {
             decoder,
@@ -162,6 +163,7 @@ impl RingReader {
         self
     }
 
+    /// The decoder the reader uses, if any.
     pub fn decoder(&self) -> Option<&Decoder> {
         self.decoder.as_ref()
     }

@@ -59,6 +59,7 @@ pub struct SmallRing {
     pub structured: bool,
     /// The member named, 0 when two members explain the pixels about as well.
     pub id: u32,
+    /// The named member's code.
     pub code: u32,
     /// Image direction of the marker's +x axis, with an ID.
     pub yaw: Option<f64>,

@@ -56,11 +56,6 @@ impl Labels {
     pub fn is_dark_visited(&self, index: usize) -> bool {
         self.data[index] == self.dark()
     }
-
-    /// The buffer's size in bytes (for memory accounting).
-    pub fn capacity_bytes(&self) -> usize {
-        self.data.capacity()
-    }
 }
 
 /// Statistics of a segment, summed over its pixels (u = column, v = row).

@@ -132,6 +132,9 @@ impl ThresholdMap {
         self.shift
     }
 
+    /// The threshold for pixel (x, y); the detector reads whole rows, tests
+    /// check single pixels.
+    #[cfg(test)]
     #[inline]
     pub fn at(&self, x: usize, y: usize) -> u8 {
         self.row(y)[x >> self.shift]

@@ -26,10 +26,34 @@
 
 use super::necklace::self_distance;
 use super::Family;
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{bail, Context, Result};
 use serde::Deserialize;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// Why a family file could not be used. Each message is one line; from a
+/// file it starts with the file's name.
+#[derive(Debug, thiserror::Error)]
+pub enum FamilyFileError {
+    /// The file could not be read.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The text is not a family file, or its codes break the family's
+    /// promises, or a derived field contradicts the codes.
+    #[error("{}{problem}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default())]
+    Invalid {
+        /// The file, when the text came from one.
+        path: Option<PathBuf>,
+        /// What is wrong, in words.
+        problem: String,
+    },
+}
 
 /// Value of the `format` field.
 pub const FAMILY_FILE_FORMAT: &str = "whycode-family";
@@ -98,75 +122,89 @@ impl Family {
 
     /// Parses and checks a family file's text (see the module docs). Errors
     /// are one line, naming the problem; [`Family::load`] adds the file name.
-    pub fn from_json(text: &str) -> Result<Family> {
-        let header: Header = serde_json::from_str(text).context("not valid JSON")?;
-        match header.format.as_deref() {
-            Some(FAMILY_FILE_FORMAT) => {}
-            Some(other) => bail!("format is \"{other}\", expected \"{FAMILY_FILE_FORMAT}\""),
-            None => bail!("not a whycode family file (no \"format\" field)"),
+    pub fn from_json(text: &str) -> std::result::Result<Family, FamilyFileError> {
+        parse_family(text).map_err(|err| FamilyFileError::Invalid {
+            path: None,
+            problem: crate::error::chain_on_one_line(&err),
+        })
+    }
+}
+
+/// The checks behind [`Family::from_json`], with anyhow's context for the
+/// nested causes.
+fn parse_family(text: &str) -> Result<Family> {
+    let header: Header = serde_json::from_str(text).context("not valid JSON")?;
+    match header.format.as_deref() {
+        Some(FAMILY_FILE_FORMAT) => {}
+        Some(other) => bail!("format is \"{other}\", expected \"{FAMILY_FILE_FORMAT}\""),
+        None => bail!("not a whycode family file (no \"format\" field)"),
+    }
+    match header.version {
+        Some(serde_json::Value::Number(n))
+            if n.as_u64() == Some(u64::from(FAMILY_FILE_VERSION)) => {}
+        Some(v) => bail!(
+            "unsupported family file version {v} (this build reads version {FAMILY_FILE_VERSION})"
+        ),
+        None => bail!("no \"version\" field"),
+    }
+    let doc: Document = serde_json::from_str(text).context("malformed family file")?;
+    let mut codes = Vec::with_capacity(doc.codes.len());
+    for (k, entry) in doc.codes.iter().enumerate() {
+        let expected_id = k as u32 + 1;
+        if entry.id != expected_id {
+            bail!(
+                "code entry {} has ID {}, expected {expected_id} (IDs run 1, 2, 3, ... in order)",
+                k + 1,
+                entry.id
+            );
         }
-        match header.version {
-            Some(serde_json::Value::Number(n)) if n.as_u64() == Some(u64::from(FAMILY_FILE_VERSION)) => {}
-            Some(v) => bail!("unsupported family file version {v} (this build reads version {FAMILY_FILE_VERSION})"),
-            None => bail!("no \"version\" field"),
+        codes.push(entry.code);
+    }
+    if let Some(count) = doc.count {
+        if count != codes.len() {
+            bail!("count is {count} but {} codes are listed", codes.len());
         }
-        let doc: Document = serde_json::from_str(text).context("malformed family file")?;
-        let mut codes = Vec::with_capacity(doc.codes.len());
-        for (k, entry) in doc.codes.iter().enumerate() {
-            let expected_id = k as u32 + 1;
-            if entry.id != expected_id {
+    }
+    let family = Family::from_codes(doc.bits, doc.distance, codes)?;
+    let bits = doc.bits as usize;
+    for entry in &doc.codes {
+        if let Some(binary) = &entry.binary {
+            let expected = format!("{:0bits$b}", entry.code);
+            if *binary != expected {
                 bail!(
-                    "code entry {} has ID {}, expected {expected_id} (IDs run 1, 2, 3, ... in order)",
-                    k + 1,
+                    "ID {}: binary \"{binary}\" does not match code {} (\"{expected}\")",
+                    entry.id,
+                    entry.code
+                );
+            }
+        }
+        if let Some(sd) = entry.self_distance {
+            let actual = self_distance(entry.code, doc.bits);
+            if sd != actual {
+                bail!(
+                    "ID {}: self_distance is {sd}, the code's is {actual}",
                     entry.id
                 );
             }
-            codes.push(entry.code);
         }
-        if let Some(count) = doc.count {
-            if count != codes.len() {
-                bail!("count is {count} but {} codes are listed", codes.len());
-            }
-        }
-        let family = Family::from_codes(doc.bits, doc.distance, codes)?;
-        let bits = doc.bits as usize;
-        for entry in &doc.codes {
-            if let Some(binary) = &entry.binary {
-                let expected = format!("{:0bits$b}", entry.code);
-                if *binary != expected {
-                    bail!(
-                        "ID {}: binary \"{binary}\" does not match code {} (\"{expected}\")",
-                        entry.id,
-                        entry.code
-                    );
-                }
-            }
-            if let Some(sd) = entry.self_distance {
-                let actual = self_distance(entry.code, doc.bits);
-                if sd != actual {
-                    bail!(
-                        "ID {}: self_distance is {sd}, the code's is {actual}",
-                        entry.id
-                    );
-                }
-            }
-        }
-        if let Some(declared) = doc.min_self_distance {
-            let actual = family.min_self_distance();
-            if declared != actual {
-                bail!("min_self_distance is {declared}, the codes' is {actual}");
-            }
-        }
-        if let Some(declared) = doc.min_distance {
-            match family.min_distance() {
-                Some(actual) if actual == declared => {}
-                Some(actual) => bail!("min_distance is {declared}, the codes' is {actual}"),
-                None => bail!("min_distance is {declared}, but a family of one has none"),
-            }
-        }
-        Ok(family)
     }
+    if let Some(declared) = doc.min_self_distance {
+        let actual = family.min_self_distance();
+        if declared != actual {
+            bail!("min_self_distance is {declared}, the codes' is {actual}");
+        }
+    }
+    if let Some(declared) = doc.min_distance {
+        match family.min_distance() {
+            Some(actual) if actual == declared => {}
+            Some(actual) => bail!("min_distance is {declared}, the codes' is {actual}"),
+            None => bail!("min_distance is {declared}, but a family of one has none"),
+        }
+    }
+    Ok(family)
+}
 
+impl Family {
     /// Writes the family file whole or not at all.
     #[cfg(feature = "files")]
     pub fn save(&self, path: &Path) -> Result<()> {
@@ -174,11 +212,18 @@ impl Family {
     }
 
     /// Reads and checks a family file. Errors read `<file>: <problem>`.
-    pub fn load(path: &Path) -> Result<Family> {
-        std::fs::read_to_string(path)
-            .map_err(|e| anyhow!(e))
-            .and_then(|text| Family::from_json(&text))
-            .with_context(|| path.display().to_string())
+    pub fn load(path: &Path) -> std::result::Result<Family, FamilyFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| FamilyFileError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Family::from_json(&text).map_err(|err| match err {
+            FamilyFileError::Invalid { problem, .. } => FamilyFileError::Invalid {
+                path: Some(path.to_path_buf()),
+                problem,
+            },
+            other => other,
+        })
     }
 }
 

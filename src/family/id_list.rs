@@ -8,18 +8,25 @@ pub const MAX_LISTED_IDS: usize = 100_000;
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum IdListError {
     #[error("'{0}' names ID 0, which means \"unknown\"; IDs start at 1")]
+    /// An item names ID 0.
     ZeroId(String),
     #[error("'{0}' is not an ID or a range like 3-7")]
+    /// An item is neither an ID nor a range.
     NotAnId(String),
     #[error("range '{0}' runs backwards")]
+    /// A range whose end is below its start.
     Backwards(String),
     #[error("range '{0}' names more than {MAX_LISTED_IDS} IDs")]
+    /// A range longer than the list may be.
     RangeTooLong(String),
     #[error("the list names more than {MAX_LISTED_IDS} IDs")]
+    /// The whole list names too many IDs.
     TooMany,
     #[error("no IDs given")]
+    /// The list is empty.
     Empty,
     #[error("ID {0} is listed more than once")]
+    /// An ID appears twice.
     Repeated(u32),
 }
 

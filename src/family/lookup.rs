@@ -14,6 +14,7 @@ pub const DENSE_MAX_BITS: u32 = 20;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
+/// How a ring reading matched the family.
 pub enum MatchStatus {
     /// The word is a rotation of a member.
     Exact,
@@ -28,6 +29,7 @@ pub enum MatchStatus {
 /// The result of decoding one ring reading.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Decoded {
+    /// How the word matched.
     pub status: MatchStatus,
     /// The member's ID, or 0 unless the status is `Exact` or `Corrected`.
     pub id: u32,
@@ -148,14 +150,18 @@ impl Decoder {
         self.rotations[(word >> 6) as usize] >> (word & 63) & 1 == 1
     }
 
+    /// The family the decoder was built for.
     pub fn family(&self) -> &Family {
         &self.family
     }
 
+    /// How many bit errors a reading may have and still be corrected (by
+    /// default floor((d-1)/2), the most the family's distance guarantees).
     pub fn radius(&self) -> u32 {
         self.radius
     }
 
+    /// Decodes one ring reading (any rotation) to a member, its status telling whether it was exact, corrected or refused.
     pub fn decode(&self, word: u32) -> Decoded {
         let bits = self.family.bits();
         let word = word & super::necklace::mask(bits);

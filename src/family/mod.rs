@@ -8,46 +8,92 @@ pub mod lookup;
 pub mod necklace;
 mod stats;
 
-pub use file::{FAMILY_FILE_FORMAT, FAMILY_FILE_VERSION};
+pub use file::{FamilyFileError, FAMILY_FILE_FORMAT, FAMILY_FILE_VERSION};
 pub use id_list::{parse_id_list, IdListError, MAX_LISTED_IDS};
 pub use lookup::{Decoded, Decoder, MatchStatus};
 pub use stats::FamilyStats;
 
 use necklace::{ball_size, for_each_mask_with_ones, is_periodic, mask, min_rotation, rotl};
 
-/// Smallest and largest supported code lengths.
+/// Shortest supported code length.
 pub const MIN_BITS: u32 = 2;
+/// Longest supported code length.
 pub const MAX_BITS: u32 = 24;
 
 /// The family `whycode ids` shows when asked for none in particular: 8 bits
 /// give 16 IDs at distance 2, which detects every single-bit misreading (the
 /// paper's recommendation together with the Bayesian ID filter).
 pub const DEFAULT_BITS: u32 = 8;
+/// Default minimum cyclic Hamming distance (see [`DEFAULT_BITS`]).
 pub const DEFAULT_DISTANCE: u32 = 2;
 
 #[derive(Debug, thiserror::Error, PartialEq, Eq)]
+/// Why a family could not be made: bad parameters or a code list that breaks the family's promises. The messages are the CLI's, one line each.
 pub enum FamilyError {
     #[error("bits must be between {MIN_BITS} and {MAX_BITS}, got {0}")]
+    /// The bit count is outside [`MIN_BITS`]..=[`MAX_BITS`].
     Bits(u32),
     #[error("distance must be between 1 and the bit count {bits}, got {distance}")]
-    Distance { bits: u32, distance: u32 },
+    /// The distance is 0 or larger than the bit count.
+    Distance {
+        /// The family's bit count.
+        bits: u32,
+        /// The distance asked for.
+        distance: u32,
+    },
     #[error("a family needs at least one code")]
+    /// The code list is empty.
     Empty,
     #[error("ID {id}: code {code} does not fit in {bits} bits")]
-    CodeRange { id: u32, code: u32, bits: u32 },
+    /// A code has bits set above the family's bit count.
+    CodeRange {
+        /// The code's ID.
+        id: u32,
+        /// The code.
+        code: u32,
+        /// The family's bit count.
+        bits: u32,
+    },
     #[error("ID {id}: code {code} is periodic (equal to one of its own rotations)")]
-    Periodic { id: u32, code: u32 },
+    /// A code equals one of its own rotations, so it cannot give a yaw.
+    Periodic {
+        /// The code's ID.
+        id: u32,
+        /// The code.
+        code: u32,
+    },
     #[error("ID {id}: code {code} is not stored as its smallest rotation {smallest}")]
-    NotSmallestRotation { id: u32, code: u32, smallest: u32 },
+    /// A code is not stored as its smallest rotation, as the spec requires.
+    NotSmallestRotation {
+        /// The code's ID.
+        id: u32,
+        /// The code as given.
+        code: u32,
+        /// Its smallest rotation.
+        smallest: u32,
+    },
     #[error("IDs {first} and {second} have the same code {code}")]
-    Duplicate { first: u32, second: u32, code: u32 },
+    /// Two IDs carry the same code.
+    Duplicate {
+        /// The first ID.
+        first: u32,
+        /// The second ID.
+        second: u32,
+        /// The code both carry.
+        code: u32,
+    },
     #[error(
         "IDs {first} and {second} are at cyclic distance {found}, below the family's distance {distance}"
     )]
+    /// Two codes are closer under rotation than the family's distance.
     TooClose {
+        /// The first ID.
         first: u32,
+        /// The second ID.
         second: u32,
+        /// Their smallest cyclic Hamming distance.
         found: u32,
+        /// The family's distance.
         distance: u32,
     },
 }
@@ -147,6 +193,7 @@ impl Family {
         })
     }
 
+    /// Code length n: the ring has 2n sectors (Manchester encoding).
     pub fn bits(&self) -> u32 {
         self.bits
     }
@@ -156,10 +203,12 @@ impl Family {
         self.distance
     }
 
+    /// Number of members (IDs 1..=len).
     pub fn len(&self) -> usize {
         self.codes.len()
     }
 
+    /// Whether the family has no members (for the `len` convention).
     pub fn is_empty(&self) -> bool {
         self.codes.is_empty()
     }

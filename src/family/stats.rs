@@ -7,6 +7,7 @@ use super::Family;
 /// Figures that describe a family's robustness.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FamilyStats {
+    /// Number of members.
     pub count: usize,
     /// Smallest cyclic Hamming distance between two different members
     /// (`None` for a family of one).

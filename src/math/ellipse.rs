@@ -18,9 +18,13 @@ use super::angle::normalize_axis_angle;
 /// v down).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Ellipse {
+    /// Centre column, pixels.
     pub u: f64,
+    /// Centre row, pixels.
     pub v: f64,
+    /// Semi-major axis, pixels.
     pub semi_major: f64,
+    /// Semi-minor axis, pixels.
     pub semi_minor: f64,
     /// Direction of the major axis, atan2(dv, du), in (-π/2, π/2].
     pub angle: f64,
@@ -178,6 +182,7 @@ impl Ellipse {
         Matrix3::new(m00, m01, l0, m01, m11, l1, l0, l1, k)
     }
 
+    /// Area, square pixels.
     pub fn area(&self) -> f64 {
         std::f64::consts::PI * self.semi_major * self.semi_minor
     }

@@ -11,15 +11,18 @@ pub type PointPair = ((f64, f64), (f64, f64));
 /// A projective map of the plane, page millimetres → image pixels.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Homography {
+    /// The 3×3 matrix acting on homogeneous points (x, y, 1).
     pub matrix: Matrix3<f64>,
 }
 
 impl Homography {
+    /// Maps a plane point to the image; `None` at the horizon.
     pub fn apply(&self, x: f64, y: f64) -> Option<(f64, f64)> {
         let p = self.matrix * Vector3::new(x, y, 1.0);
         (p.z.abs() > 1e-12).then(|| (p.x / p.z, p.y / p.z))
     }
 
+    /// The map back from image to plane; `None` when degenerate.
     pub fn inverse(&self) -> Option<Homography> {
         self.matrix
             .try_inverse()
@@ -113,7 +116,9 @@ fn normalise(points: impl Iterator<Item = (f64, f64)>) -> (Matrix3<f64>, Vec<(f6
 /// One plane ↔ image correspondence with its own inlier tolerance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Correspondence {
+    /// The point on the plane (page mm).
     pub plane: (f64, f64),
+    /// Where it was seen, image pixels.
     pub image: (f64, f64),
     /// Largest reprojection error (pixels) at which the pair agrees.
     pub tolerance: f64,
@@ -122,7 +127,9 @@ pub struct Correspondence {
 /// Result of a robust fit: the homography and which pairs agree with it.
 #[derive(Debug, Clone)]
 pub struct RobustFit {
+    /// The fitted map.
     pub homography: Homography,
+    /// For each correspondence, whether it agrees within its tolerance.
     pub inliers: Vec<bool>,
     /// Root-mean-square reprojection error of the inliers, pixels.
     pub rms_px: f64,

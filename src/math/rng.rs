@@ -24,6 +24,7 @@ impl Pcg32 {
         rng
     }
 
+    /// The next 32 random bits (PCG-XSH-RR output).
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
         self.state = old.wrapping_mul(MULTIPLIER).wrapping_add(self.increment);

@@ -9,8 +9,11 @@
 /// A row-major grey plane borrowed from an image buffer.
 #[derive(Debug, Clone, Copy)]
 pub struct Plane<'a, T> {
+    /// The samples, row after row, without padding.
     pub pixels: &'a [T],
+    /// Samples per row.
     pub width: usize,
+    /// Number of rows.
     pub height: usize,
 }
 
@@ -30,6 +33,8 @@ pub enum Border {
 
 /// A pixel type the sampler can blend, and the precision it blends in.
 pub trait Texel: Copy {
+    /// What a blend computes in: f64 for bytes, so blends never round in
+    /// between; f32 stays f32, as the simulator's image bytes depend on it.
     type Value: Copy;
     /// Interpolates between `a` (t = 0) and `b` (t = 1).
     fn blend(a: Self, b: Self, t: f64) -> Self::Value;
@@ -66,6 +71,8 @@ impl Texel for f32 {
 }
 
 impl<'a, T: Texel> Plane<'a, T> {
+    /// A view of `pixels` as `height` rows of `width`; the buffer must hold
+    /// that many samples (checked in debug builds).
     pub fn new(pixels: &'a [T], width: usize, height: usize) -> Plane<'a, T> {
         debug_assert!(pixels.len() >= width * height);
         Plane {

@@ -36,7 +36,9 @@ pub use full::{
 /// and unit plane normal pointing towards the camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CirclePose {
+    /// Circle centre in the camera frame, metres.
     pub center: Vector3<f64>,
+    /// Unit normal of the circle's plane, towards the camera.
     pub normal: Vector3<f64>,
 }
 

@@ -58,6 +58,7 @@ fn resolutions_for(markers: &[PrintedMarker], family: Option<&Family>) -> Vec<f6
 /// What the check did.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CheckReport {
+    /// Print resolutions the pages were rendered at, dpi.
     pub resolutions: Vec<f64>,
     /// Marker readings checked (markers x resolutions).
     pub readings: usize,

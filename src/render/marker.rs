@@ -24,6 +24,7 @@ pub const GUIDE_GREY: u8 = 150;
 pub const GUIDE_WIDTH_MM: f64 = 0.15;
 
 #[derive(Debug, Clone, PartialEq)]
+/// How a single marker is put on its own page.
 pub struct MarkerOptions {
     /// White margin around the black disc; None means the least allowed (0.3 R).
     pub margin_mm: Option<f64>,
@@ -33,6 +34,7 @@ pub struct MarkerOptions {
     pub cut_guide: bool,
     /// A label line under the marker.
     pub label: Option<String>,
+    /// Size of the label, points.
     pub label_size_pt: f64,
 }
 

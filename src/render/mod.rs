@@ -27,12 +27,16 @@ use std::path::{Path, PathBuf};
 /// Output file formats, chosen by file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Format {
+    /// SVG, for editing and the web.
     Svg,
+    /// PDF, for printing at exact size.
     Pdf,
+    /// PNG at print resolution.
     Png,
 }
 
 impl Format {
+    /// The format named by the file's extension, or an error naming the file.
     pub fn from_path(path: &Path) -> Result<Format> {
         let ext = path
             .extension()
@@ -100,6 +104,7 @@ pub fn encode_pages(
 }
 
 /// Fails early, before any rendering, when the output's folder is missing.
+#[cfg(feature = "files")]
 pub fn check_output_dir(path: &Path) -> Result<()> {
     crate::io::check_output_dir(path)
 }

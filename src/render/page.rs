@@ -12,8 +12,11 @@ pub type Grey = u8;
 /// How a text item is placed horizontally relative to its x.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Anchor {
+    /// The text starts at x.
     Start,
+    /// The text is centred on x.
     Middle,
+    /// The text ends at x.
     End,
 }
 
@@ -21,39 +24,68 @@ pub enum Anchor {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Item {
     /// A marker centred at (cx, cy), unrotated (its +x along the page's +x).
-    Marker { marker: Marker, cx: f64, cy: f64 },
+    Marker {
+        /// The marker to draw.
+        marker: Marker,
+        /// Centre, mm from the left edge.
+        cx: f64,
+        /// Centre, mm from the top edge.
+        cy: f64,
+    },
     /// A filled axis-aligned rectangle (top-left corner, size).
     Rect {
+        /// Left edge, mm.
         x: f64,
+        /// Top edge, mm.
         y: f64,
+        /// Width, mm.
         width: f64,
+        /// Height, mm.
         height: f64,
+        /// Fill grey.
         grey: Grey,
     },
     /// A straight stroked line, optionally dashed (dash, gap lengths).
     Line {
+        /// Start point, mm.
         from: (f64, f64),
+        /// End point, mm.
         to: (f64, f64),
+        /// Stroke width, mm.
         width: f64,
+        /// Stroke grey.
         grey: Grey,
+        /// Dash and gap lengths, mm; solid when `None`.
         dash: Option<[f64; 2]>,
     },
     /// A stroked circle, optionally dashed.
     CircleOutline {
+        /// Centre, mm from the left edge.
         cx: f64,
+        /// Centre, mm from the top edge.
         cy: f64,
+        /// Radius to the middle of the stroke, mm.
         radius: f64,
+        /// Stroke width, mm.
         width: f64,
+        /// Stroke grey.
         grey: Grey,
+        /// Dash and gap lengths, mm; solid when `None`.
         dash: Option<[f64; 2]>,
     },
     /// One line of text; y is the baseline, size the font size in points.
     Text {
+        /// Anchor point, mm from the left edge.
         x: f64,
+        /// Baseline, mm from the top edge.
         y: f64,
+        /// Font size, points.
         size_pt: f64,
+        /// Which end of the text sits at x.
         anchor: Anchor,
+        /// Text grey.
         grey: Grey,
+        /// The text, one line.
         text: String,
     },
 }
@@ -61,12 +93,16 @@ pub enum Item {
 /// A page of a given size with its items, painted in order on white.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Page {
+    /// Page width, mm.
     pub width_mm: f64,
+    /// Page height, mm.
     pub height_mm: f64,
+    /// What is on the page, painted in this order.
     pub items: Vec<Item>,
 }
 
 impl Page {
+    /// An empty page of the given size.
     pub fn new(width_mm: f64, height_mm: f64) -> Page {
         Page {
             width_mm,
@@ -75,6 +111,7 @@ impl Page {
         }
     }
 
+    /// Adds an item on top of the ones already there.
     pub fn push(&mut self, item: Item) {
         self.items.push(item);
     }
@@ -123,9 +160,13 @@ pub const MM_PER_PT: f64 = 25.4 / 72.0;
 /// A path segment in page millimetres (y down).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Segment {
+    /// Starts a new subpath at (x, y).
     MoveTo(f64, f64),
+    /// A straight line to (x, y).
     LineTo(f64, f64),
+    /// A cubic Bézier: two control points, then the end point.
     CubicTo(f64, f64, f64, f64, f64, f64),
+    /// Closes the subpath.
     Close,
 }
 

@@ -20,13 +20,21 @@ const BUILTIN: &[(&str, &str)] = &[
 pub struct Template {
     /// The built-in name, or the file path the template came from.
     pub name: String,
+    /// One line saying what the template is for.
     pub description: String,
+    /// Page width, mm.
     pub page_width_mm: f64,
+    /// Page height, mm.
     pub page_height_mm: f64,
+    /// White border kept free of markers, mm (printers cannot print to the edge).
     pub margin_mm: f64,
+    /// Space between neighbouring markers' cells, mm.
     pub gap_mm: f64,
+    /// Size of the marker labels, points.
     pub label_size_pt: f64,
+    /// Dashed circles to cut markers out along.
     pub cut_guides: bool,
+    /// Length of the printed scale bar, mm (0 for none): a ruler on the page tells a wrongly scaled print at a glance.
     pub scale_bar_mm: f64,
 }
 

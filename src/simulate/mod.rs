@@ -40,6 +40,7 @@ pub struct Placement {
 }
 
 impl Placement {
+    /// A placement at `position` (metres, camera frame) with `rotation` from the object's frame to the camera's.
     pub fn new(position: Vector3<f64>, rotation: Matrix3<f64>) -> Placement {
         Placement { position, rotation }
     }
@@ -85,7 +86,9 @@ pub struct Blot {
     /// marker frame (mm); for a page the manifest's page coordinates (mm
     /// from the top-left corner, y down, before any print scaling).
     pub x_mm: f64,
+    /// Centre y, mm (see `x_mm`).
     pub y_mm: f64,
+    /// Radius, mm.
     pub radius_mm: f64,
     /// Ink-black when true, paper-white otherwise.
     pub black: bool,
@@ -94,17 +97,21 @@ pub struct Blot {
 /// A marker on its own small card of paper.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LooseMarker {
+    /// The marker's shape and size.
     pub marker: Marker,
     /// Family ID reported in the ground truth (0 if none).
     pub id: u32,
+    /// Pose of the marker centre.
     pub placement: Placement,
     /// Half the side of the square white card around the marker, mm. The
     /// default leaves half a radius of white, more than the 0.3 R minimum.
     pub card_half_mm: f64,
+    /// Damage drawn over the card.
     pub blots: Vec<Blot>,
 }
 
 impl LooseMarker {
+    /// A marker on a card of the default size, undamaged.
     pub fn new(marker: Marker, id: u32, placement: Placement) -> LooseMarker {
         LooseMarker {
             card_half_mm: marker.outer_radius() * 1.5,
@@ -120,6 +127,7 @@ impl LooseMarker {
 /// page size with its markers.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SheetPage {
+    /// The sheet's record of its markers and page size.
     pub manifest: Manifest,
     /// Page number, from 1.
     pub page: u32,
@@ -128,6 +136,7 @@ pub struct SheetPage {
     pub print_scale: f64,
     /// Pose of the page centre.
     pub placement: Placement,
+    /// Damage drawn over the page.
     pub blots: Vec<Blot>,
     /// What else is printed on the page (labels, scale bar, caption), in
     /// page millimetres; see [`SheetPage::with_printed_text`].
@@ -135,6 +144,7 @@ pub struct SheetPage {
 }
 
 impl SheetPage {
+    /// Page `page` of the sheet, printed at scale 1, markers only.
     pub fn new(manifest: Manifest, page: u32, placement: Placement) -> SheetPage {
         SheetPage {
             manifest,
@@ -173,8 +183,11 @@ impl SheetPage {
 }
 
 #[derive(Debug, Clone, PartialEq)]
+/// One object in front of the camera.
 pub enum SceneObject {
+    /// A single marker on its own card.
     Marker(LooseMarker),
+    /// A page of a printed sheet.
     Page(SheetPage),
 }
 
@@ -186,8 +199,11 @@ pub enum Background {
     /// A darker table top with a faint low-frequency texture.
     Table,
     /// Random shapes, lines, rings and discs that are not markers, to test
-    /// for false detections. `density`: shapes per 100×100 pixels.
-    Clutter { density: f64 },
+    /// for false detections.
+    Clutter {
+        /// Shapes per 100×100 pixels.
+        density: f64,
+    },
 }
 
 /// Motion blur along a straight line.
@@ -200,9 +216,13 @@ pub struct MotionBlur {
 }
 
 #[derive(Debug, Clone, PartialEq)]
+/// A camera view to synthesise: what is in front of the camera, the light, and the ways a real camera spoils the picture; [`render`] turns it into an image with exact ground truth.
 pub struct Scene {
+    /// The camera: intrinsics, distortion and image size.
     pub camera: Camera,
+    /// The objects, drawn in order (later ones in front).
     pub objects: Vec<SceneObject>,
+    /// What shows where no object is.
     pub background: Background,
     /// Ratio of the brightest to the darkest illumination across the frame
     /// (1 = even light, 3 = "3:1").
@@ -211,15 +231,20 @@ pub struct Scene {
     pub gradient_angle: f64,
     /// Overall exposure: 1 puts white paper near grey 220; 0.2 is a dark frame.
     pub exposure: f64,
+    /// Reflectance of the paper, 0 black .. 1 white.
     pub paper_reflectance: f64,
+    /// Reflectance of the ink, 0 black .. 1 white.
     pub ink_reflectance: f64,
     /// Focus blur: Gaussian sigma, pixels.
     pub focus_blur_px: f64,
+    /// Motion blur, if the camera or the objects moved during exposure.
     pub motion_blur: Option<MotionBlur>,
     /// Sensor noise: Gaussian sigma in grey levels.
     pub noise: f64,
     /// JPEG round trip at this quality (1-100).
     pub jpeg_quality: Option<u8>,
+    /// Seed of the noise, texture and clutter: the same scene gives the same
+    /// bytes.
     pub seed: u64,
     /// Samples per pixel side on edges (n×n).
     pub supersampling: u32,

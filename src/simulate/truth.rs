@@ -8,11 +8,17 @@ use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// What a synthetic image really shows, to score a detector against.
 pub struct GroundTruth {
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// The camera the image was made with.
     pub camera: CameraTruth,
+    /// Every marker in the scene, visible or not.
     pub markers: Vec<TrueMarker>,
+    /// Every sheet page in the scene.
     pub pages: Vec<TruePage>,
 }
 
@@ -27,6 +33,7 @@ pub struct CameraTruth {
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// One marker's true identity, place and pose.
 pub struct TrueMarker {
     /// Family ID (0 for none / legacy).
     pub id: u32,
@@ -38,6 +45,7 @@ pub struct TrueMarker {
     pub page: Option<u32>,
     /// Projected true centre, pixels (origin at the top-left pixel centre).
     pub u: f64,
+    /// Row of the projected true centre, pixels.
     pub v: f64,
     /// Image direction of the marker's +x axis, atan2(dv, du), radians.
     pub yaw: f64,
@@ -66,14 +74,18 @@ pub struct TrueMarker {
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// Where a sheet page lies in the image, to check page location against.
 pub struct TruePage {
+    /// Page number, from 1.
     pub page: u32,
+    /// Scale the printer applied to the page's content.
     pub print_scale: f64,
     /// Paper corners in pixels: top-left, top-right, bottom-right, bottom-left.
     pub corners: [[f64; 2]; 4],
 }
 
 impl GroundTruth {
+    /// The truth as pretty-printed JSON, as `whycode simulate` writes it.
     pub fn to_json(&self) -> String {
         let mut s = serde_json::to_string_pretty(self).expect("ground truth serialises");
         s.push('\n');

@@ -4,13 +4,13 @@
 use super::{MarkerStatus, PhotoReport};
 use image::{GrayImage, Rgb, RgbImage};
 
-pub const GREEN: Rgb<u8> = Rgb([0, 200, 0]);
-pub const RED: Rgb<u8> = Rgb([230, 0, 0]);
-pub const ORANGE: Rgb<u8> = Rgb([255, 150, 0]);
-pub const MAGENTA: Rgb<u8> = Rgb([230, 0, 230]);
-pub const CYAN: Rgb<u8> = Rgb([0, 190, 230]);
+pub(crate) const GREEN: Rgb<u8> = Rgb([0, 200, 0]);
+pub(crate) const RED: Rgb<u8> = Rgb([230, 0, 0]);
+pub(crate) const ORANGE: Rgb<u8> = Rgb([255, 150, 0]);
+pub(crate) const MAGENTA: Rgb<u8> = Rgb([230, 0, 230]);
+pub(crate) const CYAN: Rgb<u8> = Rgb([0, 190, 230]);
 
-pub fn status_colour(status: MarkerStatus) -> Rgb<u8> {
+pub(crate) fn status_colour(status: MarkerStatus) -> Rgb<u8> {
     match status {
         MarkerStatus::Found => GREEN,
         MarkerStatus::Misread => RED,

@@ -17,9 +17,13 @@ use serde::Serialize;
 pub struct Observation {
     /// Decoded ID, 0 when the ring did not read as a family member.
     pub id: u32,
+    /// Centre column, pixels.
     pub u: f64,
+    /// Centre row, pixels.
     pub v: f64,
+    /// Semi-major axis of the outline, pixels.
     pub semi_major: f64,
+    /// Semi-minor axis of the outline, pixels.
     pub semi_minor: f64,
     /// Direction of the major axis, atan2(dv, du).
     pub angle: f64,
@@ -56,6 +60,7 @@ impl From<&crate::detect::Detection> for Observation {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
+/// What became of one printed marker in a photo.
 pub enum MarkerStatus {
     /// Detected where it was printed, reading as its own ID.
     Found,
@@ -80,6 +85,7 @@ impl MarkerStatus {
         }
     }
 
+    /// The status in words, as reports print it.
     pub fn label(self) -> &'static str {
         match self {
             MarkerStatus::Found => "found",
@@ -94,14 +100,18 @@ impl MarkerStatus {
 /// One printed marker as seen in one photo.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MarkerCheck {
+    /// The printed ID.
     pub id: u32,
+    /// The page it is printed on.
     pub page: u32,
+    /// What became of it.
     pub status: MarkerStatus,
     /// The ID it read as, when misread.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub read_as: Option<u32>,
     /// Where it is (detected) or should be (predicted), image pixels.
     pub u: f64,
+    /// Row, pixels (see `u`).
     pub v: f64,
     /// Distance between the detection and the predicted centre, pixels.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -118,6 +128,7 @@ pub struct MarkerCheck {
 /// A page located in a photo.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PageCheck {
+    /// Page number, from 1.
     pub page: u32,
     /// Detections whose ID is printed on this page.
     pub id_matches: usize,
@@ -125,6 +136,7 @@ pub struct PageCheck {
     pub inliers: usize,
     /// Reprojection error of the inliers, pixels.
     pub rms_px: f64,
+    /// The scale the page was printed at, from its paper edges and markers.
     pub scale: ScaleMeasurement,
     /// Markers whose disc is a different size from their neighbours'
     /// (detected/predicted size more than 8 % off the page's median): a
@@ -132,11 +144,14 @@ pub struct PageCheck {
     /// says, which the scale of the page would not show.
     pub odd_sizes: Vec<OddSize>,
     #[serde(skip)]
+    /// The page → image map the markers were predicted with.
     pub homography: Option<Homography>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+/// A marker whose printed size differs from its neighbours'.
 pub struct OddSize {
+    /// The marker's ID.
     pub id: u32,
     /// Its size relative to the page's median marker, 1 = as expected.
     pub relative_size: f64,
@@ -167,20 +182,32 @@ fn odd_sizes(checks: &[MarkerCheck]) -> Vec<OddSize> {
 /// A detection on a located page where no marker was printed.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StrayDetection {
+    /// The ID it read as.
     pub id: u32,
+    /// The page it lies on.
     pub page: u32,
+    /// Centre column, pixels.
     pub u: f64,
+    /// Centre row, pixels.
     pub v: f64,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
+/// The check of one photo against the manifest.
 pub struct PhotoReport {
+    /// The photo's name (usually its path).
     pub photo: String,
+    /// Image width, pixels.
     pub width: u32,
+    /// Image height, pixels.
     pub height: u32,
+    /// Number of markers the detector found.
     pub detections: usize,
+    /// The pages located in the photo.
     pub pages: Vec<PageCheck>,
+    /// Every printed marker of the located pages.
     pub markers: Vec<MarkerCheck>,
+    /// Detections on located pages where nothing was printed.
     pub stray: Vec<StrayDetection>,
 }
 

@@ -10,10 +10,14 @@ use std::fmt::Write as _;
 /// A printed marker's verdict over all photos.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct MarkerVerdict {
+    /// The printed ID.
     pub id: u32,
+    /// The page it is printed on.
     pub page: u32,
+    /// The best status any photo gave it.
     pub status: MarkerStatus,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// The ID it read as, when misread.
     pub read_as: Option<u32>,
     /// The photo that gave the verdict.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -23,31 +27,46 @@ pub struct MarkerVerdict {
 /// A page's verdict over all photos.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PageVerdict {
+    /// Page number, from 1.
     pub page: u32,
     /// Photos in which the page was located.
     pub photos: Vec<String>,
+    /// Printed size / intended size, when some photo measured it.
     pub scale: Option<f64>,
+    /// Whether that scale is within tolerance.
     pub scale_status: ScaleStatus,
     #[serde(skip_serializing_if = "Option::is_none")]
+    /// Why the scale is unknown, or a remark on it.
     pub note: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+/// How many printed markers ended in each status.
 pub struct Counts {
+    /// Markers on the sheet.
     pub printed: usize,
+    /// Found and read as their own ID.
     pub found: usize,
+    /// Read as another ID.
     pub misread: usize,
+    /// Found, but the ring did not read.
     pub unidentified: usize,
+    /// Never found (including not in view of any photo).
     pub missing: usize,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
+/// The verdict on a printed sheet over all its photos: what `whycode validate` prints and writes.
 pub struct Report {
     /// Every marker found and right, and no page printed at a wrong scale.
     pub ok: bool,
+    /// Markers per status.
     pub counts: Counts,
+    /// Each page's verdict.
     pub pages: Vec<PageVerdict>,
+    /// Each printed marker's verdict.
     pub markers: Vec<MarkerVerdict>,
+    /// The per-photo checks the verdicts come from.
     pub photos: Vec<PhotoReport>,
 }
 
@@ -179,6 +198,7 @@ pub fn summarise(manifest: &Manifest, photos: Vec<PhotoReport>) -> Report {
 }
 
 impl Report {
+    /// The report as the JSON `whycode validate` writes.
     pub fn to_json(&self) -> String {
         let mut s = serde_json::to_string_pretty(self).expect("report serialises");
         s.push('\n');

@@ -20,7 +20,7 @@ pub const SCALE_ERROR: f64 = 0.03;
 
 /// Maps between image pixels and ideal (distortion-free) pixels.
 #[derive(Debug, Clone, Copy)]
-pub struct PixelModel {
+pub(crate) struct PixelModel {
     camera: Option<Camera>,
 }
 
@@ -31,7 +31,7 @@ impl PixelModel {
         }
     }
 
-    pub fn to_ideal(&self, u: f64, v: f64) -> (f64, f64) {
+    pub fn to_ideal(self, u: f64, v: f64) -> (f64, f64) {
         match &self.camera {
             Some(c) => {
                 let (x, y) = c.undistort(u, v);
@@ -41,7 +41,7 @@ impl PixelModel {
         }
     }
 
-    pub fn to_image(&self, x: f64, y: f64) -> (f64, f64) {
+    pub fn to_image(self, x: f64, y: f64) -> (f64, f64) {
         match &self.camera {
             Some(c) => c.distort_normalized((x - c.cx) / c.fx, (y - c.cy) / c.fy),
             None => (x, y),
@@ -51,14 +51,20 @@ impl PixelModel {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
+/// How far a measured print scale is from 1.
 pub enum ScaleStatus {
+    /// Within [`SCALE_WARNING`] of 1.
     Ok,
+    /// Off by more than [`SCALE_WARNING`]: worth a look.
     Warning,
+    /// Off by more than [`SCALE_ERROR`]: the page was printed at the wrong size.
     Error,
+    /// Could not be measured.
     Unknown,
 }
 
 impl ScaleStatus {
+    /// The status of a measured scale.
     pub fn of(scale: f64) -> ScaleStatus {
         let deviation = (scale - 1.0).abs();
         if deviation > SCALE_ERROR {
@@ -72,6 +78,7 @@ impl ScaleStatus {
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
+/// One page's print scale as measured in a photo.
 pub struct ScaleMeasurement {
     /// Printed size / intended size (0.97 = "printed at 97 %").
     pub scale: Option<f64>,
@@ -79,6 +86,7 @@ pub struct ScaleMeasurement {
     pub scale_x: Option<f64>,
     /// ... and down the page (from its top and bottom edges).
     pub scale_y: Option<f64>,
+    /// Whether the scale is within tolerance.
     pub status: ScaleStatus,
     /// Paper edges found: "top", "right", "bottom", "left".
     pub edges: Vec<&'static str>,
@@ -93,6 +101,7 @@ pub struct ScaleMeasurement {
 }
 
 impl ScaleMeasurement {
+    /// A measurement that found no scale, saying why.
     pub fn unknown(note: impl Into<String>) -> ScaleMeasurement {
         ScaleMeasurement {
             scale: None,
@@ -127,7 +136,7 @@ impl EdgeLine {
 /// Measures the printed scale of one page. `markers` are the page's
 /// markers as (x, y, radius) in manifest millimetres; the search keeps
 /// clear of them so that a disc's edge is not taken for the paper's.
-pub fn measure(
+pub(crate) fn measure(
     image: &GrayImage,
     model: &PixelModel,
     homography: &Homography,
@@ -233,7 +242,7 @@ impl ScaleMeasurement {
 
 /// A printed disc as the photo shows it, for [`measure_discs`].
 #[derive(Debug, Clone, Copy)]
-pub struct DiscView {
+pub(crate) struct DiscView {
     /// The disc's outline in the photo (image pixels).
     pub outline: Ellipse,
     /// The radius it was meant to have, mm.
@@ -245,7 +254,7 @@ pub struct DiscView {
 /// [`measure`], map the photo onto the paper exactly (it is the paper's own
 /// outline), and each disc's outline mapped there is a circle whose radius
 /// is the printed one.
-pub fn measure_discs(
+pub(crate) fn measure_discs(
     paper: &ScaleMeasurement,
     model: &PixelModel,
     page_size_mm: [f64; 2],

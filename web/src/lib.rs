@@ -493,7 +493,7 @@ impl Validation {
     /// `name` is the manifest's file name, used in error messages.
     #[wasm_bindgen(constructor)]
     pub fn new(name: &str, text: &str) -> Result<Validation, JsError> {
-        let manifest = Manifest::from_json(name, text).map_err(js_error)?;
+        let manifest = Manifest::from_json(name, text).map_err(|e| js_error(e.into()))?;
         let detector = validate::detector_for(&manifest)
             .with_context(|| name.to_string())
             .map_err(js_error)?;

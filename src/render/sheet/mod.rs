@@ -19,6 +19,7 @@ use packing::{best_packing, layout_area, Cell};
 /// One marker to place on a sheet.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SheetMarker {
+    /// The marker's shape and size.
     pub marker: Marker,
     /// Family ID (0 for a legacy WhyCon circle).
     pub id: u32,
@@ -26,24 +27,31 @@ pub struct SheetMarker {
     pub code: u32,
     /// Label lines: the one-line form and a two-line fallback for narrow cells.
     pub label: String,
+    /// The label in two lines, for cells too narrow for `label`.
     pub label_lines: [String; 2],
 }
 
 /// What to print and how.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SheetSpec {
+    /// The markers, in print order.
     pub markers: Vec<SheetMarker>,
+    /// Page size, margins and decorations.
     pub template: Template,
     /// Name printed in each page's footer (usually the output file's stem).
     pub name: String,
+    /// The family, recorded in the manifest so the IDs can be checked later.
     pub family: Option<FamilyRef>,
+    /// True for legacy WhyCon circles.
     pub legacy: bool,
 }
 
 /// A laid-out sheet: its pages and the record of what is where.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sheet {
+    /// The pages, ready to encode.
     pub pages: Vec<Page>,
+    /// What was printed where.
     pub manifest: Manifest,
 }
 
