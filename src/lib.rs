@@ -49,7 +49,7 @@
 
 pub mod camera;
 pub mod detect;
-mod error;
+pub mod error;
 pub mod family;
 pub mod geometry;
 pub mod image_io;

@@ -77,23 +77,7 @@ impl From<Error> for PyErr {
 
 pub(crate) type Result<T> = std::result::Result<T, Error>;
 
-/// The error's causes joined with ": " on one line, as the CLI prints them;
-/// a cause its parent already quotes is left out.
-fn one_line(err: &anyhow::Error) -> String {
-    let mut parts: Vec<String> = Vec::new();
-    for cause in err.chain() {
-        let text = cause
-            .to_string()
-            .split_whitespace()
-            .collect::<Vec<_>>()
-            .join(" ");
-        if text.is_empty() || parts.last().is_some_and(|p| p.contains(&text)) {
-            continue;
-        }
-        parts.push(text);
-    }
-    parts.join(": ")
-}
+use whycode::error::one_line;
 
 /// Runs `f`, turning a panic into an error: a Python caller must never lose
 /// its interpreter to a bug here.

@@ -72,7 +72,7 @@ impl Camera {
     pub fn parse(text: &str) -> std::result::Result<Camera, CameraError> {
         parse_calibration(text).map_err(|err| CameraError::Invalid {
             path: None,
-            problem: crate::error::chain_on_one_line(&err),
+            problem: crate::error::one_line(&err),
         })
     }
 

@@ -143,23 +143,7 @@ impl Cli {
     }
 }
 
-/// The error's context chain joined with ": " on one line. Causes whose text
-/// their parent already quotes (image decoding errors do) are left out.
-pub fn one_line(err: &anyhow::Error) -> String {
-    let mut parts: Vec<String> = Vec::new();
-    for cause in err.chain() {
-        let text = cause
-            .to_string()
-            .split_whitespace()
-            .collect::<Vec<_>>()
-            .join(" ");
-        if text.is_empty() || parts.last().is_some_and(|p| p.contains(&text)) {
-            continue;
-        }
-        parts.push(text);
-    }
-    parts.join(": ")
-}
+pub use whycode::error::one_line;
 
 #[cfg(test)]
 mod tests {

@@ -125,7 +125,7 @@ impl Family {
     pub fn from_json(text: &str) -> std::result::Result<Family, FamilyFileError> {
         parse_family(text).map_err(|err| FamilyFileError::Invalid {
             path: None,
-            problem: crate::error::chain_on_one_line(&err),
+            problem: crate::error::one_line(&err),
         })
     }
 }

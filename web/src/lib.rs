@@ -37,22 +37,7 @@ fn js_error(err: anyhow::Error) -> JsError {
     JsError::new(&one_line(&err))
 }
 
-/// The error chain on one line, as the CLI prints it.
-fn one_line(err: &anyhow::Error) -> String {
-    let mut parts: Vec<String> = Vec::new();
-    for cause in err.chain() {
-        let text = cause
-            .to_string()
-            .split_whitespace()
-            .collect::<Vec<_>>()
-            .join(" ");
-        if text.is_empty() || parts.last().is_some_and(|p| p.contains(&text)) {
-            continue;
-        }
-        parts.push(text);
-    }
-    parts.join(": ")
-}
+use whycode::error::one_line;
 
 /// The library version, shown in the page footer.
 #[wasm_bindgen]
