@@ -482,18 +482,7 @@ fn number(value: &Value) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn distorted() -> Camera {
-        Camera {
-            fx: 610.0,
-            fy: 612.0,
-            cx: 318.4,
-            cy: 243.1,
-            distortion: [-0.28, 0.09, 0.0012, -0.0008, -0.012],
-            width: 640,
-            height: 480,
-        }
-    }
+    use crate::camera::tests::distorted;
 
     const ROS_YAML: &str = "\
 image_width: 640

@@ -203,10 +203,11 @@ impl Camera {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn distorted() -> Camera {
+    /// A typical calibrated webcam, shared with the calibration-file tests.
+    pub(crate) fn distorted() -> Camera {
         Camera {
             fx: 610.0,
             fy: 612.0,
