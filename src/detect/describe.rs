@@ -140,6 +140,12 @@ impl Detector {
             };
             if let Some(reader) = reader {
                 let reading = reader.read(image, &outer, c.black, c.white);
+                // A ring the structure test could not look at (cut by the
+                // image border, say) that reads as no code at all is no
+                // evidence of a marker either.
+                if evidence == RingEvidence::TooSmall && reading.decoded.is_none() {
+                    d.unreadable = !settled;
+                }
                 d.id = reading.id;
                 d.code = reading
                     .decoded
@@ -295,6 +301,10 @@ impl Detector {
     }
 }
 
+/// Least sector width (pixels, see [`manchester::sector_pixels`]) at which
+/// a ring read without a family is believed.
+const AUTO_MIN_SECTOR_PX: f64 = 2.0;
+
 /// What the candidate's ring shows: the family's bit count is tried first
 /// (the common case), then every other count, so that a ring of another
 /// family is told apart from no ring at all.
@@ -318,6 +328,14 @@ fn ring_evidence<C: Deref<Target = [u8]>>(
                 std::iter::once(bits).chain(others),
             )
         }
-        None => manchester::examine(image, outer, c.black, c.white, manchester::BITS),
+        // Without a family nothing but the structure test vouches for the
+        // ring, and on a ring of a few pixels the lobes of a letter or of
+        // an off-centre hole pass for a short code: only counts whose
+        // sectors are wide enough to show their own edges are tried.
+        None => {
+            let counts = manchester::BITS
+                .filter(|&n| manchester::sector_pixels(outer, n) >= AUTO_MIN_SECTOR_PX);
+            manchester::examine(image, outer, c.black, c.white, counts)
+        }
     }
 }

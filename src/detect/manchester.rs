@@ -89,8 +89,14 @@ pub struct RingStructure {
 /// True when the ring inside `outer` is large enough to show the sector
 /// structure of `bits` bits.
 pub fn testable(outer: &ImageEllipse, bits: u32) -> bool {
+    sector_pixels(outer, bits) >= MIN_TESTABLE_PIXELS
+}
+
+/// Width in pixels of one half-bit sector of a `bits`-bit ring inside
+/// `outer`, at the middle of the ring along the minor axis.
+pub fn sector_pixels(outer: &ImageEllipse, bits: u32) -> f64 {
     let mid_ratio = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
-    outer.semi_minor * mid_ratio * PI / f64::from(bits) >= MIN_TESTABLE_PIXELS
+    outer.semi_minor * mid_ratio * PI / f64::from(bits)
 }
 
 /// Tests the ring inside `outer` for Manchester structure with each bit
