@@ -14,14 +14,15 @@ use crate::math::Ellipse;
 /// Rays cast from the centre.
 const RAYS: usize = 32;
 
-/// Largest deviation of the median inner edge radius from 0.41 R, in R,
-/// plus this many pixels (blur moves a small disc's edge inwards).
-const RATIO_TOLERANCE: f64 = 0.06;
-const RATIO_TOLERANCE_PX: f64 = 0.5;
+/// Largest median distance (pixels, plus a share of the radius) between
+/// the inner edge found and WhyCon's white disc.
+const DISC_OFFSET_PX: f64 = 0.25;
+const DISC_OFFSET_RELATIVE: f64 = 0.01;
 
-/// Largest spread of the inner edge radius between rays (in R, plus a
-/// pixel's worth): an off-centre hole varies by twice its offset.
-const SPREAD_TOLERANCE: f64 = 0.04;
+/// Largest spread of that distance between rays (trimmed, pixels plus a
+/// share of the radius).
+const DISC_SPREAD_PX: f64 = 0.55;
+const DISC_SPREAD_RELATIVE: f64 = 0.02;
 
 /// True when the disc stands on white: WhyCon markers are printed with at
 /// least 0.3 R of white margin (spec section 1), while a letter 'o' or a
@@ -45,64 +46,97 @@ pub fn white_margin(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> 
 
 /// True when the white inside the candidate is a disc of WhyCon's size
 /// centred on the black one.
+///
+/// Each ray's inner edge is where its profile crosses halfway between its
+/// own lightest point inside the white disc and its darkest point on the
+/// black annulus, so that a small disc, whose middle blur keeps from full
+/// white, is not measured smaller than it is. Errors are judged in pixels
+/// along the ray: a stroke-font '0' or an oval washer keeps its relative
+/// hole size along the minor axis but not along the major one, which a
+/// tolerance in radii would forgive on a small outline.
 pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> bool {
     let mid = 0.5 * (black + white);
     let radius_px = outer.semi_minor.max(1.0);
     let step = (0.25 / radius_px).min(0.02);
-    let mut radii = Vec::with_capacity(RAYS);
+    let mut edges = Vec::with_capacity(RAYS);
+    let mut profile = Vec::new();
     for k in 0..RAYS {
         let t = std::f64::consts::TAU * k as f64 / RAYS as f64;
-        let at = |rho: f64| {
-            let (x, y) = outer.scaled(rho).point_at(t);
-            ellipse::sample(gray, x, y)
-        };
-        // From inside the white disc outwards to the first dark sample.
-        let mut rho = 0.15;
-        let Some(mut previous) = at(rho) else {
-            return false;
-        };
-        let mut crossing = None;
-        while rho < 0.85 {
-            let next_rho = rho + step;
-            let Some(next) = at(next_rho) else {
+        let (ex, ey) = outer.point_at(t);
+        let length = (ex - outer.u).hypot(ey - outer.v);
+        profile.clear();
+        let mut rho: f64 = 0.0;
+        while rho <= 1.0 {
+            let (x, y) = outer.scaled(rho.max(1e-6)).point_at(t);
+            let Some(value) = ellipse::sample(gray, x, y) else {
                 return false;
             };
-            if previous >= mid && next < mid {
-                crossing = Some(rho + step * (previous - mid) / (previous - next));
-                break;
-            }
-            previous = next;
-            rho = next_rho;
+            profile.push((rho, value));
+            rho += step;
         }
+        let light = profile
+            .iter()
+            .filter(|p| p.0 <= 0.5)
+            .map(|p| p.1)
+            .fold(f64::MIN, f64::max);
+        let dark = profile
+            .iter()
+            .filter(|p| p.0 >= WHYCON_WHITE_RATIO)
+            .map(|p| p.1)
+            .fold(f64::MAX, f64::min);
+        // A ray with no light middle of its own has no inner edge.
+        if light < mid || dark >= mid {
+            continue;
+        }
+        let level = 0.5 * (light + dark);
+        let start = profile
+            .iter()
+            .position(|p| p.0 <= 0.5 && p.1 == light)
+            .unwrap_or(0);
+        let crossing = profile[start..].windows(2).find_map(|w| {
+            let ((r0, v0), (r1, v1)) = (w[0], w[1]);
+            (v0 >= level && v1 < level).then(|| r0 + (r1 - r0) * (v0 - level) / (v0 - v1))
+        });
         if let Some(r) = crossing {
-            radii.push(r);
+            edges.push((r, length));
         }
     }
-    if radii.len() * 8 < RAYS * 7 {
+    if edges.len() * 8 < RAYS * 7 {
         return false;
     }
-    let pixel = 1.0 / radius_px;
-    let ratio_ok = |median: f64, expected: f64| {
-        (median - expected).abs() <= RATIO_TOLERANCE + RATIO_TOLERANCE_PX * pixel
-    };
     // A WhyCode marker is a WhyCon one too (paper section 5): its first
     // edge is the centre disc's (0.343 R) on rays through black sectors and
     // the ring's outside (0.6 R) on the others.
     let split = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
-    let (inner, outer_edges): (Vec<f64>, Vec<f64>) =
-        radii.iter().copied().partition(|&r| r < split);
+    let (inner, outer_edges): (Vec<(f64, f64)>, Vec<(f64, f64)>) =
+        edges.iter().partition(|e| e.0 < split);
     let whycode = inner.len() * 4 >= RAYS
         && outer_edges.len() * 4 >= RAYS
-        && tight(inner, pixel).is_some_and(|m| ratio_ok(m, RING_INNER_RATIO))
-        && tight(outer_edges, pixel).is_some_and(|m| ratio_ok(m, WHYCODE_WHITE_RATIO));
-    whycode || tight(radii, pixel).is_some_and(|m| ratio_ok(m, WHYCON_WHITE_RATIO))
+        && on_circle(&inner, RING_INNER_RATIO, outer)
+        && on_circle(&outer_edges, WHYCODE_WHITE_RATIO, outer);
+    whycode || on_circle(&edges, WHYCON_WHITE_RATIO, outer)
 }
 
-/// The median of edge radii that agree (trimmed spread within tolerance).
-fn tight(mut radii: Vec<f64>, pixel: f64) -> Option<f64> {
-    radii.sort_by(f64::total_cmp);
-    // Middle 80 %: one glint or scratch may move a few rays.
-    let trim = radii.len() / 10;
-    let spread = radii[radii.len() - 1 - trim] - radii[trim];
-    (spread <= 2.0 * SPREAD_TOLERANCE + 2.0 * pixel).then(|| radii[radii.len() / 2])
+/// True when the inner edges found along the rays, as (radius relative to
+/// the outline, the outline's distance in pixels), lie on the circle of
+/// relative radius `ratio` within a pixel tolerance that grows slowly with
+/// the marker.
+fn on_circle(edges: &[(f64, f64)], ratio: f64, outer: &Ellipse) -> bool {
+    let size = (outer.semi_major * outer.semi_minor).sqrt();
+    let mut errors: Vec<f64> = edges
+        .iter()
+        .map(|&(rho, length)| (rho - ratio) * length)
+        .collect();
+    errors.sort_by(f64::total_cmp);
+    let trim = errors.len() / 10;
+    let median = errors[errors.len() / 2];
+    let spread = errors[errors.len() - 1 - trim] - errors[trim];
+    if std::env::var("ZZ").is_ok() {
+        eprintln!(
+            "ZZ {ratio:.2} legacy at {:.0},{:.0} size {:.1} median {:.2} spread {:.2}",
+            outer.u, outer.v, size, median, spread
+        );
+    }
+    median.abs() <= DISC_OFFSET_PX + DISC_OFFSET_RELATIVE * size
+        && spread <= DISC_SPREAD_PX + DISC_SPREAD_RELATIVE * size
 }
