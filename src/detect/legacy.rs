@@ -11,6 +11,10 @@ use super::segment::Gray;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
 use crate::math::Ellipse;
 
+/// An inner edge found along a ray: its radius relative to the outline,
+/// the outline's distance from the centre in pixels, the ray's parameter.
+type Edge = (f64, f64, f64);
+
 /// Rays cast from the centre.
 const RAYS: usize = 32;
 
@@ -23,6 +27,14 @@ const DISC_OFFSET_RELATIVE: f64 = 0.01;
 /// share of the radius).
 const DISC_SPREAD_PX: f64 = 0.55;
 const DISC_SPREAD_RELATIVE: f64 = 0.02;
+
+/// Largest excess (pixels, amplitude of the second harmonic along the
+/// outline's axes) of the inner edge's distance along the major axis over
+/// that along the minor one. A view of two concentric circles shows two
+/// similar ellipses, and blur only rounds the smaller; a glyph drawn with a
+/// pen of constant width ('o', '0') has a hole more elongated than its
+/// outline.
+const MAX_OVAL_PX: f64 = 0.09;
 
 /// True when the disc stands on white: WhyCon markers are printed with at
 /// least 0.3 R of white margin (spec section 1), while a letter 'o' or a
@@ -98,7 +110,7 @@ pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white:
             (v0 >= level && v1 < level).then(|| r0 + (r1 - r0) * (v0 - level) / (v0 - v1))
         });
         if let Some(r) = crossing {
-            edges.push((r, length));
+            edges.push((r, length, t));
         }
     }
     if edges.len() * 8 < RAYS * 7 {
@@ -108,8 +120,7 @@ pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white:
     // edge is the centre disc's (0.343 R) on rays through black sectors and
     // the ring's outside (0.6 R) on the others.
     let split = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
-    let (inner, outer_edges): (Vec<(f64, f64)>, Vec<(f64, f64)>) =
-        edges.iter().partition(|e| e.0 < split);
+    let (inner, outer_edges): (Vec<Edge>, Vec<Edge>) = edges.iter().partition(|e| e.0 < split);
     let whycode = inner.len() * 4 >= RAYS
         && outer_edges.len() * 4 >= RAYS
         && on_circle(&inner, RING_INNER_RATIO, outer)
@@ -121,22 +132,23 @@ pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white:
 /// the outline, the outline's distance in pixels), lie on the circle of
 /// relative radius `ratio` within a pixel tolerance that grows slowly with
 /// the marker.
-fn on_circle(edges: &[(f64, f64)], ratio: f64, outer: &Ellipse) -> bool {
+fn on_circle(edges: &[Edge], ratio: f64, outer: &Ellipse) -> bool {
     let size = (outer.semi_major * outer.semi_minor).sqrt();
     let mut errors: Vec<f64> = edges
         .iter()
-        .map(|&(rho, length)| (rho - ratio) * length)
+        .map(|&(rho, length, _)| (rho - ratio) * length)
         .collect();
+    let oval = 2.0 / edges.len() as f64
+        * edges
+            .iter()
+            .zip(&errors)
+            .map(|(e, error)| error * (2.0 * e.2).cos())
+            .sum::<f64>();
     errors.sort_by(f64::total_cmp);
     let trim = errors.len() / 10;
     let median = errors[errors.len() / 2];
     let spread = errors[errors.len() - 1 - trim] - errors[trim];
-    if std::env::var("ZZ").is_ok() {
-        eprintln!(
-            "ZZ {ratio:.2} legacy at {:.0},{:.0} size {:.1} median {:.2} spread {:.2}",
-            outer.u, outer.v, size, median, spread
-        );
-    }
     median.abs() <= DISC_OFFSET_PX + DISC_OFFSET_RELATIVE * size
         && spread <= DISC_SPREAD_PX + DISC_SPREAD_RELATIVE * size
+        && oval <= MAX_OVAL_PX
 }
