@@ -18,10 +18,15 @@ type Edge = (f64, f64, f64);
 /// Rays cast from the centre.
 const RAYS: usize = 32;
 
-/// Largest median distance (pixels, plus a share of the radius) between
-/// the inner edge found and WhyCon's white disc.
-const DISC_OFFSET_PX: f64 = 0.25;
+/// Largest median distance (pixels, plus a share of the radius) by which
+/// the inner edge found may lie outside WhyCon's white disc.
+const DISC_OFFSET_PX: f64 = 0.12;
 const DISC_OFFSET_RELATIVE: f64 = 0.01;
+
+/// Largest median distance inside it: blur shrinks a small white disc's
+/// image (pixels, plus this many square pixels over the radius).
+const DISC_SHRINK_PX: f64 = 0.1;
+const DISC_SHRINK_PX2: f64 = 0.45;
 
 /// Largest spread of that distance between rays (trimmed, pixels plus a
 /// share of the radius).
@@ -36,6 +41,10 @@ const DISC_SPREAD_RELATIVE: f64 = 0.02;
 /// outline.
 const MAX_OVAL_PX: f64 = 0.09;
 
+/// How much darker than the white disc (share of the disc's contrast) the
+/// margin around the black disc may be.
+const MARGIN_SHADE: f64 = 0.25;
+
 /// True when the disc stands on white: WhyCon markers are printed with at
 /// least 0.3 R of white margin (spec section 1), while a letter 'o' or a
 /// ring drawn on a busy surface touches other ink. Rays that leave the
@@ -44,16 +53,24 @@ pub fn white_margin(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> 
     let mid = 0.5 * (black + white);
     // Just outside the edge's blur, and inside the 0.3 R margin.
     let rho = 1.0 + (0.15f64).max(1.5 / outer.semi_minor.max(1.0)).min(0.28);
-    let (mut seen, mut light) = (0, 0);
+    let mut values = Vec::with_capacity(RAYS);
     for k in 0..RAYS {
         let t = std::f64::consts::TAU * k as f64 / RAYS as f64;
         let (x, y) = outer.scaled(rho).point_at(t);
         if let Some(value) = ellipse::sample(gray, x, y) {
-            seen += 1;
-            light += usize::from(value >= mid);
+            values.push(value);
         }
     }
-    seen == 0 || light * 8 >= seen * 7
+    if values.is_empty() {
+        return true;
+    }
+    let light = values.iter().filter(|&&v| v >= mid).count();
+    values.sort_by(f64::total_cmp);
+    // The margin is the paper the white disc is printed on: a ring whose
+    // light middle is lighter than what surrounds it is a washer or a
+    // drawn circle on a darker surface.
+    let paper = values[values.len() / 2];
+    light * 8 >= values.len() * 7 && paper >= white - MARGIN_SHADE * (white - black)
 }
 
 /// True when the white inside the candidate is a disc of WhyCon's size
@@ -148,7 +165,8 @@ fn on_circle(edges: &[Edge], ratio: f64, outer: &Ellipse) -> bool {
     let trim = errors.len() / 10;
     let median = errors[errors.len() / 2];
     let spread = errors[errors.len() - 1 - trim] - errors[trim];
-    median.abs() <= DISC_OFFSET_PX + DISC_OFFSET_RELATIVE * size
+    let shrink = DISC_SHRINK_PX + DISC_SHRINK_PX2 / size;
+    (-shrink..=DISC_OFFSET_PX + DISC_OFFSET_RELATIVE * size).contains(&median)
         && spread <= DISC_SPREAD_PX + DISC_SPREAD_RELATIVE * size
         && oval <= MAX_OVAL_PX
 }
