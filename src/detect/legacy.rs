@@ -27,11 +27,20 @@ const DISC_OFFSET_RELATIVE: f64 = 0.01;
 /// image (pixels, plus this many square pixels over the radius).
 const DISC_SHRINK_PX: f64 = 0.1;
 const DISC_SHRINK_PX2: f64 = 0.45;
+const DISC_SHRINK_RELATIVE: f64 = 0.02;
 
 /// Largest spread of that distance between rays (trimmed, pixels plus a
 /// share of the radius).
 const DISC_SPREAD_PX: f64 = 0.55;
 const DISC_SPREAD_RELATIVE: f64 = 0.02;
+/// Largest offset (pixels, plus a share of the radius) of the white
+/// disc's centre from the outline's: perspective's on a close, steep view
+/// (the scan's concentricity test allows as much), not an off-centre hole.
+const MAX_DECENTRE_PX: f64 = 0.25;
+const MAX_DECENTRE_RELATIVE: f64 = 0.08;
+/// Further spread allowed to the edges of a WhyCode ring's parts (share of
+/// the radius): rays along a sector boundary meet either edge.
+const RING_PART_SPREAD: f64 = 0.05;
 
 /// Largest excess (pixels, amplitude of the second harmonic along the
 /// outline's axes) of the inner edge's distance along the major axis over
@@ -40,6 +49,7 @@ const DISC_SPREAD_RELATIVE: f64 = 0.02;
 /// pen of constant width ('o', '0') has a hole more elongated than its
 /// outline.
 const MAX_OVAL_PX: f64 = 0.09;
+const MAX_OVAL_RELATIVE: f64 = 0.005;
 
 /// How much darker than the white disc (share of the disc's contrast) the
 /// margin around the black disc may be.
@@ -140,33 +150,56 @@ pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white:
     let (inner, outer_edges): (Vec<Edge>, Vec<Edge>) = edges.iter().partition(|e| e.0 < split);
     let whycode = inner.len() * 4 >= RAYS
         && outer_edges.len() * 4 >= RAYS
-        && on_circle(&inner, RING_INNER_RATIO, outer)
-        && on_circle(&outer_edges, WHYCODE_WHITE_RATIO, outer);
-    whycode || on_circle(&edges, WHYCON_WHITE_RATIO, outer)
+        && on_circle(&inner, RING_INNER_RATIO, outer, false)
+        && on_circle(&outer_edges, WHYCODE_WHITE_RATIO, outer, false);
+    whycode || on_circle(&edges, WHYCON_WHITE_RATIO, outer, true)
 }
 
 /// True when the inner edges found along the rays, as (radius relative to
 /// the outline, the outline's distance in pixels), lie on the circle of
 /// relative radius `ratio` within a pixel tolerance that grows slowly with
-/// the marker.
-fn on_circle(edges: &[Edge], ratio: f64, outer: &Ellipse) -> bool {
+/// the marker; for a whole `hole` (WhyCon's white disc, not the parts of a
+/// WhyCode ring's edges, whose sectors would bias it) no more elongated
+/// than the outline.
+fn on_circle(edges: &[Edge], ratio: f64, outer: &Ellipse, hole: bool) -> bool {
     let size = (outer.semi_major * outer.semi_minor).sqrt();
     let mut errors: Vec<f64> = edges
         .iter()
         .map(|&(rho, length, _)| (rho - ratio) * length)
         .collect();
-    let oval = 2.0 / edges.len() as f64
-        * edges
-            .iter()
-            .zip(&errors)
-            .map(|(e, error)| error * (2.0 * e.2).cos())
-            .sum::<f64>();
+    // Harmonics of the error around the outline: the first is the hole's
+    // offset from the outline's centre, the second its elongation.
+    let harmonic = |n: f64| {
+        let (mut c, mut s) = (0.0, 0.0);
+        for (e, error) in edges.iter().zip(&errors) {
+            c += error * (n * e.2).cos();
+            s += error * (n * e.2).sin();
+        }
+        let scale = 2.0 / edges.len() as f64;
+        (c * scale, s * scale)
+    };
+    let oval = harmonic(2.0).0;
+    let (offset_c, offset_s) = harmonic(1.0);
+    let offset = offset_c.hypot(offset_s);
+    if hole {
+        // Perspective moves the inner circle's image off the outer
+        // ellipse's centre (the more, the closer and steeper the view):
+        // the spread is judged around the fitted offset, which is bounded
+        // on its own.
+        for (e, error) in edges.iter().zip(errors.iter_mut()) {
+            *error -= offset_c * e.2.cos() + offset_s * e.2.sin();
+        }
+    }
     errors.sort_by(f64::total_cmp);
     let trim = errors.len() / 10;
     let median = errors[errors.len() / 2];
     let spread = errors[errors.len() - 1 - trim] - errors[trim];
-    let shrink = DISC_SHRINK_PX + DISC_SHRINK_PX2 / size;
+    let shrink = DISC_SHRINK_PX + DISC_SHRINK_PX2 / size + DISC_SHRINK_RELATIVE * size;
+    let spread_limit =
+        DISC_SPREAD_PX + (DISC_SPREAD_RELATIVE + if hole { 0.0 } else { RING_PART_SPREAD }) * size;
     (-shrink..=DISC_OFFSET_PX + DISC_OFFSET_RELATIVE * size).contains(&median)
-        && spread <= DISC_SPREAD_PX + DISC_SPREAD_RELATIVE * size
-        && oval <= MAX_OVAL_PX
+        && spread <= spread_limit
+        && (!hole
+            || (oval <= MAX_OVAL_PX + MAX_OVAL_RELATIVE * size
+                && offset <= MAX_DECENTRE_PX + MAX_DECENTRE_RELATIVE * size))
 }

@@ -5,6 +5,7 @@
 
 use std::f64::consts::PI;
 
+use crate::support;
 use nalgebra::Vector3;
 use whycode::camera::Camera;
 use whycode::detect::{Detection, Detector, DetectorConfig, Target};
@@ -237,4 +238,127 @@ fn eight_bit_ids_are_read_at_12_px_and_never_wrong() {
         }
     }
     assert!(named * 10 >= total * 9, "{named} of {total} named at 12 px");
+}
+
+/// The desk frames' reports: (8-bit family, auto bits, legacy) detectors.
+fn desk_reports(seed: u64) -> [Vec<Detection>; 3] {
+    let image = support::desk::desk_clutter(seed);
+    let family = Family::generate(8, 2).unwrap();
+    [
+        with_family(&family).detect(&image),
+        detector(DetectorConfig {
+            target: Target::AnyBits { distance: None },
+            ..Default::default()
+        })
+        .detect(&image),
+        detector(DetectorConfig::default()).detect(&image),
+    ]
+}
+
+#[test]
+fn desk_clutter_with_text_and_washers_gives_no_phantom() {
+    // Stroke-font 'o' and '0' of every weight, washers with a marker-like
+    // hole, blobs with an off-centre hole: none is a WhyCode marker. An
+    // 8-bit ring below 10 px has too few pixels per sector to refute every
+    // round blob, so the rule holds from 10 px. Legacy WhyCon has no ring
+    // to test: a bold 'o' of WhyCon's proportions a few pixels across is
+    // one to any geometric test. Issue 9 asks for 0.05 per frame; this
+    // guards what the disc tests reach now (about 0.5 per frame, from
+    // about 6 before them).
+    let (mut small, mut legacy) = (0, 0);
+    for seed in 1..=20 {
+        let [family, auto, whycon] = desk_reports(seed);
+        for d in &family {
+            assert!(2.0 * d.axes[1] < 10.0, "seed {seed}, 8-bit family: {d:?}");
+        }
+        small += family.len();
+        assert!(auto.is_empty(), "seed {seed}, auto bits: {auto:?}");
+        legacy += whycon.len();
+    }
+    assert!(small <= 1, "{small} small 8-bit phantoms in 20 frames");
+    assert!(legacy <= 12, "{legacy} legacy phantoms in 20 frames");
+}
+
+/// Markers of `diameters` pasted on desk clutter, each on its own paper
+/// card: the image and where (u, v, diameter px) each marker is.
+fn markers_on_desk(
+    kind: impl Fn(usize) -> (Marker, u32),
+    diameters: &[f64],
+    seed: u64,
+) -> (image::GrayImage, Vec<(f64, f64, f64, u32)>) {
+    let cam = Camera::ideal(1280, 720, 60.0);
+    let mut image = support::desk::desk_clutter(seed);
+    let mut scene = Scene::new(cam);
+    let mut rng = Pcg32::new(seed, 11);
+    let cols = 8;
+    for (k, &diameter) in diameters.iter().enumerate() {
+        let u = (k % cols) as f64 * 1280.0 / cols as f64 + 80.0;
+        let v = (k / cols) as f64 * 180.0 + 90.0;
+        let tilt = rng.range(0.0, 30.0) * PI / 180.0;
+        let roll = rng.range(0.0, 2.0 * PI);
+        let (marker, id) = kind(k);
+        let p = placement(&cam, (u, v), diameter, tilt, roll);
+        scene
+            .objects
+            .push(SceneObject::Marker(LooseMarker::new(marker, id, p)));
+    }
+    scene.background = Background::Uniform(0.45);
+    scene.noise = 2.0;
+    scene.seed = seed;
+    let (markers, truth) = render(&scene);
+    let mut placed = Vec::new();
+    for m in &truth.markers {
+        // The card reaches 1.5 R from the centre.
+        let reach = 0.75 * m.diameter_px;
+        let (x0, x1) = ((m.u - reach).floor() as u32, (m.u + reach).ceil() as u32);
+        let (y0, y1) = ((m.v - reach).floor() as u32, (m.v + reach).ceil() as u32);
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                if (f64::from(x) - m.u).hypot(f64::from(y) - m.v) <= reach {
+                    image.put_pixel(x, y, *markers.get_pixel(x, y));
+                }
+            }
+        }
+        placed.push((m.u, m.v, m.diameter_px, m.id));
+    }
+    (image, placed)
+}
+
+#[test]
+fn markers_on_desk_clutter_are_all_reported() {
+    let diameters: Vec<f64> = (0..32).map(|k| 14.0 + (k % 8) as f64 * 2.5).collect();
+    let family = Family::generate(8, 2).unwrap();
+    for seed in [3, 4] {
+        let (image, placed) = markers_on_desk(
+            |k| {
+                let id = 1 + (k as u32 * 7 + seed as u32) % family.len() as u32;
+                (
+                    Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0),
+                    id,
+                )
+            },
+            &diameters,
+            seed,
+        );
+        let found = with_family(&family).detect(&image);
+        for &(u, v, diameter, id) in &placed {
+            let d = nearest(&found, u, v, 0.3 * diameter + 1.0);
+            assert!(
+                d.is_some_and(|d| d.id == id || d.id == 0),
+                "seed {seed}: {diameter:.0} px marker {id} at ({u:.0}, {v:.0}): {d:?}"
+            );
+        }
+        let (image, placed) = markers_on_desk(
+            |_| (Marker::whycon(DIAMETER_M * 1000.0), 0),
+            &diameters,
+            seed,
+        );
+        let found = detector(DetectorConfig::default()).detect(&image);
+        for &(u, v, diameter, _) in &placed {
+            assert!(
+                nearest(&found, u, v, 0.3 * diameter + 1.0).is_some(),
+                "seed {seed}: legacy {diameter:.0} px marker at ({u:.0}, {v:.0})"
+            );
+        }
+    }
 }

@@ -4,6 +4,7 @@
 //! reference files of `tests/data/`.
 #![allow(dead_code)]
 
+pub mod desk;
 pub mod fuzz;
 pub mod reference;
 pub mod ring_view;
