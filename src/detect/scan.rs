@@ -130,7 +130,7 @@ impl Detector {
                 let (wu, wv) = white.centroid();
                 let radius = (e.semi_major * e.semi_minor).sqrt();
                 (wu - e.u).hypot(wv - e.v) < concentricity_tolerance(design) * radius + 1.0
-                    && 2.0 * e.semi_minor >= min_d
+                    && 2.0 * e.semi_major >= min_d
             });
         let coarse = match coarse {
             Some(e) if accepted => e,
