@@ -99,11 +99,12 @@ impl AprilTag {
                 "--fy",
                 &camera.fy.to_string(),
             ])
+            // AprilTag's pixel centres are at half-integers (see `seen`).
             .args([
                 "--cx",
-                &camera.cx.to_string(),
+                &(camera.cx + 0.5).to_string(),
                 "--cy",
-                &camera.cy.to_string(),
+                &(camera.cy + 0.5).to_string(),
             ])
             .args(["--tag-size", &tag_size_m.to_string()])
             .output()
