@@ -52,9 +52,17 @@ def main():
     parser.add_argument("--cx", type=float)
     parser.add_argument("--cy", type=float)
     parser.add_argument("--tag-size", type=float, help="black square side, metres")
+    parser.add_argument(
+        "--quad-decimate",
+        type=float,
+        default=2.0,
+        help="pupil-apriltags' default 2.0 halves the image for quad finding",
+    )
     args = parser.parse_args()
 
-    detector = Detector(families="tag36h11", nthreads=1)
+    detector = Detector(
+        families="tag36h11", nthreads=1, quad_decimate=args.quad_decimate
+    )
     pose = args.fx is not None
     kwargs = {}
     if pose:

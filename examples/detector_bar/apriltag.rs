@@ -22,6 +22,9 @@ pub const SETUP: &str =
 pub struct AprilTag {
     python: PathBuf,
     script: PathBuf,
+    /// pupil-apriltags' `quad_decimate`: its default 2.0 unless
+    /// `$APRILTAG_DECIMATE` says otherwise (1.0 finds smaller tags, slower).
+    pub quad_decimate: f64,
 }
 
 #[derive(Deserialize)]
@@ -45,6 +48,14 @@ impl AprilTag {
     /// `python3`: the first that imports pupil_apriltags. The error says
     /// why none did.
     pub fn find() -> Result<AprilTag, String> {
+        let quad_decimate = match std::env::var("APRILTAG_DECIMATE") {
+            Ok(v) => v
+                .parse::<f64>()
+                .ok()
+                .filter(|d| *d >= 1.0)
+                .ok_or(format!("APRILTAG_DECIMATE={v}: not a number of at least 1"))?,
+            Err(_) => 2.0,
+        };
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let script = root.join("examples/detector_bar/apriltag.py");
         let candidates: Vec<PathBuf> = match std::env::var_os("APRILTAG_PYTHON") {
@@ -63,6 +74,7 @@ impl AprilTag {
                 return Ok(AprilTag {
                     python: python.clone(),
                     script,
+                    quad_decimate,
                 });
             }
         }
@@ -107,6 +119,7 @@ impl AprilTag {
                 &(camera.cy + 0.5).to_string(),
             ])
             .args(["--tag-size", &tag_size_m.to_string()])
+            .args(["--quad-decimate", &self.quad_decimate.to_string()])
             .output()
             .map_err(|e| format!("{}: {e}", self.python.display()))?;
         if !output.status.success() {

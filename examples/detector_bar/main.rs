@@ -70,7 +70,13 @@ fn main() {
     let run = |section: u32| only.as_ref().is_none_or(|o| o.contains(&section));
     let started = Instant::now();
     let apriltag = match AprilTag::find() {
-        Ok(a) => Some(a),
+        Ok(a) => {
+            println!(
+                "AprilTag: pupil-apriltags, tag36h11, one thread, quad_decimate {}",
+                a.quad_decimate
+            );
+            Some(a)
+        }
         Err(e) => {
             println!("AprilTag: not measured ({e})");
             None
