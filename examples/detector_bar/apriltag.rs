@@ -1,18 +1,16 @@
 //! AprilTag as the bar measures it: pupil-apriltags (tag36h11, one
-//! thread) run by `apriltag.py` on the scenario's frames, written as PGM
-//! into a temporary folder. Its reports become [`Seen`]s scored by the
-//! same code as ours.
+//! thread) run by `apriltag.py` on the scenario's frames with tags printed
+//! in our markers' places.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use image::GrayImage;
 use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
-use whycode::camera::Camera;
 
-use crate::scenario::Seen;
+use crate::rival::{run_on_frames, Rival, Setup};
+use crate::scenario::{Print, Seen};
 
 /// The one-line setup the bar prints when AprilTag cannot be run.
 pub const SETUP: &str =
@@ -87,61 +85,42 @@ impl AprilTag {
                 .join(", ")
         ))
     }
+}
 
-    /// Reads `frames` (all taken with `camera`, tags whose black square is
-    /// `tag_size_m` wide): each frame's reports, with full pose, and the
-    /// detect call's time in ms.
-    pub fn detect(
+impl Rival for AprilTag {
+    fn name(&self) -> &'static str {
+        "AprilTag"
+    }
+
+    fn print(&self) -> Print {
+        Print::AprilTag
+    }
+
+    /// Full pose included, as ours.
+    fn detect(
         &self,
-        camera: &Camera,
-        tag_size_m: f64,
+        setup: &Setup,
         frames: &[&GrayImage],
     ) -> Result<Vec<(Vec<Seen>, f64)>, String> {
-        let dir = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
-        for (k, image) in frames.iter().enumerate() {
-            write_pgm(&dir.path().join(format!("{k:06}.pgm")), image)
-                .map_err(|e| format!("writing frame {k}: {e}"))?;
-        }
-        let output = Command::new(&self.python)
-            .arg(&self.script)
-            .arg(dir.path())
-            .args([
-                "--fx",
-                &camera.fx.to_string(),
-                "--fy",
-                &camera.fy.to_string(),
-            ])
+        let camera = setup.camera;
+        let mut command = Command::new(&self.python);
+        command.arg(&self.script);
+        let args = [
+            "--fx".to_string(),
+            camera.fx.to_string(),
+            "--fy".into(),
+            camera.fy.to_string(),
             // AprilTag's pixel centres are at half-integers (see `seen`).
-            .args([
-                "--cx",
-                &(camera.cx + 0.5).to_string(),
-                "--cy",
-                &(camera.cy + 0.5).to_string(),
-            ])
-            .args(["--tag-size", &tag_size_m.to_string()])
-            .args(["--quad-decimate", &self.quad_decimate.to_string()])
-            .output()
-            .map_err(|e| format!("{}: {e}", self.python.display()))?;
-        if !output.status.success() {
-            return Err(format!(
-                "{} failed: {}",
-                self.script.display(),
-                String::from_utf8_lossy(&output.stderr).trim()
-            ));
-        }
-        let reports: Vec<FrameReport> = String::from_utf8_lossy(&output.stdout)
-            .lines()
-            .map(serde_json::from_str)
-            .collect::<Result<_, _>>()
-            .map_err(|e| format!("{}: bad output: {e}", self.script.display()))?;
-        if reports.len() != frames.len() {
-            return Err(format!(
-                "{} read {} of {} frames",
-                self.script.display(),
-                reports.len(),
-                frames.len()
-            ));
-        }
+            "--cx".into(),
+            (camera.cx + 0.5).to_string(),
+            "--cy".into(),
+            (camera.cy + 0.5).to_string(),
+            "--tag-size".into(),
+            setup.size_m.to_string(),
+            "--quad-decimate".into(),
+            self.quad_decimate.to_string(),
+        ];
+        let reports: Vec<FrameReport> = run_on_frames(command, &args, frames)?;
         Ok(reports
             .into_iter()
             .map(|r| (r.tags.iter().map(seen).collect(), r.ms))
@@ -161,25 +140,16 @@ fn seen(tag: &TagReport) -> Seen {
     // (-1, -1) with y down the tag: +x runs from the 0-3 edge to the 1-2 edge.
     let du = (c[1][0] + c[2][0] - c[0][0] - c[3][0]) / 2.0;
     let dv = (c[1][1] + c[2][1] - c[0][1] - c[3][1]) / 2.0;
-    let pose = tag.rotation.zip(tag.t).map(|(r, t)| {
-        let r = Matrix3::from_fn(|i, j| r[i][j]);
-        (
-            r * Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0)),
-            Vector3::from(t),
-        )
+    let rotation = tag.rotation.map(|r| {
+        Matrix3::from_fn(|i, j| r[i][j]) * Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0))
     });
     Seen {
         u,
         v,
         id: Some(tag.id),
         yaw: Some(dv.atan2(du)),
-        pose,
+        normal: rotation.map(|r| r.column(2).into_owned()),
+        rotation,
+        position: tag.t.map(Vector3::from),
     }
-}
-
-fn write_pgm(path: &Path, image: &GrayImage) -> std::io::Result<()> {
-    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
-    write!(out, "P5\n{} {}\n255\n", image.width(), image.height())?;
-    out.write_all(image.as_raw())?;
-    out.flush()
 }

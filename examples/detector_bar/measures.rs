@@ -1,13 +1,12 @@
 //! Rows 1 and 2 measure angles rather than count markers: yaw against the
 //! true image direction of +x, and the pose's normal, roll and centre
-//! against the true target. The same scoring reads our reports and
-//! AprilTag's on the same scenes.
+//! against the true target. The same scoring reads our reports and the
+//! rivals' on the same scenes.
 
-use nalgebra::Vector3;
 use whycode::camera::Camera;
 use whycode::family::Family;
 
-use crate::apriltag::AprilTag;
+use crate::rival::Rival;
 use crate::scenario::{
     detector, match_truth, wrap, Counts, Errors, Families, Frame, Scenario, Seen, Spread, Truth,
     DEG,
@@ -33,17 +32,21 @@ impl YawResult {
 }
 
 /// Row 1: yaw of markers read with their own ID, `frames_per_bits` frames
-/// of 800x600 per code length; ours, and AprilTag's on the same scenes.
+/// of 800x600 per code length; ours, and each rival's on the same scenes
+/// (`None` where a rival is missing or failed).
 pub fn yaw_errors(
     families: &mut Families,
     bits: &[u32],
     frames_per_bits: usize,
     spread: Spread,
     seed0: u64,
-    apriltag: Option<&AprilTag>,
-) -> (YawResult, Option<YawResult>) {
+    rivals: &[Option<&dyn Rival>],
+) -> (YawResult, Vec<Option<YawResult>>) {
     let mut ours = YawResult::default();
-    let mut theirs = apriltag.map(|_| YawResult::default());
+    let mut theirs: Vec<Option<YawResult>> = rivals
+        .iter()
+        .map(|r| r.map(|_| YawResult::default()))
+        .collect();
     for (b, &n) in bits.iter().enumerate() {
         let family = families.get(n, 2);
         let scenario = Scenario::new(
@@ -56,14 +59,17 @@ pub fn yaw_errors(
         let mut counts = std::mem::take(&mut ours.counts);
         scenario.run(&mut det, &mut counts, |frame, found| ours.add(frame, found));
         ours.counts = counts;
-        if let (Some(at), Some(result)) = (apriltag, theirs.as_mut()) {
+        for (rival, slot) in rivals.iter().zip(theirs.iter_mut()) {
+            let (Some(rival), Some(result)) = (rival, slot.as_mut()) else {
+                continue;
+            };
             let mut counts = std::mem::take(&mut result.counts);
             let run =
-                scenario.run_apriltag(at, &mut counts, |frame, found| result.add(frame, found));
+                scenario.run_rival(*rival, &mut counts, |frame, found| result.add(frame, found));
             result.counts = counts;
             if let Err(e) = run {
-                eprintln!("AprilTag failed: {e}");
-                theirs = None;
+                eprintln!("{} failed: {e}", rival.name());
+                *slot = None;
             }
         }
     }
@@ -108,13 +114,12 @@ impl NormalResult {
             };
             let m = &truth[t];
             self.centre.add((d.u - m.u).hypot(d.v - m.v), (seed, t));
-            let Some((rotation, position)) = d.pose else {
-                continue;
-            };
-            if let Some((pu, pv)) = cam.project(&position) {
+            if let Some((pu, pv)) = d.position.and_then(|p| cam.project(&p)) {
                 self.pose_centre.add((pu - m.u).hypot(pv - m.v), (seed, t));
             }
-            let n: Vector3<f64> = rotation.column(2).into_owned();
+            let Some(n) = d.normal else {
+                continue;
+            };
             let angle = n.normalize().dot(&m.normal()).clamp(-1.0, 1.0).acos() / DEG;
             let band = ((view_angle(m) / 10.0) as usize).min(self.bands.len() - 1);
             self.bands[band].add(angle, (seed, t));
@@ -123,7 +128,7 @@ impl NormalResult {
                 self.wrong_picks += 1;
                 self.first_wrong.get_or_insert((seed, t, angle));
             }
-            if d.id == Some(m.id) {
+            if let (Some(rotation), true) = (d.rotation, d.id == Some(m.id)) {
                 // Rotation about the normal: the estimated +x axis against
                 // the true one, both projected onto the true target plane.
                 let x_est = m.rotation.transpose() * rotation.column(0).into_owned();
@@ -158,13 +163,16 @@ pub fn normal_errors(
     diameter_px: (f64, f64),
     wrong_deg: f64,
     seed0: u64,
-    apriltag: Option<&AprilTag>,
-) -> (NormalResult, Option<NormalResult>) {
+    rivals: &[Option<&dyn Rival>],
+) -> (NormalResult, Vec<Option<NormalResult>>) {
     let cam = crate::scenario::camera(800, 600);
     // One detector for every tilt: its adaptive state carries over.
     let mut det = detector(Some(family), &cam, false);
     let mut ours = NormalResult::default();
-    let mut theirs = apriltag.map(|_| NormalResult::default());
+    let mut theirs: Vec<Option<NormalResult>> = rivals
+        .iter()
+        .map(|r| r.map(|_| NormalResult::default()))
+        .collect();
     for (k, &tilt) in tilts_deg.iter().enumerate() {
         let spread = Spread::fixed_tilt(markers_per_frame, diameter_px, tilt);
         let scenario = Scenario::new(
@@ -178,21 +186,24 @@ pub fn normal_errors(
             ours.add(&cam, wrong_deg, frame, found)
         });
         ours.counts = counts;
-        if let (Some(at), Some(result)) = (apriltag, theirs.as_mut()) {
+        for (rival, slot) in rivals.iter().zip(theirs.iter_mut()) {
+            let (Some(rival), Some(result)) = (rival, slot.as_mut()) else {
+                continue;
+            };
             let mut counts = std::mem::take(&mut result.counts);
-            let run = scenario.run_apriltag(at, &mut counts, |frame, found| {
+            let run = scenario.run_rival(*rival, &mut counts, |frame, found| {
                 result.add(&cam, wrong_deg, frame, found)
             });
             result.counts = counts;
             if let Err(e) = run {
-                eprintln!("AprilTag failed: {e}");
-                theirs = None;
+                eprintln!("{} failed: {e}", rival.name());
+                *slot = None;
             }
         }
     }
     ours.finish();
-    if let Some(t) = theirs.as_mut() {
-        t.finish();
+    for result in theirs.iter_mut().flatten() {
+        result.finish();
     }
     (ours, theirs)
 }

@@ -20,7 +20,7 @@ use whycode::simulate::{
     self, GroundTruth, LooseMarker, Placement, PrintedSquare, Scene, SceneObject,
 };
 
-use crate::apriltag::AprilTag;
+use crate::rival::{Rival, Setup};
 use crate::tag36h11;
 
 pub const DEG: f64 = PI / 180.0;
@@ -242,9 +242,12 @@ pub struct Seen {
     /// `None`: reported without an ID ("unknown").
     pub id: Option<u32>,
     pub yaw: Option<f64>,
-    /// Full pose: rotation target → camera (columns +x, +y, normal) and
-    /// position, metres.
-    pub pose: Option<(Matrix3<f64>, Vector3<f64>)>,
+    /// Unit normal of the printed face, camera frame.
+    pub normal: Option<Vector3<f64>>,
+    /// Full orientation: rotation target → camera (columns +x, +y, normal).
+    pub rotation: Option<Matrix3<f64>>,
+    /// Centre in the camera frame, metres.
+    pub position: Option<Vector3<f64>>,
 }
 
 impl From<&Detection> for Seen {
@@ -254,7 +257,9 @@ impl From<&Detection> for Seen {
             v: d.v,
             id: (d.id != 0).then_some(d.id),
             yaw: d.yaw,
-            pose: d.pose.as_ref().map(|p| (p.rotation, p.position)),
+            normal: d.pose.as_ref().map(|p| p.rotation.column(2).into_owned()),
+            rotation: d.pose.as_ref().map(|p| p.rotation),
+            position: d.pose.as_ref().map(|p| p.position),
         }
     }
 }
@@ -562,20 +567,26 @@ impl<'a> Scenario<'a> {
         }
     }
 
-    /// The same frames with AprilTags printed instead, read by `apriltag`
-    /// (all at once: one Python process per scenario); like
-    /// [`Scenario::run`], and gives the detector's time per frame, ms.
-    pub fn run_apriltag(
+    /// The same frames read by `rival` (all at once: one process per
+    /// scenario), with its own markers printed in ours' places if it has
+    /// any; like [`Scenario::run`], and gives its time per frame, ms.
+    pub fn run_rival(
         &self,
-        apriltag: &AprilTag,
+        rival: &dyn Rival,
         counts: &mut Counts,
         mut visit: impl FnMut(&Frame, &[Seen]),
     ) -> Result<Vec<f64>, String> {
         let frames: Vec<Frame> = (0..self.frames)
-            .map(|f| self.frame(f, Print::AprilTag))
+            .map(|f| self.frame(f, rival.print()))
             .collect();
         let images: Vec<&GrayImage> = frames.iter().map(|f| &f.image).collect();
-        let results = apriltag.detect(&self.camera(), DIAMETER_M, &images)?;
+        let setup = Setup {
+            camera: &self.camera(),
+            size_m: DIAMETER_M,
+            family: self.family.map(|f| (f.bits(), f.distance())),
+            targets: self.spread.count,
+        };
+        let results = rival.detect(&setup, &images)?;
         let mut times = Vec::with_capacity(frames.len());
         for (frame, (found, ms)) in frames.iter().zip(results) {
             counts.add(frame.seed, &frame.targets, &found);
@@ -597,14 +608,15 @@ impl<'a> Scenario<'a> {
         self.counts_with(|_, _| {})
     }
 
-    /// AprilTag's counts on the same frames; `None` when it cannot be run
+    /// A rival's counts on the same frames; `None` when it cannot be run
     /// (the reason was said once, at the start).
-    pub fn apriltag_counts(&self, apriltag: Option<&AprilTag>) -> Option<Counts> {
+    pub fn rival_counts(&self, rival: Option<&dyn Rival>) -> Option<Counts> {
+        let rival = rival?;
         let mut counts = Counts::default();
-        match self.run_apriltag(apriltag?, &mut counts, |_, _| {}) {
+        match self.run_rival(rival, &mut counts, |_, _| {}) {
             Ok(_) => Some(counts),
             Err(e) => {
-                eprintln!("AprilTag failed: {e}");
+                eprintln!("{} failed: {e}", rival.name());
                 None
             }
         }

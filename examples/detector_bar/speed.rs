@@ -8,9 +8,10 @@ use whycode::detect::{Detector, DetectorConfig};
 use whycode::math::Pcg32;
 use whycode::simulate::{self, Background};
 
-use crate::apriltag::AprilTag;
+use crate::rival::Setup;
 use crate::scenario::*;
-use crate::table::{median, Table};
+use crate::table::{median, Cells, Table};
+use crate::Rivals;
 
 fn time_ms(f: impl FnOnce()) -> f64 {
     let t = Instant::now();
@@ -18,31 +19,30 @@ fn time_ms(f: impl FnOnce()) -> f64 {
     t.elapsed().as_secs_f64() * 1000.0
 }
 
-/// AprilTag's median ms on `frames` and how many times ours (`ours_ms`) is
-/// faster.
-fn versus(
-    apriltag: Option<&AprilTag>,
-    frames: Result<Vec<f64>, String>,
-    ours_ms: f64,
-) -> Option<String> {
-    apriltag?;
-    match frames {
-        Ok(times) if !times.is_empty() => {
-            let theirs = median(times);
-            Some(format!(
-                "{theirs:.1} ms (ours {:.0}x faster)",
-                theirs / ours_ms
-            ))
+/// Each rival's median ms over its runs of `scenario` and how many times
+/// ours (`ours_ms`) is faster.
+fn versus(scenario: &Scenario, runs: usize, rivals: &Rivals, ours_ms: f64) -> Cells {
+    rivals.map(|rival| {
+        let rival = rival?;
+        let mut times = Vec::new();
+        for _ in 0..runs {
+            match scenario.run_rival(rival, &mut Counts::default(), |_, _| {}) {
+                Ok(t) => times.extend(t),
+                Err(e) => {
+                    eprintln!("{} failed: {e}", rival.name());
+                    return None;
+                }
+            }
         }
-        Ok(_) => None,
-        Err(e) => {
-            eprintln!("AprilTag failed: {e}");
-            None
-        }
-    }
+        let theirs = median(times);
+        Some(format!(
+            "{theirs:.2} ms (ours {:.1}x faster)",
+            theirs / ours_ms
+        ))
+    })
 }
 
-pub fn rows(table: &mut Table, families: &mut Families, quick: bool, at: Option<&AprilTag>) {
+pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Rivals) {
     let fam8 = families.get(8, 2);
     let runs = if quick { 3 } else { 7 };
 
@@ -67,12 +67,11 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, at: Option<
         times.push(time_ms(|| drop(det.detect(&frame.image))));
     }
     let ours = median(times);
-    let theirs = at.map(|a| clutter.run_apriltag(a, &mut Counts::default(), |_, _| {}));
     table.row(
         "8a cluttered 1280x720, no markers, 8-bit",
         format!("{ours:.2} ms"),
-        theirs.and_then(|t| versus(at, t, ours)),
-        "(not quoted)",
+        versus(&clutter, 1, rivals, ours),
+        "",
         ours < 2.0,
     );
 
@@ -107,22 +106,15 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, at: Option<
             .map(|_| time_ms(|| drop(tracker.detect(&frame.image))))
             .collect(),
     );
-    let theirs = at.map(|a| {
-        // One frame read n times by AprilTag too, for a median.
-        let mut times = Vec::new();
-        for _ in 0..if quick { 5 } else { 20 } {
-            times.extend(table_top.run_apriltag(a, &mut Counts::default(), |_, _| {})?);
-        }
-        Ok(times)
-    });
     table.row(
         "8b 640x480 table, 4 markers, 8-bit, pose",
         format!(
             "untracked {untracked:.3} ms, tracked {tracked:.3} ms; {}/{} IDs",
             counts.correct_id, counts.markers
         ),
-        theirs.and_then(|t| versus(at, t, untracked)),
-        "(not quoted)",
+        // One frame, read as many times by each rival for a median.
+        versus(&table_top, if quick { 5 } else { 20 }, rivals, untracked),
+        "",
         untracked < 1.0 && counts.correct_id == counts.markers,
     );
 
@@ -181,27 +173,35 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, at: Option<
         let (tracked_ms, tracked_n) = tracked(DetectorConfig::default().max_markers);
         let (known_ms, known_n) = tracked(550);
         let first_ms = median(first);
-        // AprilTag once, on the first scene with its markers swapped for
-        // tags (25 megapixels take it seconds).
-        let theirs = (k == 0).then_some(at).flatten().and_then(|a| {
-            let mut tags = s.clone();
-            with_tags(&mut tags);
-            let (image, truth) = simulate::render(&tags);
-            let result = a.detect(&cam, DIAMETER_M, &[&image]).map(|mut r| {
-                let (seen, ms) = r.remove(0);
-                let mut c = Counts::default();
-                c.add(900_001, &Truth::of(&truth), &seen);
-                (ms, c)
-            });
-            match result {
-                Ok((ms, c)) => Some(format!(
-                    "{ms:.0} ms, found {}/{} (ours {:.0}x faster)",
-                    c.correct_id,
-                    c.markers,
-                    ms / first_ms
-                )),
+        // Each rival once, on the first scene (with tags in our markers'
+        // places for AprilTag: 25 megapixels take it seconds).
+        let theirs: Cells = rivals.map(|rival| {
+            let rival = rival.filter(|_| k == 0)?;
+            let mut printed = s.clone();
+            if rival.print() == Print::AprilTag {
+                with_tags(&mut printed);
+            }
+            let (image, truth) = simulate::render(&printed);
+            let setup = Setup {
+                camera: &cam,
+                size_m: DIAMETER_M,
+                family: family.map(|f| (f.bits(), f.distance())),
+                targets: spread.count,
+            };
+            match rival.detect(&setup, &[&image]) {
+                Ok(mut r) => {
+                    let (seen, ms) = r.remove(0);
+                    let mut c = Counts::default();
+                    c.add(900_001, &Truth::of(&truth), &seen);
+                    Some(format!(
+                        "{ms:.0} ms, IDs {}/{} (ours {:.1}x faster)",
+                        c.correct_id,
+                        c.markers,
+                        ms / first_ms
+                    ))
+                }
                 Err(e) => {
-                    eprintln!("AprilTag failed: {e}");
+                    eprintln!("{} failed: {e}", rival.name());
                     None
                 }
             }
@@ -213,7 +213,7 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, at: Option<
                 counts.detected, counts.markers
             ),
             theirs,
-            "(not quoted)",
+            "",
             first_ms < 150.0 && known_ms < 15.0 && counts.detection_rate() >= 0.99,
         );
         table.note(format!(
