@@ -2,19 +2,42 @@
 //! public whycon-ros sources, built by `original/build.sh` with the small
 //! driver `original/whycon_bar.cpp`, reading our markers on the same
 //! frames. Found at `$WHYCON_BAR`, else `whycon_bar` in the target folder.
+//! Building the original's ID table takes it up to minutes (16 bits), so
+//! one serving process stays up for the whole run.
 
+use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
-use std::process::Command;
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::sync::Mutex;
 
 use image::GrayImage;
 use nalgebra::Vector3;
 use serde::Deserialize;
 
-use crate::rival::{run_on_frames, Rival, Setup};
+use crate::rival::{parse_reports, write_frames, Rival, Setup};
 use crate::scenario::{Print, Seen};
 
 pub struct Original {
     program: PathBuf,
+    server: Mutex<Option<Server>>,
+}
+
+struct Server {
+    child: Child,
+    input: ChildStdin,
+    output: BufReader<ChildStdout>,
+}
+
+impl Drop for Original {
+    fn drop(&mut self) {
+        if let Ok(Some(server)) = self.server.get_mut().map(Option::take) {
+            let Server {
+                mut child, input, ..
+            } = server;
+            drop(input);
+            let _ = child.wait();
+        }
+    }
 }
 
 #[derive(Deserialize)]
@@ -49,7 +72,10 @@ impl Original {
             }
         };
         if program.is_file() {
-            Ok(Original { program })
+            Ok(Original {
+                program,
+                server: Mutex::new(None),
+            })
         } else {
             Err(format!(
                 "{} not built; see examples/detector_bar/original/build.sh",
@@ -74,7 +100,9 @@ impl Rival for Original {
         frames: &[&GrayImage],
     ) -> Result<Vec<(Vec<Seen>, f64)>, String> {
         let camera = setup.camera;
+        let dir = write_frames(frames)?;
         let mut args = vec![
+            dir.path().display().to_string(),
             "--diameter".to_string(),
             setup.size_m.to_string(),
             "--markers".into(),
@@ -97,7 +125,9 @@ impl Rival for Original {
             ]),
             None => args.push("--legacy".into()),
         }
-        let reports: Vec<FrameReport> = run_on_frames(Command::new(&self.program), &args, frames)?;
+        let lines = self.request(&args.join(" "))?;
+        let reports: Vec<FrameReport> =
+            parse_reports(&self.program.display().to_string(), &lines, frames.len())?;
         Ok(reports
             .into_iter()
             .map(|r| (r.markers.iter().map(seen).collect(), r.ms))
@@ -105,9 +135,56 @@ impl Rival for Original {
     }
 }
 
+impl Original {
+    /// Sends one request line to the serving process (started on first
+    /// use) and collects its frame lines up to the end mark.
+    fn request(&self, line: &str) -> Result<Vec<String>, String> {
+        let name = self.program.display().to_string();
+        let mut guard = self.server.lock().map_err(|_| "server lock poisoned")?;
+        if guard.is_none() {
+            let mut child = Command::new(&self.program)
+                .arg("--serve")
+                .stdin(Stdio::piped())
+                .stdout(Stdio::piped())
+                .spawn()
+                .map_err(|e| format!("{name}: {e}"))?;
+            let input = child.stdin.take().ok_or("no stdin")?;
+            let output = BufReader::new(child.stdout.take().ok_or("no stdout")?);
+            *guard = Some(Server {
+                child,
+                input,
+                output,
+            });
+        }
+        let server = guard.as_mut().expect("started above");
+        writeln!(server.input, "{line}").map_err(|e| format!("{name}: {e}"))?;
+        server.input.flush().map_err(|e| format!("{name}: {e}"))?;
+        let mut lines = Vec::new();
+        loop {
+            let mut l = String::new();
+            let n = server
+                .output
+                .read_line(&mut l)
+                .map_err(|e| format!("{name}: {e}"))?;
+            if n == 0 {
+                *guard = None;
+                return Err(format!("{name} stopped"));
+            }
+            let l = l.trim();
+            if l == r#"{"end": true}"# {
+                return Ok(lines);
+            }
+            if l.starts_with('{') {
+                lines.push(l.to_string());
+            }
+        }
+    }
+}
+
 /// The original's report in our terms: IDs from 1 (0 unknown); its
-/// normal points away from the camera, ours towards it; it gives no
-/// in-plane axes, so no full rotation.
+/// normal points away from the camera, ours towards it; its position is
+/// in the ROS body frame (x forward, y left, z up); it gives no in-plane
+/// axes, so no full rotation.
 fn seen(m: &MarkerReport) -> Seen {
     let n = Vector3::from(m.n);
     Seen {
@@ -117,6 +194,6 @@ fn seen(m: &MarkerReport) -> Seen {
         yaw: Some(m.angle),
         normal: (n.norm() > 0.0).then(|| -n.normalize()),
         rotation: None,
-        position: Some(Vector3::new(m.x, m.y, m.z)),
+        position: Some(Vector3::new(-m.y, -m.z, m.x)),
     }
 }

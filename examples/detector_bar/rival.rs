@@ -35,6 +35,37 @@ pub trait Rival {
         -> Result<Vec<(Vec<Seen>, f64)>, String>;
 }
 
+/// Writes `frames` into a temporary folder as `000000.pgm`, ... (the
+/// order the rivals read them in).
+pub fn write_frames(frames: &[&GrayImage]) -> Result<tempfile::TempDir, String> {
+    let dir = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
+    for (k, image) in frames.iter().enumerate() {
+        write_pgm(&dir.path().join(format!("{k:06}.pgm")), image)
+            .map_err(|e| format!("writing frame {k}: {e}"))?;
+    }
+    Ok(dir)
+}
+
+/// Parses a rival's JSON lines, one per frame.
+pub fn parse_reports<T: DeserializeOwned>(
+    program: &str,
+    lines: &[String],
+    frames: usize,
+) -> Result<Vec<T>, String> {
+    let reports: Vec<T> = lines
+        .iter()
+        .map(|l| serde_json::from_str(l))
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("{program}: bad output: {e}"))?;
+    if reports.len() != frames {
+        return Err(format!(
+            "{program} read {} of {frames} frames",
+            reports.len()
+        ));
+    }
+    Ok(reports)
+}
+
 /// Writes `frames` into a temporary folder, runs `command` with the folder
 /// as its first argument and then `args`, and parses one JSON line per
 /// frame.
@@ -43,11 +74,7 @@ pub fn run_on_frames<T: DeserializeOwned>(
     args: &[String],
     frames: &[&GrayImage],
 ) -> Result<Vec<T>, String> {
-    let dir = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
-    for (k, image) in frames.iter().enumerate() {
-        write_pgm(&dir.path().join(format!("{k:06}.pgm")), image)
-            .map_err(|e| format!("writing frame {k}: {e}"))?;
-    }
+    let dir = write_frames(frames)?;
     let program = command.get_program().to_string_lossy().into_owned();
     let output = command
         .arg(dir.path())
@@ -60,20 +87,12 @@ pub fn run_on_frames<T: DeserializeOwned>(
             String::from_utf8_lossy(&output.stderr).trim()
         ));
     }
-    let reports: Vec<T> = String::from_utf8_lossy(&output.stdout)
+    let lines: Vec<String> = String::from_utf8_lossy(&output.stdout)
         .lines()
         .filter(|l| l.starts_with('{'))
-        .map(serde_json::from_str)
-        .collect::<Result<_, _>>()
-        .map_err(|e| format!("{program}: bad output: {e}"))?;
-    if reports.len() != frames.len() {
-        return Err(format!(
-            "{program} read {} of {} frames",
-            reports.len(),
-            frames.len()
-        ));
-    }
-    Ok(reports)
+        .map(str::to_string)
+        .collect();
+    parse_reports(&program, &lines, frames.len())
 }
 
 fn write_pgm(path: &Path, image: &GrayImage) -> std::io::Result<()> {
