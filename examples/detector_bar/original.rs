@@ -94,6 +94,10 @@ impl Rival for Original {
         Print::WhyCode
     }
 
+    fn tracks(&self) -> bool {
+        true
+    }
+
     fn detect(
         &self,
         setup: &Setup,

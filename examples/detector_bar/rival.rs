@@ -30,6 +30,11 @@ pub trait Rival {
     fn name(&self) -> &'static str;
     /// What it reads: its own markers printed in ours' places, or ours.
     fn print(&self) -> Print;
+    /// Whether it carries markers over from one run to the next (then its
+    /// repeated runs of a frame are tracked frames).
+    fn tracks(&self) -> bool {
+        false
+    }
     /// Each frame's reports and the detector's time for it, ms.
     fn detect(&self, setup: &Setup, frames: &[&GrayImage])
         -> Result<Vec<(Vec<Seen>, f64)>, String>;

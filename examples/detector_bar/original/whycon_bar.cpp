@@ -68,7 +68,7 @@ static Request parse(const std::vector<std::string> &args)
     return r;
 }
 
-// One CWhycon per family and image size: building its ID table takes
+// One CWhycon per family, image size and marker count: building its ID table takes
 // minutes at 16 bits, so a serving process keeps them.
 static std::map<std::string, whycon::CWhycon *> detectors;
 
@@ -89,9 +89,11 @@ static int serve(const Request &r)
         std::fprintf(stderr, "%s: not an 8-bit binary PGM\n", files[0].c_str());
         return 1;
     }
-    // Its detectors keep buffers of the first image size: one per size too.
+    // Its detectors keep buffers of the first image size, and fewer markers
+    // than before crash updateConfiguration (it deletes past the end): one
+    // per size and count too.
     std::string key = std::to_string(r.bits) + "/" + std::to_string(r.distance) + (r.legacy ? "L" : "") +
-                      " " + std::to_string(w) + "x" + std::to_string(h);
+                      " " + std::to_string(w) + "x" + std::to_string(h) + " " + std::to_string(r.markers);
     whycon::CWhycon *&whycon = detectors[key];
     if (!whycon) {
         whycon = new whycon::CWhycon();
