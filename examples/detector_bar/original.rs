@@ -3,8 +3,10 @@
 //! driver `original/whycon_bar.cpp`, reading our markers on the same
 //! frames. Found at `$WHYCON_BAR`, else `whycon_bar` in the target folder.
 //! Building the original's ID table takes it up to minutes (16 bits), so
-//! one serving process stays up for the whole run.
+//! serving processes stay up for the whole run: one per image size, as its
+//! detectors share one static pixel buffer sized by the first image.
 
+use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
@@ -19,7 +21,7 @@ use crate::scenario::{Print, Seen};
 
 pub struct Original {
     program: PathBuf,
-    server: Mutex<Option<Server>>,
+    servers: Mutex<HashMap<(u32, u32), Server>>,
 }
 
 struct Server {
@@ -30,12 +32,14 @@ struct Server {
 
 impl Drop for Original {
     fn drop(&mut self) {
-        if let Ok(Some(server)) = self.server.get_mut().map(Option::take) {
-            let Server {
-                mut child, input, ..
-            } = server;
-            drop(input);
-            let _ = child.wait();
+        if let Ok(servers) = self.servers.get_mut() {
+            for (_, server) in servers.drain() {
+                let Server {
+                    mut child, input, ..
+                } = server;
+                drop(input);
+                let _ = child.wait();
+            }
         }
     }
 }
@@ -74,7 +78,7 @@ impl Original {
         if program.is_file() {
             Ok(Original {
                 program,
-                server: Mutex::new(None),
+                servers: Mutex::new(HashMap::new()),
             })
         } else {
             Err(format!(
@@ -129,7 +133,8 @@ impl Rival for Original {
             ]),
             None => args.push("--legacy".into()),
         }
-        let lines = self.request(&args.join(" "))?;
+        let size = frames.first().map_or((0, 0), |f| f.dimensions());
+        let lines = self.request(size, &args.join(" "))?;
         let reports: Vec<FrameReport> =
             parse_reports(&self.program.display().to_string(), &lines, frames.len())?;
         Ok(reports
@@ -140,12 +145,13 @@ impl Rival for Original {
 }
 
 impl Original {
-    /// Sends one request line to the serving process (started on first
-    /// use) and collects its frame lines up to the end mark.
-    fn request(&self, line: &str) -> Result<Vec<String>, String> {
+    /// Sends one request line to the serving process for frames of `size`
+    /// (started on first use) and collects its frame lines up to the end
+    /// mark.
+    fn request(&self, size: (u32, u32), line: &str) -> Result<Vec<String>, String> {
         let name = self.program.display().to_string();
-        let mut guard = self.server.lock().map_err(|_| "server lock poisoned")?;
-        if guard.is_none() {
+        let mut servers = self.servers.lock().map_err(|_| "server lock poisoned")?;
+        if !servers.contains_key(&size) {
             let mut child = Command::new(&self.program)
                 .arg("--serve")
                 .stdin(Stdio::piped())
@@ -154,13 +160,16 @@ impl Original {
                 .map_err(|e| format!("{name}: {e}"))?;
             let input = child.stdin.take().ok_or("no stdin")?;
             let output = BufReader::new(child.stdout.take().ok_or("no stdout")?);
-            *guard = Some(Server {
-                child,
-                input,
-                output,
-            });
+            servers.insert(
+                size,
+                Server {
+                    child,
+                    input,
+                    output,
+                },
+            );
         }
-        let server = guard.as_mut().expect("started above");
+        let server = servers.get_mut(&size).expect("started above");
         writeln!(server.input, "{line}").map_err(|e| format!("{name}: {e}"))?;
         server.input.flush().map_err(|e| format!("{name}: {e}"))?;
         let mut lines = Vec::new();
@@ -171,7 +180,9 @@ impl Original {
                 .read_line(&mut l)
                 .map_err(|e| format!("{name}: {e}"))?;
             if n == 0 {
-                *guard = None;
+                if let Some(mut gone) = servers.remove(&size) {
+                    let _ = gone.child.wait();
+                }
                 return Err(format!("{name} stopped"));
             }
             let l = l.trim();

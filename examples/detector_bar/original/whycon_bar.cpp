@@ -89,9 +89,9 @@ static int serve(const Request &r)
         std::fprintf(stderr, "%s: not an 8-bit binary PGM\n", files[0].c_str());
         return 1;
     }
-    // Its detectors keep buffers of the first image size, and fewer markers
-    // than before crash updateConfiguration (it deletes past the end): one
-    // per size and count too.
+    // Fewer markers than before crash updateConfiguration (it deletes past
+    // the end): one per count too. All its detectors share one static pixel
+    // buffer of the first image's size: serve one image size per process.
     std::string key = std::to_string(r.bits) + "/" + std::to_string(r.distance) + (r.legacy ? "L" : "") +
                       " " + std::to_string(w) + "x" + std::to_string(h) + " " + std::to_string(r.markers);
     whycon::CWhycon *&whycon = detectors[key];
