@@ -73,7 +73,7 @@ fn main() {
                 .filter_map(|n| n.trim().parse().ok())
                 .collect()
         });
-    let run = |section: u32| only.as_ref().is_none_or(|o| o.contains(&section));
+    let run = |section: u32| only.as_ref().map_or(true, |o| o.contains(&section));
     let started = Instant::now();
 
     let apriltag = AprilTag::find()
@@ -124,7 +124,7 @@ fn main() {
     println!("{:.0} s in all", started.elapsed().as_secs_f64());
 }
 
-/// 1. Yaw bias and worst error, 8-16 bits, face-on and tilted.
+/// Row 1: Yaw bias and worst error, 8-16 bits, face-on and tilted.
 fn yaw_rows(table: &mut Table, families: &mut Families, scale: usize, rivals: &Rivals) {
     println!("1. yaw");
     for (name, max_tilt_deg, seed) in [
@@ -159,7 +159,7 @@ fn yaw_rows(table: &mut Table, families: &mut Families, scale: usize, rivals: &R
     }
 }
 
-/// 2. Normal, in-plane rotation and centre errors with tilts 0-60°.
+/// Row 2: Normal, in-plane rotation and centre errors with tilts 0-60°.
 fn normal_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals) {
     println!("2. normal");
     let tilts = [0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0];
@@ -258,7 +258,7 @@ fn few(count: usize) -> Spread {
     Spread::tilted(count, (40.0, 90.0), 30.0)
 }
 
-/// 3. False reports in clutter, 1280x720, a few real markers among it.
+/// Row 3: False reports in clutter, 1280x720, a few real markers among it.
 fn clutter_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals) {
     println!("3. clutter");
     for (name, target, seed) in [
@@ -321,10 +321,10 @@ fn clutter_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals)
     }
 }
 
-/// 4. Dark frames on a dark table top with sensor noise; every other frame
+/// Row 4: Dark frames on a dark table top with sensor noise; every other frame
 /// a worn, greyer ink. Exposure 0.15-0.35 gives frames with a mean grey of
 /// 10-25 (white paper at 33-77); 0.065-0.13 gives means of 5-9 (paper at
-/// 14-28). 5. A light gradient of `ratio`:1 across the frame in a random
+/// 14-28). Row 5: a light gradient of `ratio`:1 across the frame in a random
 /// direction, plus (with `shadow`) a soft cast shadow at that fraction of
 /// the light over part of the frame.
 fn light_rows(
@@ -412,7 +412,7 @@ fn light_rows(
     }
 }
 
-/// 6. Motion blur of `length` px in a random direction on 76-84 px markers
+/// Row 6: Motion blur of `length` px in a random direction on 76-84 px markers
 /// in 640x480 (issue 9's targets), then steep views.
 fn blur_and_tilt_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals) {
     println!("6. motion blur, steep views");
@@ -469,7 +469,7 @@ fn blur_and_tilt_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &R
     table.note(format!("{}; first miss {:?}", ids(&c), c.first_miss));
 }
 
-/// 7. Smallest diameter: markers of one size on 640x480, slight tilts, a
+/// Row 7: Smallest diameter: markers of one size on 640x480, slight tilts, a
 /// little focus blur and noise.
 fn smallest_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals) {
     let mut smallest_detect = None;

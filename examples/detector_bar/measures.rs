@@ -155,6 +155,7 @@ impl NormalResult {
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 pub fn normal_errors(
     family: &Family,
     tilts_deg: &[f64],

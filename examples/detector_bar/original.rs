@@ -6,7 +6,7 @@
 //! serving processes stay up for the whole run: one per image size, as its
 //! detectors share one static pixel buffer sized by the first image.
 
-use std::collections::HashMap;
+use std::collections::hash_map::{Entry, HashMap};
 use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
 use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
@@ -151,25 +151,24 @@ impl Original {
     fn request(&self, size: (u32, u32), line: &str) -> Result<Vec<String>, String> {
         let name = self.program.display().to_string();
         let mut servers = self.servers.lock().map_err(|_| "server lock poisoned")?;
-        if !servers.contains_key(&size) {
-            let mut child = Command::new(&self.program)
-                .arg("--serve")
-                .stdin(Stdio::piped())
-                .stdout(Stdio::piped())
-                .spawn()
-                .map_err(|e| format!("{name}: {e}"))?;
-            let input = child.stdin.take().ok_or("no stdin")?;
-            let output = BufReader::new(child.stdout.take().ok_or("no stdout")?);
-            servers.insert(
-                size,
-                Server {
+        let server = match servers.entry(size) {
+            Entry::Occupied(e) => e.into_mut(),
+            Entry::Vacant(e) => {
+                let mut child = Command::new(&self.program)
+                    .arg("--serve")
+                    .stdin(Stdio::piped())
+                    .stdout(Stdio::piped())
+                    .spawn()
+                    .map_err(|e| format!("{name}: {e}"))?;
+                let input = child.stdin.take().ok_or("no stdin")?;
+                let output = BufReader::new(child.stdout.take().ok_or("no stdout")?);
+                e.insert(Server {
                     child,
                     input,
                     output,
-                },
-            );
-        }
-        let server = servers.get_mut(&size).expect("started above");
+                })
+            }
+        };
         writeln!(server.input, "{line}").map_err(|e| format!("{name}: {e}"))?;
         server.input.flush().map_err(|e| format!("{name}: {e}"))?;
         let mut lines = Vec::new();

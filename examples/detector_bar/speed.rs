@@ -19,6 +19,15 @@ fn time_ms(f: impl FnOnce()) -> f64 {
     t.elapsed().as_secs_f64() * 1000.0
 }
 
+/// "4.2x faster" or "2.5x slower": ours against a rival's time.
+fn faster(theirs_ms: f64, ours_ms: f64) -> String {
+    if theirs_ms >= ours_ms {
+        format!("{:.1}x faster", theirs_ms / ours_ms)
+    } else {
+        format!("{:.1}x slower", ours_ms / theirs_ms)
+    }
+}
+
 /// Each rival's median ms over its runs of `scenario` and how many times
 /// ours is faster: `ours_ms` untracked, and tracked for a rival that tracks
 /// (the original keeps its markers from one run to the next).
@@ -42,8 +51,8 @@ fn versus(scenario: &Scenario, runs: usize, rivals: &Rivals, ours_ms: (f64, f64)
         }
         let theirs = median(times);
         Some(format!(
-            "{theirs:.2} ms (ours{ours_label} {:.1}x faster)",
-            theirs / ours_ms
+            "{theirs:.2} ms (ours{ours_label} {})",
+            faster(theirs, ours_ms)
         ))
     })
 }
@@ -205,10 +214,11 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Ri
                     let mut c = Counts::default();
                     c.add(900_001, &Truth::of(&truth), &seen);
                     Some(format!(
-                        "{ms:.0} ms, IDs {}/{} (ours {:.1}x faster)",
-                        c.correct_id,
+                        "{ms:.0} ms, found {}/{}, {} IDs right (ours {})",
+                        c.detected,
                         c.markers,
-                        ms / first_ms
+                        c.correct_id,
+                        faster(ms, first_ms)
                     ))
                 }
                 Err(e) => {
