@@ -137,7 +137,7 @@ fn yaw_rows(table: &mut Table, families: &mut Families, scale: usize, rivals: &R
         let show = |r: &measures::YawResult| {
             let e = &r.errors;
             format!(
-                "bias {:+.3}°, mean |e| {:.3}°, max {:.2}° over {}",
+                "bias {:+.3}°, mean abs {:.3}°, max {:.2}° over {}",
                 e.mean(),
                 e.mean_abs(),
                 e.max_abs,
@@ -218,7 +218,7 @@ fn normal_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals) 
             return "no full rotation reported".into();
         }
         format!(
-            "bias {:+.2}°, mean |e| {:.2}°, max {:.2}° over {}",
+            "bias {:+.2}°, mean abs {:.2}°, max {:.2}° over {}",
             r.pose_roll.mean(),
             r.pose_roll.mean_abs(),
             r.pose_roll.max_abs,
