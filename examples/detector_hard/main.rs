@@ -30,6 +30,25 @@ fn ids(c: &Counts) -> String {
     )
 }
 
+/// With `WHYCODE_DUMP=dir`, writes the frame of the first miss and of the
+/// first wrong ID of a row as PNG and prints where the marker is.
+fn dump(row: &str, scenario: &Scenario, c: &Counts) {
+    let Ok(dir) = std::env::var("WHYCODE_DUMP") else {
+        return;
+    };
+    for (what, at) in [("miss", c.first_miss), ("wrong", c.first_wrong)] {
+        let Some((seed, t)) = at else { continue };
+        let frame = scenario.frame((seed - scenario.seed0) as usize);
+        let m = &frame.truth.markers[t];
+        let path = format!("{dir}/{row}-{what}-{seed}.png");
+        frame.image.save(&path).expect("dump directory writable");
+        println!(
+            "    {what}: {path} marker {t} at ({:.0}, {:.0}) {:.0} px id {}",
+            m.u, m.v, m.diameter_px, m.id
+        );
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let quick = args.iter().any(|a| a == "--quick");
@@ -50,7 +69,7 @@ fn main() {
             (20.0, 0.60, 1_720_000),
             (25.0, 0.40, 1_730_000),
         ] {
-            let c = Scenario::new(
+            let scenario = Scenario::new(
                 Some(&fam8),
                 Spread::tilted(4, (76.0, 84.0), 15.0),
                 12 * scale,
@@ -63,8 +82,9 @@ fn main() {
                     angle: rng.range(0.0, PI),
                 });
                 s.noise = 2.0;
-            })
-            .counts();
+            });
+            let c = scenario.counts();
+            dump(&format!("blur{length}"), &scenario, &c);
             let pass = c.id_rate() >= target && c.wrong_id == 0;
             println!(
                 "  blur {length:>2} px: IDs {} (target ≥{}), {} wrong  [{}]",
@@ -80,14 +100,15 @@ fn main() {
     if wanted("tilt") {
         println!("steep views, 8-bit d=2, 800x600");
         for (tilt, seed) in [(60.0, 1_800_000), (65.0, 1_810_000), (70.0, 1_820_000)] {
-            let c = Scenario::new(
+            let scenario = Scenario::new(
                 Some(&fam8),
                 Spread::fixed_tilt(6, (60.0, 110.0), tilt),
                 10 * scale,
                 seed,
             )
-            .look(|s, _, _| s.noise = 2.0)
-            .counts();
+            .look(|s, _, _| s.noise = 2.0);
+            let c = scenario.counts();
+            dump(&format!("tilt{tilt}"), &scenario, &c);
             let pass = c.detection_rate() >= 1.0 && c.id_rate() >= 1.0 && c.wrong_id == 0;
             println!(
                 "  tilt {tilt}°, 60-110 px: detected {}, IDs {}  [{}]",
@@ -104,7 +125,7 @@ fn main() {
         let r = measures::normal_errors(
             &fam8,
             &[0.0, 5.0, 10.0],
-            3 * scale,
+            8 * scale,
             9,
             (80.0, 120.0),
             5.0,
@@ -136,7 +157,7 @@ fn main() {
             ("5c gradient 8:1 + shadow at 30%", 8.0, 0.3, 620_000),
             ("5d gradient 8:1 + shadow at 20%", 8.0, 0.2, 1_630_000),
         ] {
-            let c = Scenario::new(
+            let scenario = Scenario::new(
                 Some(&fam8),
                 Spread::tilted(8, (40.0, 90.0), 30.0),
                 8 * scale,
@@ -152,8 +173,9 @@ fn main() {
             .after_render(|image, rng| {
                 let through = (rng.range(200.0, 600.0), rng.range(150.0, 450.0));
                 cast_shadow(image, through, rng.range(0.0, 2.0 * PI), factor, 12.0);
-            })
-            .counts();
+            });
+            let c = scenario.counts();
+            dump(&name[..2], &scenario, &c);
             let pass = c.detection_rate() >= 1.0 && c.wrong_id == 0;
             println!(
                 "  {name}: detected {}, IDs {}  [{}]",
