@@ -59,6 +59,11 @@ const MIN_FIT: f64 = 0.7;
 /// A fit of the first count tried at least this good settles the count.
 const SURE_FIT: f64 = 0.9;
 
+/// Outer ellipses longer than this many times their width (a view of
+/// about 50° and more) are steep enough for perspective to space the
+/// sectors unevenly along the ellipse.
+const STEEP_AXIS_RATIO: f64 = 1.5;
+
 /// What the ring of one candidate shows.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum RingEvidence {
@@ -188,8 +193,14 @@ pub fn examine<C: Deref<Target = [u8]>>(
     let Some(tested) = test(&frame, &counts) else {
         return RingEvidence::TooSmall;
     };
-    if let Some(ring) = best(&tested) {
-        return RingEvidence::Manchester(ring);
+    let plain = best(&tested);
+    // A steep view whose ring fits no count surely may fit a wrong count
+    // best (an 8-bit ring at 60° passes for 7 bits): it is read again
+    // rectified below, and the better fit of the two kept.
+    let steep = outer.semi_major > STEEP_AXIS_RATIO * outer.semi_minor;
+    match plain {
+        Some(ring) if ring.fit >= SURE_FIT || !steep => return RingEvidence::Manchester(ring),
+        _ => {}
     }
     // Perspective: the outer ellipse's parameter does not space the ring's
     // sectors evenly on a steep view, which spoils the model's fit. The
@@ -211,9 +222,13 @@ pub fn examine<C: Deref<Target = [u8]>>(
         0.5 * (black_level + white_level),
     );
     let rectified = centre.and_then(|p| EllipseFrame::with_projected_centre(outer, p));
-    rectified
+    let again = rectified
         .and_then(|frame| test(&frame, &counts))
-        .and_then(|tested| best(&tested))
+        .and_then(|tested| best(&tested));
+    [plain, again]
+        .into_iter()
+        .flatten()
+        .max_by(|a, b| a.fit.total_cmp(&b.fit))
         .map_or(absent, RingEvidence::Manchester)
 }
 

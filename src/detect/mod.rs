@@ -361,6 +361,22 @@ impl Detector {
         } else {
             let map = ThresholdMap::adaptive(gray.pixels, width, height);
             self.scan(gray, &map, 0..height, &mut found, limit);
+            let shaded = map
+                .shaded_rows()
+                .filter(|_| self.config.target.family().is_some());
+            if let Some(rows) = shaded {
+                // A cast shadow's edge: shaded paper fell below the
+                // mid-level threshold. Look again there with thresholds
+                // that keep the paper's ratio to the ink. Only where a
+                // family's ring test stands between grey clutter (which
+                // looks shaded too) and a report.
+                let ratio_map =
+                    ThresholdMap::adaptive_ratio(gray.pixels, width, height, rows.clone());
+                self.labels.begin(width, height);
+                let mut again = Vec::new();
+                self.scan(gray, &ratio_map, rows, &mut again, limit);
+                merge_new(&mut found, again, limit);
+            }
             if found.is_empty() {
                 // The local map found nothing (noise above the markers'
                 // contrast, say): a few levels of the reference's global
@@ -383,16 +399,7 @@ impl Detector {
                         best = level.len();
                         self.search.hit(t);
                     }
-                    for c in level {
-                        if found.len() < limit
-                            && !found.iter().any(|o: &Candidate| {
-                                (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v)
-                                    < o.outer.semi_minor
-                            })
-                        {
-                            found.push(c);
-                        }
-                    }
+                    merge_new(&mut found, level, limit);
                 }
             } else {
                 self.search.reset();
@@ -441,5 +448,19 @@ impl Detector {
         detections.sort_by(|a, b| a.v.total_cmp(&b.v).then(a.u.total_cmp(&b.u)));
         self.check.observe(&detections);
         detections
+    }
+}
+
+/// Adds the candidates of another look that are not already found (no
+/// found centre within their semi-minor axis), up to `limit`.
+fn merge_new(found: &mut Vec<Candidate>, more: Vec<Candidate>, limit: usize) {
+    for c in more {
+        if found.len() < limit
+            && !found
+                .iter()
+                .any(|o| (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.semi_minor)
+        {
+            found.push(c);
+        }
     }
 }

@@ -29,6 +29,8 @@ pub struct ThresholdMap {
     floor: Vec<bool>,
     /// Least black-to-white difference that noise cannot fake.
     min_contrast: u8,
+    /// Image rows holding shaded tiles (see [`ThresholdMap::shaded_rows`]).
+    shaded: Option<std::ops::Range<usize>>,
 }
 
 /// Shift of the adaptive map's tiles: 16 x 16 pixels.
@@ -58,7 +60,19 @@ impl ThresholdMap {
             values: vec![threshold],
             floor: Vec::new(),
             min_contrast: MIN_CONTRAST,
+            shaded: None,
         }
+    }
+
+    /// Image rows holding shaded tiles: tiles dark in every pixel by the
+    /// mid-level threshold although their brightest pixel stands far above
+    /// the darkest of the neighbourhood. That is white paper in a cast
+    /// shadow next to lit paper (the mid-level of lit white and black lies
+    /// above shaded white), and a marker crossed by the shadow's edge loses
+    /// the shaded part of its white disc to the black. Such rows are worth
+    /// a second look with [`ThresholdMap::adaptive_ratio`].
+    pub fn shaded_rows(&self) -> Option<std::ops::Range<usize>> {
+        self.shaded.clone()
     }
 
     /// The thresholds of one image row, indexed by `x >> shift()`.
@@ -153,6 +167,31 @@ impl ThresholdMap {
         height: usize,
         band: std::ops::Range<usize>,
     ) -> ThresholdMap {
+        ThresholdMap::adaptive_with(pixels, width, height, band, Level::Mid)
+    }
+
+    /// The local map of `band` with each tile's threshold a third of the
+    /// way from its black to its white level in log light (offset by the
+    /// noise floor) rather than at the mid-level: light multiplies, so paper in a shadow
+    /// keeps its ratio to the ink beside it while falling below the
+    /// mid-level of lit paper and ink. Lower than the mid-level everywhere,
+    /// so it is kept for a second look at shaded rows.
+    pub fn adaptive_ratio(
+        pixels: &[u8],
+        width: usize,
+        height: usize,
+        band: std::ops::Range<usize>,
+    ) -> ThresholdMap {
+        ThresholdMap::adaptive_with(pixels, width, height, band, Level::Ratio)
+    }
+
+    fn adaptive_with(
+        pixels: &[u8],
+        width: usize,
+        height: usize,
+        band: std::ops::Range<usize>,
+        level: Level,
+    ) -> ThresholdMap {
         let tile = 1usize << TILE_SHIFT;
         let cols = width.div_ceil(tile).max(1);
         let first = (band.start >> TILE_SHIFT).saturating_sub(NEIGHBOURHOOD_TILES);
@@ -185,7 +224,18 @@ impl ThresholdMap {
             .map(|(&l, &h)| {
                 let contrast = h - l;
                 if contrast >= noise_floor && contrast >= h / 6 {
-                    (u16::from(l) + u16::from(h)).div_ceil(2)
+                    match level {
+                        Level::Mid => (u16::from(l) + u16::from(h)).div_ceil(2),
+                        Level::Ratio => {
+                            let c = f64::from(noise_floor) / 2.0;
+                            // A third of the way up in log light: shade
+                            // to 1/5 keeps paper above it.
+                            let g = (f64::from(l) + c).powf(2.0 / 3.0)
+                                * (f64::from(h) + c).powf(1.0 / 3.0)
+                                - c;
+                            (g.round() as u16).max(u16::from(l) + u16::from(noise_floor) / 2)
+                        }
+                    }
                 } else {
                     UNSET
                 }
@@ -204,6 +254,7 @@ impl ThresholdMap {
                 values: vec![0; cols * rows],
                 floor: Vec::new(),
                 min_contrast: noise_floor,
+                shaded: None,
             };
         }
         while let Some(i) = queue.pop_front() {
@@ -236,6 +287,21 @@ impl ThresholdMap {
         // edge of the image (left, right, and top or bottom where the map
         // reaches them) in a large enough region are floor.
         let solid: Vec<bool> = (0..values.len()).map(|i| own_hi[i] < values[i]).collect();
+        let shaded_tiles = (0..values.len()).filter(|&i| {
+            solid[i] && u16::from(own_hi[i]) >= 2 * u16::from(lo[i]) + 2 * u16::from(noise_floor)
+        });
+        let shaded = shaded_tiles
+            .fold(None, |range: Option<(usize, usize)>, i| {
+                let r = i / cols;
+                Some(range.map_or((r, r), |(a, b)| (a.min(r), b.max(r))))
+            })
+            .map(|(a, b)| {
+                // The marker a shaded tile belongs to reaches the
+                // neighbourhood's tiles above and below.
+                let top = (first + a).saturating_sub(NEIGHBOURHOOD_TILES) << TILE_SHIFT;
+                let bottom = ((first + b + NEIGHBOURHOOD_TILES + 1) << TILE_SHIFT).min(height);
+                top..bottom
+            });
         let last_row = height.div_ceil(tile) - 1;
         let on_edge = |i: usize| {
             let (c, r) = (i % cols, first + i / cols);
@@ -294,8 +360,16 @@ impl ThresholdMap {
             values,
             floor: if any_floor { floor } else { Vec::new() },
             min_contrast: noise_floor,
+            shaded,
         }
     }
+}
+
+/// Where between a tile's black and white levels its threshold lies.
+#[derive(Debug, Clone, Copy)]
+enum Level {
+    Mid,
+    Ratio,
 }
 
 /// The least contrast that sensor noise cannot fake: a flat, noisy area

@@ -288,6 +288,188 @@ fn dark_noisy_uneven_still_image_is_read_in_one_call() {
     assert_eq!(found.len(), 12, "false detections");
 }
 
+/// Paper darkened to `factor` of its light beyond the line v = `v0`
+/// turned by `angle`, over a soft edge of `soft` px: a cast shadow, which
+/// the simulator's smooth light cannot draw.
+fn cast_shadow(image: &mut image::GrayImage, v0: f64, angle: f64, factor: f64, soft: f64) {
+    let (s, c) = angle.sin_cos();
+    let u0 = f64::from(image.width()) / 2.0;
+    for (x, y, p) in image.enumerate_pixels_mut() {
+        let d = -(f64::from(x) - u0) * s + (f64::from(y) - v0) * c;
+        let t = (d / soft + 0.5).clamp(0.0, 1.0);
+        let light = 1.0 - (1.0 - factor) * t;
+        p.0[0] = (f64::from(p.0[0]) * light).round() as u8;
+    }
+}
+
+/// A shadow's edge across the middle row of markers (some cut through
+/// their centres), under a 5:1 light gradient: the shaded part of each
+/// white disc falls below the mid-level of lit paper and ink. Most markers
+/// are still named (33 of 36; without the second look at shaded rows 25),
+/// none misread; a marker whose centre the edge crosses may be lost.
+#[test]
+fn a_cast_shadow_across_markers_under_a_steep_gradient_keeps_them() {
+    let camera = Camera::ideal(1280, 960, 60.0);
+    let family = Family::generate(8, 2).unwrap();
+    let (mut markers, mut found_ids, mut wrong) = (0, 0, 0);
+    for (factor, v0, angle) in [(0.4, 480.0, 0.05), (0.4, 500.0, -0.1), (0.5, 460.0, 0.0)] {
+        let mut scene = grid_scene(camera, &family, 8, &|k| (k % 3) as f64 * 15.0 * DEG, 1.1);
+        scene.gradient = 5.0;
+        scene.gradient_angle = 0.3;
+        scene.exposure = 1.1;
+        scene.noise = 1.5;
+        let (mut image, truth) = simulate::render(&scene);
+        cast_shadow(&mut image, v0, angle, factor, 12.0);
+        let found = detector(&family, camera).detect(&image);
+        assert!(found.len() <= 12, "no false detection");
+        for m in &truth.markers {
+            markers += 1;
+            let near = found
+                .iter()
+                .find(|d| (d.u - m.u).hypot(d.v - m.v) < m.diameter_px / 4.0);
+            match near.map(|d| d.id) {
+                Some(id) if id == m.id => found_ids += 1,
+                Some(0) | None => {}
+                Some(_) => wrong += 1,
+            }
+        }
+    }
+    eprintln!("{found_ids} of {markers} named, {wrong} wrong");
+    assert_eq!(wrong, 0);
+    assert!(found_ids >= 31, "{found_ids} of {markers} named");
+}
+
+/// Markers 65-95 px across (face-on) seen at 50-70° from their normal,
+/// random codes, rolls and tilt axes on 800x600: every one found and named
+/// but at most one (an 8-bit ring that steep passed for 7 bits along the
+/// unrectified ellipse), none misread.
+#[test]
+fn steep_views_up_to_70_degrees_are_found_and_named() {
+    let camera = Camera::ideal(800, 600, 60.0);
+    let family = Family::generate(8, 2).unwrap();
+    let mut rng = crate::support::Pcg32::new(1_820_000, 1);
+    let (mut seen, mut named) = (0, 0);
+    for frame in 0..20 {
+        let mut scene = Scene::new(camera);
+        scene.noise = 2.0;
+        scene.seed = frame;
+        for k in 0..9 {
+            let (u, v) = (
+                800.0 * ((k % 3) as f64 + 0.5) / 3.0,
+                600.0 * ((k / 3) as f64 + 0.5) / 3.0,
+            );
+            let diameter_px = rng.range(65.0, 95.0);
+            let z = camera.fx * DIAMETER_M / diameter_px;
+            let (x, y) = camera.undistort(u, v);
+            let (tilt, axis) = (rng.range(55.0, 70.0) * DEG, rng.range(0.0, 6.3));
+            let id = 1 + rng.next_u32() % family.len() as u32;
+            let marker = Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
+            let placement = Placement::viewed(
+                Vector3::new(x * z, y * z, z),
+                tilt * axis.cos(),
+                tilt * axis.sin(),
+                rng.range(0.0, 6.3),
+            );
+            scene
+                .objects
+                .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+        }
+        let (image, truth) = simulate::render(&scene);
+        let found = detector(&family, camera).detect(&image);
+        for m in truth.markers.iter().filter(|m| m.visible) {
+            let to_camera = -Vector3::from(m.position).normalize();
+            let view = Vector3::from(m.normal).angle(&to_camera) / DEG;
+            if view > 70.0 {
+                continue;
+            }
+            seen += 1;
+            let d = found
+                .iter()
+                .find(|d| (d.u - m.u).hypot(d.v - m.v) < m.diameter_px / 4.0);
+            let id = d.map(|d| d.id);
+            assert!(
+                id.is_none_or(|id| id == 0 || id == m.id),
+                "frame {frame}: marker {} misread as {id:?}",
+                m.id
+            );
+            if id == Some(m.id) {
+                named += 1;
+            } else {
+                eprintln!(
+                    "frame {frame}, view {view:.1}°: marker {} gave {id:?}",
+                    m.id
+                );
+            }
+        }
+    }
+    eprintln!("{named} of {seen} named");
+    assert!(seen >= 100, "only {seen} markers within 70°");
+    // 114 of 114 now (112 before the rectified second reading); one spare.
+    assert!(named + 1 >= seen, "{named} of {seen} named");
+}
+
+/// 8-bit markers about 80 px across under 20-25 px of motion blur in random
+/// directions (640x480): most rings are past reading, and those say
+/// "unknown" or are not reported; none is named as another member (rings
+/// with an erasure filled and a bit corrected besides once were).
+#[test]
+fn heavy_motion_blur_never_gives_a_wrong_id() {
+    let camera = Camera::ideal(640, 480, 60.0);
+    let family = Family::generate(8, 2).unwrap();
+    let mut rng = crate::support::Pcg32::new(1_720_000, 1);
+    let (mut right, mut wrong) = (0, 0);
+    for frame in 0..24 {
+        let mut scene = Scene::new(camera);
+        scene.noise = 2.0;
+        scene.seed = frame;
+        scene.motion_blur = Some(simulate::MotionBlur {
+            length_px: if frame % 2 == 0 { 20.0 } else { 25.0 },
+            angle: rng.range(0.0, std::f64::consts::PI),
+        });
+        for k in 0..4 {
+            let (u, v) = (
+                640.0 * ((k % 2) as f64 + 0.5) / 2.0 + rng.range(-40.0, 40.0),
+                480.0 * ((k / 2) as f64 + 0.5) / 2.0 + rng.range(-30.0, 30.0),
+            );
+            let diameter_px = rng.range(76.0, 84.0);
+            let z = camera.fx * DIAMETER_M / diameter_px;
+            let (x, y) = camera.undistort(u, v);
+            let id = 1 + rng.next_u32() % family.len() as u32;
+            let marker = Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
+            let placement = Placement::viewed(
+                Vector3::new(x * z, y * z, z),
+                rng.range(-15.0, 15.0) * DEG,
+                rng.range(-15.0, 15.0) * DEG,
+                rng.range(0.0, 6.3),
+            );
+            scene
+                .objects
+                .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+        }
+        let (image, truth) = simulate::render(&scene);
+        let found = detector(&family, camera).detect(&image);
+        for d in found.iter().filter(|d| d.id != 0) {
+            let m = truth
+                .markers
+                .iter()
+                .min_by(|a, b| {
+                    let da = (a.u - d.u).hypot(a.v - d.v);
+                    let db = (b.u - d.u).hypot(b.v - d.v);
+                    da.total_cmp(&db)
+                })
+                .unwrap();
+            if m.id == d.id {
+                right += 1;
+            } else {
+                wrong += 1;
+                eprintln!("frame {frame}: marker {} named {}", m.id, d.id);
+            }
+        }
+    }
+    eprintln!("{right} right, {wrong} wrong");
+    assert_eq!(wrong, 0, "{wrong} wrong IDs ({right} right)");
+}
+
 /// A marker much larger than the floor threshold (48 tiles, the annulus of
 /// a 150 px marker) touching or cut by the image edge, on a card on a grey
 /// floor, beside small markers (so the global-threshold fallback, which
