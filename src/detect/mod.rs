@@ -354,7 +354,13 @@ impl Detector {
                 let band = (self.frame % DISCOVERY_BANDS) as usize;
                 let rows = height * band / DISCOVERY_BANDS as usize
                     ..height * (band + 1) / DISCOVERY_BANDS as usize;
-                let map = ThresholdMap::adaptive_rows(gray.pixels, width, height, rows.clone());
+                // The map reaches past the band by the largest marker's
+                // diameter, so a newcomer straddling the band's edge lies
+                // wholly within it (a dark fill stops where the map does).
+                let reach =
+                    self.tracks.iter().map(|t| 2.0 * t.a).fold(0.0, f64::max) as usize + SCAN_CHUNK;
+                let map_rows = rows.start.saturating_sub(reach)..(rows.end + reach).min(height);
+                let map = ThresholdMap::adaptive_rows(gray.pixels, width, height, map_rows);
                 self.scan(gray, &map, rows, &mut found, limit);
             }
         } else {

@@ -274,6 +274,15 @@ impl Filler {
         let mut escaped = false;
         while let Some((x, y)) = self.stack.pop() {
             let (x, y) = (x as usize, y as usize);
+            // Past the rows of a band map the floor is unknown: a dark
+            // segment that gets there is larger than any marker the band
+            // was sized for, and following it would flood the floor
+            // outside the band (most of a tracked frame's time on cards
+            // lying on a grey floor).
+            if dark && !map.holds_row(y) {
+                escaped = true;
+                break;
+            }
             let thresholds = map.row(y);
             let floor = floor_row(y);
             if !fillable(labels, thresholds, floor, x, y) {

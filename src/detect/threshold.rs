@@ -70,6 +70,14 @@ impl ThresholdMap {
         &self.values[r * self.cols..(r + 1) * self.cols]
     }
 
+    /// Whether the map was computed for pixel row `y` (a band map holds
+    /// only its band and margins; the others borrow the nearest thresholds
+    /// and know nothing of the floor there).
+    #[inline]
+    pub fn holds_row(&self, y: usize) -> bool {
+        (self.row0..self.row0 + self.rows).contains(&(y >> self.shift))
+    }
+
     /// Least black-to-white difference that counts as a real edge here.
     pub fn min_contrast(&self) -> f64 {
         f64::from(self.min_contrast)
@@ -230,13 +238,14 @@ impl ThresholdMap {
         }
         let values: Vec<u8> = thresholds.into_iter().map(|t| t.min(255) as u8).collect();
         // Featureless tiles dark in every pixel; those connected to the
-        // edge of the image (left, right, and top or bottom where the map
-        // reaches them) in a large enough region are floor.
+        // edge of the map (the image's edges, and the rows where a band map
+        // is cut) in a large enough region are floor. A band cuts the
+        // floor between cards off from the image's sides; left unflagged,
+        // such pockets were flood-filled as candidates every tracked frame.
         let solid: Vec<bool> = (0..values.len()).map(|i| own_hi[i] < values[i]).collect();
-        let last_row = height.div_ceil(tile) - 1;
         let on_edge = |i: usize| {
-            let (c, r) = (i % cols, first + i / cols);
-            c == 0 || c + 1 == cols || r == 0 || r == last_row
+            let (c, r) = (i % cols, i / cols);
+            c == 0 || c + 1 == cols || r == 0 || r + 1 == rows
         };
         let mut floor = vec![false; values.len()];
         let mut seen = vec![false; values.len()];
