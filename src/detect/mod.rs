@@ -292,9 +292,17 @@ impl Detector {
 
     /// Forgets tracks and adapted tolerances.
     pub fn reset(&mut self) {
+        self.restart(self.config.clone());
+    }
+
+    /// Starts over as [`Detector::new`] with `config` would, keeping only
+    /// the pixel buffers: a worker reading unrelated images one after
+    /// another gets the same results as a fresh detector per image without
+    /// allocating and clearing a frame-sized buffer each time.
+    pub fn restart(&mut self, config: DetectorConfig) {
         *self = Detector {
             labels: std::mem::take(&mut self.labels),
-            ..Detector::new(self.config.clone())
+            ..Detector::new(config)
         };
     }
 
