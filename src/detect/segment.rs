@@ -448,7 +448,7 @@ mod tests {
         // the floor above row 60 only.
         for y in 60..420 {
             for x in 100..380 {
-                let bar = x < 140 || x >= 340 || y >= 380;
+                let bar = !(140..340).contains(&x) || y >= 380;
                 if bar {
                     px[y * w + x] = 220;
                 }
