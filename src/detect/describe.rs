@@ -230,9 +230,16 @@ impl Detector {
             }
             return;
         }
+        // This frame's reading, if it named something, contradicts the
+        // belief that is reported instead.
+        let contradicted = d.id != 0 || d.status == Some(MatchStatus::Rejected);
+        d.confidence = if contradicted && estimate.id != 0 {
+            super::idfilter::IdFilter::contradicted(estimate, d.confidence)
+        } else {
+            estimate.probability
+        };
         d.id = estimate.id;
         d.code = family.code(estimate.id);
-        d.confidence = estimate.probability;
         // The reading's yaw belongs to the code it read; the believed code's
         // edges give the yaw instead.
         d.yaw = match (d.code, previous_yaw) {

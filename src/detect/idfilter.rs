@@ -139,6 +139,21 @@ impl IdFilter {
         best
     }
 
+    /// The confidence to report with `estimate` on a frame whose own
+    /// reading contradicts it (names another member, or clearly no member)
+    /// with `reading_confidence`. The posterior treats readings as
+    /// independent and so may stay at 0.999 after one contradiction; but a
+    /// glint or a tracker swap lasts several frames, and the belief is
+    /// right on this frame only if this frame's reading is the misread:
+    /// the report is capped at that reading's own chance of being wrong.
+    pub fn contradicted(estimate: IdEstimate, reading_confidence: f64) -> f64 {
+        if reading_confidence.is_nan() {
+            return estimate.probability;
+        }
+        let c = reading_confidence.clamp(0.0, MAX_CONFIDENCE);
+        estimate.probability.min(1.0 - c)
+    }
+
     /// Posterior probability of one ID (0: not a member).
     pub fn probability(&self, id: u32) -> f64 {
         if id == 0 {
@@ -250,6 +265,26 @@ mod tests {
         let before = filter.probability(3);
         filter.observe_member(4, 0.0);
         assert_eq!(filter.probability(3), before);
+    }
+
+    #[test]
+    fn a_contradicted_belief_is_reported_with_the_doubt_of_the_contradiction() {
+        let mut filter = IdFilter::new(30);
+        for _ in 0..5 {
+            filter.observe_member(7, 0.9);
+        }
+        filter.observe_member(8, 0.9);
+        let belief = filter.estimate();
+        assert_eq!(belief.id, 7);
+        assert!(belief.probability > 0.99, "{belief:?}");
+        let reported = IdFilter::contradicted(belief, 0.9);
+        assert!((reported - 0.1).abs() < 1e-9, "{reported}");
+        // A faint contradiction dents the report a little; a reading with
+        // no confidence none at all.
+        assert!((IdFilter::contradicted(belief, 0.2) - 0.8).abs() < 1e-9);
+        assert_eq!(IdFilter::contradicted(belief, 0.0), belief.probability);
+        // The filter never trusts a reading fully, nor doubts fully.
+        assert!(IdFilter::contradicted(belief, 1.0) > 0.0);
     }
 
     #[test]

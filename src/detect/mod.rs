@@ -67,7 +67,8 @@ pub struct DetectorConfig {
     pub camera: Option<Camera>,
     /// Keep state between frames: predicted search, slow adaptation.
     pub tracking: bool,
-    /// Smallest outer diameter, pixels, worth reporting.
+    /// Smallest outer diameter, pixels, worth reporting: the outline's
+    /// major axis, which a tilt does not shorten.
     pub min_diameter_px: f64,
     /// ρ_max of the roundness test (eq. 1), relative.
     pub roundness_tolerance: f64,

@@ -119,18 +119,39 @@ impl Detector {
             return None;
         }
         let (cu, cv) = dark.centroid();
-        let bounds = [dark.min_u, dark.min_v, dark.max_u, dark.max_v];
+        // The white inside may come next to the segment's bounding box only
+        // when the annulus is one pixel wide, on markers of a few pixels:
+        // those need a family's ring model to be told from blobs.
+        let inset = u32::from(self.config.target.family().is_none());
+        let bounds = [
+            dark.min_u + inset,
+            dark.min_v + inset,
+            dark.max_u.saturating_sub(inset),
+            dark.max_v.saturating_sub(inset),
+        ];
         let max_count = (n * white_fraction / dark_fraction * 2.5) as u64 + 16;
         let white = self.fill_inside(gray, map, (cu, cv), bounds, max_count)?;
         let total = dark.merged(&white);
         let ratio = white.count as f64 / total.count as f64;
         let coarse = ellipse::from_moments(&total);
+        // A marker's size is its major axis, which a tilt does not shorten;
+        // but only a family's ring model can tell a tilted marker of a few
+        // pixels from a blob (legacy markers have no ring, and the bit
+        // count of so small a ring cannot be read), so without one the
+        // minor axis must reach the size too.
+        let size_axis = |e: &crate::math::Ellipse| {
+            if self.config.target.family().is_some() {
+                e.semi_major
+            } else {
+                e.semi_minor
+            }
+        };
         let accepted = self.ratio.accepts(ratio)
             && coarse.is_some_and(|e| {
                 let (wu, wv) = white.centroid();
                 let radius = (e.semi_major * e.semi_minor).sqrt();
                 (wu - e.u).hypot(wv - e.v) < concentricity_tolerance(design) * radius + 1.0
-                    && 2.0 * e.semi_minor >= min_d
+                    && 2.0 * size_axis(&e) >= min_d
             });
         let coarse = match coarse {
             Some(e) if accepted => e,

@@ -180,9 +180,10 @@ impl Stats {
 pub enum Fill {
     /// Dark pixels not yet in a dark segment of this pass.
     Dark,
-    /// Pixels at or above the threshold, inside `bounds` (exclusive): a
-    /// white region that reaches the bounds, or grows past `max_count`, is
-    /// not enclosed by its dark segment and the fill gives up.
+    /// Pixels at or above the threshold, inside `bounds` (min u, min v,
+    /// max u, max v of the enclosing segment): a white region that reaches
+    /// the bounds, or grows past `max_count`, is not enclosed by its dark
+    /// segment and the fill gives up.
     White { bounds: [u32; 4], max_count: u64 },
 }
 
@@ -228,21 +229,22 @@ impl Filler {
             Fill::White { bounds, max_count } => (white_label, bounds, max_count),
         };
         let dark = mode == Fill::Dark;
-        // Fill range in x and y; the white fill stays strictly inside bounds.
+        // Fill range in x and y. A white region that reaches the segment's
+        // bounding box is not enclosed by it (the box's outermost row and
+        // column hold the segment's own extreme pixels, with nothing of it
+        // beyond); one that only comes next to them may be: on a marker a
+        // few pixels across, the black annulus is one pixel wide.
         let (x_lo, x_hi) = if dark {
             (0usize, width - 1)
         } else {
-            (
-                bounds[0] as usize + 1,
-                (bounds[2] as usize).saturating_sub(1),
-            )
+            (bounds[0] as usize, (bounds[2] as usize).min(width - 1))
         };
         let (y_lo, y_hi) = if dark {
             (0usize, image.height - 1)
         } else {
             (
-                bounds[1] as usize + 1,
-                (bounds[3] as usize).saturating_sub(1),
+                bounds[1] as usize,
+                (bounds[3] as usize).min(image.height - 1),
             )
         };
         // The floor test only where there is floor: it sits in the inner loop.

@@ -43,8 +43,8 @@ pub const NEIGHBOURHOOD_TILES: usize = 2;
 pub const MIN_CONTRAST: u8 = 8;
 /// Fewest tiles of a wholly dark, featureless region reaching the edge of
 /// the map for it to count as background floor: 48 tiles are 12 000
-/// pixels, the whole black annulus of a marker 150 px across, so only a
-/// large marker cut by the image edge could be taken for floor.
+/// pixels, the whole black annulus of a marker 150 px across. A larger
+/// marker cut by the image edge is told from floor by its ink.
 pub const MIN_FLOOR_TILES: usize = 48;
 
 impl ThresholdMap {
@@ -237,6 +237,9 @@ impl ThresholdMap {
             }
         }
         let values: Vec<u8> = thresholds.into_iter().map(|t| t.min(255) as u8).collect();
+        // The darkest ink of the band: a region whose every pixel lies
+        // nearer to it than to the threshold is printed black, not floor.
+        let ink = lo.iter().copied().min().unwrap_or(0);
         // Featureless tiles dark in every pixel; those connected to the
         // edge of the map (the image's edges, and the rows where a band map
         // is cut) in a large enough region are floor. A band cuts the
@@ -276,7 +279,16 @@ impl ThresholdMap {
                     }
                 }
             }
-            if component.len() >= MIN_FLOOR_TILES {
+            // A grey floor lies just under the threshold that the cards
+            // on it set; the black annulus of a large marker cut by the
+            // image edge is as large and as featureless, but as black as
+            // ink (but for the tiles along its blurred rim): it is a
+            // marker's dark segment, not floor.
+            let inked = component
+                .iter()
+                .filter(|&&i| 2 * u16::from(own_hi[i]) <= u16::from(values[i]) + u16::from(ink))
+                .count();
+            if component.len() >= MIN_FLOOR_TILES && 2 * inked < component.len() {
                 any_floor = true;
                 for &i in &component {
                     floor[i] = true;

@@ -499,6 +499,18 @@ fn the_id_filter_outvotes_a_single_misread() {
         let found = tracked.detect(&image);
         assert_eq!(found.len(), 1);
         assert_eq!(found[0].id, 4, "frame {frame}: the track keeps its ID");
+        // ...but not its certainty on the frame that contradicts it.
+        let confidence = found[0].confidence;
+        if frame == 6 {
+            assert!(
+                confidence < 1.0 - fresh[0].confidence.min(0.95) + 1e-9,
+                "overridden reading {} reported at {confidence}",
+                fresh[0].confidence
+            );
+            assert!(confidence < 0.5, "{confidence}");
+        } else if frame > 2 {
+            assert!(confidence > 0.9, "frame {frame}: {confidence}");
+        }
     }
 }
 

@@ -287,3 +287,64 @@ fn dark_noisy_uneven_still_image_is_read_in_one_call() {
     assert_eq!(right, 12, "found {} ({right} right)", found.len());
     assert_eq!(found.len(), 12, "false detections");
 }
+
+/// A marker much larger than the floor threshold (48 tiles, the annulus of
+/// a 150 px marker) touching or cut by the image edge, on a card on a grey
+/// floor, beside small markers (so the global-threshold fallback, which
+/// knows no floor, does not run): its black annulus is as large and
+/// featureless as floor, but inked. Slightly cut, it is read; cut by a
+/// fifth, it is not reported, and neither is the floor.
+#[test]
+fn a_large_marker_cut_by_the_image_edge_is_not_taken_for_floor() {
+    let family = Family::generate(8, 2).unwrap();
+    let camera = Camera::ideal(1280, 720, 60.0);
+    let at = |u: f64, v: f64, diameter_px: f64| {
+        let z = camera.fx * DIAMETER_M / diameter_px;
+        let (x, y) = camera.undistort(u, v);
+        Placement::viewed(Vector3::new(x * z, y * z, z), 0.0, 0.0, 0.0)
+    };
+    let marker = |id: u32| Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
+    for (diameter_px, cut) in [(300.0, 0.0), (400.0, 0.05), (500.0, 0.1), (400.0, 0.25)] {
+        let mut scene = Scene::new(camera);
+        for k in 0..3u32 {
+            let placement = at(60.0, 100.0 + 120.0 * f64::from(k), 40.0);
+            scene.objects.push(SceneObject::Marker(LooseMarker::new(
+                marker(2 + k),
+                2 + k,
+                placement,
+            )));
+        }
+        let u = 1279.5 - diameter_px / 2.0 + cut * diameter_px;
+        scene.objects.push(SceneObject::Marker(LooseMarker::new(
+            marker(5),
+            5,
+            at(u, 360.0, diameter_px),
+        )));
+        scene.background = Background::Uniform(0.45);
+        scene.noise = 2.0;
+        let (image, _) = simulate::render(&scene);
+        let found = Detector::new(DetectorConfig {
+            target: Target::WhyCode(family.clone()),
+            ..Default::default()
+        })
+        .detect(&image);
+        let large: Vec<&Detection> = found.iter().filter(|d| d.u > 200.0).collect();
+        assert_eq!(
+            found.len() - large.len(),
+            3,
+            "{diameter_px} px cut {cut}: {found:?}"
+        );
+        if cut < 0.2 {
+            assert_eq!(large.len(), 1, "{diameter_px} px cut {cut}: {found:?}");
+            let d = large[0];
+            assert_eq!(d.id, 5, "{d:?}");
+            // The outline's centre, a few pixels cut off.
+            assert!(
+                (d.u - u).hypot(d.v - 360.0) < 0.01 * diameter_px + 1.0,
+                "{d:?} vs ({u}, 360)"
+            );
+        } else {
+            assert!(large.is_empty(), "{diameter_px} px cut {cut}: {large:?}");
+        }
+    }
+}
