@@ -456,6 +456,10 @@ mod tests {
                 }
             }
         }
+        // Ink on the cards (a marker's black), darker than the floor.
+        for y in 290..310 {
+            px[y * w + 110..y * w + 130].fill(15);
+        }
         let image = Gray {
             pixels: &px,
             width: w,
