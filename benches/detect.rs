@@ -1,7 +1,8 @@
 //! Detector speed, single thread (paper Table 5 setting).
 //!
 //! Targets: a 5000x5000 grey image with 550 markers of 60-120 px, first
-//! frame (no tracking) under 150 ms and a tracked frame under 15 ms;
+//! frame (no tracking) under 150 ms and a tracked frame under 15 ms, also
+//! with the full 6-DoF pose of every marker (`..._with_pose`);
 //! 640x480 with a few markers under 1 ms. Memory: divan's "max alloc"
 //! column shows what a frame allocates on top of the image (target: the
 //! whole process under 3x the image size, i.e. under 2x on top of it).
@@ -15,6 +16,7 @@ use std::sync::OnceLock;
 use divan::{black_box, AllocProfiler, Bencher};
 use image::GrayImage;
 use scenes::{render, scatter, Look, Pinhole};
+use whycode::camera::Camera;
 use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
@@ -99,6 +101,23 @@ fn config(tracking: bool, max_markers: usize) -> DetectorConfig {
     }
 }
 
+/// The camera `big_scene` is rendered with, and its markers' diameter.
+fn with_pose(config: DetectorConfig) -> DetectorConfig {
+    DetectorConfig {
+        camera: Some(Camera {
+            fx: 5000.0,
+            fy: 5000.0,
+            cx: 2500.0,
+            cy: 2500.0,
+            distortion: [0.0; 5],
+            width: 5000,
+            height: 5000,
+        }),
+        diameter_m: Some(0.1),
+        ..config
+    }
+}
+
 /// A frame seen without tracking, buffers already allocated (a folder of
 /// unrelated frames, or the first frame of a sequence after the first).
 #[divan::bench(sample_count = 10)]
@@ -127,6 +146,30 @@ fn tracked_frame_5000x5000_550_markers(bencher: Bencher) {
     let image = big_scene();
     let mut detector = Detector::new(config(true, 550));
     assert_eq!(detector.detect(image).len(), 550);
+    bencher.bench_local(|| {
+        let found = detector.detect(black_box(image)).len();
+        assert_eq!(found, 550);
+        found
+    });
+}
+
+/// As `first_frame_...`, with every marker's pose.
+#[divan::bench(sample_count = 10)]
+fn first_frame_5000x5000_550_markers_with_pose(bencher: Bencher) {
+    let image = big_scene();
+    let mut detector = Detector::new(with_pose(config(false, 1024)));
+    assert_eq!(detector.detect(image).len(), 550);
+    bencher.bench_local(|| detector.detect(black_box(image)).len());
+}
+
+/// As `tracked_frame_...`, with every marker's pose.
+#[divan::bench(sample_count = 20)]
+fn tracked_frame_5000x5000_550_markers_with_pose(bencher: Bencher) {
+    let image = big_scene();
+    let mut detector = Detector::new(with_pose(config(true, 550)));
+    let first = detector.detect(image);
+    assert_eq!(first.len(), 550);
+    assert!(first.iter().all(|d| d.pose.is_some()));
     bencher.bench_local(|| {
         let found = detector.detect(black_box(image)).len();
         assert_eq!(found, 550);

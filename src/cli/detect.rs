@@ -145,22 +145,27 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         progress.inc(1);
         result
     };
-    // Jobs run in parallel; a sequence's frames run in order on one detector.
+    // Jobs run in parallel, one detector per worker thread, restarted for
+    // each job (so results never depend on which thread ran what); a
+    // sequence's frames run in order on one detector.
     let results: Vec<Vec<Result<FrameReport>>> = jobs
         .par_iter()
-        .map(|job| match job {
-            Job::Image(path) => {
-                let mut detector = Detector::new(config.clone());
-                vec![process(&mut detector, path)]
-            }
-            Job::Sequence(frames) => {
-                let mut detector = Detector::new(DetectorConfig {
-                    tracking: true,
-                    ..config.clone()
-                });
-                frames.iter().map(|f| process(&mut detector, f)).collect()
-            }
-        })
+        .map_init(
+            || Detector::new(config.clone()),
+            |detector, job| match job {
+                Job::Image(path) => {
+                    detector.restart(config.clone());
+                    vec![process(detector, path)]
+                }
+                Job::Sequence(frames) => {
+                    detector.restart(DetectorConfig {
+                        tracking: true,
+                        ..config.clone()
+                    });
+                    frames.iter().map(|f| process(detector, f)).collect()
+                }
+            },
+        )
         .collect();
     progress.finish_and_clear();
 

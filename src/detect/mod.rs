@@ -293,9 +293,17 @@ impl Detector {
 
     /// Forgets tracks and adapted tolerances.
     pub fn reset(&mut self) {
+        self.restart(self.config.clone());
+    }
+
+    /// Starts over as [`Detector::new`] with `config` would, keeping only
+    /// the pixel buffers: a worker reading unrelated images one after
+    /// another gets the same results as a fresh detector per image without
+    /// allocating and clearing a frame-sized buffer each time.
+    pub fn restart(&mut self, config: DetectorConfig) {
         *self = Detector {
             labels: std::mem::take(&mut self.labels),
-            ..Detector::new(self.config.clone())
+            ..Detector::new(config)
         };
     }
 
@@ -355,7 +363,13 @@ impl Detector {
                 let band = (self.frame % DISCOVERY_BANDS) as usize;
                 let rows = height * band / DISCOVERY_BANDS as usize
                     ..height * (band + 1) / DISCOVERY_BANDS as usize;
-                let map = ThresholdMap::adaptive_rows(gray.pixels, width, height, rows.clone());
+                // The map reaches past the band by the largest marker's
+                // diameter, so a newcomer straddling the band's edge lies
+                // wholly within it (a dark fill stops where the map does).
+                let reach =
+                    self.tracks.iter().map(|t| 2.0 * t.a).fold(0.0, f64::max) as usize + SCAN_CHUNK;
+                let map_rows = rows.start.saturating_sub(reach)..(rows.end + reach).min(height);
+                let map = ThresholdMap::adaptive_rows(gray.pixels, width, height, map_rows);
                 self.scan(gray, &map, rows, &mut found, limit);
             }
         } else {

@@ -37,9 +37,10 @@ pub fn refine_rotation(
     let radii = [0.25, 0.5, 0.75]
         .map(|k| (RING_INNER_RATIO + (WHYCODE_WHITE_RATIO - RING_INNER_RATIO) * k) * radius_m);
     let mut profile = Vec::with_capacity(n);
-    for j in 0..n {
-        let theta = std::f64::consts::TAU * j as f64 / n as f64;
-        let (s, c) = theta.sin_cos();
+    // Walk the angle by a fixed rotation instead of a sine per sample.
+    let (step_sin, step_cos) = (std::f64::consts::TAU / n as f64).sin_cos();
+    let (mut s, mut c) = (0.0f64, 1.0f64);
+    for _ in 0..n {
         let direction: Vector3<f64> = x * c + y * s;
         let mut sum = 0.0;
         for r in radii {
@@ -47,6 +48,7 @@ pub fn refine_rotation(
             sum += sample(image, u, v)?;
         }
         profile.push(sum / radii.len() as f64);
+        (s, c) = (s * step_cos + c * step_sin, c * step_cos - s * step_sin);
     }
     let phi = edge_phase(&profile, bits, code, SAMPLES_PER_SECTOR, 1.0)?;
     // The edges sit at angle φ in the current frame: +x turns by φ.

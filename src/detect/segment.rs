@@ -276,6 +276,15 @@ impl Filler {
         let mut escaped = false;
         while let Some((x, y)) = self.stack.pop() {
             let (x, y) = (x as usize, y as usize);
+            // Past the rows of a band map the floor is unknown: a dark
+            // segment that gets there is larger than any marker the band
+            // was sized for, and following it would flood the floor
+            // outside the band (most of a tracked frame's time on cards
+            // lying on a grey floor).
+            if dark && !map.holds_row(y) {
+                escaped = true;
+                break;
+            }
             let thresholds = map.row(y);
             let floor = floor_row(y);
             if !fillable(labels, thresholds, floor, x, y) {
@@ -428,6 +437,73 @@ mod tests {
             ring.stats.count,
             px.iter().filter(|&&p| p == 12).count() as u64
         );
+    }
+
+    /// Floor between white cards that reaches the image's sides only
+    /// outside a tracked frame's band: within the band map it must still be
+    /// floor, and no dark fill may run on past the rows the map holds.
+    #[test]
+    fn a_band_map_stops_fills_in_floor_the_band_cuts_off() {
+        let (w, h) = (480usize, 480usize);
+        let mut px = vec![112u8; w * h];
+        // A white U open at the top: the floor inside it meets the rest of
+        // the floor above row 60 only.
+        for y in 60..420 {
+            for x in 100..380 {
+                let bar = !(140..340).contains(&x) || y >= 380;
+                if bar {
+                    px[y * w + x] = 220;
+                }
+            }
+        }
+        // Ink on the cards (a marker's black), darker than the floor.
+        for y in 290..310 {
+            px[y * w + 110..y * w + 130].fill(15);
+        }
+        let image = Gray {
+            pixels: &px,
+            width: w,
+            height: h,
+        };
+        let band = ThresholdMap::adaptive_rows(&px, w, h, 250..330);
+        assert!(band.is_floor(240, 300), "the pocket inside the U is floor");
+        let mut labels = Labels::default();
+        labels.begin(w, h);
+        let mut filler = Filler::default();
+        // Seeded next to a bar, in a tile the floor test does not cover.
+        let pocket = filler.fill(image, &band, &mut labels, (141, 300), Fill::Dark);
+        assert!(pocket.escaped);
+        assert!(pocket.stats.count < 2_000, "{}", pocket.stats.count);
+    }
+
+    /// A dark bar too narrow to be floor running the height of the frame:
+    /// a band map's fill gives up where the map's rows end.
+    #[test]
+    fn a_band_fill_stops_where_the_map_ends() {
+        let (w, h) = (240usize, 480usize);
+        let mut px = vec![220u8; w * h];
+        for y in 0..h {
+            px[y * w + 104..y * w + 128].fill(20);
+        }
+        let image = Gray {
+            pixels: &px,
+            width: w,
+            height: h,
+        };
+        let band = ThresholdMap::adaptive_rows(&px, w, h, 250..330);
+        assert!(!band.is_floor(120, 300));
+        let mut labels = Labels::default();
+        labels.begin(w, h);
+        let mut filler = Filler::default();
+        let bar = filler.fill(image, &band, &mut labels, (110, 300), Fill::Dark);
+        assert!(bar.escaped);
+        assert!(bar.stats.count < 24 * 200, "{}", bar.stats.count);
+        // The whole-frame map holds every row: the bar fills whole.
+        let full = ThresholdMap::adaptive(&px, w, h);
+        labels.begin(w, h);
+        let bar = filler.fill(image, &full, &mut labels, (110, 300), Fill::Dark);
+        assert!(!bar.escaped);
+        assert_eq!(bar.stats.count, (24 * h) as u64);
     }
 
     #[test]

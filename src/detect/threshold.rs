@@ -84,6 +84,14 @@ impl ThresholdMap {
         &self.values[r * self.cols..(r + 1) * self.cols]
     }
 
+    /// Whether the map was computed for pixel row `y` (a band map holds
+    /// only its band and margins; the others borrow the nearest thresholds
+    /// and know nothing of the floor there).
+    #[inline]
+    pub fn holds_row(&self, y: usize) -> bool {
+        (self.row0..self.row0 + self.rows).contains(&(y >> self.shift))
+    }
+
     /// Least black-to-white difference that counts as a real edge here.
     pub fn min_contrast(&self) -> f64 {
         f64::from(self.min_contrast)
@@ -284,8 +292,10 @@ impl ThresholdMap {
         // nearer to it than to the threshold is printed black, not floor.
         let ink = lo.iter().copied().min().unwrap_or(0);
         // Featureless tiles dark in every pixel; those connected to the
-        // edge of the image (left, right, and top or bottom where the map
-        // reaches them) in a large enough region are floor.
+        // edge of the map (the image's edges, and the rows where a band map
+        // is cut) in a large enough region are floor. A band cuts the
+        // floor between cards off from the image's sides; left unflagged,
+        // such pockets were flood-filled as candidates every tracked frame.
         let solid: Vec<bool> = (0..values.len()).map(|i| own_hi[i] < values[i]).collect();
         let shaded_tiles = (0..values.len()).filter(|&i| {
             solid[i] && u16::from(own_hi[i]) >= 2 * u16::from(lo[i]) + 2 * u16::from(noise_floor)
@@ -302,10 +312,9 @@ impl ThresholdMap {
                 let bottom = ((first + b + NEIGHBOURHOOD_TILES + 1) << TILE_SHIFT).min(height);
                 top..bottom
             });
-        let last_row = height.div_ceil(tile) - 1;
         let on_edge = |i: usize| {
-            let (c, r) = (i % cols, first + i / cols);
-            c == 0 || c + 1 == cols || r == 0 || r == last_row
+            let (c, r) = (i % cols, i / cols);
+            c == 0 || c + 1 == cols || r == 0 || r + 1 == rows
         };
         let mut floor = vec![false; values.len()];
         let mut seen = vec![false; values.len()];

@@ -83,7 +83,9 @@ impl<'a, T: Texel> Plane<'a, T> {
     }
 
     /// Bilinear value at (x, y) under the `border` policy.
-    #[inline]
+    // Always inlined: the policy is a constant at every call site, and the
+    // ring and pose stages call this a thousand times per marker.
+    #[inline(always)]
     pub fn at(&self, x: f64, y: f64, border: Border) -> Option<T::Value> {
         let (w, h) = (self.width, self.height);
         let (x0, y0, x1, y1, fx, fy) = match border {
