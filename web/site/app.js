@@ -444,7 +444,8 @@ async function printDownload(button, format, manifestOnly) {
 for (const button of document.querySelectorAll("#print-form button[data-format]")) {
   button.addEventListener("click", () => printDownload(button, button.dataset.format, false));
 }
-$("p-manifest").addEventListener("click", (event) => printDownload(event.currentTarget, "pdf", true));
+// The manifest is the same for every format; SVG needs no PDF module.
+$("p-manifest").addEventListener("click", (event) => printDownload(event.currentTarget, "svg", true));
 
 // ---------- Check ----------
 
@@ -755,6 +756,7 @@ async function start() {
   const status = $("engine-status");
   try {
     const hello = await engine.call("hello", {});
+    performance.mark("whycode-engine-ready");
     status.className = "engine ready";
     $("version").textContent = `whycode ${hello.version}`;
     fillTemplates(hello.templates);
