@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Builds the static site into web/dist/: the whycode library compiled to
 # WebAssembly (wasm-bindgen), the page's HTML/CSS/JS and an offline cache
-# list. Works on a fresh machine: installs the wasm target and the
-# wasm-bindgen CLI (the version Cargo.lock pins) when they are missing.
+# list. Works on a fresh machine with Rust (rustup), Python 3 and Node.js
+# (npm): installs the wasm target, the wasm-bindgen CLI (the version
+# Cargo.lock pins) and binaryen (npm) under the target directory when they
+# are missing.
 # Serve the result with any static server, e.g. `python3 -m http.server -d web/dist`.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -39,19 +41,18 @@ if ! command -v wasm-bindgen >/dev/null 2>&1 || [ "$(wasm-bindgen --version | aw
     }
     install --locked || install
 fi
-# Binaryen's wasm-opt and wasm-metadce: from the distribution when missing.
-if ! command -v wasm-opt >/dev/null 2>&1 || ! command -v wasm-metadce >/dev/null 2>&1; then
-    if command -v apt-get >/dev/null 2>&1; then
-        echo "web/build.sh: installing binaryen (wasm-opt)" >&2
-        sudo=$([ "$(id -u)" = 0 ] || echo sudo)
-        DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq binaryen >/dev/null ||
-            { $sudo apt-get update -qq && DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq binaryen >/dev/null; }
-    fi
-    if ! command -v wasm-opt >/dev/null 2>&1 || ! command -v wasm-metadce >/dev/null 2>&1; then
-        echo "web/build.sh: error: needs binaryen's wasm-opt and wasm-metadce (Debian/Ubuntu: apt-get install binaryen; npm: binaryen)" >&2
-        exit 1
-    fi
+# Binaryen's wasm-opt and wasm-metadce, at a version that reads
+# wasm-bindgen's externref table right (Debian 12's binaryen 108 exports
+# the function table in its place, and the page fails to start), from npm.
+binaryen_version=132.0.0
+binaryen="$tools/npm/node_modules/binaryen"
+if [ "$(node -p "require('$binaryen/package.json').version" 2>/dev/null)" != "$binaryen_version" ]; then
+    echo "web/build.sh: installing binaryen $binaryen_version from npm into $tools/npm" >&2
+    mkdir -p "$tools/npm"
+    npm install --silent --no-audit --no-fund --prefix "$tools/npm" "binaryen@$binaryen_version"
 fi
+wasm_opt="$tools/npm/node_modules/.bin/wasm-opt"
+wasm_metadce="$tools/npm/node_modules/.bin/wasm-metadce"
 
 staging="$here/dist.tmp"
 rm -rf "$staging"
@@ -77,11 +78,14 @@ module whycode_pdf --features pdf
 # printpdf's own JavaScript API goes, and all it alone reaches).
 python3 "$here/wasm_exports.py" "$staging/raw/whycode_pdf_bg.wasm" "$staging/raw/graph.json" \
     sheet marker 'files_*' __wbg_files_free
-wasm-metadce "$staging/raw/whycode_pdf_bg.wasm" --graph-file "$staging/raw/graph.json" \
+"$wasm_metadce" "$staging/raw/whycode_pdf_bg.wasm" --graph-file "$staging/raw/graph.json" \
     -o "$staging/raw/whycode_pdf_bg.wasm" >/dev/null
+pids=()
 for name in whycode_web whycode_pdf; do
-    wasm-opt -Oz --strip-debug --strip-producers "$staging/raw/${name}_bg.wasm" -o "$staging/pkg/${name}_bg.wasm"
+    "$wasm_opt" -Oz --strip-debug --strip-producers "$staging/raw/${name}_bg.wasm" -o "$staging/pkg/${name}_bg.wasm" &
+    pids+=($!)
 done
+for pid in "${pids[@]}"; do wait "$pid"; done
 rm -rf "$staging/raw"
 cp "$here/site/index.html" "$here/site/style.css" "$here/site/app.js" "$here/site/worker.js" "$staging/"
 
