@@ -242,8 +242,8 @@ class Tests:
                      "-o", f"id5.{ext}")
             assert got[f"id5.{ext}"] == (self.work / f"id5.{ext}").read_bytes(), f"id5.{ext} differs"
 
-    def check_photos(self, manifest, photos):
-        self.open("check")
+    def check_photos(self, manifest, photos, width=1280, height=900):
+        self.open("check", width=width, height=height)
         self.page.click("#c-clear")
         self.page.set_input_files("#c-manifest", str(self.work / manifest))
         self.page.set_input_files("#c-photos", [str(self.work / p) for p in photos])
@@ -392,7 +392,7 @@ class Tests:
             if panel == "print":
                 self.page.wait_for_selector("#print-preview img")
             if panel == "check" and (self.work / "swarm.json").exists():
-                self.check_photos("swarm.json", ["blot.png"])
+                self.check_photos("swarm.json", ["photo.png", "blot.png", "scaled.jpg"], width=390, height=844)
             self.page.wait_for_timeout(300)
             self.shot(f"{panel}-390")
             overflow = self.page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
@@ -439,7 +439,7 @@ class Tests:
             self.page.wait_for_function("document.querySelector('#ids-table-title').textContent.includes('10-bit')")
             # The PDF module was never fetched: a PDF offline says so, and
             # the rest of the page keeps working.
-            self.page.goto(f"{self.base}/#print")
+            self.open("print")
             self.page.wait_for_selector("#print-preview img", timeout=60000)
             self.page.click("#print-form button[data-format=pdf]")
             self.page.wait_for_selector("#print-msg.error", timeout=60000)

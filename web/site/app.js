@@ -559,7 +559,7 @@ function showReport(r, table) {
     <div class="counts"><span>${c.printed} printed</span><span>${c.found} found</span><span>${c.misread} misread</span><span>${c.unidentified} unidentified</span><span>${c.missing} missing</span></div>`;
   $("c-pages").innerHTML = `<thead><tr><th>Page</th><th class="text">Printed scale</th><th class="text">Note</th></tr></thead><tbody>${r.pages.map((p) => {
     const scale = p.scale == null ? "unknown" : `${(p.scale * 100).toFixed(1)} %`;
-    return `<tr><td>${p.page}</td><td class="text ${p.scale_status}">${scale} (${p.scale_status})</td><td class="text">${escapeHtml(p.note || "")}</td></tr>`;
+    return `<tr><td>${p.page}</td><td class="text ${p.scale_status}">${scale} (${p.scale_status})</td><td class="text wrap">${escapeHtml(p.note || "")}</td></tr>`;
   }).join("")}</tbody>`;
   $("c-markers").innerHTML = `<thead><tr><th>ID</th><th>Page</th><th class="text">Status</th><th>Read as</th><th class="text">Photo</th></tr></thead><tbody>${r.markers.map((m) =>
     `<tr><td>${m.id}</td><td>${m.page}</td><td class="text ${m.status}">${m.status}</td><td>${m.read_as ?? ""}</td><td class="text">${escapeHtml(m.photo || "")}</td></tr>`).join("")}</tbody>`;
