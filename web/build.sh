@@ -47,6 +47,10 @@ fi
 binaryen_version=132.0.0
 binaryen="$tools/npm/node_modules/binaryen"
 if [ "$(node -p "require('$binaryen/package.json').version" 2>/dev/null)" != "$binaryen_version" ]; then
+    if ! command -v npm >/dev/null 2>&1; then
+        echo "web/build.sh: error: needs Node.js and npm (for binaryen's wasm-opt), e.g. apt-get install nodejs npm" >&2
+        exit 1
+    fi
     echo "web/build.sh: installing binaryen $binaryen_version from npm into $tools/npm" >&2
     mkdir -p "$tools/npm"
     npm install --silent --no-audit --no-fund --prefix "$tools/npm" "binaryen@$binaryen_version"
