@@ -67,7 +67,7 @@ mod tests {
     #[test]
     fn numbers_are_written_short_and_rounded() {
         let text = serde_json::to_string(&Written {
-            a: 1234.567_849_999,
+            a: 1_234.567_849_999,
             b: 12.0,
             c: 0.970_000_000_000_4,
             d: Some(1.000_012_345),
