@@ -10,13 +10,18 @@ use std::collections::HashMap;
 use std::f64::consts::PI;
 
 use image::GrayImage;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use whycode::camera::Camera;
 use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::math::Pcg32;
-use whycode::simulate::{self, GroundTruth, LooseMarker, Placement, Scene, SceneObject};
+use whycode::simulate::{
+    self, GroundTruth, LooseMarker, Placement, PrintedSquare, Scene, SceneObject,
+};
+
+use crate::rival::{Rival, Setup};
+use crate::tag36h11;
 
 pub const DEG: f64 = PI / 180.0;
 
@@ -173,33 +178,116 @@ pub fn detector(family: Option<&Family>, camera: &Camera, tracking: bool) -> Det
     })
 }
 
-/// A detection this close to any true marker (in its diameters, plus 2 px)
-/// is about that marker, not a false one: the card reaches 0.75 D from the
+/// One true target of a frame, whichever kind (a WhyCode marker, or the
+/// AprilTag printed in its place), as the scoring sees it.
+#[derive(Debug, Clone)]
+pub struct Truth {
+    /// Family ID of a marker, tag ID of a tag (0 for a legacy marker).
+    pub id: u32,
+    pub u: f64,
+    pub v: f64,
+    /// Longest projected size (disc diameter, or the tag's black square side), px.
+    pub size_px: f64,
+    pub visible: bool,
+    /// Image direction of the target's +x axis, radians.
+    pub yaw: f64,
+    /// Rotation target → camera (columns +x, +y, normal).
+    pub rotation: Matrix3<f64>,
+    pub position: Vector3<f64>,
+}
+
+impl Truth {
+    pub fn normal(&self) -> Vector3<f64> {
+        self.rotation.column(2).into_owned()
+    }
+
+    /// The frame's targets: its markers, then its printed squares.
+    pub fn of(truth: &GroundTruth) -> Vec<Truth> {
+        let rotation = |r: &[[f64; 3]; 3]| Matrix3::from_fn(|i, j| r[i][j]);
+        let markers = truth.markers.iter().map(|m| Truth {
+            id: m.id,
+            u: m.u,
+            v: m.v,
+            size_px: m.diameter_px,
+            visible: m.visible,
+            yaw: m.yaw,
+            rotation: rotation(&m.rotation),
+            position: Vector3::from(m.position),
+        });
+        let squares = truth.squares.iter().map(|q| {
+            // The image of +x at the centre: from the left to the right edge's midpoint.
+            let c = &q.corners;
+            let du = (c[1][0] + c[2][0] - c[0][0] - c[3][0]) / 2.0;
+            let dv = (c[1][1] + c[2][1] - c[0][1] - c[3][1]) / 2.0;
+            Truth {
+                id: q.id,
+                u: q.u,
+                v: q.v,
+                size_px: q.side_px,
+                visible: q.visible,
+                yaw: dv.atan2(du),
+                rotation: rotation(&q.rotation),
+                position: Vector3::from(q.position),
+            }
+        });
+        markers.chain(squares).collect()
+    }
+}
+
+/// One report of a detector, ours or another, as the scoring sees it.
+#[derive(Debug, Clone)]
+pub struct Seen {
+    pub u: f64,
+    pub v: f64,
+    /// `None`: reported without an ID ("unknown").
+    pub id: Option<u32>,
+    pub yaw: Option<f64>,
+    /// Unit normal of the printed face, camera frame.
+    pub normal: Option<Vector3<f64>>,
+    /// Full orientation: rotation target → camera (columns +x, +y, normal).
+    pub rotation: Option<Matrix3<f64>>,
+    /// Centre in the camera frame, metres.
+    pub position: Option<Vector3<f64>>,
+}
+
+impl From<&Detection> for Seen {
+    fn from(d: &Detection) -> Seen {
+        Seen {
+            u: d.u,
+            v: d.v,
+            id: (d.id != 0).then_some(d.id),
+            yaw: d.yaw,
+            normal: d.pose.as_ref().map(|p| p.rotation.column(2).into_owned()),
+            rotation: d.pose.as_ref().map(|p| p.rotation),
+            position: d.pose.as_ref().map(|p| p.position),
+        }
+    }
+}
+
+/// A report this close to any true target (in its sizes, plus 2 px) is
+/// about that target, not a false one: the card reaches 0.75 D from the
 /// centre, a blurred outline a little past D/2.
 const NEAR_MARKER: f64 = 0.6;
 
-/// Detections paired with the visible true markers: for each true marker
-/// the nearest detection within a quarter diameter (+2 px); detections near
-/// no marker at all (visible or not) are false.
+/// Reports paired with the visible true targets: for each target the
+/// nearest report within a quarter of its size (+2 px); reports near no
+/// target at all (visible or not) are false.
 pub struct Matched {
     pub pairs: Vec<(usize, Option<usize>)>,
     pub false_detections: Vec<usize>,
 }
 
-pub fn match_truth(truth: &GroundTruth, found: &[Detection]) -> Matched {
+pub fn match_truth(truth: &[Truth], found: &[Seen]) -> Matched {
     let mut used = vec![false; found.len()];
     let mut pairs = Vec::new();
-    for (t, m) in truth.markers.iter().enumerate() {
-        let radius = 0.25 * m.diameter_px + 2.0;
+    let distance = |d: &Seen, m: &Truth| (d.u - m.u).hypot(d.v - m.v);
+    for (t, m) in truth.iter().enumerate() {
+        let radius = 0.25 * m.size_px + 2.0;
         let best = found
             .iter()
             .enumerate()
-            .filter(|(k, d)| !used[*k] && (d.u - m.u).hypot(d.v - m.v) < radius)
-            .min_by(|a, b| {
-                let da = (a.1.u - m.u).hypot(a.1.v - m.v);
-                let db = (b.1.u - m.u).hypot(b.1.v - m.v);
-                da.total_cmp(&db)
-            })
+            .filter(|(k, d)| !used[*k] && distance(d, m) < radius)
+            .min_by(|a, b| distance(a.1, m).total_cmp(&distance(b.1, m)))
             .map(|(k, _)| k);
         if let Some(k) = best {
             used[k] = true;
@@ -211,9 +299,9 @@ pub fn match_truth(truth: &GroundTruth, found: &[Detection]) -> Matched {
     let false_detections = (0..found.len())
         .filter(|&k| {
             !used[k]
-                && !truth.markers.iter().any(|m| {
-                    (found[k].u - m.u).hypot(found[k].v - m.v) < NEAR_MARKER * m.diameter_px + 2.0
-                })
+                && !truth
+                    .iter()
+                    .any(|m| distance(&found[k], m) < NEAR_MARKER * m.size_px + 2.0)
         })
         .collect();
     Matched {
@@ -300,7 +388,7 @@ pub struct Counts {
 }
 
 impl Counts {
-    pub fn add(&mut self, seed: u64, truth: &GroundTruth, found: &[Detection]) {
+    pub fn add(&mut self, seed: u64, truth: &[Truth], found: &[Seen]) {
         let matched = match_truth(truth, found);
         self.frames += 1;
         for &(t, d) in &matched.pairs {
@@ -310,20 +398,18 @@ impl Counts {
                 continue;
             };
             self.detected += 1;
-            let want = truth.markers[t].id;
-            let got = found[d].id;
-            if got == 0 {
-                self.unknown_id += 1;
-            } else if got == want {
-                self.correct_id += 1;
-            } else {
-                self.wrong_id += 1;
-                self.first_wrong.get_or_insert((seed, t));
+            match found[d].id {
+                None => self.unknown_id += 1,
+                Some(id) if id == truth[t].id => self.correct_id += 1,
+                Some(_) => {
+                    self.wrong_id += 1;
+                    self.first_wrong.get_or_insert((seed, t));
+                }
             }
         }
         for &k in &matched.false_detections {
             self.false_detections += 1;
-            if found[k].id != 0 {
+            if found[k].id.is_some() {
                 self.false_with_id += 1;
             }
             self.first_false
@@ -341,11 +427,44 @@ impl Counts {
     }
 }
 
-/// One frame of a scenario: its seed, the image and the truth.
+/// One frame of a scenario: its seed, the image and the true targets.
 pub struct Frame {
     pub seed: u64,
     pub image: GrayImage,
-    pub truth: GroundTruth,
+    pub targets: Vec<Truth>,
+}
+
+/// Which targets a frame shows: our markers, or tag36h11 AprilTags of the
+/// same printed footprint in their places.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Print {
+    WhyCode,
+    AprilTag,
+}
+
+/// The tag printed where `marker` was: its black square as wide as the
+/// marker's disc, on a card of the same size, so the tag's white border
+/// (two cells) is the card's margin; tag ID from the marker's ID.
+pub fn tag_for(marker: &LooseMarker) -> PrintedSquare {
+    let id = marker.id % tag36h11::TAGS;
+    PrintedSquare {
+        card_half_mm: marker.card_half_mm,
+        ..PrintedSquare::new(
+            tag36h11::bitmap(id),
+            marker.marker.diameter_mm,
+            id,
+            marker.placement,
+        )
+    }
+}
+
+/// A scene's markers swapped for AprilTags (see [`tag_for`]).
+pub fn with_tags(scene: &mut Scene) {
+    for object in &mut scene.objects {
+        if let SceneObject::Marker(m) = object {
+            *object = SceneObject::Square(tag_for(m));
+        }
+    }
 }
 
 type Look<'a> = dyn Fn(&mut Scene, &mut Pcg32, usize) + 'a;
@@ -355,7 +474,8 @@ type AfterRender<'a> = dyn Fn(&mut GrayImage, &mut Pcg32) + 'a;
 /// spread as `spread` over a distortion-free 60° camera, then the row's
 /// look. Frame `f` draws everything from `Pcg32::new(seed0 + f, 1)`: first
 /// the markers, then whatever [`Scenario::look`] and
-/// [`Scenario::after_render`] draw, in that order.
+/// [`Scenario::after_render`] draw, in that order; so the AprilTag frame
+/// of the same `f` differs only in what is printed.
 pub struct Scenario<'a> {
     pub size: (u32, u32),
     pub family: Option<&'a Family>,
@@ -402,7 +522,7 @@ impl<'a> Scenario<'a> {
         camera(self.size.0, self.size.1)
     }
 
-    pub fn frame(&self, f: usize) -> Frame {
+    pub fn frame(&self, f: usize, print: Print) -> Frame {
         let seed = self.seed0 + f as u64;
         let cam = self.camera();
         let mut rng = Pcg32::new(seed, 1);
@@ -412,32 +532,72 @@ impl<'a> Scenario<'a> {
             seed,
         );
         (self.look)(&mut s, &mut rng, f);
+        if print == Print::AprilTag {
+            with_tags(&mut s);
+        }
         let (mut image, truth) = simulate::render(&s);
         if let Some(change) = &self.after_render {
             change(&mut image, &mut rng);
         }
-        Frame { seed, image, truth }
+        Frame {
+            seed,
+            image,
+            targets: Truth::of(&truth),
+        }
     }
 
     /// Detects every frame with `detector` (whose adaptive state carries
     /// over, as in a video), adds to `counts` and shows each frame and its
-    /// detections to `visit`.
+    /// reports to `visit`.
     pub fn run(
         &self,
         detector: &mut Detector,
         counts: &mut Counts,
-        mut visit: impl FnMut(&Frame, &[Detection]),
+        mut visit: impl FnMut(&Frame, &[Seen]),
     ) {
         for f in 0..self.frames {
-            let frame = self.frame(f);
-            let found = detector.detect(&frame.image);
-            counts.add(frame.seed, &frame.truth, &found);
+            let frame = self.frame(f, Print::WhyCode);
+            let found: Vec<Seen> = detector
+                .detect(&frame.image)
+                .iter()
+                .map(Seen::from)
+                .collect();
+            counts.add(frame.seed, &frame.targets, &found);
             visit(&frame, &found);
         }
     }
 
+    /// The same frames read by `rival` (all at once: one process per
+    /// scenario), with its own markers printed in ours' places if it has
+    /// any; like [`Scenario::run`], and gives its time per frame, ms.
+    pub fn run_rival(
+        &self,
+        rival: &dyn Rival,
+        counts: &mut Counts,
+        mut visit: impl FnMut(&Frame, &[Seen]),
+    ) -> Result<Vec<f64>, String> {
+        let frames: Vec<Frame> = (0..self.frames)
+            .map(|f| self.frame(f, rival.print()))
+            .collect();
+        let images: Vec<&GrayImage> = frames.iter().map(|f| &f.image).collect();
+        let setup = Setup {
+            camera: &self.camera(),
+            size_m: DIAMETER_M,
+            family: self.family.map(|f| (f.bits(), f.distance())),
+            targets: self.spread.count,
+        };
+        let results = rival.detect(&setup, &images)?;
+        let mut times = Vec::with_capacity(frames.len());
+        for (frame, (found, ms)) in frames.iter().zip(results) {
+            counts.add(frame.seed, &frame.targets, &found);
+            visit(frame, &found);
+            times.push(ms);
+        }
+        Ok(times)
+    }
+
     /// [`Scenario::run`] with a fresh detector (with pose, no tracking).
-    pub fn counts_with(&self, visit: impl FnMut(&Frame, &[Detection])) -> Counts {
+    pub fn counts_with(&self, visit: impl FnMut(&Frame, &[Seen])) -> Counts {
         let mut det = detector(self.family, &self.camera(), false);
         let mut counts = Counts::default();
         self.run(&mut det, &mut counts, visit);
@@ -446,5 +606,19 @@ impl<'a> Scenario<'a> {
 
     pub fn counts(&self) -> Counts {
         self.counts_with(|_, _| {})
+    }
+
+    /// A rival's counts on the same frames; `None` when it cannot be run
+    /// (the reason was said once, at the start).
+    pub fn rival_counts(&self, rival: Option<&dyn Rival>) -> Option<Counts> {
+        let rival = rival?;
+        let mut counts = Counts::default();
+        match self.run_rival(rival, &mut counts, |_, _| {}) {
+            Ok(_) => Some(counts),
+            Err(e) => {
+                eprintln!("{} failed: {e}", rival.name());
+                None
+            }
+        }
     }
 }

@@ -21,8 +21,10 @@ mod background;
 mod effects;
 pub mod layout;
 mod raster;
+mod square;
 mod truth;
 
+pub use square::{PrintedSquare, TrueSquare};
 pub use truth::{GroundTruth, TrueMarker, TruePage};
 
 use crate::camera::Camera;
@@ -189,6 +191,8 @@ pub enum SceneObject {
     Marker(LooseMarker),
     /// A page of a printed sheet.
     Page(SheetPage),
+    /// A square bitmap on its own card (another kind of fiducial).
+    Square(PrintedSquare),
 }
 
 /// What is behind the objects.

@@ -1,6 +1,8 @@
 //! Ray casting of the scene's paper planes into a reflectance image.
 
-use super::{background, Blot, LooseMarker, Placement, Scene, SceneObject, SheetPage};
+use super::{
+    background, Blot, LooseMarker, Placement, PrintedSquare, Scene, SceneObject, SheetPage,
+};
 use crate::camera::Camera;
 use crate::geometry::Marker;
 use crate::parallel::prelude::*;
@@ -97,6 +99,7 @@ impl RayMap {
 /// What a plane shows at a point of its own frame (mm).
 enum Content<'a> {
     Loose(&'a LooseMarker),
+    Square(&'a PrintedSquare),
     Page(PageContent<'a>),
 }
 
@@ -249,6 +252,12 @@ impl<'a> PlaneSampler<'a> {
                 }
                 front && blot_at(&m.blots, lx, ly).unwrap_or_else(|| m.marker.is_black_at(lx, ly))
             }
+            Content::Square(q) => {
+                if lx.abs() > q.card_half_mm || ly.abs() > q.card_half_mm {
+                    return None;
+                }
+                front && q.is_black_at(lx, ly)
+            }
             Content::Page(p) => {
                 if lx.abs() > p.half_w || ly.abs() > p.half_h {
                     return None;
@@ -377,6 +386,19 @@ pub(crate) fn render_reflectance(scene: &Scene) -> Vec<f32> {
                         detail.into_iter().collect(),
                     )
                 }
+                SceneObject::Square(q) => {
+                    let outline = rectangle_outline(q.card_half_mm, q.card_half_mm).collect();
+                    // Cells can be thinner than the uniformity test sees.
+                    let half = q.side_mm / 2.0;
+                    let detail =
+                        project_box(camera, &q.placement, rectangle_outline(half, half), 1.5);
+                    (
+                        &q.placement,
+                        Content::Square(q),
+                        outline,
+                        detail.into_iter().collect(),
+                    )
+                }
                 SceneObject::Page(p) => {
                     let [w, h] = p.manifest.page_size_mm;
                     let outline = rectangle_outline(w / 2.0, h / 2.0).collect();
@@ -453,10 +475,11 @@ fn object_depth(object: &SceneObject) -> f64 {
     match object {
         SceneObject::Marker(m) => m.placement.position.norm(),
         SceneObject::Page(p) => p.placement.position.norm(),
+        SceneObject::Square(q) => q.placement.position.norm(),
     }
 }
 
-/// Pixels that are always supersampled: marker discs, whose ring sectors
+/// Pixels that are always supersampled: marker discs and printed squares, whose ring sectors
 /// can be thinner than the five-point uniformity test can see.
 struct DetailMask {
     bounds: PixelBox,

@@ -1,5 +1,6 @@
 //! The ground truth of a simulated view: where every marker really is.
 
+use super::square::{true_square, TrueSquare};
 use super::{Blot, Placement, Scene, SceneObject, SheetPage};
 use crate::camera::Camera;
 use crate::geometry::{Marker, MarkerKind};
@@ -20,6 +21,10 @@ pub struct GroundTruth {
     pub markers: Vec<TrueMarker>,
     /// Every sheet page in the scene.
     pub pages: Vec<TruePage>,
+    /// Every printed square (other fiducials) in the scene; left out of
+    /// the JSON when there are none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub squares: Vec<TrueSquare>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -104,8 +109,10 @@ pub(super) fn ground_truth(scene: &Scene) -> GroundTruth {
     let camera = &scene.camera;
     let mut markers = Vec::new();
     let mut pages = Vec::new();
+    let mut squares = Vec::new();
     for object in &scene.objects {
         match object {
+            SceneObject::Square(sq) => squares.push(true_square(camera, sq)),
             SceneObject::Marker(m) => markers.push(true_marker(
                 camera,
                 &m.marker,
@@ -165,6 +172,7 @@ pub(super) fn ground_truth(scene: &Scene) -> GroundTruth {
         },
         markers,
         pages,
+        squares,
     }
 }
 

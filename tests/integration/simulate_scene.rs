@@ -215,3 +215,52 @@ fn distorted_camera_moves_off_axis_markers_as_the_lens_model_says() {
     assert!(m.u < pinhole.0 && m.v < pinhole.1);
     assert!(image.get_pixel(m.u.round() as u32, m.v.round() as u32)[0] > 180);
 }
+
+/// A bitmap printed as a square: rendered tilted, then every cell read back
+/// at its centre through the homography of the true corners must show the
+/// bitmap's ink (a 10x10 checkerboard with a random-looking pattern, so a
+/// flipped or rotated square would fail).
+#[test]
+fn printed_square_round_trips_through_its_true_corners() {
+    use whycode::math::Homography;
+    use whycode::simulate::PrintedSquare;
+    let cells = 10u32;
+    let ink = |col: u32, row: u32| (col * 7 + row * 3 + col * row) % 5 < 2;
+    let bitmap = image::GrayImage::from_fn(cells, cells, |c, r| {
+        image::Luma([if ink(c, r) { 0 } else { 255 }])
+    });
+    let camera = Camera::ideal(640, 480, 60.0);
+    let mut scene = Scene::new(camera);
+    let placement = Placement::viewed(Vector3::new(0.02, -0.01, 0.4), 0.5, -0.3, 0.7);
+    let mut square = PrintedSquare::new(bitmap, 80.0, 42, placement);
+    square.card_half_mm = 50.0;
+    scene.objects.push(SceneObject::Square(square));
+    let (image, truth) = render(&scene);
+    assert_eq!(truth.squares.len(), 1);
+    let t = &truth.squares[0];
+    assert!(t.visible && t.id == 42);
+    // Corner order: top-left, top-right, bottom-right, bottom-left of the bitmap.
+    let unit = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+    let pairs: Vec<_> = unit
+        .iter()
+        .zip(&t.corners)
+        .map(|(&p, c)| (p, (c[0], c[1])))
+        .collect();
+    let h = Homography::fit(&pairs).expect("four corners");
+    let mut wrong = Vec::new();
+    for row in 0..cells {
+        for col in 0..cells {
+            let x = (f64::from(col) + 0.5) / f64::from(cells);
+            let y = (f64::from(row) + 0.5) / f64::from(cells);
+            let (u, v) = h.apply(x, y).expect("in front");
+            let grey = image.get_pixel(u.round() as u32, v.round() as u32).0[0];
+            if (grey < 128) != ink(col, row) {
+                wrong.push((col, row, grey));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "cells read back wrong: {wrong:?}");
+    // The projected centre is the centre of the corners' homography.
+    let (cu, cv) = h.apply(0.5, 0.5).unwrap();
+    assert!((cu - t.u).abs() < 1e-6 && (cv - t.v).abs() < 1e-6);
+}

@@ -1,0 +1,108 @@
+//! Detectors the bar compares ours with, each run as a separate program
+//! (AprilTag through Python, the original WhyCode as a C++ build) on the
+//! scenario's frames written as PGM into a temporary folder. Each prints a
+//! JSON line per frame; its reports become [`Seen`]s scored by the same
+//! code as ours.
+
+use std::io::Write;
+use std::path::Path;
+use std::process::Command;
+
+use image::GrayImage;
+use serde::de::DeserializeOwned;
+use whycode::camera::Camera;
+
+use crate::scenario::{Print, Seen};
+
+/// What a rival is told about the frames besides the pixels.
+pub struct Setup<'a> {
+    pub camera: &'a Camera,
+    /// Printed size: the marker's outer diameter, the tag's black square, m.
+    pub size_m: f64,
+    /// Code bits and family distance of our markers in the frames (the
+    /// original reads the same rings); `None`: legacy WhyCon.
+    pub family: Option<(u32, u32)>,
+    /// How many targets each frame shows (the original tracks a fixed number).
+    pub targets: usize,
+}
+
+pub trait Rival {
+    fn name(&self) -> &'static str;
+    /// What it reads: its own markers printed in ours' places, or ours.
+    fn print(&self) -> Print;
+    /// Whether it carries markers over from one run to the next (then its
+    /// repeated runs of a frame are tracked frames).
+    fn tracks(&self) -> bool {
+        false
+    }
+    /// Each frame's reports and the detector's time for it, ms.
+    fn detect(&self, setup: &Setup, frames: &[&GrayImage])
+        -> Result<Vec<(Vec<Seen>, f64)>, String>;
+}
+
+/// Writes `frames` into a temporary folder as `000000.pgm`, ... (the
+/// order the rivals read them in).
+pub fn write_frames(frames: &[&GrayImage]) -> Result<tempfile::TempDir, String> {
+    let dir = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
+    for (k, image) in frames.iter().enumerate() {
+        write_pgm(&dir.path().join(format!("{k:06}.pgm")), image)
+            .map_err(|e| format!("writing frame {k}: {e}"))?;
+    }
+    Ok(dir)
+}
+
+/// Parses a rival's JSON lines, one per frame.
+pub fn parse_reports<T: DeserializeOwned>(
+    program: &str,
+    lines: &[String],
+    frames: usize,
+) -> Result<Vec<T>, String> {
+    let reports: Vec<T> = lines
+        .iter()
+        .map(|l| serde_json::from_str(l))
+        .collect::<Result<_, _>>()
+        .map_err(|e| format!("{program}: bad output: {e}"))?;
+    if reports.len() != frames {
+        return Err(format!(
+            "{program} read {} of {frames} frames",
+            reports.len()
+        ));
+    }
+    Ok(reports)
+}
+
+/// Writes `frames` into a temporary folder, runs `command` with the folder
+/// as its first argument and then `args`, and parses one JSON line per
+/// frame.
+pub fn run_on_frames<T: DeserializeOwned>(
+    mut command: Command,
+    args: &[String],
+    frames: &[&GrayImage],
+) -> Result<Vec<T>, String> {
+    let dir = write_frames(frames)?;
+    let program = command.get_program().to_string_lossy().into_owned();
+    let output = command
+        .arg(dir.path())
+        .args(args)
+        .output()
+        .map_err(|e| format!("{program}: {e}"))?;
+    if !output.status.success() {
+        return Err(format!(
+            "{program} failed: {}",
+            String::from_utf8_lossy(&output.stderr).trim()
+        ));
+    }
+    let lines: Vec<String> = String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter(|l| l.starts_with('{'))
+        .map(str::to_string)
+        .collect();
+    parse_reports(&program, &lines, frames.len())
+}
+
+fn write_pgm(path: &Path, image: &GrayImage) -> std::io::Result<()> {
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+    write!(out, "P5\n{} {}\n255\n", image.width(), image.height())?;
+    out.write_all(image.as_raw())?;
+    out.flush()
+}
