@@ -40,6 +40,7 @@ if ! command -v wasm-bindgen >/dev/null 2>&1 || [ "$(wasm-bindgen --version | aw
             cargo install wasm-bindgen-cli --version "$version" --root "$tools" "$@"
     }
     install --locked || install
+    rm -rf "$tools/build"
 fi
 # Binaryen's wasm-opt and wasm-metadce, at a version that reads
 # wasm-bindgen's externref table right (Debian 12's binaryen 108 exports
