@@ -12,6 +12,30 @@ pub const MAX_SIDE: u32 = 30_000;
 /// Largest image area accepted by [`load_gray`], pixels.
 pub const MAX_PIXELS: u64 = 400_000_000;
 
+/// The largest image a reader accepts, checked against the file's header
+/// before anything is decoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SizeLimit {
+    /// Longest side, pixels.
+    pub max_side: u32,
+    /// Largest area, pixels.
+    pub max_pixels: u64,
+}
+
+impl SizeLimit {
+    /// What [`load_gray`] accepts: [`MAX_SIDE`] and [`MAX_PIXELS`].
+    pub const FILES: SizeLimit = SizeLimit {
+        max_side: MAX_SIDE,
+        max_pixels: MAX_PIXELS,
+    };
+
+    fn admits(&self, width: u32, height: u32) -> bool {
+        width <= self.max_side
+            && height <= self.max_side
+            && u64::from(width) * u64::from(height) <= self.max_pixels
+    }
+}
+
 /// Why an image file could not be read. Each message is one line that
 /// starts with the file's name; the cause, when there is one, is also the
 /// error's `source`.
@@ -26,7 +50,16 @@ pub enum ImageError {
         #[source]
         source: std::io::Error,
     },
-    /// The file is not an image the decoders understand, or is damaged.
+    /// The file starts like no image format at all (whatever its name says).
+    #[error(
+        "{}: not an image (no PNG, JPEG, PGM/PPM or BMP signature)",
+        path.display()
+    )]
+    NotAnImage {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The file is an image the decoders do not understand, or is damaged.
     #[error("{}: {source}", path.display())]
     Decode {
         /// The file.
@@ -35,12 +68,13 @@ pub enum ImageError {
         #[source]
         source: image::ImageError,
     },
-    /// The image is larger than [`MAX_SIDE`] or [`MAX_PIXELS`]: refused
-    /// before decoding, so a hostile header cannot exhaust memory.
+    /// The image is larger than the reader's [`SizeLimit`]: refused before
+    /// decoding, so a hostile header cannot exhaust memory.
     #[error(
-        "{}: image of {width}x{height} pixels is larger than the supported {MAX_SIDE} px a side and {} megapixels",
+        "{}: image of {width}x{height} pixels is larger than the supported {} px a side and {} megapixels",
         path.display(),
-        MAX_PIXELS / 1_000_000
+        limit.max_side,
+        limit.max_pixels / 1_000_000
     )]
     TooLarge {
         /// The file.
@@ -49,6 +83,8 @@ pub enum ImageError {
         width: u32,
         /// Height in the header, pixels.
         height: u32,
+        /// What the reader accepts.
+        limit: SizeLimit,
     },
     /// A JPEG file that ends before its image data does.
     #[error(
@@ -62,8 +98,46 @@ pub enum ImageError {
 }
 
 /// Reads an image file (PNG, JPEG, PGM/PPM, BMP; 8 or 16 bit; grey or
-/// colour) as 8-bit grey. Refuses absurd dimensions before decoding.
+/// colour) as 8-bit grey. Refuses sizes beyond [`SizeLimit::FILES`] before
+/// decoding.
 pub fn load_gray(path: &Path) -> std::result::Result<GrayImage, ImageError> {
+    let open = || std::fs::File::open(path).map(std::io::BufReader::new);
+    let (decoded, format) = decode(path, open, SizeLimit::FILES)?;
+    if format == image::ImageFormat::Jpeg {
+        // Only now the whole file: the decoder has already read it once.
+        let bytes = std::fs::read(path).map_err(|source| ImageError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        check_jpeg_complete(path, &bytes)?;
+    }
+    Ok(to_gray(decoded))
+}
+
+/// [`load_gray`] for a file's contents already in memory (an upload in the
+/// browser page, bytes from a socket): same formats, same conversion, same
+/// errors, with `name` standing for the file in them and `limit` for what
+/// the caller can hold.
+pub fn decode_gray(
+    name: &Path,
+    bytes: &[u8],
+    limit: SizeLimit,
+) -> std::result::Result<GrayImage, ImageError> {
+    let open = || Ok(std::io::Cursor::new(bytes));
+    let (decoded, format) = decode(name, open, limit)?;
+    if format == image::ImageFormat::Jpeg {
+        check_jpeg_complete(name, bytes)?;
+    }
+    Ok(to_gray(decoded))
+}
+
+/// Decodes what `open` reads (opened twice: once for the header, once for
+/// the pixels), after checking the header's size against `limit`.
+fn decode<R: std::io::BufRead + std::io::Seek>(
+    path: &Path,
+    open: impl Fn() -> std::io::Result<R>,
+    limit: SizeLimit,
+) -> std::result::Result<(image::DynamicImage, image::ImageFormat), ImageError> {
     let io = |source| ImageError::Io {
         path: path.to_path_buf(),
         source,
@@ -72,31 +146,34 @@ pub fn load_gray(path: &Path) -> std::result::Result<GrayImage, ImageError> {
         path: path.to_path_buf(),
         source,
     };
-    let open = || -> std::result::Result<_, ImageError> {
-        image::ImageReader::open(path)
-            .map_err(io)?
+    let reader = || -> std::result::Result<_, ImageError> {
+        image::ImageReader::new(open().map_err(io)?)
             .with_guessed_format()
             .map_err(io)
     };
-    let (width, height) = open()?.into_dimensions().map_err(decode)?;
-    if width > MAX_SIDE || height > MAX_SIDE || u64::from(width) * u64::from(height) > MAX_PIXELS {
+    let probe = reader()?;
+    let Some(format) = probe.format() else {
+        return Err(ImageError::NotAnImage {
+            path: path.to_path_buf(),
+        });
+    };
+    let (width, height) = probe.into_dimensions().map_err(decode)?;
+    if !limit.admits(width, height) {
         return Err(ImageError::TooLarge {
             path: path.to_path_buf(),
             width,
             height,
+            limit,
         });
     }
-    let mut reader = open()?;
+    let mut reader = reader()?;
     let mut limits = image::Limits::no_limits();
-    limits.max_image_width = Some(MAX_SIDE);
-    limits.max_image_height = Some(MAX_SIDE);
+    limits.max_image_width = Some(limit.max_side);
+    limits.max_image_height = Some(limit.max_side);
+    // 16-bit RGBA, the widest pixels any of the decoders produces.
+    limits.max_alloc = Some(limit.max_pixels.saturating_mul(8));
     reader.limits(limits);
-    let format = reader.format();
-    let decoded = reader.decode().map_err(decode)?;
-    if format == Some(image::ImageFormat::Jpeg) {
-        check_jpeg_complete(path)?;
-    }
-    Ok(to_gray(decoded))
+    Ok((reader.decode().map_err(decode)?, format))
 }
 
 /// 8-bit grey of decoded pixels: 8-bit grey as it is, colour by the `image`
@@ -137,11 +214,7 @@ pub fn stretched_values(wide: &[u16]) -> Vec<u8> {
 /// reports no error, which would read as "no markers here". A complete
 /// file has an end-of-image marker after its last scan (a thumbnail's EOI
 /// comes before the main image's scans; entropy-coded data never holds FF D9).
-fn check_jpeg_complete(path: &Path) -> std::result::Result<(), ImageError> {
-    let bytes = std::fs::read(path).map_err(|source| ImageError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
+fn check_jpeg_complete(path: &Path, bytes: &[u8]) -> std::result::Result<(), ImageError> {
     let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
     let ends = last_scan.is_some_and(|k| bytes[k..].windows(2).any(|w| w == [0xFF, 0xD9]));
     if !ends {
@@ -231,5 +304,67 @@ mod tests {
     fn sixteen_bit_data_is_stretched_to_the_brightest_value() {
         let wide = image::ImageBuffer::from_raw(4, 1, vec![0u16, 1, 511, 1023]).unwrap();
         assert_eq!(stretched_to_8_bits(wide).into_raw(), [0, 0, 127, 255]);
+    }
+
+    fn png_bytes(image: &GrayImage) -> Vec<u8> {
+        use image::ImageEncoder;
+        let mut bytes = Vec::new();
+        image::codecs::png::PngEncoder::new(&mut bytes)
+            .write_image(
+                image.as_raw(),
+                image.width(),
+                image.height(),
+                image::ExtendedColorType::L8,
+            )
+            .unwrap();
+        bytes
+    }
+
+    #[test]
+    fn bytes_and_files_read_the_same() {
+        let image = GrayImage::from_fn(30, 20, |x, y| image::Luma([(x * 7 + y * 3) as u8]));
+        let bytes = png_bytes(&image);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("ramp.png");
+        std::fs::write(&path, &bytes).unwrap();
+        let from_file = load_gray(&path).unwrap();
+        let from_bytes = decode_gray(Path::new("ramp.png"), &bytes, SizeLimit::FILES).unwrap();
+        assert_eq!(from_file, image);
+        assert_eq!(from_bytes, image);
+    }
+
+    #[test]
+    fn errors_name_the_input_and_the_problem() {
+        let name = Path::new("notes.png");
+        let err = decode_gray(name, b"these are notes", SizeLimit::FILES).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "notes.png: not an image (no PNG, JPEG, PGM/PPM or BMP signature)"
+        );
+        let small = SizeLimit {
+            max_side: 25,
+            max_pixels: 1_000_000,
+        };
+        let bytes = png_bytes(&GrayImage::new(30, 20));
+        let err = decode_gray(Path::new("wide.png"), &bytes, small).unwrap_err();
+        assert!(matches!(
+            err,
+            ImageError::TooLarge {
+                width: 30,
+                height: 20,
+                ..
+            }
+        ));
+        assert_eq!(
+            err.to_string(),
+            "wide.png: image of 30x20 pixels is larger than the supported 25 px a side and 1 megapixels"
+        );
+        let mut jpeg = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new(&mut jpeg)
+            .encode_image(&GrayImage::new(64, 64))
+            .unwrap();
+        jpeg.truncate(jpeg.len() - 2);
+        let err = decode_gray(Path::new("cut.jpg"), &jpeg, SizeLimit::FILES).unwrap_err();
+        assert!(matches!(err, ImageError::TruncatedJpeg { .. }), "{err}");
     }
 }

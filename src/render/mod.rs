@@ -8,6 +8,7 @@ pub mod check;
 pub mod font;
 pub mod marker;
 pub mod page;
+#[cfg(feature = "pdf")]
 pub mod pdf;
 pub mod png;
 pub mod raster;
@@ -87,7 +88,13 @@ pub fn encode_pages(
 ) -> Result<Vec<(PathBuf, Vec<u8>)>> {
     let format = Format::from_path(path)?;
     Ok(match format {
+        #[cfg(feature = "pdf")]
         Format::Pdf => vec![(path.to_path_buf(), pdf::pages_pdf(pages, title)?)],
+        #[cfg(not(feature = "pdf"))]
+        Format::Pdf => bail!(
+            "{}: this build of whycode writes no PDF (it lacks the `pdf` feature)",
+            path.display()
+        ),
         Format::Svg => page_paths(path, pages.len())
             .into_iter()
             .zip(pages)

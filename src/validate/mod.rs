@@ -14,6 +14,7 @@ pub mod annotate;
 mod photo;
 mod report;
 pub mod scale;
+mod written;
 
 pub use photo::{
     check_image, check_photo, MarkerCheck, MarkerStatus, Observation, OddSize, PageCheck,

@@ -110,15 +110,19 @@ pub struct MarkerCheck {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub read_as: Option<u32>,
     /// Where it is (detected) or should be (predicted), image pixels.
+    #[serde(serialize_with = "super::written::pixels")]
     pub u: f64,
     /// Row, pixels (see `u`).
+    #[serde(serialize_with = "super::written::pixels")]
     pub v: f64,
     /// Distance between the detection and the predicted centre, pixels.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(serialize_with = "super::written::pixels_opt")]
     pub offset_px: Option<f64>,
     /// Detected / predicted size of the disc: a marker printed at another
     /// size than its neighbours shows here.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(serialize_with = "super::written::ratio_opt")]
     pub size_ratio: Option<f64>,
     /// The outline to draw: the detected ellipse, or the predicted one.
     #[serde(skip)]
@@ -135,6 +139,7 @@ pub struct PageCheck {
     /// Of those, the ones that agree with the fitted homography.
     pub inliers: usize,
     /// Reprojection error of the inliers, pixels.
+    #[serde(serialize_with = "super::written::pixels")]
     pub rms_px: f64,
     /// The scale the page was printed at, from its paper edges and markers.
     pub scale: ScaleMeasurement,
@@ -154,6 +159,7 @@ pub struct OddSize {
     /// The marker's ID.
     pub id: u32,
     /// Its size relative to the page's median marker, 1 = as expected.
+    #[serde(serialize_with = "super::written::ratio")]
     pub relative_size: f64,
 }
 
@@ -187,8 +193,10 @@ pub struct StrayDetection {
     /// The page it lies on.
     pub page: u32,
     /// Centre column, pixels.
+    #[serde(serialize_with = "super::written::pixels")]
     pub u: f64,
     /// Centre row, pixels.
+    #[serde(serialize_with = "super::written::pixels")]
     pub v: f64,
 }
 

@@ -32,6 +32,7 @@ pub struct PageVerdict {
     /// Photos in which the page was located.
     pub photos: Vec<String>,
     /// Printed size / intended size, when some photo measured it.
+    #[serde(serialize_with = "super::written::ratio_opt")]
     pub scale: Option<f64>,
     /// Whether that scale is within tolerance.
     pub scale_status: ScaleStatus,

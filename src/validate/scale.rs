@@ -81,10 +81,13 @@ impl ScaleStatus {
 /// One page's print scale as measured in a photo.
 pub struct ScaleMeasurement {
     /// Printed size / intended size (0.97 = "printed at 97 %").
+    #[serde(serialize_with = "super::written::ratio_opt")]
     pub scale: Option<f64>,
     /// The same across the page (from its left and right edges) ...
+    #[serde(serialize_with = "super::written::ratio_opt")]
     pub scale_x: Option<f64>,
     /// ... and down the page (from its top and bottom edges).
+    #[serde(serialize_with = "super::written::ratio_opt")]
     pub scale_y: Option<f64>,
     /// Whether the scale is within tolerance.
     pub status: ScaleStatus,

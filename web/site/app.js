@@ -444,7 +444,8 @@ async function printDownload(button, format, manifestOnly) {
 for (const button of document.querySelectorAll("#print-form button[data-format]")) {
   button.addEventListener("click", () => printDownload(button, button.dataset.format, false));
 }
-$("p-manifest").addEventListener("click", (event) => printDownload(event.currentTarget, "pdf", true));
+// The manifest is the same for every format; SVG needs no PDF module.
+$("p-manifest").addEventListener("click", (event) => printDownload(event.currentTarget, "svg", true));
 
 // ---------- Check ----------
 
@@ -558,7 +559,7 @@ function showReport(r, table) {
     <div class="counts"><span>${c.printed} printed</span><span>${c.found} found</span><span>${c.misread} misread</span><span>${c.unidentified} unidentified</span><span>${c.missing} missing</span></div>`;
   $("c-pages").innerHTML = `<thead><tr><th>Page</th><th class="text">Printed scale</th><th class="text">Note</th></tr></thead><tbody>${r.pages.map((p) => {
     const scale = p.scale == null ? "unknown" : `${(p.scale * 100).toFixed(1)} %`;
-    return `<tr><td>${p.page}</td><td class="text ${p.scale_status}">${scale} (${p.scale_status})</td><td class="text">${escapeHtml(p.note || "")}</td></tr>`;
+    return `<tr><td>${p.page}</td><td class="text ${p.scale_status}">${scale} (${p.scale_status})</td><td class="text wrap">${escapeHtml(p.note || "")}</td></tr>`;
   }).join("")}</tbody>`;
   $("c-markers").innerHTML = `<thead><tr><th>ID</th><th>Page</th><th class="text">Status</th><th>Read as</th><th class="text">Photo</th></tr></thead><tbody>${r.markers.map((m) =>
     `<tr><td>${m.id}</td><td>${m.page}</td><td class="text ${m.status}">${m.status}</td><td>${m.read_as ?? ""}</td><td class="text">${escapeHtml(m.photo || "")}</td></tr>`).join("")}</tbody>`;
@@ -755,6 +756,7 @@ async function start() {
   const status = $("engine-status");
   try {
     const hello = await engine.call("hello", {});
+    performance.mark("whycode-engine-ready");
     status.className = "engine ready";
     $("version").textContent = `whycode ${hello.version}`;
     fillTemplates(hello.templates);

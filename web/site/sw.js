@@ -1,6 +1,8 @@
 // Offline: the site's files (listed and versioned by build.sh) are cached
 // on first visit and served from the cache afterwards; a new build has a new
-// version, which replaces the old cache.
+// version, which replaces the old cache. The PDF module is not in the list
+// (it is fetched only when a PDF is made, to keep the first visit small):
+// it joins the cache the first time it is fetched.
 const VERSION = "__VERSION__";
 const FILES = __FILES__;
 const CACHE = `whycode-${VERSION}`;
@@ -22,6 +24,9 @@ self.addEventListener("fetch", (event) => {
   if (event.request.method !== "GET" || url.origin !== self.location.origin) return;
   event.respondWith(
     caches.open(CACHE).then((cache) =>
-      cache.match(event.request, { ignoreSearch: true }).then((hit) => hit || fetch(event.request))),
+      cache.match(event.request, { ignoreSearch: true }).then((hit) => hit || fetch(event.request).then((response) => {
+        if (response.ok && url.pathname.includes("/pkg/")) cache.put(event.request, response.clone());
+        return response;
+      }))),
   );
 });

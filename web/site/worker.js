@@ -6,6 +6,27 @@ import init, * as wc from "./pkg/whycode_web.js";
 
 const ready = init({ module_or_path: new URL("./pkg/whycode_web_bg.wasm", import.meta.url) });
 let validation = null;
+
+// PDF output lives in a module of its own (printpdf, with its fonts and
+// colour profile, is as large as the rest of the library): fetched on the
+// first PDF, so the page's first load stays small.
+let pdfModule = null;
+function pdf() {
+  if (!pdfModule) {
+    pdfModule = import("./pkg/whycode_pdf.js")
+      .then(async (m) => {
+        await m.default({ module_or_path: new URL("./pkg/whycode_pdf_bg.wasm", import.meta.url) });
+        return m;
+      })
+      .catch((err) => {
+        pdfModule = null;
+        const offline = self.navigator && self.navigator.onLine === false;
+        throw new Error(`the PDF writer did not load (${err.message || err})${offline ? "; it is fetched the first time a PDF is made online, SVG and PNG work offline" : ""}`);
+      });
+  }
+  return pdfModule;
+}
+const engineFor = async (options) => (options.output.toLowerCase().endsWith(".pdf") ? pdf() : wc);
 let live = null;
 
 function files(out) {
@@ -22,8 +43,8 @@ const handlers = {
   familyJson: ({ bits, distance }) => wc.familyJson(bits, distance),
   counts: ({ bits, distances }) =>
     JSON.parse(wc.counts(Uint32Array.from(bits), Uint32Array.from(distances))),
-  sheet: (options) => files(wc.sheet(JSON.stringify(options))),
-  marker: (options) => files(wc.marker(JSON.stringify(options))),
+  sheet: async (options) => files((await engineFor(options)).sheet(JSON.stringify(options))),
+  marker: async (options) => files((await engineFor(options)).marker(JSON.stringify(options))),
   validateStart: ({ name, text }) => {
     if (validation) validation.free();
     validation = null;
@@ -49,7 +70,7 @@ self.onmessage = async (event) => {
   const { id, op, args } = event.data;
   try {
     await ready;
-    const result = handlers[op](args);
+    const result = await handlers[op](args);
     const transfer = [];
     if (result instanceof Uint8Array) transfer.push(result.buffer);
     if (result && result.buffer instanceof ArrayBuffer && op === "liveFrame") transfer.push(result.buffer);

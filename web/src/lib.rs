@@ -15,6 +15,7 @@ use whycode::family::{
     parse_id_list, Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MAX_LISTED_IDS, MIN_BITS,
 };
 use whycode::geometry::Marker;
+use whycode::image_io;
 use whycode::manifest::{FamilyRef, Manifest};
 use whycode::render::check::{check_marker_page, check_sheet, check_sheet_png};
 use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
@@ -27,11 +28,12 @@ use whycode::validate::{self, annotate, PhotoReport};
 /// PNG resolutions the CLI accepts (`--dpi`), for pages and single markers.
 const DPI_RANGE: std::ops::RangeInclusive<f64> = 10.0..=1200.0;
 
-/// Largest photo the page decodes, pixels: a phone's 50 MP still fits, and
-/// the decoded copies stay well inside a tab's memory.
-const MAX_PHOTO_PIXELS: u64 = 60_000_000;
-/// Largest photo side the page decodes.
-const MAX_PHOTO_SIDE: u32 = 12_000;
+/// Largest photo the page decodes: a phone's 50 MP still fits, and the
+/// decoded copies stay well inside a tab's memory.
+const PHOTO_LIMIT: image_io::SizeLimit = image_io::SizeLimit {
+    max_side: 12_000,
+    max_pixels: 60_000_000,
+};
 
 fn js_error(err: anyhow::Error) -> JsError {
     JsError::new(&one_line(&err))
@@ -410,57 +412,15 @@ fn marker_files(options: &str) -> Result<Files> {
     Ok(Files { files, notes })
 }
 
-/// Decodes a photo's bytes to 8-bit grey the way `whycode validate` reads
-/// a file, after refusing sizes the page cannot hold.
+/// Decodes a photo's bytes to 8-bit grey with the CLI's loader, within
+/// what a tab can hold.
 fn decode_gray(name: &str, bytes: &[u8]) -> Result<GrayImage> {
-    let reader = || -> Result<image::ImageReader<std::io::Cursor<&[u8]>>> {
-        Ok(image::ImageReader::new(std::io::Cursor::new(bytes)).with_guessed_format()?)
-    };
-    let probe = reader().with_context(|| name.to_string())?;
-    if probe.format().is_none() {
-        bail!("{name}: not an image this page reads (PNG, JPEG, PGM/PPM or BMP)");
-    }
-    let (width, height) = probe.into_dimensions().with_context(|| name.to_string())?;
-    if width > MAX_PHOTO_SIDE
-        || height > MAX_PHOTO_SIDE
-        || u64::from(width) * u64::from(height) > MAX_PHOTO_PIXELS
-    {
-        bail!(
-            "{name}: photo of {width}x{height} pixels is larger than the page handles ({} megapixels, {MAX_PHOTO_SIDE} px a side); scale it down or use the whycode command",
-            MAX_PHOTO_PIXELS / 1_000_000
-        );
-    }
-    let mut reader = reader()?;
-    let mut limits = image::Limits::default();
-    limits.max_image_width = Some(MAX_PHOTO_SIDE);
-    limits.max_image_height = Some(MAX_PHOTO_SIDE);
-    limits.max_alloc = Some(1 << 30);
-    reader.limits(limits);
-    let format = reader.format();
-    let decoded = reader.decode().with_context(|| name.to_string())?;
-    if format == Some(image::ImageFormat::Jpeg) {
-        let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
-        let ends = last_scan.is_some_and(|k| bytes[k..].windows(2).any(|w| w == [0xFF, 0xD9]));
-        if !ends {
-            bail!("{name}: JPEG file is truncated (no end-of-image marker after its image data)");
-        }
-    }
-    Ok(match decoded {
-        image::DynamicImage::ImageLuma8(g) => g,
-        image::DynamicImage::ImageLuma16(_)
-        | image::DynamicImage::ImageLumaA16(_)
-        | image::DynamicImage::ImageRgb16(_)
-        | image::DynamicImage::ImageRgba16(_) => {
-            // As the CLI's loader: 10- or 12-bit data in 16-bit files is
-            // stretched so its brightest value becomes 255.
-            let wide = decoded.into_luma16();
-            let brightest = wide.pixels().map(|p| p.0[0]).max().unwrap_or(0).max(1);
-            let scale = 255.0 / f64::from(brightest);
-            GrayImage::from_fn(wide.width(), wide.height(), |x, y| {
-                image::Luma([(f64::from(wide.get_pixel(x, y).0[0]) * scale).round() as u8])
-            })
-        }
-        other => other.into_luma8(),
+    image_io::decode_gray(Path::new(name), bytes, PHOTO_LIMIT).map_err(|err| match err {
+        image_io::ImageError::TooLarge { .. } => anyhow::anyhow!(
+            "{err}; scale it down, or check it with the whycode command (up to {} px a side)",
+            image_io::MAX_SIDE
+        ),
+        other => other.into(),
     })
 }
 
@@ -630,5 +590,24 @@ mod tests {
     fn a_text_file_is_not_a_photo() {
         let err = decode_gray("notes.txt", b"hello, not an image").unwrap_err();
         assert!(one_line(&err).starts_with("notes.txt: not an image"));
+    }
+
+    #[test]
+    fn a_photo_too_large_for_the_page_points_to_the_command() {
+        let (width, height) = (13_000u32, 40u32);
+        let mut bytes = Vec::new();
+        image::ImageEncoder::write_image(
+            image::codecs::png::PngEncoder::new(&mut bytes),
+            &vec![255; (width * height) as usize],
+            width,
+            height,
+            image::ExtendedColorType::L8,
+        )
+        .unwrap();
+        let text = one_line(&decode_gray("wide.png", &bytes).unwrap_err());
+        assert!(
+            text.starts_with("wide.png: image of 13000x40 pixels is larger than the supported 12000 px a side and 60 megapixels; scale it down"),
+            "{text}"
+        );
     }
 }
