@@ -10,10 +10,14 @@ root=$(cd "$here/.." && pwd)
 cd "$root"
 target_dir=${CARGO_TARGET_DIR:-$root/target}
 
-if ! command -v chromium >/dev/null 2>&1; then
+# Chromium drives the page; npm brings the build's binaryen (web/build.sh).
+missing=()
+command -v chromium >/dev/null 2>&1 || missing+=(chromium)
+command -v npm >/dev/null 2>&1 || missing+=(nodejs npm)
+if [ ${#missing[@]} -gt 0 ]; then
     export DEBIAN_FRONTEND=noninteractive
     apt-get update -qq
-    apt-get install -y -qq chromium >/dev/null
+    apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
 if ! python3 -c "import playwright" 2>/dev/null; then
     python3 -m pip install --quiet --disable-pip-version-check "playwright==1.65.2"
