@@ -327,8 +327,9 @@ fn desk_clutter_with_text_and_washers_gives_no_phantom() {
     // round blob, so the rule holds from 10 px. Legacy WhyCon has no ring
     // to test: a bold 'o' of WhyCon's proportions a few pixels across is
     // one to any geometric test. Issue 9 asks for 0.05 per frame; this
-    // guards what the disc tests reach now (about 0.5 per frame, from
-    // about 6 before them).
+    // guards what the disc tests reach now (about 1.2 per frame, from
+    // about 6 before them) while still taking the smaller white discs of
+    // the original's printed markers (many.png).
     let (mut small, mut legacy) = (0, 0);
     for seed in 1..=20 {
         let [family, auto, whycon] = desk_reports(seed);
@@ -340,7 +341,7 @@ fn desk_clutter_with_text_and_washers_gives_no_phantom() {
         legacy += whycon.len();
     }
     assert!(small <= 1, "{small} small 8-bit phantoms in 20 frames");
-    assert!(legacy <= 12, "{legacy} legacy phantoms in 20 frames");
+    assert!(legacy <= 30, "{legacy} legacy phantoms in 20 frames");
 }
 
 /// Markers of `diameters` pasted on desk clutter, each on its own paper
