@@ -8,10 +8,9 @@ use std::path::{Path, PathBuf};
 use whycode::detect::Target;
 use whycode::family::Family;
 use whycode::geometry::Marker;
-use whycode::manifest::FamilyRef;
 use whycode::render::check::{check_marker_page, check_sheet, check_sheet_png};
 use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
-use whycode::render::sheet::{family_markers, id_range_error, layout, legacy_markers, SheetSpec};
+use whycode::render::sheet::{chosen_markers, id_range_error, layout, SheetSpec};
 use whycode::render::{encode_pages, write_all, Format, Template};
 
 /// The output format: from `output`'s extension, else from `format`.
@@ -241,42 +240,14 @@ fn render_sheet<'py>(
                 whycode::render::check_output_dir(path).map_err(crate::Error::os)?;
             }
             let template = Template::resolve(&template)?;
-            let (markers, family_ref) = match &family {
-                None => {
-                    let count = count.unwrap_or(0);
-                    if count == 0 || count > 100_000 {
-                        return Err(Error::value(format!(
-                            "count must be between 1 and 100000, got {count}"
-                        )));
-                    }
-                    (legacy_markers(count, diameter), None)
+            if let Some(family) = &family {
+                check_generated(family)?;
+                if let Some(ids) = &ids {
+                    check_ids(ids)?;
                 }
-                Some(family) => {
-                    check_generated(family)?;
-                    let ids: Vec<u32> = match &ids {
-                        Some(ids) => {
-                            check_ids(ids)?;
-                            ids.clone()
-                        }
-                        None if family.len() > 100_000 => {
-                            return Err(Error::value(format!(
-                                "the {}-bit family with distance {} has {} IDs, too many to print at once; choose some with ids (at most 100000)",
-                                family.bits(),
-                                family.distance(),
-                                family.len()
-                            )))
-                        }
-                        None => (1..=family.len() as u32).collect(),
-                    };
-                    (
-                        family_markers(family, &ids, diameter)?,
-                        Some(FamilyRef {
-                            bits: family.bits(),
-                            distance: family.distance(),
-                        }),
-                    )
-                }
-            };
+            }
+            let (markers, family_ref) =
+                chosen_markers(family.as_ref(), ids.clone(), count, diameter, "")?;
             let spec = SheetSpec {
                 markers,
                 template,

@@ -1,11 +1,10 @@
 use super::args::{whole_number, DpiArg, MarkerKindArgs};
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use std::path::PathBuf;
 use std::process::ExitCode;
-use whycode::family::{parse_id_list, MAX_LISTED_IDS};
-use whycode::manifest::FamilyRef;
+use whycode::family::parse_id_list;
 use whycode::render::check::{check_sheet, check_sheet_png};
-use whycode::render::sheet::{family_markers, layout, legacy_markers, SheetSpec};
+use whycode::render::sheet::{chosen_markers, layout, SheetSpec};
 use whycode::render::template::Template;
 use whycode::render::{encode_pages, write_all, Format};
 use whycode::units::Length;
@@ -84,29 +83,14 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
     whycode::render::check_output_dir(&output)?;
     let template = Template::resolve(&args.template)?;
     let target = args.kind.resolve()?;
-    let check_family = target.family();
-    let (markers, family) = match &check_family {
-        None => {
-            let count = args.count.expect("clap requires --count with --legacy") as usize;
-            if count == 0 || count > 100_000 {
-                bail!("--count must be between 1 and 100000, got {count}");
-            }
-            (legacy_markers(count, diameter), None)
-        }
-        Some(family) => {
-            let (bits, distance) = (family.bits(), family.distance());
-            let ids: Vec<u32> = match &args.ids {
-                Some(list) => parse_id_list(list).context("--ids")?,
-                None if family.len() > MAX_LISTED_IDS => bail!(
-                    "the {bits}-bit family with distance {distance} has {} IDs, too many to print at once; choose some with --ids (at most {MAX_LISTED_IDS})",
-                    family.len(),
-                ),
-                None => (1..=family.len() as u32).collect(),
-            };
-            let markers = family_markers(family, &ids, diameter)?;
-            (markers, Some(FamilyRef { bits, distance }))
-        }
-    };
+    let ids = args
+        .ids
+        .as_deref()
+        .map(parse_id_list)
+        .transpose()
+        .context("--ids")?;
+    let count = args.count.map(|c| c as usize);
+    let (markers, family) = chosen_markers(target.family(), ids, count, diameter, "--")?;
     let name = output
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

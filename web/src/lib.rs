@@ -11,15 +11,13 @@ use image::GrayImage;
 use serde::Deserialize;
 use wasm_bindgen::prelude::*;
 use whycode::detect::{Detector, DetectorConfig, Target};
-use whycode::family::{
-    parse_id_list, Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MAX_LISTED_IDS, MIN_BITS,
-};
+use whycode::family::{parse_id_list, Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MIN_BITS};
 use whycode::geometry::Marker;
 use whycode::image_io;
-use whycode::manifest::{FamilyRef, Manifest};
+use whycode::manifest::Manifest;
 use whycode::render::check::{check_marker_page, check_sheet, check_sheet_png};
 use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
-use whycode::render::sheet::{family_markers, id_range_error, layout, legacy_markers, SheetSpec};
+use whycode::render::sheet::{chosen_markers, id_range_error, layout, SheetSpec};
 use whycode::render::template::{builtin_names, Template};
 use whycode::render::{encode_pages, Format};
 use whycode::units::{trim_float, Length};
@@ -216,6 +214,19 @@ struct SheetOptions {
     no_check: bool,
 }
 
+/// What a sheet or a marker prints, from the form's kind fields as the
+/// command line resolves `--legacy`, `--bits` and `--distance`.
+fn chosen_target(legacy: bool, bits: Option<u32>, distance: Option<u32>) -> Result<Target> {
+    Ok(if legacy {
+        Target::WhyCon
+    } else {
+        Target::WhyCode(Family::generate(
+            bits.unwrap_or(DEFAULT_BITS),
+            distance.unwrap_or(DEFAULT_DISTANCE),
+        )?)
+    })
+}
+
 /// `whycode sheet`: the page files and the manifest, as the CLI writes them
 /// for the same options. `options` is JSON (see [`SheetOptions`]).
 #[wasm_bindgen]
@@ -235,37 +246,12 @@ fn sheet_files(options: &str) -> Result<Files> {
             .with_context(|| format!("template {}", args.template))?,
         None => Template::builtin(&args.template)?,
     };
-    let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
-    let target = if args.legacy {
-        Target::WhyCon
-    } else {
-        Target::WhyCode(Family::generate(
-            args.bits.unwrap_or(DEFAULT_BITS),
-            distance,
-        )?)
+    let target = chosen_target(args.legacy, args.bits, args.distance)?;
+    let ids = match args.ids.as_deref().map(str::trim) {
+        Some(list) if !list.is_empty() => Some(parse_id_list(list).context("--ids")?),
+        _ => None,
     };
-    let (markers, family) = match target.family() {
-        None => {
-            let count = args.count.unwrap_or(0);
-            if count == 0 || count > MAX_LISTED_IDS {
-                bail!("--count must be between 1 and 100000, got {count}");
-            }
-            (legacy_markers(count, diameter), None)
-        }
-        Some(family) => {
-            let bits = family.bits();
-            let ids: Vec<u32> = match args.ids.as_deref().map(str::trim) {
-                Some(list) if !list.is_empty() => parse_id_list(list).context("--ids")?,
-                _ if family.len() > MAX_LISTED_IDS => bail!(
-                    "the {bits}-bit family with distance {distance} has {} IDs, too many to print at once; choose some with --ids (at most {MAX_LISTED_IDS})",
-                    family.len(),
-                ),
-                _ => (1..=family.len() as u32).collect(),
-            };
-            let markers = family_markers(family, &ids, diameter)?;
-            (markers, Some(FamilyRef { bits, distance }))
-        }
-    };
+    let (markers, family) = chosen_markers(target.family(), ids, args.count, diameter, "--")?;
     let name = output
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -355,14 +341,7 @@ fn marker_files(options: &str) -> Result<Files> {
     check_dpi(dpi)?;
     let diameter = length("--diameter", &args.diameter)?;
     let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
-    let target = if args.legacy {
-        Target::WhyCon
-    } else {
-        Target::WhyCode(Family::generate(
-            args.bits.unwrap_or(DEFAULT_BITS),
-            distance,
-        )?)
-    };
+    let target = chosen_target(args.legacy, args.bits, args.distance)?;
     let (marker, title) = match target.family() {
         None => (Marker::whycon(diameter), "WhyCon marker".to_string()),
         Some(family) => {
