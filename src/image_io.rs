@@ -259,6 +259,19 @@ impl ImageFormat {
     }
 }
 
+/// A colour picture (an annotated photo) as PNG bytes.
+pub fn encode_rgb_png(picture: &image::RgbImage) -> Result<Vec<u8>, image::ImageError> {
+    use image::ImageEncoder;
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes).write_image(
+        picture.as_raw(),
+        picture.width(),
+        picture.height(),
+        image::ExtendedColorType::Rgb8,
+    )?;
+    Ok(bytes)
+}
+
 /// Writes a grey image whole or not at all, in the format of the path's
 /// extension (JPEG at `jpeg_quality`).
 #[cfg(feature = "files")]

@@ -86,15 +86,7 @@ pub fn run(args: ValidateArgs) -> Result<ExitCode> {
 }
 
 fn save_rgb(path: &Path, picture: &image::RgbImage) -> Result<()> {
-    use image::ImageEncoder;
-    let mut bytes = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut bytes)
-        .write_image(
-            picture.as_raw(),
-            picture.width(),
-            picture.height(),
-            image::ExtendedColorType::Rgb8,
-        )
+    let bytes = whycode::image_io::encode_rgb_png(picture)
         .map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", path.display()))?;
     whycode::io::write_atomic(path, &bytes)
 }

@@ -30,25 +30,9 @@ pub fn annotated_png(image: &GrayImage, detections: &[Detection]) -> Result<Vec<
         .chunks_exact(4)
         .flat_map(|p| [p[0], p[1], p[2]])
         .collect();
-    let mut bytes = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut bytes).write_image_rgb(
-        &rgb,
-        pixmap.width(),
-        pixmap.height(),
-    )?;
-    Ok(bytes)
-}
-
-trait WriteRgb {
-    fn write_image_rgb(self, rgb: &[u8], w: u32, h: u32) -> Result<()>;
-}
-
-impl<W: std::io::Write> WriteRgb for image::codecs::png::PngEncoder<W> {
-    fn write_image_rgb(self, rgb: &[u8], w: u32, h: u32) -> Result<()> {
-        use image::ImageEncoder;
-        self.write_image(rgb, w, h, image::ExtendedColorType::Rgb8)?;
-        Ok(())
-    }
+    let picture = image::RgbImage::from_raw(pixmap.width(), pixmap.height(), rgb)
+        .context("annotated image has the wrong size")?;
+    Ok(crate::image_io::encode_rgb_png(&picture)?)
 }
 
 fn paint(rgb: [u8; 3]) -> Paint<'static> {

@@ -435,7 +435,8 @@ impl Validation {
         let report = validate::check_image(name, &self.manifest, &image, None, &mut self.detector);
         let picture = annotate::annotate(&image, &report);
         self.photos.push(report);
-        encode_rgb_png(&picture).map_err(js_error)
+        image_io::encode_rgb_png(&picture)
+            .map_err(|e| JsError::new(&format!("cannot encode the annotated photo: {e}")))
     }
 
     /// The report over the photos added so far, as `whycode validate --format json`.
@@ -449,20 +450,6 @@ impl Validation {
     pub fn report_table(&self) -> String {
         validate::summarise(&self.manifest, self.photos.clone()).to_table()
     }
-}
-
-fn encode_rgb_png(picture: &image::RgbImage) -> Result<Vec<u8>> {
-    use image::ImageEncoder;
-    let mut bytes = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut bytes)
-        .write_image(
-            picture.as_raw(),
-            picture.width(),
-            picture.height(),
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| anyhow::anyhow!("cannot encode the annotated photo: {e}"))?;
-    Ok(bytes)
 }
 
 /// Live detection on camera frames, with tracking between frames.
