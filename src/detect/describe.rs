@@ -13,7 +13,7 @@ use crate::camera::Camera;
 use crate::family::{Family, MatchStatus};
 use crate::geometry::Design;
 use crate::math::Ellipse;
-use crate::pose::{self, CirclePose, Pose};
+use crate::pose::{self, Pose};
 
 /// What the ring reading and the marker's track tell the pose stage.
 #[derive(Debug, Clone, Copy)]
@@ -22,6 +22,8 @@ struct PoseHints {
     axis_point: Option<(f64, f64)>,
     centre_estimate: Option<(f64, f64)>,
     settled_normal: Option<Vector3<f64>>,
+    /// Bit count of the code ring, whose sector sides break its circles.
+    bits: Option<u32>,
 }
 
 impl Detector {
@@ -173,6 +175,7 @@ impl Detector {
                 axis_point,
                 centre_estimate,
                 settled_normal: c.track.and_then(|i| self.tracks[i].normal),
+                bits: d.bits.or(self.config.target.family().map(Family::bits)),
             };
             let (pose, settled) = match self.pose(&camera, diameter / 2.0, gray, c, &outer, hints) {
                 Some((pose, settled)) => (Some(pose), settled),
@@ -275,37 +278,95 @@ impl Detector {
             axis_point,
             centre_estimate,
             settled_normal,
+            bits,
         } = hints;
         let candidates = pose::circle_poses_from_points(camera, &c.edge, radius_m)
             .or_else(|| pose::try_circle_poses(camera, outer, radius_m))?;
         let by_centre = centre_estimate
             .and_then(|measured| pose::choose_by_centre_estimate(camera, &candidates, measured));
         let by_track = || pose::choose_by_settled_normal(&candidates, &settled_normal?);
-        if let Some(k) = by_centre.or_else(by_track) {
-            let pose = pose::full_pose_from_ring(camera, &candidates[k], yaw, axis_point);
-            return Some((pose, true));
-        }
-        let mid = (c.black + c.white) / 2.0;
-        let inner_ratios = self.config.target.design().inner_edge_ratios();
+        let settled = by_centre.or_else(by_track);
+        let design = self.config.target.design();
         let mut errors = [0.0f64; 2];
-        for &ratio in inner_ratios {
-            ellipse::inner_edge_points(gray, &c.outer, ratio, mid, &mut self.inner_scratch);
-            let found =
-                pose::inner_edge_errors(camera, &candidates, &self.inner_scratch, ratio * radius_m);
-            for (error, e) in errors.iter_mut().zip(found) {
-                *error += e;
+        if settled.is_none() {
+            let mid = (c.black + c.white) / 2.0;
+            for &ratio in design.inner_edge_ratios() {
+                ellipse::inner_edge_points(gray, &c.outer, ratio, mid, &mut self.inner_scratch);
+                let found = pose::inner_edge_errors(
+                    camera,
+                    &candidates,
+                    &self.inner_scratch,
+                    ratio * radius_m,
+                );
+                for (error, e) in errors.iter_mut().zip(found) {
+                    *error += e;
+                }
             }
         }
-        let circle: &CirclePose = if errors[1] < errors[0] {
-            &candidates[1]
-        } else {
-            &candidates[0]
+        let chosen = candidates[usize::from(settled.map_or(errors[1] < errors[0], |k| k == 1))];
+        let rough = pose::full_pose_from_ring(camera, &chosen, yaw, axis_point);
+        // The concentric edges sharpen the normal (see
+        // `pose::refine_circle_pose`). A WhyCode ring's circles break
+        // where its sectors meet; the ring's rotation says where.
+        let sector_sides = match design {
+            Design::WhyCon => Some(None),
+            Design::WhyCode => bits.filter(|_| yaw.is_some()).map(Some),
         };
+        let mut points = std::mem::take(&mut self.pose_points);
+        points.clear();
+        let min_rise = 0.5 * (c.white - c.black);
+        ellipse::concentric_edge_points(gray, &c.outer, 1.0, min_rise, &mut self.inner_scratch);
+        points.extend(self.inner_scratch.iter().map(|&p| (p, radius_m)));
+        if let Some(sides) = sector_sides {
+            for &ratio in design.inner_edge_ratios() {
+                let radius = ratio * radius_m;
+                ellipse::concentric_edge_points(
+                    gray,
+                    &c.outer,
+                    ratio,
+                    min_rise,
+                    &mut self.inner_scratch,
+                );
+                points.extend(
+                    self.inner_scratch
+                        .iter()
+                        .filter(|&&p| {
+                            sides.map_or(true, |bits| {
+                                clear_of_sector_sides(camera, &rough, bits, radius, p)
+                            })
+                        })
+                        .map(|&p| (p, radius)),
+                );
+            }
+        }
+        let circle = pose::refine_circle_pose(camera, &chosen, &points).unwrap_or(chosen);
+        self.pose_points = points;
         Some((
-            pose::full_pose_from_ring(camera, circle, yaw, axis_point),
-            false,
+            pose::full_pose_from_ring(camera, &circle, yaw, axis_point),
+            settled.is_some(),
         ))
     }
+}
+
+/// Whether an edge point of a ring circle (radius `radius_m`) lies far
+/// enough from the sides of the ring's sectors that its sample did not
+/// see them: two pixels of arc.
+fn clear_of_sector_sides(
+    camera: &Camera,
+    pose: &Pose,
+    bits: u32,
+    radius_m: f64,
+    point: (f64, f64),
+) -> bool {
+    let Some(hit) = pose::intersect_marker_plane(camera, pose, point) else {
+        return false;
+    };
+    let angle = hit.y.atan2(hit.x).rem_euclid(std::f64::consts::TAU);
+    let width = crate::geometry::sector_width(bits);
+    let into = angle.rem_euclid(width);
+    let arc_m = radius_m * into.min(width - into);
+    let pixel_m = pose.position.z / camera.fx;
+    arc_m > 2.0 * pixel_m
 }
 
 /// Least sector width (pixels, see [`manchester::sector_pixels`]) at which

@@ -180,6 +180,7 @@ pub struct Detector {
     filler: Filler,
     edge_scratch: Vec<(f64, f64)>,
     inner_scratch: Vec<(f64, f64)>,
+    pose_points: Vec<crate::pose::RadialPoint>,
     /// Scan tiles covered by markers followed this frame.
     occupied: Vec<bool>,
     /// A follow of this frame fell back to the flood fill.
@@ -237,6 +238,7 @@ impl Detector {
             filler: Filler::default(),
             edge_scratch: Vec::new(),
             inner_scratch: Vec::new(),
+            pose_points: Vec::new(),
             occupied: Vec::new(),
             follow_filled: false,
             tracks: Vec::new(),

@@ -205,6 +205,17 @@ pub fn project_marker_point(
     camera.project(&pose.marker_to_camera(&Vector3::new(x_m, y_m, 0.0)))
 }
 
+/// Where the viewing ray of a pixel meets the marker's plane, in marker
+/// coordinates (metres; z is 0); `None` if it meets it behind the camera.
+pub fn intersect_marker_plane(
+    camera: &Camera,
+    pose: &Pose,
+    pixel: (f64, f64),
+) -> Option<Vector3<f64>> {
+    let hit = intersect_plane(camera, &pose.circle(), pixel.0, pixel.1)?;
+    Some(pose.rotation.transpose() * (hit - pose.position))
+}
+
 /// A marker-plane point (x, y in metres) and the pixel (u, v) where it was
 /// seen.
 pub type PointMatch = ((f64, f64), (f64, f64));

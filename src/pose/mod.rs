@@ -21,6 +21,7 @@ use crate::math::ellipse::{fit_conic, Ellipse};
 
 mod choose;
 mod full;
+mod refine;
 
 pub use choose::{
     choose_by_centre_estimate, choose_by_circle_points, choose_by_inner_circle,
@@ -28,9 +29,10 @@ pub use choose::{
     RadialPoint,
 };
 pub use full::{
-    estimate_pose, full_pose, full_pose_from_ring, full_pose_from_yaw, project_marker_point,
-    reprojection_rms, PointMatch, Pose, PoseEstimate,
+    estimate_pose, full_pose, full_pose_from_ring, full_pose_from_yaw, intersect_marker_plane,
+    project_marker_point, reprojection_rms, PointMatch, Pose, PoseEstimate,
 };
+pub use refine::refine_circle_pose;
 
 /// One solution for a circle in space: its centre (camera frame, metres)
 /// and unit plane normal pointing towards the camera.
