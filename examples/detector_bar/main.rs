@@ -452,7 +452,7 @@ fn blur_and_tilt_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &R
     }
     let scenario = Scenario::new(
         Some(fam8),
-        Spread::fixed_tilt(6, (60.0, 90.0), 70.0),
+        Spread::fixed_view(6, (60.0, 90.0), 70.0),
         6 * scale,
         780_000,
     )
@@ -460,7 +460,7 @@ fn blur_and_tilt_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &R
     let c = scenario.counts();
     let theirs = rival_counts(&scenario, rivals);
     table.row(
-        "6b tilt 70°, 60-90 px markers, 8-bit",
+        "6b view 70°, 60-90 px markers, 8-bit",
         rates(&c),
         cells(&theirs, rates),
         "",

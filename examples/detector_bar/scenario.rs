@@ -10,7 +10,7 @@ use std::collections::HashMap;
 use std::f64::consts::PI;
 
 use image::GrayImage;
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use whycode::camera::Camera;
 use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
@@ -82,6 +82,10 @@ pub struct Spread {
     /// Exact tilt of every marker about a random in-plane axis, radians;
     /// overrides `max_tilt` when set.
     pub fixed_tilt: Option<f64>,
+    /// `fixed_tilt` is the angle between the marker's normal and its own
+    /// line of sight (its view angle), not a turn about the camera's axes
+    /// (which off the optical axis adds up to half the field of view).
+    pub against_view: bool,
 }
 
 impl Spread {
@@ -93,6 +97,7 @@ impl Spread {
             diameter_px,
             max_tilt: max_tilt_deg * DEG,
             fixed_tilt: None,
+            against_view: false,
         }
     }
 
@@ -104,6 +109,17 @@ impl Spread {
             diameter_px,
             max_tilt: 0.0,
             fixed_tilt: Some(tilt_deg * DEG),
+            against_view: false,
+        }
+    }
+
+    /// `count` markers of `diameter_px`, each seen at exactly `view_deg`
+    /// from face-on (normal against the line of sight to its centre),
+    /// tilted about a random axis.
+    pub fn fixed_view(count: usize, diameter_px: (f64, f64), view_deg: f64) -> Spread {
+        Spread {
+            against_view: true,
+            ..Spread::fixed_tilt(count, diameter_px, view_deg)
         }
     }
 }
@@ -145,7 +161,19 @@ pub fn spread_markers(
                 rng.range(-spread.max_tilt, spread.max_tilt.max(1e-12)),
             ),
         };
-        let placement = placement_at(camera, (u, v), d, tilt, pan, roll);
+        let mut placement = placement_at(camera, (u, v), d, tilt, pan, roll);
+        if spread.against_view {
+            // Face-on to the line of sight, then the tilt (about an axis
+            // across it): the same draws, measured from the ray instead of
+            // from the optical axis.
+            let face_on = placement_at(camera, (u, v), d, 0.0, 0.0, roll);
+            let turn = tilt.hypot(pan);
+            let axis = Vector3::new(tilt, -pan, 0.0) / turn.max(1e-12);
+            let to_ray = Rotation3::rotation_between(&Vector3::z(), &face_on.position)
+                .unwrap_or_else(Rotation3::identity);
+            let tilted = Rotation3::from_axis_angle(&Unit::new_normalize(to_ray * axis), turn);
+            placement.rotation = tilted.matrix() * to_ray.matrix() * face_on.rotation;
+        }
         let (marker, id) = match family {
             Some(f) => {
                 let id = 1 + rng.next_u32() % f.len() as u32;

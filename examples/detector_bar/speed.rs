@@ -155,6 +155,7 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Ri
         diameter_px: (60.0, 120.0),
         max_tilt: 20.0 * DEG,
         fixed_tilt: None,
+        against_view: false,
     };
     for (k, (label, family, background)) in [
         ("WhyCode 14-bit, white sheet", Some(&fam14), 0.86),

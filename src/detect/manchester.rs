@@ -195,25 +195,24 @@ pub fn examine<C: Deref<Target = [u8]>>(
     // sectors evenly on a steep view, which spoils the model's fit. The
     // ring's own radial edges show where the marker's centre projects;
     // read again through that exact rectification.
-    // The count whose boundaries the edges follow best sets the rays.
-    let Some((nearest, bits)) = tested
-        .iter()
-        .zip(&counts)
-        .max_by(|a, b| a.0.coherence.total_cmp(&b.0.coherence))
+    // The count whose boundaries the edges follow best sets the rays, and
+    // the count expected first (a family's) too: on a view of 70° its
+    // sides may look less regular than another count's before the
+    // rectification that evens them out.
+    let Some(nearest) =
+        (0..counts.len()).max_by(|&a, &b| tested[a].coherence.total_cmp(&tested[b].coherence))
     else {
         return absent;
     };
-    let centre = refined_centre(
-        image,
-        &frame,
-        nearest.phase,
-        *bits,
-        0.5 * (black_level + white_level),
-    );
-    let rectified = centre.and_then(|p| EllipseFrame::with_projected_centre(outer, p));
-    let again = rectified
-        .and_then(|frame| test(&frame, &counts))
-        .and_then(|tested| best(&tested));
+    let mid_level = 0.5 * (black_level + white_level);
+    let again = [0, nearest][..if nearest == 0 { 1 } else { 2 }]
+        .iter()
+        .filter_map(|&k| {
+            let centre = refined_centre(image, &frame, tested[k].phase, counts[k], mid_level)?;
+            let frame = EllipseFrame::with_projected_centre(outer, centre)?;
+            best(&test(&frame, &counts)?)
+        })
+        .max_by(|a, b| a.fit.total_cmp(&b.fit));
     [plain, again]
         .into_iter()
         .flatten()
