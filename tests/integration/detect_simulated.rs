@@ -340,9 +340,8 @@ fn a_cast_shadow_across_markers_under_a_steep_gradient_keeps_them() {
 }
 
 /// Markers 65-95 px across (face-on) seen at 50-70° from their normal,
-/// random codes, rolls and tilt axes on 800x600: every one found and named
-/// but at most one (an 8-bit ring that steep passed for 7 bits along the
-/// unrectified ellipse), none misread.
+/// random codes, rolls and tilt axes on 800x600: every one found and named,
+/// none misread.
 #[test]
 fn steep_views_up_to_70_degrees_are_found_and_named() {
     let camera = Camera::ideal(800, 600, 60.0);
@@ -404,8 +403,8 @@ fn steep_views_up_to_70_degrees_are_found_and_named() {
     }
     eprintln!("{named} of {seen} named");
     assert!(seen >= 100, "only {seen} markers within 70°");
-    // 114 of 114 now (112 before the rectified second reading); one spare.
-    assert!(named + 1 >= seen, "{named} of {seen} named");
+    // 114 of 114 (112 before the rectified second reading).
+    assert_eq!(named, seen, "{named} of {seen} named");
 }
 
 /// 8-bit markers about 80 px across under 20-25 px of motion blur in random
@@ -529,4 +528,139 @@ fn a_large_marker_cut_by_the_image_edge_is_not_taken_for_floor() {
             assert!(large.is_empty(), "{diameter_px} px cut {cut}: {large:?}");
         }
     }
+}
+
+/// A marker at the pixel (u, v), `diameter_px` across were it face-on,
+/// seen at exactly `view` radians from face-on (its normal against its own
+/// line of sight), tilted about the axis at `axis` radians across that line.
+fn viewed_at(
+    camera: &Camera,
+    (u, v): (f64, f64),
+    diameter_px: f64,
+    view: f64,
+    axis: f64,
+    roll: f64,
+) -> Placement {
+    let z = camera.fx * DIAMETER_M / diameter_px;
+    let (x, y) = camera.undistort(u, v);
+    let face_on = Placement::viewed(Vector3::new(x * z, y * z, z), 0.0, 0.0, roll);
+    let to_ray = nalgebra::Rotation3::rotation_between(&Vector3::z(), &face_on.position).unwrap();
+    let across = to_ray * Vector3::new(axis.cos(), axis.sin(), 0.0);
+    let tilt = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(across), view);
+    Placement::new(
+        face_on.position,
+        tilt.matrix() * to_ray.matrix() * face_on.rotation,
+    )
+}
+
+/// 8-bit markers 60-90 px across seen at exactly 70° from face-on, tilted
+/// about every direction (a slanted ellipse fills less of its bounding box
+/// than the roundness test of an upright one expects; the ring's sides of
+/// that steep a view look less regular than another count's until the
+/// rectified re-read evens them out): every one found and named.
+#[test]
+fn markers_seen_at_70_degrees_are_all_found_and_named() {
+    let camera = Camera::ideal(800, 600, 60.0);
+    let family = Family::generate(8, 2).unwrap();
+    let mut rng = crate::support::Pcg32::new(1_970_000, 1);
+    let mut seen = 0;
+    for frame in 0..12 {
+        let mut scene = Scene::new(camera);
+        scene.noise = 2.0;
+        scene.seed = frame;
+        for k in 0..9 {
+            let (u, v) = (
+                800.0 * ((k % 3) as f64 + 0.5) / 3.0 + rng.range(-40.0, 40.0),
+                600.0 * ((k / 3) as f64 + 0.5) / 3.0 + rng.range(-20.0, 20.0),
+            );
+            // Every eighth of a turn, and a random offset within it.
+            let axis = (frame * 9 + k) as f64 * std::f64::consts::FRAC_PI_4 + rng.range(0.0, 0.3);
+            let placement = viewed_at(
+                &camera,
+                (u, v),
+                rng.range(60.0, 90.0),
+                70.0 * DEG,
+                axis,
+                rng.range(0.0, 6.3),
+            );
+            let id = 1 + rng.next_u32() % family.len() as u32;
+            let marker = Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
+            scene
+                .objects
+                .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+        }
+        let (image, truth) = simulate::render(&scene);
+        let found = detector(&family, camera).detect(&image);
+        for m in truth.markers.iter().filter(|m| m.visible) {
+            seen += 1;
+            let d = found
+                .iter()
+                .find(|d| (d.u - m.u).hypot(d.v - m.v) < m.diameter_px / 4.0);
+            assert_eq!(
+                d.map(|d| d.id),
+                Some(m.id),
+                "frame {frame}: marker at ({:.0}, {:.0}) not named",
+                m.u,
+                m.v
+            );
+        }
+    }
+    assert_eq!(seen, 12 * 9, "every marker in view");
+}
+
+/// Markers 80-120 px across seen face-on to 10° anywhere in the frame,
+/// sharp and noiseless (where the closed-form normal, read off the outer
+/// ellipse's eccentricity alone, was up to 2.5° off): the normal from all
+/// the marker's concentric edges is within 1° of the truth, and the
+/// reported centre within 0.05 px.
+#[test]
+fn face_on_normals_are_within_a_degree() {
+    let camera = Camera::ideal(800, 600, 60.0);
+    let family = Family::generate(8, 2).unwrap();
+    let mut rng = crate::support::Pcg32::new(1_980_000, 1);
+    let (mut worst, mut worst_centre, mut count) = (0.0f64, 0.0f64, 0);
+    for frame in 0..10 {
+        let mut scene = Scene::new(camera);
+        scene.seed = frame;
+        for k in 0..9 {
+            let (u, v) = (
+                800.0 * ((k % 3) as f64 + 0.5) / 3.0 + rng.range(-50.0, 50.0),
+                600.0 * ((k / 3) as f64 + 0.5) / 3.0 + rng.range(-30.0, 30.0),
+            );
+            let view = rng.range(0.0, 10.0) * DEG;
+            let placement = viewed_at(
+                &camera,
+                (u, v),
+                rng.range(80.0, 120.0),
+                view,
+                rng.range(0.0, 6.3),
+                rng.range(0.0, 6.3),
+            );
+            let id = 1 + rng.next_u32() % family.len() as u32;
+            let marker = Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
+            scene
+                .objects
+                .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+        }
+        let (image, truth) = simulate::render(&scene);
+        let found = detector(&family, camera).detect(&image);
+        for m in &truth.markers {
+            let d = found
+                .iter()
+                .find(|d| (d.u - m.u).hypot(d.v - m.v) < m.diameter_px / 4.0)
+                .unwrap_or_else(|| panic!("frame {frame}: marker {} not found", m.id));
+            let pose = d.pose.expect("a pose with camera and diameter");
+            let error = pose.normal().angle(&Vector3::from(m.normal)) / DEG;
+            assert!(
+                error < 1.0,
+                "frame {frame}: marker {} normal {error:.2}° off",
+                m.id
+            );
+            worst = worst.max(error);
+            worst_centre = worst_centre.max((d.u - m.u).hypot(d.v - m.v));
+            count += 1;
+        }
+    }
+    eprintln!("{count} markers: normal within {worst:.2}°, centre within {worst_centre:.3} px");
+    assert!(worst_centre < 0.05, "centre {worst_centre:.3} px off");
 }
