@@ -315,28 +315,33 @@ impl Detector {
         let mut points = std::mem::take(&mut self.pose_points);
         points.clear();
         let min_rise = 0.5 * (c.white - c.black);
-        ellipse::concentric_edge_points(gray, &c.outer, 1.0, min_rise, &mut self.inner_scratch);
+        let everywhere = |_: (f64, f64)| true;
+        ellipse::concentric_edge_points(
+            gray,
+            &c.outer,
+            1.0,
+            min_rise,
+            everywhere,
+            &mut self.inner_scratch,
+        );
         points.extend(self.inner_scratch.iter().map(|&p| (p, radius_m)));
         if let Some(sides) = sector_sides {
             for &ratio in design.inner_edge_ratios() {
                 let radius = ratio * radius_m;
+                let wanted = |p: (f64, f64)| {
+                    sides.map_or(true, |bits| {
+                        clear_of_sector_sides(camera, &rough, bits, radius, p)
+                    })
+                };
                 ellipse::concentric_edge_points(
                     gray,
                     &c.outer,
                     ratio,
                     min_rise,
+                    wanted,
                     &mut self.inner_scratch,
                 );
-                points.extend(
-                    self.inner_scratch
-                        .iter()
-                        .filter(|&&p| {
-                            sides.map_or(true, |bits| {
-                                clear_of_sector_sides(camera, &rough, bits, radius, p)
-                            })
-                        })
-                        .map(|&p| (p, radius)),
-                );
+                points.extend(self.inner_scratch.iter().map(|&p| (p, radius)));
             }
         }
         let circle = pose::refine_circle_pose(camera, &chosen, &points).unwrap_or(chosen);

@@ -135,14 +135,39 @@ pub fn inner_edge_points(
     }
 }
 
-/// Bilinear sample of the image smoothed by a 2×2 box.
+/// The image at (x, y) interpolated with the quadratic B-spline, which
+/// smooths as it interpolates: a sharp edge's steps between pixels, which
+/// bilinear samples keep, would move the gradient's centroid with the
+/// edge's phase against the grid. `None` unless the 3×3 neighbourhood is
+/// in the image.
 #[inline]
 fn smooth_sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
-    let a = sample(image, x - 0.5, y - 0.5)?;
-    let b = sample(image, x + 0.5, y - 0.5)?;
-    let c = sample(image, x - 0.5, y + 0.5)?;
-    let d = sample(image, x + 0.5, y + 0.5)?;
-    Some(0.25 * (a + b + c + d))
+    if !(x >= 0.5 && y >= 0.5) {
+        return None;
+    }
+    // Rounding by truncation: the coordinates are positive.
+    let (i, j) = ((x + 0.5) as usize as f64, (y + 0.5) as usize as f64);
+    if !(i + 1.0 < image.width as f64 && j + 1.0 < image.height as f64) {
+        return None;
+    }
+    let weights = |d: f64| {
+        [
+            0.5 * (0.5 - d) * (0.5 - d),
+            0.75 - d * d,
+            0.5 * (0.5 + d) * (0.5 + d),
+        ]
+    };
+    let (wx, wy) = (weights(x - i), weights(y - j));
+    let (i, j) = (i as usize, j as usize);
+    let mut value = 0.0;
+    for (row, w) in image.pixels[(j - 1) * image.width..]
+        .chunks_exact(image.width)
+        .zip(wy)
+    {
+        let p = &row[i - 1..i + 2];
+        value += w * (wx[0] * f64::from(p[0]) + wx[1] * f64::from(p[1]) + wx[2] * f64::from(p[2]));
+    }
+    Some(value)
 }
 
 /// Edge points of a circle of the marker concentric with its outer edge,
@@ -151,25 +176,27 @@ fn smooth_sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
 /// edge along a ray from the outer ellipse's centre. Unlike a 50 %
 /// crossing between interpolated samples, which shifts by up to a tenth of
 /// a pixel with the edge's phase against the pixel grid, the centroid of a
-/// pixel-integrated step is exact, and it does not depend on the levels on
-/// either side. Rays where the grey level does not change by at least
-/// `min_rise` the expected way (dark inside the outer edge, light inside
-/// an inner one) give no point: on a WhyCode ring each inner circle shows
-/// only where a sector borders it.
+/// smoothly interpolated step hardly does, and it does not depend on the
+/// levels on either side. Rays where the grey level does not change by at
+/// least `min_rise` the expected way (dark inside the outer edge, light
+/// inside an inner one) give no point, nor rays whose nominal edge point
+/// `wanted` refuses (on a WhyCode ring an inner circle shows only where a
+/// sector borders it, and breaks at the sectors' sides).
 pub fn concentric_edge_points(
     image: Gray<'_>,
     outer: &Ellipse,
     ratio: f64,
     min_rise: f64,
+    wanted: impl Fn((f64, f64)) -> bool,
     out: &mut Vec<(f64, f64)>,
 ) {
     out.clear();
     let perimeter = std::f64::consts::PI * ratio * (outer.semi_major + outer.semi_minor);
-    let rays = ((perimeter / 2.0) as usize).clamp(16, 160);
+    let rays = ((perimeter / 4.0) as usize).clamp(16, 64);
     // Darker outside than inside for the inner circles.
     let sign = if ratio >= 1.0 { 1.0 } else { -1.0 };
-    const STEP: f64 = 0.5;
-    let mut profile = [0.0f64; 40];
+    const STEP: f64 = 1.0;
+    let mut profile = [0.0f64; 16];
     for k in 0..rays {
         let t = std::f64::consts::TAU * (k as f64 + 0.5) / rays as f64;
         let (px, py) = outer.point_at(t);
@@ -177,8 +204,8 @@ pub fn concentric_edge_points(
         let r = dx.hypot(dy);
         // The window stays clear of the neighbouring circles: the ring's
         // borders lie 0.257 R apart.
-        let half = (0.08 * r).max(3.0).min(0.2 * r);
-        if half < 1.5 {
+        let half = (0.2 * r).min(3.0);
+        if half < 1.5 || !wanted((outer.u + ratio * dx, outer.v + ratio * dy)) {
             continue;
         }
         let n = ((2.0 * half / STEP) as usize + 1).min(profile.len());

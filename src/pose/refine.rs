@@ -54,7 +54,7 @@ impl Observations {
             let weighted = Vector3::new(plane.x, plane.y, -r * r * plane.z);
             let value = plane.dot(&weighted);
             let gradient = 2.0 * (g.transpose() * weighted);
-            let norm = gradient.x.hypot(gradient.y);
+            let norm = (gradient.x * gradient.x + gradient.y * gradient.y).sqrt();
             if !(norm > 0.0 && value.is_finite()) {
                 return false;
             }
@@ -64,16 +64,18 @@ impl Observations {
     }
 }
 
-/// Gauss-Newton with Levenberg damping on the five pose parameters.
+/// Gauss-Newton on the five pose parameters, halving a step that does not
+/// lower the cost; the start is close (the closed-form pose, then the first
+/// round's fit), so a few steps converge.
 fn solve(
     observations: &Observations,
     initial: &CirclePose,
     basis: &(Vector3<f64>, Vector3<f64>),
-) -> Option<(Params, f64)> {
+    steps: usize,
+) -> Option<Params> {
     let n = observations.points.len();
     let mut residual = vec![0.0; n];
     let mut trial = vec![0.0; n];
-    let mut shifted = vec![0.0; n];
     let mut jacobian = vec![[0.0f64; 5]; n];
     let mut p = Params::zeros();
     let cost = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
@@ -81,17 +83,16 @@ fn solve(
         return None;
     }
     let mut current = cost(&residual);
-    let mut damping = 1e-4;
-    const STEP: f64 = 1e-7;
-    for _ in 0..10 {
+    const DELTA: f64 = 1e-7;
+    for _ in 0..steps {
         for k in 0..5 {
             let mut q = p;
-            q[k] += STEP;
-            if !observations.residuals(&moved(initial, basis, &q), &mut shifted) {
+            q[k] += DELTA;
+            if !observations.residuals(&moved(initial, basis, &q), &mut trial) {
                 return None;
             }
-            for (row, (s, r)) in jacobian.iter_mut().zip(shifted.iter().zip(&residual)) {
-                row[k] = (s - r) / STEP;
+            for (row, (s, r)) in jacobian.iter_mut().zip(trial.iter().zip(&residual)) {
+                row[k] = (s - r) / DELTA;
             }
         }
         let mut normal = SMatrix::<f64, 5, 5>::zeros();
@@ -101,35 +102,30 @@ fn solve(
             normal += j * j.transpose();
             gradient += j * *r;
         }
-        let mut improved = false;
-        for _ in 0..6 {
-            let mut damped = normal;
-            for k in 0..5 {
-                damped[(k, k)] *= 1.0 + damping;
-            }
-            let Some(step) = damped.cholesky().map(|c| c.solve(&-gradient)) else {
-                damping *= 10.0;
-                continue;
-            };
+        let Some(mut step) = normal.cholesky().map(|c| c.solve(&-gradient)) else {
+            return Some(p);
+        };
+        let mut accepted = false;
+        for _ in 0..4 {
             let q = p + step;
             if observations.residuals(&moved(initial, basis, &q), &mut trial)
-                && cost(&trial) < current
+                && cost(&trial) <= current
             {
-                let gain = current - cost(&trial);
                 p = q;
                 current = cost(&trial);
                 std::mem::swap(&mut residual, &mut trial);
-                damping = (damping * 0.1).max(1e-9);
-                improved = gain > 1e-12 * current.max(1e-12);
+                accepted = true;
                 break;
             }
-            damping *= 10.0;
+            step *= 0.5;
         }
-        if !improved {
+        // Converged: the normal turns by less than 0.0006°, the centre
+        // moves by less than 1e-6 of its distance.
+        if !accepted || step.norm() < 1e-5 {
             break;
         }
     }
-    Some((p, (current / n as f64).sqrt()))
+    Some(p)
 }
 
 /// The circle pose that best explains edge points of several concentric
@@ -160,11 +156,10 @@ pub fn refine_circle_pose(
             .collect(),
         focal: 0.5 * (camera.fx + camera.fy),
     };
-    let basis = plane_basis(&initial.normal);
     let mut circle = *initial;
     // Outlier limits of the two rounds, pixels: loose around the
     // closed-form start, tight around the first fit.
-    for floor in [0.6, 0.3] {
+    for (floor, steps) in [(0.6, 3), (0.3, 1)] {
         let mut residual = vec![0.0; observations.points.len()];
         if !observations.residuals(&circle, &mut residual) {
             return None;
@@ -177,8 +172,9 @@ pub fn refine_circle_pose(
         if observations.points.len() < MIN_POINTS {
             return None;
         }
-        let (p, _rms) = solve(&observations, initial, &basis)?;
-        circle = moved(initial, &basis, &p);
+        let basis = plane_basis(&circle.normal);
+        let p = solve(&observations, &circle, &basis, steps)?;
+        circle = moved(&circle, &basis, &p);
     }
     let facing = circle.normal.dot(&circle.center) < 0.0;
     (facing && circle.center.z > 0.0 && circle.center.iter().all(|x| x.is_finite()))
