@@ -158,6 +158,20 @@ impl Detector {
                 axis_point = reading.axis_point;
                 centre_estimate = reading.centre_estimate;
             }
+            let family_ring = match evidence {
+                RingEvidence::Manchester(ring) => Some(ring.bits) == family_bits,
+                RingEvidence::Absent => true,
+                RingEvidence::TooSmall => false,
+            };
+            if family_ring {
+                if let Some(ring) = self.read_blurred(image, gray, &outer) {
+                    Self::apply_blurred_reading(&mut d, ring);
+                    if d.id == 0 || d.yaw.is_none() {
+                        axis_point = None;
+                        centre_estimate = None;
+                    }
+                }
+            }
         } else {
             let disc = legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
                 && legacy::white_margin(gray, &c.outer, c.black, c.white);
@@ -210,6 +224,61 @@ impl Detector {
             }
         }
         (d, settled_normal)
+    }
+
+    /// The ring read through the motion blur its outline shows, when the
+    /// blur is long enough to smear the sectors the reader samples.
+    fn read_blurred<C: Deref<Target = [u8]>>(
+        &self,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        outer: &Ellipse,
+    ) -> Option<ring_model::SmallRing> {
+        let family = self.config.target.family()?;
+        let blur = ellipse::linear_blur(gray, outer)?;
+        // Below this the sector reader's central samples stay clear of
+        // the neighbouring sectors.
+        if blur.length < ellipse::MIN_MOTION_BLUR_PX {
+            return None;
+        }
+        ring_model::read_blurred_ring(image, outer, family, &blur)
+    }
+
+    /// Combines the sector reader's verdict with the blurred model's: the
+    /// model vouches for the ring (a marker even when the sector test saw
+    /// no Manchester structure) and names the ID the reader could not; when
+    /// the two name different members, neither is trusted.
+    fn apply_blurred_reading(d: &mut Detection, ring: ring_model::SmallRing) {
+        if !ring.structured {
+            return;
+        }
+        d.unreadable = false;
+        if ring.id == 0 {
+            if d.id != 0 && d.status != Some(MatchStatus::Exact) {
+                // The model sees two members about equally well where the
+                // reader had to correct: no ID rather than a guess.
+                d.id = 0;
+                d.yaw = None;
+                d.confidence = 0.0;
+            }
+            return;
+        }
+        if d.id != 0 && d.id != ring.id {
+            d.id = 0;
+            d.code = None;
+            d.status = None;
+            d.yaw = None;
+            d.confidence = 0.0;
+            return;
+        }
+        if d.id == ring.id {
+            return;
+        }
+        d.id = ring.id;
+        d.code = Some(ring.code);
+        d.status = Some(MatchStatus::Exact);
+        d.yaw = ring.yaw;
+        d.confidence = (1.0 - 1.0 / ring.margin).clamp(0.0, 1.0);
     }
 
     /// Tracked markers report what the ID filter believes after this
