@@ -496,6 +496,52 @@ pub fn linear_blur(image: Gray<'_>, outer: &Ellipse) -> Option<LinearBlur> {
 mod tests {
     use super::*;
 
+    /// A marker rendered under motion blur: the outline's edge spread
+    /// gives the blur's direction, and its length to within the fifth the
+    /// ring model's search covers; a sharp marker shows none.
+    #[test]
+    fn the_outline_of_a_motion_blurred_marker_gives_the_blur() {
+        use crate::camera::Camera;
+        use crate::geometry::Marker;
+        use crate::simulate::{self, LooseMarker, MotionBlur, Placement, Scene, SceneObject};
+        use nalgebra::Vector3;
+        let camera = Camera::ideal(320, 240, 60.0);
+        let z = camera.fx * 0.05 / 80.0;
+        for (length, angle) in [(0.0, 0.0), (12.0, 0.3), (20.0, 2.0), (25.0, 1.2)] {
+            let mut scene = Scene::new(camera);
+            scene.noise = 2.0;
+            let marker = Marker::whycode(8, 0b0001_0011, 50.0);
+            let placement = Placement::viewed(Vector3::new(0.0, 0.0, z), 0.0, 0.0, 0.5);
+            scene
+                .objects
+                .push(SceneObject::Marker(LooseMarker::new(marker, 1, placement)));
+            scene.motion_blur = Some(MotionBlur {
+                length_px: length,
+                angle,
+            });
+            let (image, truth) = simulate::render(&scene);
+            let m = &truth.markers[0];
+            let outer = Ellipse {
+                u: m.u,
+                v: m.v,
+                semi_major: m.diameter_px / 2.0,
+                semi_minor: m.diameter_px / 2.0,
+                angle: 0.0,
+            };
+            let gray = Gray::new(image.as_raw(), 320, 240);
+            let blur = linear_blur(gray, &outer).expect("edge readable");
+            if length == 0.0 {
+                assert!(blur.length < MIN_MOTION_BLUR_PX, "{blur:?}");
+                continue;
+            }
+            let off = (blur.angle - angle).rem_euclid(std::f64::consts::PI);
+            let off = off.min(std::f64::consts::PI - off);
+            assert!(off < 0.1, "{length} px at {angle}: {blur:?}");
+            let ratio = blur.length / length;
+            assert!((0.7..1.05).contains(&ratio), "{length} px: {blur:?}");
+        }
+    }
+
     #[test]
     fn moments_of_a_filled_disc_give_its_radius() {
         let mut s = Stats::default();
