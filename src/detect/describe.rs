@@ -163,10 +163,15 @@ impl Detector {
                 RingEvidence::Absent => true,
                 RingEvidence::TooSmall => false,
             };
-            if family_ring {
+            // A clean exact reading needs no second opinion; any other ring
+            // the outline shows smeared by motion is compared with the members
+            // rendered through that smear.
+            let clean = d.id != 0 && d.status == Some(MatchStatus::Exact) && d.confidence >= 0.5;
+            if family_ring && !clean {
                 if let Some(ring) = self.read_blurred(image, gray, &outer) {
-                    Self::apply_blurred_reading(&mut d, ring);
-                    if d.id == 0 || d.yaw.is_none() {
+                    if !Self::apply_blurred_reading(&mut d, ring) {
+                        // The reader's rim point and centre belong to a
+                        // reading that no longer stands.
                         axis_point = None;
                         centre_estimate = None;
                     }
@@ -247,38 +252,36 @@ impl Detector {
     /// Combines the sector reader's verdict with the blurred model's: the
     /// model vouches for the ring (a marker even when the sector test saw
     /// no Manchester structure) and names the ID the reader could not; when
-    /// the two name different members, neither is trusted.
-    fn apply_blurred_reading(d: &mut Detection, ring: ring_model::SmallRing) {
+    /// the two name different members, or the reader needed correcting
+    /// where the model sees two members alike, no ID is named. True when
+    /// the reader's reading stands as it was.
+    fn apply_blurred_reading(d: &mut Detection, ring: ring_model::SmallRing) -> bool {
         if !ring.structured {
-            return;
+            return true;
         }
         d.unreadable = false;
-        if ring.id == 0 {
-            if d.id != 0 && d.status != Some(MatchStatus::Exact) {
-                // The model sees two members about equally well where the
-                // reader had to correct: no ID rather than a guess.
-                d.id = 0;
-                d.yaw = None;
-                d.confidence = 0.0;
-            }
-            return;
+        let agrees = match (d.id, ring.id) {
+            (0, 0) => return true,
+            (read, 0) => read != 0 && d.status == Some(MatchStatus::Exact),
+            (read, modelled) => read == modelled,
+        };
+        if agrees {
+            return true;
         }
-        if d.id != 0 && d.id != ring.id {
+        if d.id == 0 {
+            d.id = ring.id;
+            d.code = Some(ring.code);
+            d.status = Some(MatchStatus::Exact);
+            d.yaw = ring.yaw;
+            d.confidence = (1.0 - 1.0 / ring.margin).clamp(0.0, 1.0);
+        } else {
             d.id = 0;
             d.code = None;
             d.status = None;
             d.yaw = None;
             d.confidence = 0.0;
-            return;
         }
-        if d.id == ring.id {
-            return;
-        }
-        d.id = ring.id;
-        d.code = Some(ring.code);
-        d.status = Some(MatchStatus::Exact);
-        d.yaw = ring.yaw;
-        d.confidence = (1.0 - 1.0 / ring.margin).clamp(0.0, 1.0);
+        false
     }
 
     /// Tracked markers report what the ID filter believes after this

@@ -10,6 +10,12 @@
 //! against a ring without angular structure (any grey, any radial profile
 //! of the marker's discs) tells a tiny marker from a round blob.
 //!
+//! A ring smeared by motion blur is read the same way (issue 9): a blur of
+//! length L smears sectors into their neighbours, so no sample reads one
+//! sector, but the members rendered through a segment of the length and
+//! direction the outline's edge spread shows
+//! ([`super::ellipse::linear_blur`]) still tell them apart.
+//!
 //! Each pixel's model value is linear in the 2n half-sector colours, so the
 //! pixel sums that the least-squares comparison needs are formed once per
 //! blur and phase; each member rotation then costs O(n²).
