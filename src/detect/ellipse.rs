@@ -192,7 +192,7 @@ pub fn concentric_edge_points(
 ) {
     out.clear();
     let perimeter = std::f64::consts::PI * ratio * (outer.semi_major + outer.semi_minor);
-    let rays = ((perimeter / 4.0) as usize).clamp(16, 64);
+    let rays = ((perimeter / 2.0) as usize).clamp(16, 160);
     // Darker outside than inside for the inner circles.
     let sign = if ratio >= 1.0 { 1.0 } else { -1.0 };
     const STEP: f64 = 1.0;
