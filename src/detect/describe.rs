@@ -334,8 +334,9 @@ impl Detector {
     /// Position and normal from the outer edge, the two-fold ambiguity
     /// decided by where the ring shows the marker's centre, else by the
     /// normal this marker's track settled on, else by the inner white
-    /// edges; the rotation from the yaw. The flag says whether the normal
-    /// was settled (not left to the inner edges).
+    /// edges; then refined on the outer and inner edges together; the
+    /// rotation from the yaw. The flag says whether the normal was settled
+    /// (not left to the inner edges).
     fn pose(
         &mut self,
         camera: &Camera,
