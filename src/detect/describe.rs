@@ -159,10 +159,13 @@ impl Detector {
                 centre_estimate = reading.centre_estimate;
             }
         } else {
-            let disc = legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
-                && legacy::white_margin(gray, &c.outer, c.black, c.white);
-            // A marker followed for a while stays one when its inside blurs.
-            d.unreadable = !disc && !c.track.is_some_and(|i| self.tracks[i].hits >= 3);
+            // A marker followed for a while stays one when its inside blurs,
+            // so its inside need not be looked at (the ray test costs more
+            // than following it).
+            let followed = c.track.is_some_and(|i| self.tracks[i].hits >= 3);
+            d.unreadable = !followed
+                && !(legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
+                    && legacy::white_margin(gray, &c.outer, c.black, c.white));
         }
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed_yaw.is_some());
