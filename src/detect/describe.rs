@@ -24,6 +24,17 @@ struct PoseHints {
     settled_normal: Option<Vector3<f64>>,
 }
 
+/// A followed marker's pose, its rotation measured on the known code's
+/// edges.
+#[derive(Debug, Clone, Copy)]
+struct FollowedPose {
+    pose: Pose,
+    /// The normal was told apart from the other candidate with confidence.
+    settled: bool,
+    /// Image direction of +x at the projected centre.
+    yaw: f64,
+}
+
 impl Detector {
     /// The detection of a candidate, and its normal when that was told
     /// apart from the other pose candidate with confidence (for the track).
@@ -59,10 +70,20 @@ impl Detector {
             .track
             .map(|i| self.tracks[i].clone())
             .filter(|t| t.id_streak >= 3);
-        let followed_yaw = match (known, self.config.target.family()) {
-            (Some(t), Some(family)) => match (t.code, t.yaw) {
+        // With a pose to give, the code's edges are measured once, on the
+        // rectified ring that gives the rotation; without, along the image
+        // ellipse.
+        let mut followed_pose = None;
+        let followed_yaw = match (known, self.config.target.family().map(Family::bits)) {
+            (Some(t), Some(bits)) => match (t.code, t.yaw) {
                 (Some(code), Some(yaw)) => {
-                    rectify::follow_ring(gray, &c.outer, family.bits(), code, yaw).map(|y| (t, y))
+                    followed_pose = self.follow_pose(gray, c, &t, bits, code, yaw);
+                    match &followed_pose {
+                        Some(followed) => Some((t, followed.yaw)),
+                        None => {
+                            rectify::follow_ring(gray, &c.outer, bits, code, yaw).map(|y| (t, y))
+                        }
+                    }
                 }
                 _ => None,
             },
@@ -177,9 +198,12 @@ impl Detector {
                 centre_estimate,
                 settled_normal: c.track.and_then(|i| self.tracks[i].normal),
             };
-            let (pose, settled) = match self.pose(&camera, diameter / 2.0, gray, c, &outer, hints) {
-                Some((pose, settled)) => (Some(pose), settled),
-                None => (None, false),
+            let (pose, settled) = match followed_pose {
+                Some(followed) => (Some(followed.pose), followed.settled),
+                None => match self.pose(&camera, diameter / 2.0, gray, c, &outer, hints) {
+                    Some((pose, settled)) => (Some(pose), settled),
+                    None => (None, false),
+                },
             };
             d.pose = pose;
             settled_normal = d
@@ -187,7 +211,8 @@ impl Detector {
                 .filter(|_| settled)
                 .map(|p| p.rotation.column(2).into_owned());
             let member_code = d.code.filter(|_| {
-                d.bits.is_none() || d.bits == self.config.target.family().map(Family::bits)
+                followed_pose.is_none()
+                    && (d.bits.is_none() || d.bits == self.config.target.family().map(Family::bits))
             });
             if let (Some(pose), Some(code), Some(family)) =
                 (&d.pose, member_code, self.config.target.family())
@@ -213,6 +238,35 @@ impl Detector {
             }
         }
         (d, settled_normal)
+    }
+
+    /// The pose of a followed marker whose code is known, its rotation
+    /// measured on the rectified ring from where last frame's yaw puts the
+    /// code's edges; every edge must show with the code's polarity, which
+    /// confirms the code as [`rectify::follow_ring`] would. None without a
+    /// camera and a diameter, or when the edges do not show (then the ring
+    /// is followed or read as for a marker without a pose).
+    fn follow_pose(
+        &mut self,
+        gray: Gray<'_>,
+        c: &Candidate,
+        track: &super::track::Track,
+        bits: u32,
+        code: u32,
+        previous_yaw: f64,
+    ) -> Option<FollowedPose> {
+        let (camera, diameter) = (self.config.camera?, self.config.diameter_m?);
+        let radius_m = diameter / 2.0;
+        let hints = PoseHints {
+            yaw: Some(previous_yaw),
+            axis_point: None,
+            centre_estimate: None,
+            settled_normal: track.normal,
+        };
+        let (pose, settled) = self.pose(&camera, radius_m, gray, c, &c.outer, hints)?;
+        let pose = rectify::refine_rotation(gray, &camera, &pose, radius_m, bits, code)?;
+        let yaw = pose.image_yaw(&camera)?;
+        Some(FollowedPose { pose, settled, yaw })
     }
 
     /// Tracked markers report what the ID filter believes after this
