@@ -101,7 +101,11 @@ impl Detector {
             let settled = c
                 .track
                 .is_some_and(|i| self.tracks[i].id != 0 && self.tracks[i].id_streak >= 3);
-            let evidence = ring_evidence(image, &outer, c, family_bits);
+            // A followed ring is tested for the bit count it showed last
+            // first: passing that surely spares testing every other count
+            // (each frame's cost on rings of another family, or without one).
+            let remembered = c.track.and_then(|i| self.tracks[i].bits);
+            let evidence = ring_evidence(image, &outer, c, family_bits, remembered);
             // Rings whose sectors are a pixel or two wide: compare with the
             // rendered members instead (also the ring test when too small
             // for the sector test).
@@ -369,27 +373,31 @@ impl Detector {
 /// a ring read without a family is believed.
 const AUTO_MIN_SECTOR_PX: f64 = 2.0;
 
-/// What the candidate's ring shows: the family's bit count is tried first
-/// (the common case), then every other count, so that a ring of another
-/// family is told apart from no ring at all.
+/// What the candidate's ring shows: the bit count its track showed last
+/// and the family's are tried first (the common case), then every other
+/// count, so that a ring of another family is told apart from no ring at
+/// all.
 fn ring_evidence<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
     outer: &Ellipse,
     c: &Candidate,
     family_bits: Option<u32>,
+    remembered: Option<u32>,
 ) -> RingEvidence {
     match family_bits {
         Some(bits) if !manchester::testable(outer, bits) => RingEvidence::TooSmall,
         Some(bits) => {
+            let first = remembered.filter(|&n| n != bits && manchester::testable(outer, n));
             // Counts too long to test on this ring are no evidence against
             // the family's.
-            let others = manchester::BITS.filter(|&n| n != bits && manchester::testable(outer, n));
+            let others = manchester::BITS
+                .filter(|&n| n != bits && Some(n) != first && manchester::testable(outer, n));
             manchester::examine(
                 image,
                 outer,
                 c.black,
                 c.white,
-                std::iter::once(bits).chain(others),
+                first.into_iter().chain(std::iter::once(bits)).chain(others),
             )
         }
         // Without a family nothing but the structure test vouches for the
@@ -397,9 +405,16 @@ fn ring_evidence<C: Deref<Target = [u8]>>(
         // an off-centre hole pass for a short code: only counts whose
         // sectors are wide enough to show their own edges are tried.
         None => {
-            let counts = manchester::BITS
-                .filter(|&n| manchester::sector_pixels(outer, n) >= AUTO_MIN_SECTOR_PX);
-            manchester::examine(image, outer, c.black, c.white, counts)
+            let wide = |n: u32| manchester::sector_pixels(outer, n) >= AUTO_MIN_SECTOR_PX;
+            let first = remembered.filter(|&n| manchester::BITS.contains(&n) && wide(n));
+            let counts = manchester::BITS.filter(|&n| wide(n) && Some(n) != first);
+            manchester::examine(
+                image,
+                outer,
+                c.black,
+                c.white,
+                first.into_iter().chain(counts),
+            )
         }
     }
 }
