@@ -188,9 +188,10 @@ impl Detector {
             // so its inside need not be looked at (the ray test costs more
             // than following it).
             let followed = c.track.is_some_and(|i| self.tracks[i].hits >= 3);
-            d.unreadable = !followed
-                && !(legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
+            let marker = followed
+                || (legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
                     && legacy::white_margin(gray, &c.outer, c.black, c.white));
+            d.unreadable = !marker;
         }
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed_yaw.is_some());
