@@ -16,9 +16,9 @@
 //! lines, and, once its ID is settled, its yaw from the known code's
 //! edges (on the rectified ring, once, when a pose is wanted; a ring of
 //! another family, or read without one, is tested for the bit count it
-//! showed last first); only if that fails does the flood fill run, and only if a marker
-//! is lost is the whole frame scanned (else one band of rows per frame
-//! looks for newcomers). IDs of tracked markers go through a Bayesian
+//! showed last first); only if that fails does the flood fill run, and
+//! only if a marker is lost is the whole frame scanned (else one band of
+//! rows per frame looks for newcomers). IDs of tracked markers go through a Bayesian
 //! filter ([`idfilter`], paper 5.1); the test tolerances adapt slowly to
 //! what is measured (paper 4.2).
 //!
