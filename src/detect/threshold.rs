@@ -679,6 +679,46 @@ mod tests {
         let _ = band.row(h - 1);
     }
 
+    /// A dim disc of a contrast near the noise floor on a noisy dark
+    /// background is where the global walk must look (its tiles are
+    /// blind, at levels between the disc and the background); the flat
+    /// noise around it and an inked disc on white paper are not.
+    #[test]
+    fn blind_tiles_cover_a_dim_disc_and_nothing_clear_or_flat() {
+        let (w, h) = (480usize, 160usize);
+        let mut state = 12345u32;
+        let px: Vec<u8> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as i32, (i / w) as i32);
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let noise = (state >> 29) as i32 - 3;
+                let d2 = |cx: i32, cy: i32| (x - cx).pow(2) + (y - cy).pow(2);
+                let level = if x >= 320 {
+                    // Paper with an inked disc.
+                    if d2(400, 80) < 900 {
+                        15
+                    } else {
+                        200
+                    }
+                } else if d2(80, 80) < 900 {
+                    8
+                } else {
+                    20
+                };
+                (level + noise).clamp(0, 255) as u8
+            })
+            .collect();
+        let map = ThresholdMap::adaptive(&px, w, h);
+        let blind = map.blind_tiles(&px, w, h);
+        let cols = w.div_ceil(16);
+        let at = |x: usize, y: usize| blind[(y / 16) * cols + x / 16];
+        let (lo, hi) = at(80, 80);
+        assert!(lo < 14 && 14 <= hi, "dim disc: {:?}", (lo, hi));
+        assert_eq!(at(250, 80), (0, 0), "flat noise");
+        assert_eq!(at(400, 80), (0, 0), "inked disc on paper");
+        assert_eq!(at(400, 40), (0, 0), "inked disc's edge");
+    }
+
     #[test]
     fn flat_image_has_no_dark_pixels() {
         let px = vec![90u8; 100 * 50];
