@@ -289,6 +289,7 @@ impl Detector {
             axis_point: None,
             centre_estimate: None,
             settled_normal: track.normal,
+            bits: Some(bits),
         };
         let (pose, settled) = self.pose(&camera, radius_m, gray, c, &c.outer, hints)?;
         let pose = rectify::refine_rotation(gray, &camera, &pose, radius_m, bits, code)?;
