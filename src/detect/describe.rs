@@ -159,8 +159,18 @@ impl Detector {
                 centre_estimate = reading.centre_estimate;
             }
         } else {
-            let disc = legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
-                && legacy::white_margin(gray, &c.outer, c.black, c.white);
+            let inside = legacy::concentric_white_disc(gray, &c.outer, c.black, c.white);
+            let paper = inside.and_then(|_| legacy::white_margin(gray, &c.outer, c.black, c.white));
+            let disc = match (inside, paper) {
+                (Some(legacy::Inside::WhyConDisc), Some(paper)) => {
+                    legacy::white_disc_mass(gray, &c.outer, paper)
+                }
+                (Some(legacy::Inside::WhyCodeRing), Some(_)) => matches!(
+                    ring_evidence(image, &outer, c, None),
+                    RingEvidence::Manchester(_)
+                ),
+                _ => false,
+            };
             // A marker followed for a while stays one when its inside blurs.
             d.unreadable = !disc && !c.track.is_some_and(|i| self.tracks[i].hits >= 3);
         }
