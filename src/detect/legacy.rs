@@ -298,13 +298,20 @@ pub fn white_disc_mass(gray: Gray<'_>, outer: &Ellipse, paper: f64) -> bool {
     if ink.is_empty() {
         return true;
     }
-    let quarter = ink.len() / 4;
-    let black = *ink.select_nth_unstable_by(quarter, f64::total_cmp).1;
+    let middle = ink.len() / 2;
+    let black = *ink.select_nth_unstable_by(middle, f64::total_cmp).1;
+    // The ink's noise (median absolute deviation), which every pixel
+    // weighed carries too.
+    let mut deviations: Vec<f64> = ink.iter().map(|g| (g - black).abs()).collect();
+    let noise_grey = 1.4826 * *deviations.select_nth_unstable_by(middle, f64::total_cmp).1;
     let contrast = paper - black;
     if contrast <= 0.0 {
         return false;
     }
     let (mut m0, mut mx, mut my, mut mxx, mut mxy, mut myy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    // Sums of the squared lever arms of the first and second moments, for
+    // their noise.
+    let (mut n, mut r2_sum, mut r4_sum) = (0.0f64, 0.0, 0.0);
     for (dx, dy, rho2, grey) in samples {
         if rho2 <= MASS_REACH * MASS_REACH {
             let w = (grey - black) / contrast;
@@ -314,12 +321,17 @@ pub fn white_disc_mass(gray: Gray<'_>, outer: &Ellipse, paper: f64) -> bool {
             mxx += w * dx * dx;
             mxy += w * dx * dy;
             myy += w * dy * dy;
+            let r2 = dx * dx + dy * dy;
+            n += 1.0;
+            r2_sum += r2;
+            r4_sum += r2 * r2;
         }
     }
     if m0 <= 0.0 {
         return false;
     }
-    let area = m0 * (stride * stride) as f64;
+    let cell = (stride * stride) as f64;
+    let area = m0 * cell;
     let ratio = (area / outer.area()).sqrt();
     let (cx, cy) = (mx / m0, my / m0);
     let (cxx, cxy, cyy) = (mxx / m0 - cx * cx, mxy / m0 - cx * cy, myy / m0 - cy * cy);
@@ -330,7 +342,12 @@ pub fn white_disc_mass(gray: Gray<'_>, outer: &Ellipse, paper: f64) -> bool {
     let excess = (0.5 * (cxx - cyy) - expected * c2).hypot(cxy - expected * s2);
     let spread = 0.5 * (cxx + cyy);
     let size2 = outer.semi_major * outer.semi_minor;
-    MASS_RATIO.contains(&ratio)
-        && excess <= MASS_ELONGATION_PX2 + MAX_MASS_ELONGATION * spread
-        && cx.hypot(cy) <= MASS_DECENTRE_PX + MASS_DECENTRE_PERSPECTIVE * size2
+    // Three standard deviations of what the noise alone moves each measure.
+    let noise = 3.0 * noise_grey / contrast;
+    let ratio_slack = noise * n.sqrt() * cell / outer.area() / (2.0 * ratio);
+    let excess_slack = noise * (r4_sum / 4.0).sqrt() / m0;
+    let offset_slack = noise * (r2_sum / 2.0).sqrt() / m0;
+    (MASS_RATIO.start() - ratio_slack..=MASS_RATIO.end() + ratio_slack).contains(&ratio)
+        && excess <= MASS_ELONGATION_PX2 + MAX_MASS_ELONGATION * spread + excess_slack
+        && cx.hypot(cy) <= MASS_DECENTRE_PX + MASS_DECENTRE_PERSPECTIVE * size2 + offset_slack
 }

@@ -30,7 +30,8 @@ use std::ops::Deref;
 use image::{ImageBuffer, Luma};
 
 use super::ring::{
-    bit_differences, half_sector_means, refined_centre, sample_profile, sample_radii, EllipseFrame,
+    bit_differences, evened_light, half_sector_means, refined_centre, sample_profile, sample_radii,
+    EllipseFrame,
 };
 use crate::family::necklace;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
@@ -214,10 +215,24 @@ pub fn examine<C: Deref<Target = [u8]>>(
     let again = rectified
         .and_then(|frame| test(&frame, &counts))
         .and_then(|tested| best(&tested));
-    [plain, again]
+    let found = [plain, again]
         .into_iter()
         .flatten()
-        .max_by(|a, b| a.fit.total_cmp(&b.fit))
+        .max_by(|a, b| a.fit.total_cmp(&b.fit));
+    if let Some(ring) = found {
+        return RingEvidence::Manchester(ring);
+    }
+    // A cast shadow's edge across the ring (see [`evened_light`]): tried
+    // for the expected count only.
+    sample_profile(image, &frame, radii, count)
+        .and_then(|profile| evened_light(&profile, counts[0]))
+        .and_then(|even| {
+            let gradient: Vec<f64> = (0..count)
+                .map(|j| (even[(j + 1) % count] - even[j]).abs())
+                .collect();
+            test_bits(&even, &gradient, counts[0], contrast, pixels_per_sample).ring
+        })
+        .filter(|r| r.fit >= MIN_FIT)
         .map_or(absent, RingEvidence::Manchester)
 }
 
