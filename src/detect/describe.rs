@@ -81,6 +81,7 @@ impl Detector {
                 .track
                 .is_some_and(|i| self.tracks[i].id != 0 && self.tracks[i].id_streak >= 3);
             let evidence = ring_evidence(image, &outer, c, family_bits);
+            let in_shade = matches!(evidence, RingEvidence::Manchester(r) if r.in_shade);
             // Rings whose sectors are a pixel or two wide: compare with the
             // rendered members instead (also the ring test when too small
             // for the sector test).
@@ -139,7 +140,11 @@ impl Detector {
                 None => reader,
             };
             if let Some(reader) = reader {
-                let reading = reader.read(image, &outer, c.black, c.white);
+                let reading = if in_shade {
+                    reader.read_in_shade(image, &outer, c.black, c.white)
+                } else {
+                    reader.read(image, &outer, c.black, c.white)
+                };
                 // A ring the structure test could not look at (cut by the
                 // image border, say) that reads as no code at all is no
                 // evidence of a marker either.

@@ -90,6 +90,10 @@ pub struct RingStructure {
     pub fit: f64,
     /// The weakest bit's mid-edge relative to the ring's contrast.
     pub weakest_bit: f64,
+    /// The ring passed only read as under even light (a cast shadow's edge
+    /// crosses it): its bits are to be read so too
+    /// ([`super::ring::RingReader::read_in_shade`]).
+    pub in_shade: bool,
 }
 
 /// True when the ring inside `outer` is large enough to show the sector
@@ -233,7 +237,12 @@ pub fn examine<C: Deref<Target = [u8]>>(
             test_bits(&even, &gradient, counts[0], contrast, pixels_per_sample).ring
         })
         .filter(|r| r.fit >= MIN_FIT)
-        .map_or(absent, RingEvidence::Manchester)
+        .map_or(absent, |ring| {
+            RingEvidence::Manchester(RingStructure {
+                in_shade: true,
+                ..ring
+            })
+        })
 }
 
 /// One count tried: the ring read, if it passed the contrast and mid-bit
@@ -318,6 +327,7 @@ fn pairing(
         contrast: ring_contrast / disc_contrast,
         fit,
         weakest_bit,
+        in_shade: false,
     })
 }
 

@@ -184,6 +184,31 @@ impl RingReader {
         black_level: f64,
         white_level: f64,
     ) -> RingReading {
+        self.read_light(image, outer, black_level, white_level, false)
+    }
+
+    /// As [`RingReader::read`], for a ring that a cast shadow's edge
+    /// crosses (the structure test found it so,
+    /// [`super::manchester::RingStructure::in_shade`]): the ring's profile
+    /// is read as under even light ([`evened_light`]).
+    pub fn read_in_shade<C: Deref<Target = [u8]>>(
+        &self,
+        image: &ImageBuffer<Luma<u8>, C>,
+        outer: &Ellipse,
+        black_level: f64,
+        white_level: f64,
+    ) -> RingReading {
+        self.read_light(image, outer, black_level, white_level, true)
+    }
+
+    fn read_light<C: Deref<Target = [u8]>>(
+        &self,
+        image: &ImageBuffer<Luma<u8>, C>,
+        outer: &Ellipse,
+        black_level: f64,
+        white_level: f64,
+        in_shade: bool,
+    ) -> RingReading {
         let Some(decoder) = &self.decoder else {
             return RingReading::unreadable(0.0);
         };
@@ -259,7 +284,7 @@ impl RingReader {
             threshold = 0.1;
         }
 
-        if let Some(even) = evened_light(&profile, bits) {
+        if let Some(even) = evened_light(&profile, bits).filter(|_| in_shade) {
             profile = even;
         }
         let halves_a = half_sector_means(&profile, bits, phase);
