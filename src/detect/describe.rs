@@ -348,6 +348,7 @@ fn ring_evidence<C: Deref<Target = [u8]>>(
                 c.black,
                 c.white,
                 std::iter::once(bits).chain(others),
+                true,
             )
         }
         // Without a family nothing but the structure test vouches for the
@@ -357,7 +358,7 @@ fn ring_evidence<C: Deref<Target = [u8]>>(
         None => {
             let counts = manchester::BITS
                 .filter(|&n| manchester::sector_pixels(outer, n) >= AUTO_MIN_SECTOR_PX);
-            manchester::examine(image, outer, c.black, c.white, counts)
+            manchester::examine(image, outer, c.black, c.white, counts, false)
         }
     }
 }

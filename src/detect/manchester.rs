@@ -113,13 +113,16 @@ pub fn sector_pixels(outer: &ImageEllipse, bits: u32) -> f64 {
 /// count in `bits`; of the counts that pass, the one whose model fits best
 /// wins (a ring of n bits can pass for n ± 1 when its profile is short).
 /// When none passes, the ring is `Absent` only if every count could be
-/// tested.
+/// tested. With `expected` (a family's count first in `bits`), a ring
+/// that a cast shadow's edge crosses is tried for that count as under
+/// even light too.
 pub fn examine<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
     outer: &ImageEllipse,
     black_level: f64,
     white_level: f64,
     bits: impl IntoIterator<Item = u32>,
+    expected: bool,
 ) -> RingEvidence {
     let contrast = white_level - black_level;
     let valid = [outer.u, outer.v, outer.semi_major, outer.semi_minor]
@@ -229,6 +232,7 @@ pub fn examine<C: Deref<Target = [u8]>>(
     // A cast shadow's edge across the ring (see [`evened_light`]): tried
     // for the expected count only.
     sample_profile(image, &frame, radii, count)
+        .filter(|_| expected)
         .and_then(|profile| evened_light(&profile, counts[0]))
         .and_then(|even| {
             let gradient: Vec<f64> = (0..count)
