@@ -140,11 +140,25 @@ impl Detector {
                 None => reader,
             };
             if let Some(reader) = reader {
-                let reading = if in_shade {
+                let mut reading = if in_shade {
                     reader.read_in_shade(image, &outer, c.black, c.white)
                 } else {
                     reader.read(image, &outer, c.black, c.white)
                 };
+                if !in_shade && reading.id == 0 {
+                    // A shadow's edge across a ring whose structure still
+                    // shows may hide a bit's edge in the shade. Read as
+                    // under even light, only a clean, exact member counts:
+                    // evening also flattens a motion blur's smear.
+                    let shaded = reader.read_in_shade(image, &outer, c.black, c.white);
+                    let clean = shaded.erasures == 0
+                        && shaded
+                            .decoded
+                            .is_some_and(|x| x.status == MatchStatus::Exact);
+                    if shaded.id != 0 && clean {
+                        reading = shaded;
+                    }
+                }
                 // A ring the structure test could not look at (cut by the
                 // image border, say) that reads as no code at all is no
                 // evidence of a marker either.
