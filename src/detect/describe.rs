@@ -177,6 +177,25 @@ impl Detector {
                 axis_point = reading.axis_point;
                 centre_estimate = reading.centre_estimate;
             }
+            let family_ring = match evidence {
+                RingEvidence::Manchester(ring) => Some(ring.bits) == family_bits,
+                RingEvidence::Absent => true,
+                RingEvidence::TooSmall => false,
+            };
+            // A clean exact reading needs no second opinion; any other ring
+            // the outline shows smeared by motion is compared with the members
+            // rendered through that smear.
+            let clean = d.id != 0 && d.status == Some(MatchStatus::Exact) && d.confidence >= 0.5;
+            if family_ring && !clean {
+                if let Some(ring) = self.read_blurred(image, gray, &outer) {
+                    if !Self::apply_blurred_reading(&mut d, ring) {
+                        // The reader's rim point and centre belong to a
+                        // reading that no longer stands.
+                        axis_point = None;
+                        centre_estimate = None;
+                    }
+                }
+            }
         } else {
             let inside = legacy::concentric_white_disc(gray, &c.outer, c.black, c.white);
             let paper = inside.and_then(|_| legacy::white_margin(gray, &c.outer, c.black, c.white));
@@ -239,6 +258,59 @@ impl Detector {
             }
         }
         (d, settled_normal)
+    }
+
+    /// The ring read through the motion blur its outline shows, when the
+    /// blur is long enough to smear the sectors the reader samples.
+    fn read_blurred<C: Deref<Target = [u8]>>(
+        &self,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        outer: &Ellipse,
+    ) -> Option<ring_model::SmallRing> {
+        let family = self.config.target.family()?;
+        let blur = ellipse::linear_blur(gray, outer)?;
+        // Below this the sector reader's central samples stay clear of
+        // the neighbouring sectors.
+        if blur.length < ellipse::MIN_MOTION_BLUR_PX {
+            return None;
+        }
+        ring_model::read_blurred_ring(image, outer, family, &blur)
+    }
+
+    /// Combines the sector reader's verdict with the blurred model's: the
+    /// model vouches for the ring (a marker even when the sector test saw
+    /// no Manchester structure) and names the ID the reader could not; when
+    /// the two name different members, or the reader needed correcting
+    /// where the model sees two members alike, no ID is named. True when
+    /// the reader's reading stands as it was.
+    fn apply_blurred_reading(d: &mut Detection, ring: ring_model::SmallRing) -> bool {
+        if !ring.structured {
+            return true;
+        }
+        d.unreadable = false;
+        let agrees = match (d.id, ring.id) {
+            (0, 0) => return true,
+            (read, 0) => read != 0 && d.status == Some(MatchStatus::Exact),
+            (read, modelled) => read == modelled,
+        };
+        if agrees {
+            return true;
+        }
+        if d.id == 0 {
+            d.id = ring.id;
+            d.code = Some(ring.code);
+            d.status = Some(MatchStatus::Exact);
+            d.yaw = ring.yaw;
+            d.confidence = (1.0 - 1.0 / ring.margin).clamp(0.0, 1.0);
+        } else {
+            d.id = 0;
+            d.code = None;
+            d.status = None;
+            d.yaw = None;
+            d.confidence = 0.0;
+        }
+        false
     }
 
     /// Tracked markers report what the ID filter believes after this

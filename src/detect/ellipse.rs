@@ -299,16 +299,27 @@ pub struct Refined {
     pub rms: f64,
     /// Share of rays that gave an edge point kept in the fit.
     pub support: f64,
+    /// The motion blur the outline showed, when the fit had to leave out
+    /// the stretches of edge smeared along it.
+    pub blur: Option<LinearBlur>,
 }
+
+/// Least motion blur (pixels, as [`linear_blur`] measures it) that may
+/// explain an outline whose edge points scatter along one direction.
+pub const MIN_MOTION_BLUR_PX: f64 = 4.0;
 
 /// The outer ellipse refined from edge points, with points farther than
 /// max(0.5 px, 3 × median) from a first fit dropped before a second fit.
+/// Where a motion blur smears the edge across more than the black annulus
+/// the 50 % crossing moves (the ramp no longer reaches black): when too
+/// many points are off and the outline shows a linear blur, only the
+/// stretches the blur leaves sharp enough are fitted.
 /// None when the edge does not support a consistent ellipse near `coarse`.
 pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) -> Option<Refined> {
     let rays = edge_points(image, coarse, scratch);
     let scale = coarse.semi_major.max(1.0);
     let first = Ellipse::fit_near(scratch, (coarse.u, coarse.v), scale)?;
-    let mut residuals: Vec<f64> = scratch
+    let residuals: Vec<f64> = scratch
         .iter()
         .map(|&(x, y)| first.radial_distance(x, y))
         .collect();
@@ -317,10 +328,31 @@ pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) 
     let median = sorted[sorted.len() / 2];
     let limit = (3.0 * median).max(0.5);
     let total = scratch.len();
-    let mut keep = residuals.iter_mut().map(|r| *r <= limit);
-    scratch.retain(|_| keep.next().unwrap_or(false));
-    if scratch.len() * 4 < total * 3 {
-        return None;
+    let kept = residuals.iter().filter(|&&r| r <= limit).count();
+    let mut blur = None;
+    if kept * 4 < total * 3 {
+        let b = linear_blur(image, &first).filter(|b| b.length >= MIN_MOTION_BLUR_PX)?;
+        // Keep the points where the ramp (L·|cos φ|, as measured: about
+        // 0.85 of the true one) about fits inside the black annulus (0.4 R).
+        let (sb, cb) = b.angle.sin_cos();
+        let (s, c) = first.angle.sin_cos();
+        let (a2, b2) = (first.semi_major.powi(2), first.semi_minor.powi(2));
+        let reach = 0.45 * first.semi_minor;
+        scratch.retain(|&(x, y)| {
+            let (dx, dy) = (x - first.u, y - first.v);
+            let (p, q) = (dx * c + dy * s, -dx * s + dy * c);
+            let (nl, nm) = (p / a2, q / b2);
+            let (nx, ny) = (nl * c - nm * s, nl * s + nm * c);
+            let spread = b.length * (nx * cb + ny * sb).abs() / nx.hypot(ny);
+            spread <= reach
+        });
+        if scratch.len() * 20 < total * 9 || scratch.len() < 12 {
+            return None;
+        }
+        blur = Some(b);
+    } else {
+        let mut keep = residuals.iter().map(|&r| r <= limit);
+        scratch.retain(|_| keep.next().unwrap_or(false));
     }
     let fitted = Ellipse::fit_near(scratch, (coarse.u, coarse.v), scale)?;
     let consistent = (fitted.u - coarse.u).hypot(fitted.v - coarse.v)
@@ -338,12 +370,177 @@ pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) 
         ellipse: fitted,
         rms: (sum_sq / scratch.len() as f64).sqrt(),
         support: scratch.len() as f64 / rays as f64,
+        blur,
+    })
+}
+
+/// A straight-line motion blur: the image averaged along a segment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearBlur {
+    /// Length of the segment, pixels.
+    pub length: f64,
+    /// Its direction, radians in [0, π).
+    pub angle: f64,
+    /// Width (pixels) of the outline's edge ramp across the blur: focus
+    /// blur and the pixels' own size.
+    pub base_width: f64,
+}
+
+/// Rays cast across the outline to measure its edge spread.
+const BLUR_RAYS: usize = 48;
+
+/// The motion blur the outline's edge profile shows, if any. A blur of
+/// length L in direction θ spreads an edge whose normal makes the angle φ
+/// with θ over a ramp of L·|cos φ| (plus the focus blur), whatever lies
+/// beside the edge, and the ramp's steepest slope is the black-white
+/// contrast over that width: so the inverse slope across the outline,
+/// fitted as a + b·|cos(φ - θ)|, gives θ, and b times the contrast (read
+/// where the edge is sharpest) gives L. `None` when the outline shows no
+/// anisotropic spread (a sharp or evenly blurred edge) or cannot be read.
+pub fn linear_blur(image: Gray<'_>, outer: &Ellipse) -> Option<LinearBlur> {
+    let (s, c) = outer.angle.sin_cos();
+    let (a, b) = (outer.semi_major, outer.semi_minor);
+    if !(a.is_finite() && b > 4.0) {
+        return None;
+    }
+    // Along the normal, from inside the black annulus (0.4 R wide) to the
+    // white margin (0.3 R wide).
+    let (inside, outside) = (0.35 * b, 0.3 * b);
+    let step = 0.5;
+    let samples = ((inside + outside) / step) as usize + 1;
+    let mut profile = vec![0.0f64; samples];
+    // (normal angle, inverse steepest slope, contrast) per ray.
+    let mut rays: Vec<(f64, f64, f64)> = Vec::with_capacity(BLUR_RAYS);
+    for k in 0..BLUR_RAYS {
+        let t = std::f64::consts::TAU * (k as f64 + 0.5) / BLUR_RAYS as f64;
+        let (px, py) = outer.point_at(t);
+        // Outward normal: gradient of the implicit form, rotated to the image.
+        let (nl, nm) = (t.cos() / a, t.sin() / b);
+        let (nx, ny) = (nl * c - nm * s, nl * s + nm * c);
+        let norm = nx.hypot(ny);
+        let (nx, ny) = (nx / norm, ny / norm);
+        let mut ok = true;
+        for (j, slot) in profile.iter_mut().enumerate() {
+            let d = -inside + step * j as f64;
+            match sample(image, px + nx * d, py + ny * d) {
+                Some(value) => *slot = value,
+                None => {
+                    ok = false;
+                    break;
+                }
+            }
+        }
+        if !ok {
+            continue;
+        }
+        // Slope over two pixels (four steps), against noise.
+        let slope = (4..samples)
+            .map(|j| (profile[j] - profile[j - 4]) / (4.0 * step))
+            .fold(f64::MIN, f64::max);
+        let low = profile.iter().copied().fold(f64::MAX, f64::min);
+        let high = profile.iter().copied().fold(f64::MIN, f64::max);
+        if slope <= 0.0 || high - low < 8.0 {
+            continue;
+        }
+        rays.push((ny.atan2(nx), 1.0 / slope, high - low));
+    }
+    if rays.len() < BLUR_RAYS * 3 / 4 {
+        return None;
+    }
+    // Least squares of inverse slope = a + b·|cos(φ - θ)| on a grid of θ.
+    let mut best: Option<(f64, f64, f64, f64)> = None;
+    for step in 0..90 {
+        let theta = std::f64::consts::PI * f64::from(step) / 90.0;
+        let (mut sx, mut sy, mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for &(phi, inv, _) in &rays {
+            let x = (phi - theta).cos().abs();
+            sx += x;
+            sy += inv;
+            sxx += x * x;
+            sxy += x * inv;
+            syy += inv * inv;
+        }
+        let n = rays.len() as f64;
+        let det = n * sxx - sx * sx;
+        if det <= 1e-12 {
+            continue;
+        }
+        let slope = (n * sxy - sx * sy) / det;
+        let offset = (sy - slope * sx) / n;
+        let residual = syy - offset * sy - slope * sxy;
+        if best.map_or(true, |b| residual < b.0) {
+            best = Some((residual, theta, offset, slope));
+        }
+    }
+    let (_, theta, offset, slope) = best?;
+    // The contrast where the edge is sharpest (across the blur), where
+    // the ramp reaches both the black annulus and the white margin.
+    let mut across: Vec<f64> = rays
+        .iter()
+        .filter(|r| (r.0 - theta).cos().abs() < 0.5)
+        .map(|r| r.2)
+        .collect();
+    if across.len() < 4 || slope <= 0.0 {
+        return None;
+    }
+    across.sort_by(f64::total_cmp);
+    let contrast = across[across.len() / 2];
+    Some(LinearBlur {
+        length: slope * contrast,
+        angle: theta,
+        base_width: (offset * contrast).max(0.0),
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A marker rendered under motion blur: the outline's edge spread
+    /// gives the blur's direction, and its length to within the fifth the
+    /// ring model's search covers; a sharp marker shows none.
+    #[test]
+    fn the_outline_of_a_motion_blurred_marker_gives_the_blur() {
+        use crate::camera::Camera;
+        use crate::geometry::Marker;
+        use crate::simulate::{self, LooseMarker, MotionBlur, Placement, Scene, SceneObject};
+        use nalgebra::Vector3;
+        let camera = Camera::ideal(320, 240, 60.0);
+        let z = camera.fx * 0.05 / 80.0;
+        for (length, angle) in [(0.0, 0.0), (12.0, 0.3), (20.0, 2.0), (25.0, 1.2)] {
+            let mut scene = Scene::new(camera);
+            scene.noise = 2.0;
+            let marker = Marker::whycode(8, 0b0001_0011, 50.0);
+            let placement = Placement::viewed(Vector3::new(0.0, 0.0, z), 0.0, 0.0, 0.5);
+            scene
+                .objects
+                .push(SceneObject::Marker(LooseMarker::new(marker, 1, placement)));
+            scene.motion_blur = Some(MotionBlur {
+                length_px: length,
+                angle,
+            });
+            let (image, truth) = simulate::render(&scene);
+            let m = &truth.markers[0];
+            let outer = Ellipse {
+                u: m.u,
+                v: m.v,
+                semi_major: m.diameter_px / 2.0,
+                semi_minor: m.diameter_px / 2.0,
+                angle: 0.0,
+            };
+            let gray = Gray::new(image.as_raw(), 320, 240);
+            let blur = linear_blur(gray, &outer).expect("edge readable");
+            if length == 0.0 {
+                assert!(blur.length < MIN_MOTION_BLUR_PX, "{blur:?}");
+                continue;
+            }
+            let off = (blur.angle - angle).rem_euclid(std::f64::consts::PI);
+            let off = off.min(std::f64::consts::PI - off);
+            assert!(off < 0.1, "{length} px at {angle}: {blur:?}");
+            let ratio = blur.length / length;
+            assert!((0.7..1.05).contains(&ratio), "{length} px: {blur:?}");
+        }
+    }
 
     #[test]
     fn moments_of_a_filled_disc_give_its_radius() {

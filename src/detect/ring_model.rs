@@ -10,6 +10,12 @@
 //! against a ring without angular structure (any grey, any radial profile
 //! of the marker's discs) tells a tiny marker from a round blob.
 //!
+//! A ring smeared by motion blur is read the same way (issue 9): a blur of
+//! length L smears sectors into their neighbours, so no sample reads one
+//! sector, but the members rendered through a segment of the length and
+//! direction the outline's edge spread shows
+//! ([`super::ellipse::linear_blur`]) still tell them apart.
+//!
 //! Each pixel's model value is linear in the 2n half-sector colours, so the
 //! pixel sums that the least-squares comparison needs are formed once per
 //! blur and phase; each member rotation then costs O(n²).
@@ -20,6 +26,7 @@ use std::ops::Deref;
 
 use image::{ImageBuffer, Luma};
 
+use super::ellipse::LinearBlur;
 use crate::family::{necklace, Family};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
 use crate::math::Ellipse as ImageEllipse;
@@ -54,6 +61,18 @@ const MAX_STRUCTURE_RATIO: f64 = 0.4;
 /// factor for the ID to be named.
 const MIN_ID_MARGIN: f64 = 1.6;
 
+/// Lengths tried, relative to the measured blur (the outline's ramp
+/// reads about 0.85 of the true length: its ends are rounded by the focus
+/// blur and the pixels).
+const BLURRED_LENGTHS: [f64; 3] = [1.0, 1.15, 1.3];
+
+/// Pixels compared on a blurred ring (a subset, evenly spread, on large ones).
+const COMPARED_PIXELS: f64 = 1200.0;
+
+/// [`MAX_STRUCTURE_RATIO`] and [`MIN_ID_MARGIN`] for blurred rings.
+const MAX_BLURRED_STRUCTURE_RATIO: f64 = 0.4;
+const MIN_BLURRED_ID_MARGIN: f64 = 1.6;
+
 /// What the pixels of a small ring say.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SmallRing {
@@ -79,6 +98,99 @@ pub fn read_small_ring<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
     outer: &ImageEllipse,
     family: &Family,
+) -> Option<SmallRing> {
+    let footprints: Vec<Footprint> = BLURS.iter().map(|&blur| gaussian_footprint(blur)).collect();
+    compare(image, outer, family, &footprints, 1, Thresholds::SMALL)
+}
+
+/// Reads a ring smeared by the motion blur `blur` (measured on the outline,
+/// see [`super::ellipse::linear_blur`]): the same comparison with every member
+/// rendered through segments of about the measured length. Large rings
+/// are compared on a subset of their pixels (the smear, not the pixel,
+/// sets the scale of what the model can tell apart).
+pub fn read_blurred_ring<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    outer: &ImageEllipse,
+    family: &Family,
+    blur: &LinearBlur,
+) -> Option<SmallRing> {
+    let footprints: Vec<Footprint> = BLURRED_LENGTHS
+        .iter()
+        .map(|&k| line_footprint(k * blur.length, blur.angle))
+        .collect();
+    // About COMPARED_PIXELS pixels whatever the ring's size.
+    let disc = PI * (outer.semi_major * COMPARED_RADIUS) * (outer.semi_minor * COMPARED_RADIUS);
+    let stride = ((disc / COMPARED_PIXELS).sqrt().floor() as u32).max(1);
+    compare(
+        image,
+        outer,
+        family,
+        &footprints,
+        stride,
+        Thresholds::BLURRED,
+    )
+}
+
+/// Sub-pixel offsets and weights (summing to 1) over which one pixel's
+/// model value is averaged.
+type Footprint = Vec<(f64, f64, f64)>;
+
+/// A pixel's area seen through a Gaussian blur of `blur` pixels: a 5x5
+/// grid of sub-samples, Gaussian-weighted.
+fn gaussian_footprint(blur: f64) -> Footprint {
+    let sigma = (blur * blur + 1.0 / 12.0).sqrt();
+    let offsets: Vec<(f64, f64, f64)> = (-2..=2)
+        .flat_map(|i| (-2..=2).map(move |j| (i, j)))
+        .map(|(i, j)| {
+            let (dx, dy) = (f64::from(i) * 0.8 * sigma, f64::from(j) * 0.8 * sigma);
+            (dx, dy, (-(dx * dx + dy * dy) / (2.0 * sigma * sigma)).exp())
+        })
+        .collect();
+    let total: f64 = offsets.iter().map(|o| o.2).sum();
+    offsets
+        .into_iter()
+        .map(|(x, y, w)| (x, y, w / total))
+        .collect()
+}
+
+/// A pixel smeared along a segment of `length` pixels in direction
+/// `angle`: samples a pixel apart (the pixel's own width fills between them).
+fn line_footprint(length: f64, angle: f64) -> Footprint {
+    let taps = (length.ceil() as usize).max(1) + 1;
+    let (s, c) = angle.sin_cos();
+    (0..taps)
+        .map(|k| {
+            let t = (k as f64 / (taps - 1) as f64 - 0.5) * length;
+            (t * c, t * s, 1.0 / taps as f64)
+        })
+        .collect()
+}
+
+/// When a comparison counts as a ring, and as an ID.
+#[derive(Debug, Clone, Copy)]
+struct Thresholds {
+    max_structure_ratio: f64,
+    min_id_margin: f64,
+}
+
+impl Thresholds {
+    const SMALL: Thresholds = Thresholds {
+        max_structure_ratio: MAX_STRUCTURE_RATIO,
+        min_id_margin: MIN_ID_MARGIN,
+    };
+    const BLURRED: Thresholds = Thresholds {
+        max_structure_ratio: MAX_BLURRED_STRUCTURE_RATIO,
+        min_id_margin: MIN_BLURRED_ID_MARGIN,
+    };
+}
+
+fn compare<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    outer: &ImageEllipse,
+    family: &Family,
+    footprints: &[Footprint],
+    stride: u32,
+    thresholds: Thresholds,
 ) -> Option<SmallRing> {
     let bits = family.bits();
     let members = family.len();
@@ -107,8 +219,8 @@ pub fn read_small_ring<C: Deref<Target = [u8]>>(
         return None;
     }
     let mut pixels: Vec<(f64, f64, f64)> = Vec::new();
-    for y in y0 as u32..=y1 as u32 {
-        for x in x0 as u32..=x1 as u32 {
+    for y in (y0 as u32..=y1 as u32).step_by(stride as usize) {
+        for x in (x0 as u32..=x1 as u32).step_by(stride as usize) {
             let (p, q) = to_marker(f64::from(x), f64::from(y));
             if p.hypot(q) <= COMPARED_RADIUS {
                 pixels.push((
@@ -166,17 +278,7 @@ pub fn read_small_ring<C: Deref<Target = [u8]>>(
     let mut best_null = f64::INFINITY;
     let mut weights = vec![0.0f64; sectors];
     let mut touched: Vec<usize> = Vec::with_capacity(sectors);
-    for blur in BLURS {
-        let sigma = (blur * blur + 1.0 / 12.0).sqrt();
-        // A 5x5 grid of sub-samples, Gaussian-weighted, covers the footprint.
-        let offsets: Vec<(f64, f64, f64)> = (-2..=2)
-            .flat_map(|i| (-2..=2).map(move |j| (i, j)))
-            .map(|(i, j)| {
-                let (dx, dy) = (f64::from(i) * 0.8 * sigma, f64::from(j) * 0.8 * sigma);
-                (dx, dy, (-(dx * dx + dy * dy) / (2.0 * sigma * sigma)).exp())
-            })
-            .collect();
-        let total: f64 = offsets.iter().map(|o| o.2).sum();
+    for offsets in footprints {
         // Per pixel: white weight outside the ring, and (angle, weight) of
         // sub-samples inside it.
         let mut fixed = Vec::with_capacity(pixels.len());
@@ -184,10 +286,9 @@ pub fn read_small_ring<C: Deref<Target = [u8]>>(
         for &(x, y, _) in &pixels {
             let mut white = 0.0;
             let mut inside = Vec::new();
-            for &(dx, dy, w) in &offsets {
+            for &(dx, dy, w) in offsets {
                 let (p, q) = to_marker(x + dx, y + dy);
                 let rho = p.hypot(q);
-                let w = w / total;
                 if !(RING_INNER_RATIO..1.0).contains(&rho) {
                     white += w;
                 } else if rho < WHYCODE_WHITE_RATIO {
@@ -282,8 +383,8 @@ pub fn read_small_ring<C: Deref<Target = [u8]>>(
     let floor = 1e-6 * syy;
     let margin = runner_up.max(floor) / best.sse.max(floor);
     let structure_ratio = best.sse / best_null.max(floor);
-    let structured = structure_ratio <= MAX_STRUCTURE_RATIO;
-    let named = structured && margin >= MIN_ID_MARGIN;
+    let structured = structure_ratio <= thresholds.max_structure_ratio;
+    let named = structured && margin >= thresholds.min_id_margin;
     let code = codes[best.id as usize - 1];
     // Sector 0 of the word seen sits at `phase`; the word is the code
     // rotated left by `rotation`, so the code's own bit 0 (the +x axis)

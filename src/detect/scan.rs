@@ -175,7 +175,10 @@ impl Detector {
         // blobs pass the moment tests (a square's area is within 5 % of its
         // moment ellipse's) but not this.
         let refined = ellipse::refine(gray, &coarse, &mut self.edge_scratch)?;
-        if refined.support < 0.75 || refined.rms > 0.35 + 0.015 * coarse.semi_major {
+        // A motion-blurred outline is fitted on the stretches across the
+        // blur only (at least 45 % of the rays).
+        let min_support = if refined.blur.is_some() { 0.45 } else { 0.75 };
+        if refined.support < min_support || refined.rms > 0.35 + 0.015 * coarse.semi_major {
             return None;
         }
         let outer = refined.ellipse;
