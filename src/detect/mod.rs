@@ -215,6 +215,8 @@ struct Candidate {
 
 /// Width of the scan's chunks (and of the tiles of the followed-marker mask).
 const SCAN_CHUNK: usize = 16;
+// The scan's tiles are the threshold map's (seed masks come from the map).
+const _: () = assert!(SCAN_CHUNK == 1 << threshold::TILE_SHIFT);
 /// A tracked frame looks for new markers in one of this many row bands.
 const DISCOVERY_BANDS: u64 = 8;
 
@@ -388,7 +390,7 @@ impl Detector {
                     ThresholdMap::adaptive_ratio(gray.pixels, width, height, rows.clone());
                 self.labels.begin(width, height);
                 let mut again = Vec::new();
-                self.scan(gray, &ratio_map, rows, &mut again, limit);
+                self.scan_tiles(gray, &ratio_map, rows, map.near_shaded(), &mut again, limit);
                 merge_new(&mut found, again, limit);
             }
             if found.is_empty() {
@@ -397,15 +399,26 @@ impl Detector {
                 // threshold walk. Under a light gradient no one level suits
                 // the whole frame, so what each finds is pooled, and the
                 // level that found most is tried first next time.
+                // Only where the local map was blind (see
+                // `ThresholdMap::blind_tiles`) can a level find what it
+                // missed; a level that cuts no blind tile is not scanned.
                 let histogram = threshold::sampled_histogram(gray.pixels, width);
+                let blind = map.blind_tiles(gray.pixels, width, height);
                 let mut best = 0;
+                let mut seeds = Vec::new();
                 for t in self.search.levels_after_miss(&histogram) {
+                    seeds.clear();
+                    seeds.extend(blind.iter().map(|&(lo, hi)| lo < t && t <= hi));
+                    if !seeds.contains(&true) {
+                        continue;
+                    }
                     self.labels.begin(width, height);
                     let mut level = Vec::new();
-                    self.scan(
+                    self.scan_tiles(
                         gray,
                         &ThresholdMap::constant(t),
                         0..height,
+                        &seeds,
                         &mut level,
                         limit,
                     );

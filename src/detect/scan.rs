@@ -42,6 +42,29 @@ impl Detector {
         }
     }
 
+    /// [`Detector::scan`] with segments started only in the tiles flagged
+    /// in `seed_tiles` (laid out as the scan's tiles); the segments so
+    /// started are filled and tested whole, wherever they reach.
+    pub(super) fn scan_tiles(
+        &mut self,
+        gray: Gray<'_>,
+        map: &ThresholdMap,
+        rows: std::ops::Range<usize>,
+        seed_tiles: &[bool],
+        found: &mut Vec<Candidate>,
+        limit: usize,
+    ) {
+        if !seed_tiles.contains(&true) {
+            return;
+        }
+        let followed = std::mem::take(&mut self.occupied);
+        self.occupied.extend(
+            (0..seed_tiles.len()).map(|i| !seed_tiles[i] || followed.get(i) == Some(&true)),
+        );
+        self.scan(gray, map, rows, found, limit);
+        self.occupied = followed;
+    }
+
     /// Scans the rows for dark pixels not yet visited and tests the
     /// segment each one starts.
     pub(super) fn scan(

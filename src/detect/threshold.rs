@@ -31,6 +31,13 @@ pub struct ThresholdMap {
     min_contrast: u8,
     /// Image rows holding shaded tiles (see [`ThresholdMap::shaded_rows`]).
     shaded: Option<std::ops::Range<usize>>,
+    /// Tiles near a shaded tile (see [`ThresholdMap::near_shaded`]), laid
+    /// out as `values`; empty when there are none.
+    near_shaded: Vec<bool>,
+    /// Per tile, the darkest and brightest pixel of its neighbourhood
+    /// (what [`ThresholdMap::blind_tiles`] needs); empty for a constant map.
+    near_lo: Vec<u8>,
+    near_hi: Vec<u8>,
 }
 
 /// Shift of the adaptive map's tiles: 16 x 16 pixels.
@@ -61,6 +68,9 @@ impl ThresholdMap {
             floor: Vec::new(),
             min_contrast: MIN_CONTRAST,
             shaded: None,
+            near_shaded: Vec::new(),
+            near_lo: Vec::new(),
+            near_hi: Vec::new(),
         }
     }
 
@@ -73,6 +83,68 @@ impl ThresholdMap {
     /// a second look with [`ThresholdMap::adaptive_ratio`].
     pub fn shaded_rows(&self) -> Option<std::ops::Range<usize>> {
         self.shaded.clone()
+    }
+
+    /// The tiles within reach of a shaded tile (as far as its rows reach
+    /// in [`ThresholdMap::shaded_rows`]), indexed as the scan's tiles: the
+    /// only places where a marker crossed by a shadow's edge can start.
+    /// Elsewhere a second look only fills the same clutter again.
+    pub fn near_shaded(&self) -> &[bool] {
+        &self.near_shaded
+    }
+
+    /// Where the map may be blind, for the global walk after a miss:
+    /// tiles whose neighbourhood's range of grey is under twice the noise
+    /// floor (so noise sets or vetoes their threshold: a marker of that
+    /// contrast is cut to specks or not cut at all), yet whose tile means
+    /// differ by more than noise can make them (something is there). Per
+    /// tile, the levels a global threshold must take to cut it,
+    /// `lo < t <= hi`; (0, 0) elsewhere. Blank walls, the flat insides of
+    /// large shapes and edges of clear contrast are not blind: a global
+    /// level finds nothing there that the local map missed, yet it filled
+    /// them whole at every level of the walk.
+    pub fn blind_tiles(&self, pixels: &[u8], width: usize, height: usize) -> Vec<(u8, u8)> {
+        let n = self.near_lo.len();
+        if n == 0 {
+            return Vec::new();
+        }
+        let tile = 1usize << self.shift;
+        let y_start = self.row0 << self.shift;
+        let y_end = ((self.row0 + self.rows) << self.shift).min(height);
+        let mut sums = vec![0u32; n];
+        let mut counts = vec![0u32; n];
+        for (y, row) in pixels[y_start * width..y_end * width]
+            .chunks_exact(width)
+            .enumerate()
+        {
+            let t = (y >> self.shift) * self.cols;
+            for (k, chunk) in row.chunks(tile).enumerate() {
+                sums[t + k] += chunk.iter().map(|&p| u32::from(p)).sum::<u32>();
+                counts[t + k] += chunk.len() as u32;
+            }
+        }
+        let means: Vec<u8> = sums
+            .iter()
+            .zip(&counts)
+            .map(|(&s, &c)| (s / c.max(1)) as u8)
+            .collect();
+        let darkest = box_filter(&means, self.cols, self.rows, NEIGHBOURHOOD_TILES, u8::min);
+        let brightest = box_filter(&means, self.cols, self.rows, NEIGHBOURHOOD_TILES, u8::max);
+        // A tile's mean of 256 pixels has a sixteenth of the noise's σ,
+        // and the noise floor is about eight σ.
+        let structure = (self.min_contrast / 8).max(2);
+        (0..n)
+            .map(|i| {
+                let range = u16::from(self.near_hi[i] - self.near_lo[i]);
+                if range < 2 * u16::from(self.min_contrast)
+                    && brightest[i] - darkest[i] >= structure
+                {
+                    (self.near_lo[i], self.near_hi[i])
+                } else {
+                    (0, 0)
+                }
+            })
+            .collect()
     }
 
     /// The thresholds of one image row, indexed by `x >> shift()`.
@@ -263,6 +335,9 @@ impl ThresholdMap {
                 floor: Vec::new(),
                 min_contrast: noise_floor,
                 shaded: None,
+                near_shaded: Vec::new(),
+                near_lo: lo,
+                near_hi: hi,
             };
         }
         while let Some(i) = queue.pop_front() {
@@ -297,9 +372,24 @@ impl ThresholdMap {
         // floor between cards off from the image's sides; left unflagged,
         // such pockets were flood-filled as candidates every tracked frame.
         let solid: Vec<bool> = (0..values.len()).map(|i| own_hi[i] < values[i]).collect();
-        let shaded_tiles = (0..values.len()).filter(|&i| {
-            solid[i] && u16::from(own_hi[i]) >= 2 * u16::from(lo[i]) + 2 * u16::from(noise_floor)
-        });
+        let shaded_flags: Vec<u8> = (0..values.len())
+            .map(|i| {
+                u8::from(
+                    solid[i]
+                        && u16::from(own_hi[i])
+                            >= 2 * u16::from(lo[i]) + 2 * u16::from(noise_floor),
+                )
+            })
+            .collect();
+        let shaded_tiles = (0..values.len()).filter(|&i| shaded_flags[i] != 0);
+        let near_shaded = if shaded_flags.contains(&1) {
+            box_filter(&shaded_flags, cols, rows, NEIGHBOURHOOD_TILES, u8::max)
+                .into_iter()
+                .map(|f| f != 0)
+                .collect()
+        } else {
+            Vec::new()
+        };
         let shaded = shaded_tiles
             .fold(None, |range: Option<(usize, usize)>, i| {
                 let r = i / cols;
@@ -370,6 +460,9 @@ impl ThresholdMap {
             floor: if any_floor { floor } else { Vec::new() },
             min_contrast: noise_floor,
             shaded,
+            near_shaded,
+            near_lo: lo,
+            near_hi: hi,
         }
     }
 }
@@ -584,6 +677,46 @@ mod tests {
         }
         let _ = band.row(0);
         let _ = band.row(h - 1);
+    }
+
+    /// A dim disc of a contrast near the noise floor on a noisy dark
+    /// background is where the global walk must look (its tiles are
+    /// blind, at levels between the disc and the background); the flat
+    /// noise around it and an inked disc on white paper are not.
+    #[test]
+    fn blind_tiles_cover_a_dim_disc_and_nothing_clear_or_flat() {
+        let (w, h) = (480usize, 160usize);
+        let mut state = 12345u32;
+        let px: Vec<u8> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as i32, (i / w) as i32);
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let noise = (state >> 29) as i32 - 3;
+                let d2 = |cx: i32, cy: i32| (x - cx).pow(2) + (y - cy).pow(2);
+                let level = if x >= 320 {
+                    // Paper with an inked disc.
+                    if d2(400, 80) < 900 {
+                        15
+                    } else {
+                        200
+                    }
+                } else if d2(80, 80) < 900 {
+                    8
+                } else {
+                    20
+                };
+                (level + noise).clamp(0, 255) as u8
+            })
+            .collect();
+        let map = ThresholdMap::adaptive(&px, w, h);
+        let blind = map.blind_tiles(&px, w, h);
+        let cols = w.div_ceil(16);
+        let at = |x: usize, y: usize| blind[(y / 16) * cols + x / 16];
+        let (lo, hi) = at(80, 80);
+        assert!(lo < 14 && 14 <= hi, "dim disc: {:?}", (lo, hi));
+        assert_eq!(at(250, 80), (0, 0), "flat noise");
+        assert_eq!(at(400, 80), (0, 0), "inked disc on paper");
+        assert_eq!(at(400, 40), (0, 0), "inked disc's edge");
     }
 
     #[test]
