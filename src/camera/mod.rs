@@ -36,6 +36,42 @@ pub struct Camera {
 /// are treated as not projectable.
 const MIN_DEPTH: f64 = 1e-9;
 
+/// Projects the points of one plane, given in its own coordinates (a, b):
+/// [`Camera::project`] of `origin + a·x_axis + b·y_axis`. Without lens
+/// distortion the plane maps to the image by a homography, and a point
+/// costs one division (the ring stages project about a thousand points per
+/// marker).
+#[derive(Debug, Clone, Copy)]
+pub struct PlaneProjection {
+    camera: Camera,
+    origin: Vector3<f64>,
+    x_axis: Vector3<f64>,
+    y_axis: Vector3<f64>,
+    pixel_origin: Vector3<f64>,
+    pixel_x: Vector3<f64>,
+    pixel_y: Vector3<f64>,
+    distorted: bool,
+}
+
+impl PlaneProjection {
+    /// Pixel position of the plane point (a, b); `None` where
+    /// [`Camera::project`] gives none.
+    #[inline]
+    pub fn project(&self, a: f64, b: f64) -> Option<(f64, f64)> {
+        if self.distorted {
+            return self
+                .camera
+                .project(&(self.origin + self.x_axis * a + self.y_axis * b));
+        }
+        let h = self.pixel_origin + self.pixel_x * a + self.pixel_y * b;
+        if h.z.is_nan() || h.z <= MIN_DEPTH || !h.x.is_finite() || !h.y.is_finite() {
+            return None;
+        }
+        let inverse = 1.0 / h.z;
+        Some((h.x * inverse, h.y * inverse))
+    }
+}
+
 impl Camera {
     /// Distortion-free camera with square pixels, the principal point at the
     /// image centre and the given horizontal field of view (degrees, edge of
@@ -109,6 +145,36 @@ impl Camera {
             return None;
         }
         Some(self.distort_normalized(p.x / p.z, p.y / p.z))
+    }
+
+    /// Projection of the points `origin + a·x_axis + b·y_axis` of a plane
+    /// (camera frame), for stages that sample a marker plane at many
+    /// points: see [`PlaneProjection`].
+    pub fn plane_projection(
+        &self,
+        origin: Vector3<f64>,
+        x_axis: Vector3<f64>,
+        y_axis: Vector3<f64>,
+    ) -> PlaneProjection {
+        // The plane's points in pixel units before the perspective
+        // division: K applied to origin and axes.
+        let pixel = |p: Vector3<f64>| {
+            Vector3::new(
+                self.fx * p.x + self.cx * p.z,
+                self.fy * p.y + self.cy * p.z,
+                p.z,
+            )
+        };
+        PlaneProjection {
+            camera: *self,
+            origin,
+            x_axis,
+            y_axis,
+            pixel_origin: pixel(origin),
+            pixel_x: pixel(x_axis),
+            pixel_y: pixel(y_axis),
+            distorted: self.has_distortion(),
+        }
     }
 
     /// Pixel position of an ideal normalised image point (x/z, y/z).
@@ -240,6 +306,28 @@ pub(crate) mod tests {
         assert!(cam.project(&Vector3::new(0.1, 0.1, -1.0)).is_none());
         assert!(cam.project(&Vector3::new(0.1, 0.1, 0.0)).is_none());
         assert!(cam.project(&Vector3::new(0.1, 0.1, 0.5)).is_some());
+    }
+
+    #[test]
+    fn a_plane_projection_projects_as_the_camera_does() {
+        let origin = Vector3::new(0.05, -0.03, 0.8);
+        let x_axis = Vector3::new(0.9, 0.1, -0.3).normalize();
+        let y_axis = Vector3::new(-0.2, 0.95, 0.1).normalize();
+        for cam in [distorted(), Camera::ideal(640, 480, 60.0)] {
+            let plane = cam.plane_projection(origin, x_axis, y_axis);
+            for k in 0..50 {
+                let (a, b) = (0.004 * f64::from(k) - 0.1, 0.1 - 0.003 * f64::from(k));
+                let (u, v) = plane.project(a, b).unwrap();
+                let (pu, pv) = cam.project(&(origin + x_axis * a + y_axis * b)).unwrap();
+                assert!(
+                    (u - pu).abs() < 1e-9 && (v - pv).abs() < 1e-9,
+                    "{u} {v} {pu} {pv}"
+                );
+            }
+            // A plane through the camera's centre: its far side is behind.
+            let edge_on = cam.plane_projection(Vector3::new(0.0, 0.0, 0.1), x_axis, Vector3::z());
+            assert!(edge_on.project(0.0, -0.2).is_none());
+        }
     }
 
     #[test]

@@ -24,6 +24,17 @@ struct PoseHints {
     settled_normal: Option<Vector3<f64>>,
 }
 
+/// A followed marker's pose, its rotation measured on the known code's
+/// edges.
+#[derive(Debug, Clone, Copy)]
+struct FollowedPose {
+    pose: Pose,
+    /// The normal was told apart from the other candidate with confidence.
+    settled: bool,
+    /// Image direction of +x at the projected centre.
+    yaw: f64,
+}
+
 impl Detector {
     /// The detection of a candidate, and its normal when that was told
     /// apart from the other pose candidate with confidence (for the track).
@@ -59,10 +70,20 @@ impl Detector {
             .track
             .map(|i| self.tracks[i].clone())
             .filter(|t| t.id_streak >= 3);
-        let followed_yaw = match (known, self.config.target.family()) {
-            (Some(t), Some(family)) => match (t.code, t.yaw) {
+        // With a pose to give, the code's edges are measured once, on the
+        // rectified ring that gives the rotation; without, along the image
+        // ellipse.
+        let mut followed_pose = None;
+        let followed_yaw = match (known, self.config.target.family().map(Family::bits)) {
+            (Some(t), Some(bits)) => match (t.code, t.yaw) {
                 (Some(code), Some(yaw)) => {
-                    rectify::follow_ring(gray, &c.outer, family.bits(), code, yaw).map(|y| (t, y))
+                    followed_pose = self.follow_pose(gray, c, &t, bits, code, yaw);
+                    match &followed_pose {
+                        Some(followed) => Some((t, followed.yaw)),
+                        None => {
+                            rectify::follow_ring(gray, &c.outer, bits, code, yaw).map(|y| (t, y))
+                        }
+                    }
                 }
                 _ => None,
             },
@@ -80,7 +101,11 @@ impl Detector {
             let settled = c
                 .track
                 .is_some_and(|i| self.tracks[i].id != 0 && self.tracks[i].id_streak >= 3);
-            let evidence = ring_evidence(image, &outer, c, family_bits);
+            // A followed ring is tested for the bit count it showed last
+            // first: passing that surely spares testing every other count
+            // (each frame's cost on rings of another family, or without one).
+            let remembered = c.track.and_then(|i| self.tracks[i].bits);
+            let evidence = ring_evidence(image, &outer, c, family_bits, remembered);
             let in_shade = matches!(evidence, RingEvidence::Manchester(r) if r.in_shade);
             // Rings whose sectors are a pixel or two wide: compare with the
             // rendered members instead (also the ring test when too small
@@ -197,20 +222,26 @@ impl Detector {
                 }
             }
         } else {
-            let inside = legacy::concentric_white_disc(gray, &c.outer, c.black, c.white);
-            let paper = inside.and_then(|_| legacy::white_margin(gray, &c.outer, c.black, c.white));
-            let disc = match (inside, paper) {
-                (Some(legacy::Inside::WhyConDisc), Some(paper)) => {
-                    legacy::white_disc_mass(gray, &c.outer, paper)
+            // A marker followed for a while stays one when its inside blurs,
+            // so its inside need not be looked at (the ray test costs more
+            // than following it).
+            let followed = c.track.is_some_and(|i| self.tracks[i].hits >= 3);
+            let disc = || {
+                let inside = legacy::concentric_white_disc(gray, &c.outer, c.black, c.white);
+                let paper =
+                    inside.and_then(|_| legacy::white_margin(gray, &c.outer, c.black, c.white));
+                match (inside, paper) {
+                    (Some(legacy::Inside::WhyConDisc), Some(paper)) => {
+                        legacy::white_disc_mass(gray, &c.outer, paper)
+                    }
+                    (Some(legacy::Inside::WhyCodeRing), Some(_)) => matches!(
+                        ring_evidence(image, &outer, c, None, None),
+                        RingEvidence::Manchester(_)
+                    ),
+                    _ => false,
                 }
-                (Some(legacy::Inside::WhyCodeRing), Some(_)) => matches!(
-                    ring_evidence(image, &outer, c, None),
-                    RingEvidence::Manchester(_)
-                ),
-                _ => false,
             };
-            // A marker followed for a while stays one when its inside blurs.
-            d.unreadable = !disc && !c.track.is_some_and(|i| self.tracks[i].hits >= 3);
+            d.unreadable = !(followed || disc());
         }
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed_yaw.is_some());
@@ -222,9 +253,12 @@ impl Detector {
                 centre_estimate,
                 settled_normal: c.track.and_then(|i| self.tracks[i].normal),
             };
-            let (pose, settled) = match self.pose(&camera, diameter / 2.0, gray, c, &outer, hints) {
-                Some((pose, settled)) => (Some(pose), settled),
-                None => (None, false),
+            let (pose, settled) = match followed_pose {
+                Some(followed) => (Some(followed.pose), followed.settled),
+                None => match self.pose(&camera, diameter / 2.0, gray, c, &outer, hints) {
+                    Some((pose, settled)) => (Some(pose), settled),
+                    None => (None, false),
+                },
             };
             d.pose = pose;
             settled_normal = d
@@ -232,7 +266,8 @@ impl Detector {
                 .filter(|_| settled)
                 .map(|p| p.rotation.column(2).into_owned());
             let member_code = d.code.filter(|_| {
-                d.bits.is_none() || d.bits == self.config.target.family().map(Family::bits)
+                followed_pose.is_none()
+                    && (d.bits.is_none() || d.bits == self.config.target.family().map(Family::bits))
             });
             if let (Some(pose), Some(code), Some(family)) =
                 (&d.pose, member_code, self.config.target.family())
@@ -258,6 +293,35 @@ impl Detector {
             }
         }
         (d, settled_normal)
+    }
+
+    /// The pose of a followed marker whose code is known, its rotation
+    /// measured on the rectified ring from where last frame's yaw puts the
+    /// code's edges; every edge must show with the code's polarity, which
+    /// confirms the code as [`rectify::follow_ring`] would. None without a
+    /// camera and a diameter, or when the edges do not show (then the ring
+    /// is followed or read as for a marker without a pose).
+    fn follow_pose(
+        &mut self,
+        gray: Gray<'_>,
+        c: &Candidate,
+        track: &super::track::Track,
+        bits: u32,
+        code: u32,
+        previous_yaw: f64,
+    ) -> Option<FollowedPose> {
+        let (camera, diameter) = (self.config.camera?, self.config.diameter_m?);
+        let radius_m = diameter / 2.0;
+        let hints = PoseHints {
+            yaw: Some(previous_yaw),
+            axis_point: None,
+            centre_estimate: None,
+            settled_normal: track.normal,
+        };
+        let (pose, settled) = self.pose(&camera, radius_m, gray, c, &c.outer, hints)?;
+        let pose = rectify::refine_rotation(gray, &camera, &pose, radius_m, bits, code)?;
+        let yaw = pose.image_yaw(&camera)?;
+        Some(FollowedPose { pose, settled, yaw })
     }
 
     /// The ring read through the motion blur its outline shows, when the
@@ -413,28 +477,32 @@ impl Detector {
 /// a ring read without a family is believed.
 const AUTO_MIN_SECTOR_PX: f64 = 2.0;
 
-/// What the candidate's ring shows: the family's bit count is tried first
-/// (the common case), then every other count, so that a ring of another
-/// family is told apart from no ring at all.
+/// What the candidate's ring shows: the bit count its track showed last
+/// and the family's are tried first (the common case), then every other
+/// count, so that a ring of another family is told apart from no ring at
+/// all.
 fn ring_evidence<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
     outer: &Ellipse,
     c: &Candidate,
     family_bits: Option<u32>,
+    remembered: Option<u32>,
 ) -> RingEvidence {
     match family_bits {
         Some(bits) if !manchester::testable(outer, bits) => RingEvidence::TooSmall,
         Some(bits) => {
+            let first = remembered.filter(|&n| n != bits && manchester::testable(outer, n));
             // Counts too long to test on this ring are no evidence against
             // the family's.
-            let others = manchester::BITS.filter(|&n| n != bits && manchester::testable(outer, n));
+            let others = manchester::BITS
+                .filter(|&n| n != bits && Some(n) != first && manchester::testable(outer, n));
             manchester::examine(
                 image,
                 outer,
                 c.black,
                 c.white,
-                std::iter::once(bits).chain(others),
-                true,
+                first.into_iter().chain(std::iter::once(bits)).chain(others),
+                first.is_none(),
             )
         }
         // Without a family nothing but the structure test vouches for the
@@ -442,9 +510,17 @@ fn ring_evidence<C: Deref<Target = [u8]>>(
         // an off-centre hole pass for a short code: only counts whose
         // sectors are wide enough to show their own edges are tried.
         None => {
-            let counts = manchester::BITS
-                .filter(|&n| manchester::sector_pixels(outer, n) >= AUTO_MIN_SECTOR_PX);
-            manchester::examine(image, outer, c.black, c.white, counts, false)
+            let wide = |n: u32| manchester::sector_pixels(outer, n) >= AUTO_MIN_SECTOR_PX;
+            let first = remembered.filter(|&n| manchester::BITS.contains(&n) && wide(n));
+            let counts = manchester::BITS.filter(|&n| wide(n) && Some(n) != first);
+            manchester::examine(
+                image,
+                outer,
+                c.black,
+                c.white,
+                first.into_iter().chain(counts),
+                false,
+            )
         }
     }
 }

@@ -123,11 +123,14 @@ pub fn concentric_white_disc(
     for k in 0..RAYS {
         let t = std::f64::consts::TAU * k as f64 / RAYS as f64;
         let (ex, ey) = outer.point_at(t);
-        let length = (ex - outer.u).hypot(ey - outer.v);
+        let (dx, dy) = (ex - outer.u, ey - outer.v);
+        let length = dx.hypot(dy);
         profile.clear();
         let mut rho: f64 = 0.0;
         while rho <= 1.0 {
-            let (x, y) = outer.scaled(rho.max(1e-6)).point_at(t);
+            // The scaled outline's point at t, without a sine per sample.
+            let k = rho.max(1e-6);
+            let (x, y) = (outer.u + k * dx, outer.v + k * dy);
             let value = ellipse::sample(gray, x, y)?;
             profile.push((rho, value));
             rho += step;

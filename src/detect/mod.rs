@@ -14,9 +14,11 @@
 //! With tracking on, each known marker is first followed where it should
 //! be (last position plus velocity) by its edges along a few dozen scan
 //! lines, and, once its ID is settled, its yaw from the known code's
-//! edges; only if that fails does the flood fill run, and only if a marker
-//! is lost is the whole frame scanned (else one band of rows per frame
-//! looks for newcomers). IDs of tracked markers go through a Bayesian
+//! edges (on the rectified ring, once, when a pose is wanted; a ring of
+//! another family, or read without one, is tested for the bit count it
+//! showed last first); only if that fails does the flood fill run, and
+//! only if a marker is lost is the whole frame scanned (else one band of
+//! rows per frame looks for newcomers). IDs of tracked markers go through a Bayesian
 //! filter ([`idfilter`], paper 5.1); the test tolerances adapt slowly to
 //! what is measured (paper 4.2).
 //!
@@ -340,6 +342,12 @@ impl Detector {
                 if found.len() >= limit {
                     break;
                 }
+                if let Some(next) = self.tracks.get(index + 1) {
+                    // The edge search reaches a window (at most 23 px)
+                    // past the outline.
+                    let (u, v) = next.predicted();
+                    preload_disc(gray, u, v, next.a + 12.0);
+                }
                 if let Some(mut c) = self.follow(gray, index) {
                     c.track = Some(index);
                     found.push(c);
@@ -449,7 +457,11 @@ impl Detector {
         found.truncate(limit);
         let mut detections: Vec<Detection> = Vec::with_capacity(found.len());
         let mut settled_normals = Vec::with_capacity(found.len());
-        for c in &found {
+        for (k, c) in found.iter().enumerate() {
+            if let Some(next) = found.get(k + 1) {
+                let e = &next.outer;
+                preload_disc(gray, e.u, e.v, e.semi_major + 2.0);
+            }
             let (d, settled) = self.describe(image, gray, c);
             detections.push(d);
             settled_normals.push(settled);
@@ -476,6 +488,14 @@ impl Detector {
         self.check.observe(&detections);
         detections
     }
+}
+
+/// Brings the pixels of the square around a marker (centre, half side) on
+/// their way into the cache while the marker before it is worked on: on a
+/// large frame every marker's pixels have left the cache since they were
+/// last read.
+fn preload_disc(gray: Gray<'_>, u: f64, v: f64, reach: f64) {
+    gray.preload(u - reach..u + reach + 1.0, v - reach..v + reach + 1.0);
 }
 
 /// Adds the candidates of another look that are not already found (no

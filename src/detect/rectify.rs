@@ -6,8 +6,6 @@
 //! of the code's sector edges, compared with where the decoded code puts
 //! them, give the in-plane rotation directly.
 
-use nalgebra::Vector3;
-
 use super::ellipse::sample;
 use super::segment::Gray;
 use crate::camera::Camera;
@@ -37,14 +35,14 @@ pub fn refine_rotation(
     let radii = [0.25, 0.5, 0.75]
         .map(|k| (RING_INNER_RATIO + (WHYCODE_WHITE_RATIO - RING_INNER_RATIO) * k) * radius_m);
     let mut profile = Vec::with_capacity(n);
+    let plane = camera.plane_projection(pose.position, x, y);
     // Walk the angle by a fixed rotation instead of a sine per sample.
     let (step_sin, step_cos) = (std::f64::consts::TAU / n as f64).sin_cos();
     let (mut s, mut c) = (0.0f64, 1.0f64);
     for _ in 0..n {
-        let direction: Vector3<f64> = x * c + y * s;
         let mut sum = 0.0;
         for r in radii {
-            let (u, v) = camera.project(&(pose.position + direction * r))?;
+            let (u, v) = plane.project(r * c, r * s)?;
             sum += sample(image, u, v)?;
         }
         profile.push(sum / radii.len() as f64);

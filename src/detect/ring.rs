@@ -643,6 +643,11 @@ impl EllipseFrame {
     /// Direction of parameter `t` in rectified coordinates (for [`Self::at`]).
     fn direction(&self, t: f64) -> (f64, f64) {
         let (s, c) = t.sin_cos();
+        self.direction_of(s, c)
+    }
+
+    /// [`Self::direction`] of the parameter whose sine and cosine are given.
+    fn direction_of(&self, s: f64, c: f64) -> (f64, f64) {
         (
             c * self.major.0 + s * self.minor.0,
             c * self.major.1 + s * self.minor.1,
@@ -687,8 +692,12 @@ pub(super) fn sample_profile<C: Deref<Target = [u8]>>(
         image.height() as usize,
     );
     let mut profile = Vec::with_capacity(count);
-    for j in 0..count {
-        let direction = frame.direction(2.0 * PI * j as f64 / count as f64);
+    // Walk the parameter by a fixed rotation instead of a sine per sample.
+    let (step_sin, step_cos) = (2.0 * PI / count as f64).sin_cos();
+    let (mut s, mut c) = (0.0f64, 1.0f64);
+    for _ in 0..count {
+        let direction = frame.direction_of(s, c);
+        (s, c) = (s * step_cos + c * step_sin, c * step_cos - s * step_sin);
         let mut sum = 0.0;
         for &rho in radii {
             let (x, y) = frame.at(direction, rho);

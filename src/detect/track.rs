@@ -31,6 +31,8 @@ pub struct Track {
     pub yaw: Option<f64>,
     pub confidence: f64,
     pub status: Option<crate::family::MatchStatus>,
+    /// The ring's bit count as the ring showed it last.
+    pub bits: Option<u32>,
     pub id_streak: u32,
     /// Belief over the marker's ID from all its ring readings so far
     /// (paper 5.1), with a family.
@@ -59,6 +61,7 @@ impl Track {
             yaw: None,
             confidence: 0.0,
             status: None,
+            bits: None,
             id_streak: 0,
             ids: None,
             normal: None,
@@ -122,6 +125,7 @@ impl Track {
         self.yaw = d.yaw;
         self.confidence = d.confidence;
         self.status = d.status;
+        self.bits = d.bits.or(self.bits);
     }
 
     /// True when an observation at (u, v) is this marker moved on.

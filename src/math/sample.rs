@@ -124,6 +124,34 @@ impl<'a, T: Texel> Plane<'a, T> {
     }
 }
 
+impl Plane<'_, u8> {
+    /// Reads one byte of every cache line the rows `y` span across the
+    /// columns `x` (clipped to the plane). A marker's pixels lie on a
+    /// hundred rows, each a separate line far from the last; loads in a
+    /// tight loop overlap in flight, while the stages that need them fetch
+    /// them one after another between their arithmetic. Called just before a
+    /// marker's stages, it cuts the time those spend waiting on memory.
+    pub fn preload(&self, x: std::ops::Range<f64>, y: std::ops::Range<f64>) {
+        const LINE: usize = 64;
+        let clip = |r: std::ops::Range<f64>, n: usize| {
+            (r.start.max(0.0) as usize).min(n)..(r.end.max(0.0) as usize).min(n)
+        };
+        let (x, y) = (clip(x, self.width), clip(y, self.height));
+        if x.is_empty() {
+            return;
+        }
+        let mut sum = 0u8;
+        for row in y {
+            let line = &self.pixels[row * self.width..][x.clone()];
+            for k in (0..line.len()).step_by(LINE) {
+                sum ^= line[k];
+            }
+            sum ^= line[line.len() - 1];
+        }
+        std::hint::black_box(sum);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

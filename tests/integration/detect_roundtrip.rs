@@ -453,6 +453,153 @@ fn tracked_whycode_markers_keep_ids_and_yaw_while_turning() {
     }
 }
 
+/// Tracked markers with a pose: once a marker's ID is settled, its
+/// rotation comes from the known code's edges on the rectified ring alone.
+/// IDs, yaw and normal stay as good as a fresh detection's, frame after
+/// frame, while the markers move and turn.
+#[test]
+fn tracked_markers_with_pose_keep_ids_yaw_and_normal_while_turning() {
+    let family = Family::generate(12, 2).unwrap();
+    let camera = Pinhole {
+        f: 1500.0,
+        cx: 400.0,
+        cy: 300.0,
+    };
+    let config = DetectorConfig {
+        target: Target::WhyCode(family.clone()),
+        camera: Some(whycode::Camera {
+            fx: camera.f,
+            fy: camera.f,
+            cx: camera.cx,
+            cy: camera.cy,
+            distortion: [0.0; 5],
+            width: 800,
+            height: 600,
+        }),
+        diameter_m: Some(0.1),
+        ..DetectorConfig::default()
+    };
+    let mut tracked = Detector::new(DetectorConfig {
+        tracking: true,
+        ..config.clone()
+    });
+    let mut fresh = Detector::new(config);
+    for frame in 0..8 {
+        let placements: Vec<Placement> = (0..6)
+            .map(|k| {
+                let (u, v) = (
+                    110.0 + 115.0 * k as f64 + 1.5 * frame as f64,
+                    180.0 + 200.0 * (k % 2) as f64 - frame as f64,
+                );
+                let psi = (k as f64 * 50.0 + 3.0 * frame as f64) * DEG;
+                let tilt = (20.0 + 3.0 * k as f64 + 0.5 * frame as f64) * DEG;
+                let code = family.code(k as u32 + 5).unwrap();
+                Placement::at(
+                    &camera,
+                    Marker::whycode(12, code, 100.0),
+                    (u, v),
+                    90.0,
+                    psi,
+                    tilt,
+                    k as f64 * 60.0 * DEG,
+                )
+            })
+            .collect();
+        let image = render(
+            800,
+            600,
+            &camera,
+            &placements,
+            Look {
+                noise: 2.0,
+                ..Look::default()
+            },
+        );
+        let found = tracked.detect(&image);
+        let again = fresh.detect(&image);
+        let matched = all_found(&camera, &placements, &found);
+        let matched_fresh = all_found(&camera, &placements, &again);
+        for (k, ((p, d), f)) in placements
+            .iter()
+            .zip(matched)
+            .zip(matched_fresh)
+            .enumerate()
+        {
+            assert_eq!(d.id, k as u32 + 5, "frame {frame}");
+            let yaw_error = angle_diff(d.yaw.unwrap(), p.yaw(&camera));
+            assert!(
+                yaw_error < 0.3 * DEG,
+                "frame {frame}: yaw off by {}°",
+                yaw_error / DEG
+            );
+            let normal = |d: &Detection| d.pose.as_ref().unwrap().rotation.column(2).into_owned();
+            let truth = p.rotation.column(2).into_owned();
+            let (tracked_error, fresh_error) = (normal(d).angle(&truth), normal(f).angle(&truth));
+            assert!(
+                tracked_error < fresh_error + 0.5 * DEG,
+                "frame {frame}: normal off by {}° tracked, {}° fresh",
+                tracked_error / DEG,
+                fresh_error / DEG
+            );
+        }
+    }
+}
+
+/// A followed ring keeps the reading a fresh look gives it when its bit
+/// count is not the family's, or no family is given (the count it showed
+/// last is tested first).
+#[test]
+fn followed_rings_of_another_or_no_family_keep_their_bit_count_and_code() {
+    let family = Family::generate(12, 2).unwrap();
+    let camera = Pinhole {
+        f: 2000.0,
+        cx: 400.0,
+        cy: 300.0,
+    };
+    for target in [
+        Target::AnyBits { distance: None },
+        Target::WhyCode(Family::generate(8, 2).unwrap()),
+    ] {
+        let config = DetectorConfig {
+            target,
+            ..DetectorConfig::default()
+        };
+        let mut tracked = Detector::new(DetectorConfig {
+            tracking: true,
+            ..config.clone()
+        });
+        let mut fresh = Detector::new(config);
+        for frame in 0..6 {
+            let placements: Vec<Placement> = (0..5)
+                .map(|k| {
+                    let (u, v) = (130.0 + 135.0 * k as f64 + frame as f64, 300.0);
+                    let psi = (k as f64 * 70.0 + 2.0 * frame as f64) * DEG;
+                    let code = family.code(k as u32 + 1).unwrap();
+                    Placement::at(
+                        &camera,
+                        Marker::whycode(12, code, 100.0),
+                        (u, v),
+                        100.0,
+                        psi,
+                        0.0,
+                        0.0,
+                    )
+                })
+                .collect();
+            let image = render(800, 600, &camera, &placements, Look::default());
+            let found = tracked.detect(&image);
+            let again = fresh.detect(&image);
+            let matched = all_found(&camera, &placements, &found);
+            let matched_fresh = all_found(&camera, &placements, &again);
+            for (d, f) in matched.iter().zip(matched_fresh) {
+                assert_eq!(d.bits, Some(12), "frame {frame}: {d:?}");
+                assert_eq!((d.id, d.code), (0, f.code), "frame {frame}: {d:?}");
+                assert!(f.code.is_some(), "frame {frame}: {f:?}");
+            }
+        }
+    }
+}
+
 /// Paper 5.1: a per-track Bayesian filter over IDs. One frame in which a
 /// marker reads as another member (here: drawn with another code, the
 /// worst case of a misread) does not change its reported ID.
