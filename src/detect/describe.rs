@@ -108,6 +108,7 @@ impl Detector {
             // (each frame's cost on rings of another family, or without one).
             let remembered = c.track.and_then(|i| self.tracks[i].bits);
             let evidence = ring_evidence(image, &outer, c, family_bits, remembered);
+            let in_shade = matches!(evidence, RingEvidence::Manchester(r) if r.in_shade);
             // Rings whose sectors are a pixel or two wide: compare with the
             // rendered members instead (also the ring test when too small
             // for the sector test).
@@ -166,7 +167,25 @@ impl Detector {
                 None => reader,
             };
             if let Some(reader) = reader {
-                let reading = reader.read(image, &outer, c.black, c.white);
+                let mut reading = if in_shade {
+                    reader.read_in_shade(image, &outer, c.black, c.white)
+                } else {
+                    reader.read(image, &outer, c.black, c.white)
+                };
+                if !in_shade && reading.id == 0 {
+                    // A shadow's edge across a ring whose structure still
+                    // shows may hide a bit's edge in the shade. Read as
+                    // under even light, only a clean, exact member counts:
+                    // evening also flattens a motion blur's smear.
+                    let shaded = reader.read_in_shade(image, &outer, c.black, c.white);
+                    let clean = shaded.erasures == 0
+                        && shaded
+                            .decoded
+                            .is_some_and(|x| x.status == MatchStatus::Exact);
+                    if shaded.id != 0 && clean {
+                        reading = shaded;
+                    }
+                }
                 // A ring the structure test could not look at (cut by the
                 // image border, say) that reads as no code at all is no
                 // evidence of a marker either.
@@ -209,10 +228,22 @@ impl Detector {
             // so its inside need not be looked at (the ray test costs more
             // than following it).
             let followed = c.track.is_some_and(|i| self.tracks[i].hits >= 3);
-            let marker = followed
-                || (legacy::concentric_white_disc(gray, &c.outer, c.black, c.white)
-                    && legacy::white_margin(gray, &c.outer, c.black, c.white));
-            d.unreadable = !marker;
+            let disc = || {
+                let inside = legacy::concentric_white_disc(gray, &c.outer, c.black, c.white);
+                let paper =
+                    inside.and_then(|_| legacy::white_margin(gray, &c.outer, c.black, c.white));
+                match (inside, paper) {
+                    (Some(legacy::Inside::WhyConDisc), Some(paper)) => {
+                        legacy::white_disc_mass(gray, &c.outer, paper)
+                    }
+                    (Some(legacy::Inside::WhyCodeRing), Some(_)) => matches!(
+                        ring_evidence(image, &outer, c, None, None),
+                        RingEvidence::Manchester(_)
+                    ),
+                    _ => false,
+                }
+            };
+            d.unreadable = !(followed || disc());
         }
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed_yaw.is_some());
@@ -539,6 +570,7 @@ fn ring_evidence<C: Deref<Target = [u8]>>(
                 c.black,
                 c.white,
                 first.into_iter().chain(std::iter::once(bits)).chain(others),
+                first.is_none(),
             )
         }
         // Without a family nothing but the structure test vouches for the
@@ -555,6 +587,7 @@ fn ring_evidence<C: Deref<Target = [u8]>>(
                 c.black,
                 c.white,
                 first.into_iter().chain(counts),
+                false,
             )
         }
     }

@@ -4,7 +4,10 @@
 //! other size (their pixel counts fit within the tolerances blur and
 //! perspective need); the inner edge, found along rays from the centre,
 //! does not: it must lie at the same relative radius all round, and at
-//! WhyCon's.
+//! WhyCon's. The light inside the disc, summed (which blur moves about but
+//! does not change), must then make a disc of a printed marker's area, no
+//! more elongated than the outline: a bold stroke-font 'o' or '0' keeps its
+//! pen's width all round, so its hole is narrower across than its outline.
 
 use super::ellipse;
 use super::segment::Gray;
@@ -56,11 +59,11 @@ const MAX_OVAL_RELATIVE: f64 = 0.005;
 /// margin around the black disc may be.
 const MARGIN_SHADE: f64 = 0.25;
 
-/// True when the disc stands on white: WhyCon markers are printed with at
-/// least 0.3 R of white margin (spec section 1), while a letter 'o' or a
-/// ring drawn on a busy surface touches other ink. Rays that leave the
-/// image say nothing.
-pub fn white_margin(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> bool {
+/// The paper's grey when the disc stands on white: WhyCon markers are
+/// printed with at least 0.3 R of white margin (spec section 1), while a
+/// letter 'o' or a ring drawn on a busy surface touches other ink (None).
+/// Rays that leave the image say nothing (the disc's own white stands in).
+pub fn white_margin(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> Option<f64> {
     let mid = 0.5 * (black + white);
     // Just outside the edge's blur, and inside the 0.3 R margin.
     let rho = 1.0 + (0.15f64).max(1.5 / outer.semi_minor.max(1.0)).min(0.28);
@@ -73,7 +76,7 @@ pub fn white_margin(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> 
         }
     }
     if values.is_empty() {
-        return true;
+        return Some(white);
     }
     let light = values.iter().filter(|&&v| v >= mid).count();
     values.sort_by(f64::total_cmp);
@@ -81,11 +84,23 @@ pub fn white_margin(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> 
     // light middle is lighter than what surrounds it is a washer or a
     // drawn circle on a darker surface.
     let paper = values[values.len() / 2];
-    light * 8 >= values.len() * 7 && paper >= white - MARGIN_SHADE * (white - black)
+    (light * 8 >= values.len() * 7 && paper >= white - MARGIN_SHADE * (white - black))
+        .then_some(paper)
 }
 
-/// True when the white inside the candidate is a disc of WhyCon's size
-/// centred on the black one.
+/// What a candidate's inside was taken for by [`concentric_white_disc`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Inside {
+    /// WhyCon's white disc: to be weighed with [`white_disc_mass`].
+    WhyConDisc,
+    /// The edges of a WhyCode ring's parts: only its Manchester structure
+    /// tells it from a glyph whose hole is an oval (a '0' shows edges at
+    /// the two radii too, on the rays along either axis).
+    WhyCodeRing,
+}
+
+/// Some when the white inside the candidate is a disc of WhyCon's size
+/// centred on the black one, or a WhyCode ring's parts.
 ///
 /// Each ray's inner edge is where its profile crosses halfway between its
 /// own lightest point inside the white disc and its darkest point on the
@@ -94,7 +109,12 @@ pub fn white_margin(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> 
 /// along the ray: a stroke-font '0' or an oval washer keeps its relative
 /// hole size along the minor axis but not along the major one, which a
 /// tolerance in radii would forgive on a small outline.
-pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> bool {
+pub fn concentric_white_disc(
+    gray: Gray<'_>,
+    outer: &Ellipse,
+    black: f64,
+    white: f64,
+) -> Option<Inside> {
     let mid = 0.5 * (black + white);
     let radius_px = outer.semi_minor.max(1.0);
     let step = (0.25 / radius_px).min(0.02);
@@ -111,9 +131,7 @@ pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white:
             // The scaled outline's point at t, without a sine per sample.
             let k = rho.max(1e-6);
             let (x, y) = (outer.u + k * dx, outer.v + k * dy);
-            let Some(value) = ellipse::sample(gray, x, y) else {
-                return false;
-            };
+            let value = ellipse::sample(gray, x, y)?;
             profile.push((rho, value));
             rho += step;
         }
@@ -145,7 +163,10 @@ pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white:
         }
     }
     if edges.len() * 8 < RAYS * 7 {
-        return false;
+        return None;
+    }
+    if on_circle(&edges, WHYCON_WHITE_RATIO, outer, true) {
+        return Some(Inside::WhyConDisc);
     }
     // A WhyCode marker is a WhyCon one too (paper section 5): its first
     // edge is the centre disc's (0.343 R) on rays through black sectors and
@@ -156,7 +177,7 @@ pub fn concentric_white_disc(gray: Gray<'_>, outer: &Ellipse, black: f64, white:
         && outer_edges.len() * 4 >= RAYS
         && on_circle(&inner, RING_INNER_RATIO, outer, false)
         && on_circle(&outer_edges, WHYCODE_WHITE_RATIO, outer, false);
-    whycode || on_circle(&edges, WHYCON_WHITE_RATIO, outer, true)
+    whycode.then_some(Inside::WhyCodeRing)
 }
 
 /// True when the inner edges found along the rays, as (radius relative to
@@ -206,4 +227,130 @@ fn on_circle(edges: &[Edge], ratio: f64, outer: &Ellipse, hole: bool) -> bool {
         && (!hole
             || (oval <= MAX_OVAL_PX + MAX_OVAL_RELATIVE * size
                 && offset <= MAX_DECENTRE_PX + MAX_DECENTRE_RELATIVE * size))
+}
+
+/// Least and greatest radius of the white disc, relative to the outline,
+/// that its light adds up to: the spec's 0.41 R, and the 0.354 R of the
+/// original's printed markers (`many.png`, where every one of 48 weighs
+/// 0.354-0.356 R but the held-up print, 0.38 R).
+const MASS_RATIO: std::ops::RangeInclusive<f64> = 0.34..=0.43;
+
+/// Largest excess elongation of the white disc's light over the outline's:
+/// anisotropy of the second moments (px²), beyond the outline's own scaled
+/// by the area ratio, relative to their mean, plus a floor for the noise on
+/// a disc of a few pixels (8 px markers at noise 2 reach 0.08 px² of 0.75).
+/// The sharpened photo of the held-up print in `many.png` makes 0.076 of
+/// its mean; a stroke-font 'o' of WhyCon's proportions 0.1-0.2, a '0' 0.3.
+const MAX_MASS_ELONGATION: f64 = 0.08;
+const MASS_ELONGATION_PX2: f64 = 0.03;
+
+/// Largest offset (pixels) of the light's centroid from the outline's
+/// centre: noise on small discs, plus perspective, which moves the inner
+/// circle's image by a share of the squared size (px²; 0.0006 at 30° in a
+/// 60° view, four times as much allowed for wider lenses).
+const MASS_DECENTRE_PX: f64 = 0.08;
+const MASS_DECENTRE_PERSPECTIVE: f64 = 0.0025;
+
+/// Part of the outline's radii that holds the white disc and its blur,
+/// and stays clear of the outer edge's.
+const MASS_REACH: f64 = 0.72;
+
+/// Samples across the region weighed (sparser on large discs).
+const MASS_SAMPLES: f64 = 28.0;
+
+/// True when the light inside the black disc adds up to a white disc of a
+/// printed WhyCon marker: of its area, and shaped as the outline.
+///
+/// Each pixel within [`MASS_REACH`] of the outline counts for its share of
+/// the way from the annulus's ink to the margin's `paper`. Blur spreads the
+/// white disc's light but keeps its sum, so the area is a printed ratio at
+/// every size (the radius where an edge crosses halfway shrinks on a small,
+/// blurred disc); and it adds the same spread in every direction, so the
+/// anisotropy of the light's second moments is the disc's own: for a view
+/// of concentric circles, the outline's scaled by the area ratio.
+pub fn white_disc_mass(gray: Gray<'_>, outer: &Ellipse, paper: f64) -> bool {
+    let reach = MASS_REACH * outer.semi_major;
+    let (x0, x1) = ((outer.u - reach).floor(), (outer.u + reach).ceil());
+    let (y0, y1) = ((outer.v - reach).floor(), (outer.v + reach).ceil());
+    if x0 < 0.0 || y0 < 0.0 || x1 >= gray.width as f64 || y1 >= gray.height as f64 {
+        // Cut by the border: the edge tests alone decide.
+        return true;
+    }
+    let stride = ((x1 - x0) / MASS_SAMPLES).ceil().max(1.0) as usize;
+    let (s, c) = outer.angle.sin_cos();
+    // Squared radius relative to the outline, and the grey, of each sample.
+    let samples = (y0 as usize..=y1 as usize)
+        .step_by(stride)
+        .flat_map(|y| {
+            (x0 as usize..=x1 as usize)
+                .step_by(stride)
+                .map(move |x| (x, y))
+        })
+        .map(|(x, y)| {
+            let (dx, dy) = (x as f64 - outer.u, y as f64 - outer.v);
+            let (p, q) = (dx * c + dy * s, -dx * s + dy * c);
+            let rho2 = (p / outer.semi_major).powi(2) + (q / outer.semi_minor).powi(2);
+            (dx, dy, rho2, f64::from(gray.pixels[y * gray.width + x]))
+        });
+    // The ink: the annulus between the white disc's blur and the edge's.
+    let mut ink: Vec<f64> = samples
+        .clone()
+        .filter(|t| (0.62 * 0.62..=0.85 * 0.85).contains(&t.2))
+        .map(|t| t.3)
+        .collect();
+    if ink.is_empty() {
+        return true;
+    }
+    let middle = ink.len() / 2;
+    let black = *ink.select_nth_unstable_by(middle, f64::total_cmp).1;
+    // The ink's noise (median absolute deviation), which every pixel
+    // weighed carries too.
+    let mut deviations: Vec<f64> = ink.iter().map(|g| (g - black).abs()).collect();
+    let noise_grey = 1.4826 * *deviations.select_nth_unstable_by(middle, f64::total_cmp).1;
+    let contrast = paper - black;
+    if contrast <= 0.0 {
+        return false;
+    }
+    let (mut m0, mut mx, mut my, mut mxx, mut mxy, mut myy) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    // Sums of the squared lever arms of the first and second moments, for
+    // their noise.
+    let (mut n, mut r2_sum, mut r4_sum) = (0.0f64, 0.0, 0.0);
+    for (dx, dy, rho2, grey) in samples {
+        if rho2 <= MASS_REACH * MASS_REACH {
+            let w = (grey - black) / contrast;
+            m0 += w;
+            mx += w * dx;
+            my += w * dy;
+            mxx += w * dx * dx;
+            mxy += w * dx * dy;
+            myy += w * dy * dy;
+            let r2 = dx * dx + dy * dy;
+            n += 1.0;
+            r2_sum += r2;
+            r4_sum += r2 * r2;
+        }
+    }
+    if m0 <= 0.0 {
+        return false;
+    }
+    let cell = (stride * stride) as f64;
+    let area = m0 * cell;
+    let ratio = (area / outer.area()).sqrt();
+    let (cx, cy) = (mx / m0, my / m0);
+    let (cxx, cxy, cyy) = (mxx / m0 - cx * cx, mxy / m0 - cx * cy, myy / m0 - cy * cy);
+    // Anisotropy as (cos 2θ, sin 2θ) parts; a uniform ellipse of semi-axes
+    // a, b has (a² - b²) / 8 along its major axis.
+    let expected = ratio * ratio * (outer.semi_major.powi(2) - outer.semi_minor.powi(2)) / 8.0;
+    let (s2, c2) = (2.0 * outer.angle).sin_cos();
+    let excess = (0.5 * (cxx - cyy) - expected * c2).hypot(cxy - expected * s2);
+    let spread = 0.5 * (cxx + cyy);
+    let size2 = outer.semi_major * outer.semi_minor;
+    // Three standard deviations of what the noise alone moves each measure.
+    let noise = 3.0 * noise_grey / contrast;
+    let ratio_slack = noise * n.sqrt() * cell / outer.area() / (2.0 * ratio);
+    let excess_slack = noise * (r4_sum / 4.0).sqrt() / m0;
+    let offset_slack = noise * (r2_sum / 2.0).sqrt() / m0;
+    (MASS_RATIO.start() - ratio_slack..=MASS_RATIO.end() + ratio_slack).contains(&ratio)
+        && excess <= MASS_ELONGATION_PX2 + MAX_MASS_ELONGATION * spread + excess_slack
+        && cx.hypot(cy) <= MASS_DECENTRE_PX + MASS_DECENTRE_PERSPECTIVE * size2 + offset_slack
 }

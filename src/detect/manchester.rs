@@ -30,7 +30,8 @@ use std::ops::Deref;
 use image::{ImageBuffer, Luma};
 
 use super::ring::{
-    bit_differences, half_sector_means, refined_centre, sample_profile, sample_radii, EllipseFrame,
+    bit_differences, evened_light, half_sector_means, refined_centre, sample_profile, sample_radii,
+    EllipseFrame,
 };
 use crate::family::necklace;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
@@ -93,6 +94,10 @@ pub struct RingStructure {
     pub fit: f64,
     /// The weakest bit's mid-edge relative to the ring's contrast.
     pub weakest_bit: f64,
+    /// The ring passed only read as under even light (a cast shadow's edge
+    /// crosses it): its bits are to be read so too
+    /// ([`super::ring::RingReader::read_in_shade`]).
+    pub in_shade: bool,
 }
 
 /// True when the ring inside `outer` is large enough to show the sector
@@ -112,13 +117,16 @@ pub fn sector_pixels(outer: &ImageEllipse, bits: u32) -> f64 {
 /// count in `bits`; of the counts that pass, the one whose model fits best
 /// wins (a ring of n bits can pass for n ± 1 when its profile is short).
 /// When none passes, the ring is `Absent` only if every count could be
-/// tested.
+/// tested. With `expected` (a family's count first in `bits`), a ring
+/// that a cast shadow's edge crosses is tried for that count as under
+/// even light too.
 pub fn examine<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
     outer: &ImageEllipse,
     black_level: f64,
     white_level: f64,
     bits: impl IntoIterator<Item = u32>,
+    expected: bool,
 ) -> RingEvidence {
     let contrast = white_level - black_level;
     let valid = [outer.u, outer.v, outer.semi_major, outer.semi_minor]
@@ -224,11 +232,31 @@ pub fn examine<C: Deref<Target = [u8]>>(
             best(&test(&frame, &counts)?)
         })
         .max_by(|a, b| a.fit.total_cmp(&b.fit));
-    [plain, again]
+    let found = [plain, again]
         .into_iter()
         .flatten()
-        .max_by(|a, b| a.fit.total_cmp(&b.fit))
-        .map_or(absent, RingEvidence::Manchester)
+        .max_by(|a, b| a.fit.total_cmp(&b.fit));
+    if let Some(ring) = found {
+        return RingEvidence::Manchester(ring);
+    }
+    // A cast shadow's edge across the ring (see [`evened_light`]): tried
+    // for the expected count only.
+    sample_profile(image, &frame, radii, count)
+        .filter(|_| expected)
+        .and_then(|profile| evened_light(&profile, counts[0]))
+        .and_then(|even| {
+            let gradient: Vec<f64> = (0..count)
+                .map(|j| (even[(j + 1) % count] - even[j]).abs())
+                .collect();
+            test_bits(&even, &gradient, counts[0], contrast, pixels_per_sample).ring
+        })
+        .filter(|r| r.fit >= MIN_FIT)
+        .map_or(absent, |ring| {
+            RingEvidence::Manchester(RingStructure {
+                in_shade: true,
+                ..ring
+            })
+        })
 }
 
 /// One count tried: the ring read, if it passed the contrast and mid-bit
@@ -313,6 +341,7 @@ fn pairing(
         contrast: ring_contrast / disc_contrast,
         fit,
         weakest_bit,
+        in_shade: false,
     })
 }
 

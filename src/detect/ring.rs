@@ -187,6 +187,31 @@ impl RingReader {
         black_level: f64,
         white_level: f64,
     ) -> RingReading {
+        self.read_light(image, outer, black_level, white_level, false)
+    }
+
+    /// As [`RingReader::read`], for a ring that a cast shadow's edge
+    /// crosses (the structure test found it so,
+    /// [`super::manchester::RingStructure::in_shade`]): the ring's profile
+    /// is read as under even light ([`evened_light`]).
+    pub fn read_in_shade<C: Deref<Target = [u8]>>(
+        &self,
+        image: &ImageBuffer<Luma<u8>, C>,
+        outer: &Ellipse,
+        black_level: f64,
+        white_level: f64,
+    ) -> RingReading {
+        self.read_light(image, outer, black_level, white_level, true)
+    }
+
+    fn read_light<C: Deref<Target = [u8]>>(
+        &self,
+        image: &ImageBuffer<Luma<u8>, C>,
+        outer: &Ellipse,
+        black_level: f64,
+        white_level: f64,
+        in_shade: bool,
+    ) -> RingReading {
         let Some(decoder) = &self.decoder else {
             return RingReading::unreadable(0.0);
         };
@@ -262,6 +287,9 @@ impl RingReader {
             threshold = 0.1;
         }
 
+        if let Some(even) = evened_light(&profile, bits).filter(|_| in_shade) {
+            profile = even;
+        }
         let halves_a = half_sector_means(&profile, bits, phase);
         let halves_b = half_sector_means(&profile, bits, phase + sector);
         let diffs_a = bit_differences(&halves_a);
@@ -839,4 +867,42 @@ pub(super) fn half_sector_means(profile: &[f64], bits: u32, start: f64) -> Vec<f
 /// black, a 1 bit.
 pub(super) fn bit_differences(halves: &[f64]) -> Vec<f64> {
     halves.chunks_exact(2).map(|h| h[0] - h[1]).collect()
+}
+
+/// Least ratio of the brightest to the dimmest light along the ring at
+/// which a cast shadow's edge is taken to cross it.
+const SHADED_LIGHT_RATIO: f64 = 1.5;
+
+/// The ring's profile (`bits` bits, samples evenly spaced round it) as
+/// under even light, when a cast shadow's edge crosses the ring: the
+/// profile steps down with the light, which hides the bits' edges in the
+/// shade. Every window of three half-sectors of a Manchester ring holds a
+/// white one, so the profile's running maximum over that window follows
+/// the light; divided by it (and scaled back to the brightest), the ring
+/// reads as under even light. None where the light varies less than
+/// [`SHADED_LIGHT_RATIO`] round the ring (a gentle gradient, or a washer or
+/// a letter, whose light middle is no ring of sectors).
+pub(crate) fn evened_light(profile: &[f64], bits: u32) -> Option<Vec<f64>> {
+    let count = profile.len();
+    let half = ((0.75 * count as f64 / f64::from(2 * bits)).ceil() as usize).min(count / 2);
+    let light: Vec<f64> = (0..count)
+        .map(|j| {
+            (0..=2 * half)
+                .map(|k| profile[(j + count + k - half) % count])
+                .fold(f64::MIN, f64::max)
+        })
+        .collect();
+    let (dimmest, brightest) = light
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(lo, hi), &l| (lo.min(l), hi.max(l)));
+    if dimmest <= 0.0 || brightest < SHADED_LIGHT_RATIO * dimmest {
+        return None;
+    }
+    Some(
+        profile
+            .iter()
+            .zip(&light)
+            .map(|(p, l)| p * brightest / l)
+            .collect(),
+    )
 }

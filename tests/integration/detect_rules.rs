@@ -325,11 +325,14 @@ fn desk_clutter_with_text_and_washers_gives_no_phantom() {
     // hole, blobs with an off-centre hole: none is a WhyCode marker. An
     // 8-bit ring below 10 px has too few pixels per sector to refute every
     // round blob, so the rule holds from 10 px. Legacy WhyCon has no ring
-    // to test: a bold 'o' of WhyCon's proportions a few pixels across is
-    // one to any geometric test. Issue 9 asks for 0.05 per frame; this
-    // guards what the disc tests reach now (about 1.2 per frame, from
-    // about 6 before them) while still taking the smaller white discs of
-    // the original's printed markers (many.png).
+    // to test: the white disc's light must weigh as a printed marker's
+    // (area, shape, centre), which rules out most stroke-font 'o's, but a
+    // bold 'o' of WhyCon's proportions 8-12 px across (or a hollow circle
+    // of the original's 0.354 hole, which the desk draws too) is one to
+    // any geometric test. Issue 9 asks for 0.05 per frame; this guards
+    // what the tests reach now (0.35 per frame, from 1.1 before the
+    // weighing and about 6 before the disc tests) while still taking the
+    // smaller white discs of the original's printed markers (many.png).
     let (mut small, mut legacy) = (0, 0);
     for seed in 1..=20 {
         let [family, auto, whycon] = desk_reports(seed);
@@ -341,7 +344,7 @@ fn desk_clutter_with_text_and_washers_gives_no_phantom() {
         legacy += whycon.len();
     }
     assert!(small <= 1, "{small} small 8-bit phantoms in 20 frames");
-    assert!(legacy <= 30, "{legacy} legacy phantoms in 20 frames");
+    assert!(legacy <= 7, "{legacy} legacy phantoms in 20 frames");
 }
 
 /// Markers of `diameters` pasted on desk clutter, each on its own paper
@@ -426,4 +429,91 @@ fn markers_on_desk_clutter_are_all_reported() {
             );
         }
     }
+}
+
+/// Darkens `image` to `factor` of its light beyond the line through
+/// `(u0, v0)` at `angle` (a soft edge `soft` pixels wide): a cast shadow.
+fn cast_shadow(image: &mut image::GrayImage, (u0, v0): (f64, f64), angle: f64, factor: f64) {
+    let (s, c) = angle.sin_cos();
+    let soft = 12.0;
+    for (x, y, p) in image.enumerate_pixels_mut() {
+        let d = -(f64::from(x) - u0) * s + (f64::from(y) - v0) * c;
+        let t = (d / soft + 0.5).clamp(0.0, 1.0);
+        let light = 1.0 - (1.0 - factor) * t;
+        p.0[0] = (f64::from(p.0[0]) * light).round().clamp(0.0, 255.0) as u8;
+    }
+}
+
+#[test]
+fn a_shadow_edge_across_the_ring_keeps_the_id() {
+    // The ring's white half-sectors in the shade fall below its black ones
+    // in the light: read as under even light, every bit keeps its edge.
+    let family = Family::generate(8, 2).unwrap();
+    let mut rng = Pcg32::new(5, 3);
+    for case in 0..12u32 {
+        let id = 1 + case % family.len() as u32;
+        let (mut image, truth) = frame(
+            &[(8, family.code(id).unwrap(), id)],
+            70.0,
+            40 + u64::from(case),
+        );
+        let m = &truth.markers[0];
+        let angle = rng.range(0.0, 2.0 * PI);
+        // The edge crosses the ring on one side of the centre or the other.
+        let offset = rng.range(-0.3, 0.3) * m.diameter_px / 2.0;
+        let through = (m.u - offset * angle.sin(), m.v + offset * angle.cos());
+        cast_shadow(&mut image, through, angle, 0.3);
+        let found = with_family(&family).detect(&image);
+        let d = nearest(&found, m.u, m.v, 5.0);
+        assert!(
+            d.is_some_and(|d| d.id == id),
+            "case {case}: marker {id}, shadow at {offset:.1} px, {:.0}°: {found:?}",
+            angle.to_degrees()
+        );
+    }
+}
+
+#[test]
+fn bold_letters_of_whycon_proportions_are_mostly_no_legacy_marker() {
+    // A stroke-font 'o' drawn with a pen about 0.59 of its half-height has
+    // WhyCon's hole ratio, but the pen keeps its width all round: the hole
+    // is narrower across than the outline, and its light does not add up
+    // to a printed disc's, which the weighing of the white disc shows
+    // down to letters of some 12 px (of 126 letters 9-16 px tall, 50 pass
+    // the edge tests alone, 21 the weighing too). A printed legacy marker
+    // beside them is always found.
+    let cam = Camera::ideal(1280, 720, 60.0);
+    let mut letters = 0;
+    for (k, size_pt) in [12.0, 14.0, 16.0, 18.0, 20.0, 22.0].into_iter().enumerate() {
+        for (j, weight) in [1.9, 2.0, 2.1, 2.2, 2.3, 2.4, 2.5].into_iter().enumerate() {
+            let mut scene = Scene::new(cam);
+            let p = placement(&cam, (900.0, 360.0), 40.0, 0.0, 0.0);
+            let marker = Marker::whycon(DIAMETER_M * 1000.0);
+            scene
+                .objects
+                .push(SceneObject::Marker(LooseMarker::new(marker, 0, p)));
+            scene.background = Background::Uniform(0.85);
+            scene.noise = 2.0;
+            scene.seed = (10 * k + j) as u64;
+            let (mut image, _) = render(&scene);
+            support::desk::stroke_letters(
+                &mut image,
+                "o o o",
+                (100.0, 400.0),
+                size_pt,
+                weight,
+                30.0,
+            );
+            let found = detector(DetectorConfig::default()).detect(&image);
+            assert!(
+                nearest(&found, 900.0, 360.0, 3.0).is_some(),
+                "{size_pt} pt, weight {weight}: {found:?}"
+            );
+            letters += found.len() - 1;
+        }
+    }
+    assert!(
+        letters <= 21,
+        "{letters} of 126 bold letters taken for markers"
+    );
 }

@@ -59,9 +59,8 @@ pub fn desk_clutter(seed: u64) -> GrayImage {
         for l in 0..lines {
             let text = words[rng.next_u32() as usize % words.len()];
             let baseline = y0 + line_height * (l as f64 + 1.0);
-            let segments = stroke_text(text, x0 / scale, baseline / scale, size_pt, Anchor::Start);
-            let pen = whycode::render::font::stroke_pen_mm(size_pt) * scale * weight;
-            draw_polylines(&mut image, &segments, scale, pen, rng.range(10.0, 60.0));
+            let ink = rng.range(10.0, 60.0);
+            stroke_letters(&mut image, text, (x0, baseline), size_pt, weight, ink);
         }
     }
     // Round things.
@@ -124,6 +123,23 @@ pub fn desk_clutter(seed: u64) -> GrayImage {
         }
     }
     image
+}
+
+/// Draws `text` in the stroke font on `image`: baseline starting at
+/// (x, y) pixels, at 3 pixels per millimetre, the pen `weight` times the
+/// font's own, in grey `ink`.
+pub fn stroke_letters(
+    image: &mut GrayImage,
+    text: &str,
+    (x, y): (f64, f64),
+    size_pt: f64,
+    weight: f64,
+    ink: f64,
+) {
+    let scale = 3.0;
+    let segments = stroke_text(text, x / scale, y / scale, size_pt, Anchor::Start);
+    let pen = whycode::render::font::stroke_pen_mm(size_pt) * scale * weight;
+    draw_polylines(image, &segments, scale, pen, ink);
 }
 
 /// Supersampled fill of pixels inside a box: `shade(x, y)` gives the grey
