@@ -192,7 +192,10 @@ pub fn concentric_edge_points(
 ) {
     out.clear();
     let perimeter = std::f64::consts::PI * ratio * (outer.semi_major + outer.semi_minor);
-    let rays = ((perimeter / 2.0) as usize).clamp(16, 160);
+    // 48 rays a circle (144 points over the three) hold the fitted
+    // normal's error near 0.5° face-on (bar rows 2/2a); more rays cost
+    // time on every posed marker for no gain measured there.
+    let rays = ((perimeter / 2.0) as usize).clamp(16, 48);
     // Darker outside than inside for the inner circles.
     let sign = if ratio >= 1.0 { 1.0 } else { -1.0 };
     const STEP: f64 = 1.0;
