@@ -163,7 +163,8 @@ impl Detector {
             dark.max_v.saturating_sub(inset),
         ];
         let max_count = (n * white_fraction / dark_fraction * 2.5) as u64 + 16;
-        let white = self.fill_inside(gray, map, (cu, cv), bounds, max_count)?;
+        let reach = concentricity_tolerance(design) * 0.25 * (bw + bh);
+        let white = self.fill_inside(gray, map, (cu, cv), reach, bounds, max_count)?;
         let total = dark.merged(&white);
         let ratio = white.count as f64 / total.count as f64;
         let coarse = ellipse::from_moments(&total);
@@ -228,21 +229,44 @@ impl Detector {
         })
     }
 
-    /// Fills the white region around the dark segment's centroid (or a
-    /// neighbouring pixel when rounding lands on the ring); None when it is
-    /// not enclosed by the segment.
+    /// Fills the white region around the dark segment's centroid; None when
+    /// it is not enclosed by the segment. When the centroid lands on ink
+    /// (the ring, or a printed centring cross, whose lines a local
+    /// threshold cuts as dark inside the white disc), the fill starts at
+    /// the nearest light pixel within `reach` pixels, on one of eight
+    /// rays: further off, the white's centroid would fail concentricity
+    /// anyway.
     fn fill_inside(
         &mut self,
         gray: Gray<'_>,
         map: &ThresholdMap,
         centre: (f64, f64),
+        reach: f64,
         bounds: [u32; 4],
         max_count: u64,
     ) -> Option<Stats> {
         let (cx, cy) = (centre.0.round() as i64, centre.1.round() as i64);
-        for (dx, dy) in [(0, 0), (1, 0), (-1, 0), (0, 1), (0, -1)] {
+        const RAYS: [(i64, i64); 8] = [
+            (1, 0),
+            (-1, 0),
+            (0, 1),
+            (0, -1),
+            (1, 1),
+            (-1, -1),
+            (1, -1),
+            (-1, 1),
+        ];
+        let steps = (reach.max(1.0) as i64).min(64);
+        let probes = std::iter::once((0, 0))
+            .chain(RAYS.iter().map(|&d| d))
+            .chain((2..=steps).flat_map(|k| RAYS.iter().map(move |&(dx, dy)| (k * dx, k * dy))));
+        for (dx, dy) in probes {
             let (x, y) = (cx + dx, cy + dy);
-            if x <= i64::from(bounds[0]) || y <= i64::from(bounds[1]) {
+            if x <= i64::from(bounds[0])
+                || y <= i64::from(bounds[1])
+                || x >= i64::from(bounds[2])
+                || y >= i64::from(bounds[3])
+            {
                 continue;
             }
             let result = self.filler.fill(
