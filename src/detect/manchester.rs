@@ -30,8 +30,8 @@ use std::ops::Deref;
 use image::{ImageBuffer, Luma};
 
 use super::ring::{
-    bit_differences, evened_light, half_sector_means, refined_centre, sample_profile, sample_radii,
-    EllipseFrame,
+    bit_differences, evened_light, half_sector_means, paper_profile, refined_centre,
+    sample_profile, sample_radii, EllipseFrame,
 };
 use crate::family::necklace;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
@@ -243,7 +243,10 @@ pub fn examine<C: Deref<Target = [u8]>>(
     // for the expected count only.
     sample_profile(image, &frame, radii, count)
         .filter(|_| expected)
-        .and_then(|profile| evened_light(&profile, counts[0]))
+        .and_then(|profile| {
+            let paper = paper_profile(image, &frame, count)?;
+            evened_light(&profile, &paper, counts[0])
+        })
         .and_then(|even| {
             let gradient: Vec<f64> = (0..count)
                 .map(|j| (even[(j + 1) % count] - even[j]).abs())

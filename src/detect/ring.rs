@@ -287,7 +287,11 @@ impl RingReader {
             threshold = 0.1;
         }
 
-        if let Some(even) = evened_light(&profile, bits).filter(|_| in_shade) {
+        let even = in_shade
+            .then(|| paper_profile(image, &frame, count))
+            .flatten()
+            .and_then(|paper| evened_light(&profile, &paper, bits));
+        if let Some(even) = even {
             profile = even;
         }
         let halves_a = half_sector_means(&profile, bits, phase);
@@ -873,6 +877,24 @@ pub(super) fn bit_differences(halves: &[f64]) -> Vec<f64> {
 /// which a cast shadow's edge is taken to cross it.
 const SHADED_LIGHT_RATIO: f64 = 1.5;
 
+/// Most the dimmest paper round a shaded ring may keep of the brightest:
+/// a light gradient across one marker stays well above it.
+const SHADED_PAPER_RATIO: f64 = 0.6;
+
+/// Where the paper round the marker is sampled for its light, in outer
+/// radii: clear of the black disc's blurred edge.
+const PAPER_RADII: [f64; 2] = [1.2, 1.3];
+
+/// The light on the paper just outside the marker, at the same `count`
+/// parameters as [`sample_profile`]'s; `None` where it leaves the image.
+pub(super) fn paper_profile<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    frame: &EllipseFrame,
+    count: usize,
+) -> Option<Vec<f64>> {
+    sample_profile(image, frame, &PAPER_RADII, count)
+}
+
 /// The ring's profile (`bits` bits, samples evenly spaced round it) as
 /// under even light, when a cast shadow's edge crosses the ring: the
 /// profile steps down with the light, which hides the bits' edges in the
@@ -882,7 +904,7 @@ const SHADED_LIGHT_RATIO: f64 = 1.5;
 /// reads as under even light. None where the light varies less than
 /// [`SHADED_LIGHT_RATIO`] round the ring (a gentle gradient, or a washer or
 /// a letter, whose light middle is no ring of sectors).
-pub(crate) fn evened_light(profile: &[f64], bits: u32) -> Option<Vec<f64>> {
+pub(crate) fn evened_light(profile: &[f64], paper: &[f64], bits: u32) -> Option<Vec<f64>> {
     let count = profile.len();
     let half = ((0.75 * count as f64 / f64::from(2 * bits)).ceil() as usize).min(count / 2);
     let light: Vec<f64> = (0..count)
@@ -896,6 +918,16 @@ pub(crate) fn evened_light(profile: &[f64], bits: u32) -> Option<Vec<f64>> {
         .iter()
         .fold((f64::MAX, f64::MIN), |(lo, hi), &l| (lo.min(l), hi.max(l)));
     if dimmest <= 0.0 || brightest < SHADED_LIGHT_RATIO * dimmest {
+        return None;
+    }
+    // Shade falls on the paper round the marker too; an ink blot over
+    // the ring (a run of three or more dark half-sectors, whose "light"
+    // is the ink itself) leaves it lit, and evening the blot would read
+    // noise as the bits beneath it.
+    let (paper_dim, paper_bright) = paper
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(lo, hi), &l| (lo.min(l), hi.max(l)));
+    if paper_dim > SHADED_PAPER_RATIO * paper_bright {
         return None;
     }
     Some(
