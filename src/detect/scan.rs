@@ -258,7 +258,7 @@ impl Detector {
         ];
         let steps = (reach.max(1.0) as i64).min(64);
         let probes = std::iter::once((0, 0))
-            .chain(RAYS.iter().map(|&d| d))
+            .chain(RAYS.iter().copied())
             .chain((2..=steps).flat_map(|k| RAYS.iter().map(move |&(dx, dy)| (k * dx, k * dy))));
         for (dx, dy) in probes {
             let (x, y) = (cx + dx, cy + dy);
