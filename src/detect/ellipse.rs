@@ -17,6 +17,26 @@ pub(crate) fn sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
     image.at(x, y, Border::Interior)
 }
 
+/// Fills `out` with samples along the line through `origin` in the unit
+/// direction `dir`, at distances `start`, `start + step`, ...; false when
+/// the line leaves the image.
+fn sample_line(
+    image: Gray<'_>,
+    origin: (f64, f64),
+    dir: (f64, f64),
+    (start, step): (f64, f64),
+    out: &mut [f64],
+) -> bool {
+    for (j, slot) in out.iter_mut().enumerate() {
+        let d = start + step * j as f64;
+        match sample(image, origin.0 + dir.0 * d, origin.1 + dir.1 * d) {
+            Some(value) => *slot = value,
+            None => return false,
+        }
+    }
+    true
+}
+
 /// The coarse outline of a segment: the ellipse of its pixel moments.
 pub fn from_moments(stats: &Stats) -> Option<Ellipse> {
     if stats.count < 3 {
@@ -51,18 +71,8 @@ pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>)
         let (s0, s1) = (0.75 * r - 1.0, 1.3 * r + 1.5);
         let n = (((s1 - s0) as usize) + 1).clamp(8, profile.len());
         let step = (s1 - s0) / (n - 1) as f64;
-        let mut ok = true;
-        for (j, slot) in profile[..n].iter_mut().enumerate() {
-            let s = s0 + step * j as f64;
-            match sample(image, coarse.u + ux * s, coarse.v + uy * s) {
-                Some(value) => *slot = value,
-                None => {
-                    ok = false;
-                    break;
-                }
-            }
-        }
-        if !ok {
+        let (origin, dir) = ((coarse.u, coarse.v), (ux, uy));
+        if !sample_line(image, origin, dir, (s0, step), &mut profile[..n]) {
             continue;
         }
         let edge_index = ((r - s0) / step).round() as usize;
@@ -532,18 +542,7 @@ pub fn linear_blur(image: Gray<'_>, outer: &Ellipse) -> Option<LinearBlur> {
         let (nx, ny) = (nl * c - nm * s, nl * s + nm * c);
         let norm = nx.hypot(ny);
         let (nx, ny) = (nx / norm, ny / norm);
-        let mut ok = true;
-        for (j, slot) in profile.iter_mut().enumerate() {
-            let d = -inside + step * j as f64;
-            match sample(image, px + nx * d, py + ny * d) {
-                Some(value) => *slot = value,
-                None => {
-                    ok = false;
-                    break;
-                }
-            }
-        }
-        if !ok {
+        if !sample_line(image, (px, py), (nx, ny), (-inside, step), &mut profile) {
             continue;
         }
         // Slope over two pixels (four steps), against noise.
