@@ -161,17 +161,20 @@ pub fn examine<C: Deref<Target = [u8]>>(
     let count = ((2.0 * arc).ceil() as usize).clamp(16 * 24, 2048);
     let pixels_per_sample =
         2.0 * PI * mid_ratio * (outer.semi_major * outer.semi_minor).sqrt() / count as f64;
-    let test = |frame: &EllipseFrame, counts: &[u32]| -> Option<Vec<Tested>> {
-        let profile = sample_profile(image, frame, radii, count)?;
+    let test_profile = |profile: &[f64], counts: &[u32]| -> Vec<Tested> {
         let gradient: Vec<f64> = (0..count)
             .map(|j| (profile[(j + 1) % count] - profile[j]).abs())
             .collect();
-        Some(
-            counts
-                .iter()
-                .map(|&n| test_bits(&profile, &gradient, n, contrast, pixels_per_sample))
-                .collect(),
-        )
+        counts
+            .iter()
+            .map(|&n| test_bits(profile, &gradient, n, contrast, pixels_per_sample))
+            .collect()
+    };
+    let test = |frame: &EllipseFrame, counts: &[u32]| -> Option<Vec<Tested>> {
+        Some(test_profile(
+            &sample_profile(image, frame, radii, count)?,
+            counts,
+        ))
     };
     let best = |tested: &[Tested]| {
         tested
@@ -184,16 +187,14 @@ pub fn examine<C: Deref<Target = [u8]>>(
     // The expected count first (a family's): a ring that fits it this
     // well fits no other count nearly as well (a neighbouring count drifts
     // half a sector around the ring), so the rest need no look.
-    if let Some(ring) = test(&frame, &counts[..1])
-        .and_then(|t| best(&t))
-        .filter(|r| r.fit >= SURE_FIT)
-    {
-        return RingEvidence::Manchester(ring);
-    }
     // Cut by the image border: nothing to test, nothing to refute.
-    let Some(tested) = test(&frame, &counts) else {
+    let Some(profile) = sample_profile(image, &frame, radii, count) else {
         return RingEvidence::TooSmall;
     };
+    if let Some(ring) = best(&test_profile(&profile, &counts[..1])).filter(|r| r.fit >= SURE_FIT) {
+        return RingEvidence::Manchester(ring);
+    }
+    let tested = test_profile(&profile, &counts);
     let plain = best(&tested);
     // A steep view whose ring fits no count surely may fit a wrong count
     // best (an 8-bit ring at 60° passes for 7 bits): it is read again
@@ -241,18 +242,12 @@ pub fn examine<C: Deref<Target = [u8]>>(
     }
     // A cast shadow's edge across the ring (see [`evened_light`]): tried
     // for the expected count only.
-    sample_profile(image, &frame, radii, count)
-        .filter(|_| expected)
-        .and_then(|profile| {
-            let paper = paper_profile(image, &frame, count)?;
-            evened_light(&profile, &paper, counts[0])
-        })
-        .and_then(|even| {
-            let gradient: Vec<f64> = (0..count)
-                .map(|j| (even[(j + 1) % count] - even[j]).abs())
-                .collect();
-            test_bits(&even, &gradient, counts[0], contrast, pixels_per_sample).ring
-        })
+    if !expected {
+        return absent;
+    }
+    paper_profile(image, &frame, count)
+        .and_then(|paper| evened_light(&profile, &paper, counts[0]))
+        .and_then(|even| test_profile(&even, &counts[..1]).pop()?.ring)
         .filter(|r| r.fit >= MIN_FIT)
         .map_or(absent, |ring| {
             RingEvidence::Manchester(RingStructure {

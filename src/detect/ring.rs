@@ -903,8 +903,19 @@ pub(super) fn paper_profile<C: Deref<Target = [u8]>>(
 /// the light; divided by it (and scaled back to the brightest), the ring
 /// reads as under even light. None where the light varies less than
 /// [`SHADED_LIGHT_RATIO`] round the ring (a gentle gradient, or a washer or
-/// a letter, whose light middle is no ring of sectors).
+/// a letter, whose light middle is no ring of sectors), and where `paper`
+/// (the light just outside the marker, [`paper_profile`]) is not shaded.
 pub(crate) fn evened_light(profile: &[f64], paper: &[f64], bits: u32) -> Option<Vec<f64>> {
+    // Shade falls on the paper round the marker too; an ink blot over
+    // the ring (a run of three or more dark half-sectors, whose "light"
+    // is the ink itself) leaves it lit, and evening the blot would read
+    // noise as the bits beneath it.
+    let (paper_dim, paper_bright) = paper
+        .iter()
+        .fold((f64::MAX, f64::MIN), |(lo, hi), &l| (lo.min(l), hi.max(l)));
+    if paper_dim > SHADED_PAPER_RATIO * paper_bright {
+        return None;
+    }
     let count = profile.len();
     let half = ((0.75 * count as f64 / f64::from(2 * bits)).ceil() as usize).min(count / 2);
     let light: Vec<f64> = (0..count)
@@ -918,16 +929,6 @@ pub(crate) fn evened_light(profile: &[f64], paper: &[f64], bits: u32) -> Option<
         .iter()
         .fold((f64::MAX, f64::MIN), |(lo, hi), &l| (lo.min(l), hi.max(l)));
     if dimmest <= 0.0 || brightest < SHADED_LIGHT_RATIO * dimmest {
-        return None;
-    }
-    // Shade falls on the paper round the marker too; an ink blot over
-    // the ring (a run of three or more dark half-sectors, whose "light"
-    // is the ink itself) leaves it lit, and evening the blot would read
-    // noise as the bits beneath it.
-    let (paper_dim, paper_bright) = paper
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(lo, hi), &l| (lo.min(l), hi.max(l)));
-    if paper_dim > SHADED_PAPER_RATIO * paper_bright {
         return None;
     }
     Some(
