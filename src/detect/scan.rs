@@ -5,7 +5,7 @@
 
 use std::f64::consts::PI;
 
-use super::segment::{Fill, Gray, Stats};
+use super::segment::{below_mask, Fill, Gray, Stats};
 use super::threshold::ThresholdMap;
 use super::{ellipse, Candidate, Detector, SCAN_CHUNK};
 use crate::geometry::Design;
@@ -76,6 +76,9 @@ impl Detector {
         limit: usize,
     ) {
         const CHUNK: usize = SCAN_CHUNK;
+        // Seeds are gathered a 64-bit word (four chunks) at a time: the
+        // chunks' seed pixels as bits, less those already in a segment.
+        const WORD: usize = 64;
         let shift = map.shift();
         let margin = map.seed_margin();
         let cols = gray.width.div_ceil(CHUNK);
@@ -86,24 +89,32 @@ impl Detector {
             let row_start = y * gray.width;
             let row = &gray.pixels[row_start..row_start + gray.width];
             let thresholds = map.row(y);
-            for (k, chunk) in row.chunks(CHUNK).enumerate() {
-                let x0 = k * CHUNK;
-                if !self.occupied.is_empty() && self.occupied[(y / CHUNK) * cols + k] {
-                    continue;
+            let floor = map.floor_row(y);
+            let tile_row = (y / CHUNK) * cols;
+            for (w, block) in row.chunks(WORD).enumerate() {
+                let mut seeds = 0u64;
+                for (q, chunk) in block.chunks(CHUNK).enumerate() {
+                    let x0 = w * WORD + q * CHUNK;
+                    if (!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
+                        || floor.is_some_and(|f| f[x0 >> shift])
+                    {
+                        continue;
+                    }
+                    let t = thresholds[x0 >> shift].saturating_sub(margin);
+                    seeds |= u64::from(below_mask(chunk, t)) << (q * CHUNK);
                 }
-                let t = thresholds[x0 >> shift].saturating_sub(margin);
-                if chunk.iter().copied().min().unwrap_or(255) >= t || map.is_floor(x0, y) {
-                    continue;
-                }
-                for (j, &p) in chunk.iter().enumerate() {
-                    if p < t && !self.labels.is_dark_visited(row_start + x0 + j) {
-                        if let Some(c) = self.evaluate(gray, map, ((x0 + j) as u32, y as u32)) {
-                            found.push(c);
-                            if found.len() >= limit {
-                                return;
-                            }
+                seeds &= !self.labels.dark_word(y, w);
+                while seeds != 0 {
+                    let x = w * WORD + seeds.trailing_zeros() as usize;
+                    if let Some(c) = self.evaluate(gray, map, (x as u32, y as u32)) {
+                        found.push(c);
+                        if found.len() >= limit {
+                            return;
                         }
                     }
+                    // The fill took this seed and perhaps others of the word.
+                    seeds &= seeds - 1;
+                    seeds &= !self.labels.dark_word(y, w);
                 }
             }
         }
@@ -190,7 +201,7 @@ impl Detector {
         let coarse = match coarse {
             Some(e) if accepted => e,
             _ => {
-                self.filler.undo_last(&mut self.labels, gray.width);
+                self.filler.undo_last(&mut self.labels);
                 return None;
             }
         };
@@ -277,7 +288,7 @@ impl Detector {
                 Fill::White { bounds, max_count },
             );
             if result.escaped {
-                self.filler.undo_last(&mut self.labels, gray.width);
+                self.filler.undo_last(&mut self.labels);
                 return None;
             }
             if result.stats.count > 0 {

@@ -3,59 +3,267 @@
 //! need (pixel count, bounding box, first and second moments, brightness)
 //! are summed while filling, in integer arithmetic.
 //!
-//! The fill works on horizontal runs: a run's moments have closed forms, so
-//! the per-pixel work is one comparison, one label write and one addition.
+//! The fill works on horizontal runs held as bit masks: a row's pixels are
+//! classified dark or light 16 at a time (one threshold tile) into 64-bit
+//! words, once per threshold map, and visit marks are bits too. Finding a
+//! run's ends, the runs of the rows above and below that it touches, and
+//! marking it visited are then a few word operations per 64 pixels; a
+//! run's moments have closed forms, so what is left per pixel is adding its
+//! grey value. Large clutter shapes, which every frame is full of and no
+//! test can refuse before they are whole, cost by their runs, not pixels.
 
 use super::threshold::ThresholdMap;
 
-/// Per-pixel visit marks, reused from frame to frame. A label is
-/// `generation * 4 + kind`; bumping the generation forgets every mark of the
-/// previous frame without touching the buffer, which is only cleared when
-/// the generation counter wraps.
-#[derive(Debug, Clone, Default)]
-pub struct Labels {
-    data: Vec<u8>,
-    width: usize,
-    height: usize,
-    generation: u8,
+/// Bits per mask word.
+const WORD: usize = 64;
+/// Pixels classified at once: one threshold tile's width.
+const CHUNK: usize = 16;
+
+/// One bit per pixel, row after row, each row padded to whole words (the
+/// padding bits stay clear, so runs never reach past the row's end).
+fn words_per_row(width: usize) -> usize {
+    width.div_ceil(WORD)
 }
 
-const KIND_DARK: u8 = 1;
-const KIND_WHITE: u8 = 2;
-const MAX_GENERATION: u8 = 63;
+/// Bit `i` set when `chunk[i] < t`: one vector compare and a byte mask
+/// per full chunk where the target has them.
+#[inline]
+pub fn below_mask(chunk: &[u8], t: u8) -> u16 {
+    #[cfg(target_arch = "x86_64")]
+    if chunk.len() == CHUNK {
+        // SAFETY: SSE2 is part of x86_64; the load reads the chunk's 16
+        // bytes, unaligned. p < t exactly when min(p, t - 1) == p (t > 0).
+        unsafe {
+            use std::arch::x86_64::*;
+            if t == 0 {
+                return 0;
+            }
+            let p = _mm_loadu_si128(chunk.as_ptr().cast());
+            let below = _mm_cmpeq_epi8(_mm_min_epu8(p, _mm_set1_epi8((t - 1) as i8)), p);
+            return _mm_movemask_epi8(below) as u16;
+        }
+    }
+    chunk
+        .iter()
+        .enumerate()
+        .fold(0u16, |m, (i, &p)| m | u16::from(p < t) << i)
+}
+
+/// Per-pixel visit marks, reused from frame to frame: dark segments and
+/// white insides each have a bit per pixel. A row's bits are valid only
+/// when its stamp equals the pass's generation, so starting a pass
+/// forgets every mark without touching the buffers; a row is cleared when
+/// first written in a pass.
+#[derive(Debug, Clone, Default)]
+pub struct Labels {
+    dark: Vec<u64>,
+    white: Vec<u64>,
+    stamps: Vec<u32>,
+    stride: usize,
+    width: usize,
+    height: usize,
+    generation: u32,
+}
 
 impl Labels {
     /// Starts a fresh pass over a `width` x `height` image.
     pub fn begin(&mut self, width: usize, height: usize) {
         if self.width != width || self.height != height {
-            self.data = Vec::new();
-            self.data.resize(width * height, 0);
+            self.stride = words_per_row(width);
+            self.dark = vec![0; self.stride * height];
+            self.white = vec![0; self.stride * height];
+            self.stamps = vec![0; height];
             self.width = width;
             self.height = height;
             self.generation = 0;
         }
-        if self.generation >= MAX_GENERATION {
-            self.data.fill(0);
+        if self.generation == u32::MAX {
+            self.stamps.fill(0);
             self.generation = 0;
         }
         self.generation += 1;
     }
 
+    /// The dark-segment marks of word `w` (pixels 64 w to 64 w + 63) of
+    /// row `y`.
     #[inline]
-    fn dark(&self) -> u8 {
-        self.generation * 4 + KIND_DARK
+    pub fn dark_word(&self, y: usize, w: usize) -> u64 {
+        if self.stamps[y] == self.generation {
+            self.dark[y * self.stride + w]
+        } else {
+            0
+        }
     }
 
+    /// The marks of either kind of word `w` of row `y`.
     #[inline]
-    fn white(&self) -> u8 {
-        self.generation * 4 + KIND_WHITE
+    fn any_word(&self, y: usize, w: usize) -> u64 {
+        if self.stamps[y] == self.generation {
+            self.dark[y * self.stride + w] | self.white[y * self.stride + w]
+        } else {
+            0
+        }
+    }
+
+    /// Row `y`'s marks, cleared first if they are a previous pass's.
+    #[inline]
+    fn row_mut(&mut self, y: usize, dark: bool) -> &mut [u64] {
+        let range = y * self.stride..(y + 1) * self.stride;
+        if self.stamps[y] != self.generation {
+            self.dark[range.clone()].fill(0);
+            self.white[range.clone()].fill(0);
+            self.stamps[y] = self.generation;
+        }
+        if dark {
+            &mut self.dark[range]
+        } else {
+            &mut self.white[range]
+        }
     }
 
     /// True when the pixel already belongs to a dark segment of this pass.
     #[inline]
     pub fn is_dark_visited(&self, index: usize) -> bool {
-        self.data[index] == self.dark()
+        let (y, x) = (index / self.width, index % self.width);
+        self.dark_word(y, x / WORD) >> (x % WORD) & 1 == 1
     }
+}
+
+/// Sets (or clears) bits x0..=x1 of a row of words.
+fn set_bits(row: &mut [u64], x0: usize, x1: usize, on: bool) {
+    let (w0, w1) = (x0 / WORD, x1 / WORD);
+    for (w, word) in row.iter_mut().enumerate().take(w1 + 1).skip(w0) {
+        let mut mask = !0u64;
+        if w == w0 {
+            mask &= !0u64 << (x0 % WORD);
+        }
+        if w == w1 {
+            mask &= !0u64 >> (WORD - 1 - x1 % WORD);
+        }
+        if on {
+            *word |= mask;
+        } else {
+            *word &= !mask;
+        }
+    }
+}
+
+/// The pixels of an image classified under one threshold map, rows
+/// computed when a fill first reaches them: `dark` below the threshold
+/// and outside floor tiles (what a dark fill may take), `light` at or
+/// above it (what a white fill may take).
+#[derive(Debug, Clone, Default)]
+struct Classes {
+    /// The map and image the rows were classified for.
+    key: Option<(u64, usize, usize)>,
+    dark: Vec<u64>,
+    light: Vec<u64>,
+    stamps: Vec<u32>,
+    generation: u32,
+    stride: usize,
+}
+
+impl Classes {
+    /// Forgets the rows unless they were classified for this map and image.
+    fn select(&mut self, image: Gray<'_>, map: &ThresholdMap) {
+        let key = (map.id(), image.pixels.as_ptr() as usize, image.width);
+        let stride = words_per_row(image.width);
+        if self.stride != stride || self.stamps.len() != image.height {
+            self.stride = stride;
+            self.dark = vec![0; stride * image.height];
+            self.light = vec![0; stride * image.height];
+            self.stamps = vec![0; image.height];
+            self.generation = 0;
+            self.key = None;
+        }
+        if self.key != Some(key) {
+            self.key = Some(key);
+            if self.generation == u32::MAX {
+                self.stamps.fill(0);
+                self.generation = 0;
+            }
+            self.generation += 1;
+        }
+    }
+
+    /// Classifies row `y` unless it already is.
+    #[inline]
+    fn ensure(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
+        if self.stamps[y] == self.generation {
+            return;
+        }
+        self.stamps[y] = self.generation;
+        let thresholds = map.row(y);
+        let floor = map.floor_row(y);
+        let shift = map.shift();
+        let pixels = &image.pixels[y * image.width..(y + 1) * image.width];
+        let range = y * self.stride..(y + 1) * self.stride;
+        let (dark, light) = (&mut self.dark[range.clone()], &mut self.light[range]);
+        for (w, (block, (d, l))) in pixels
+            .chunks(WORD)
+            .zip(dark.iter_mut().zip(light.iter_mut()))
+            .enumerate()
+        {
+            let (mut dw, mut lw) = (0u64, 0u64);
+            for (q, chunk) in block.chunks(CHUNK).enumerate() {
+                let x0 = w * WORD + q * CHUNK;
+                let below = below_mask(chunk, thresholds[x0 >> shift]);
+                let valid = (1u32 << chunk.len()) - 1;
+                let on_floor = floor.is_some_and(|f| f[x0 >> shift]);
+                if !on_floor {
+                    dw |= u64::from(below) << (q * CHUNK);
+                }
+                lw |= u64::from(!below & valid as u16) << (q * CHUNK);
+            }
+            *d = dw;
+            *l = lw;
+        }
+    }
+}
+
+/// A source of a row's fillable bits, word by word.
+trait Row {
+    fn word(&self, w: usize) -> u64;
+}
+
+impl<F: Fn(usize) -> u64> Row for F {
+    #[inline]
+    fn word(&self, w: usize) -> u64 {
+        self(w)
+    }
+}
+
+/// The ends of the run of set bits through bit `x` (which must be set) of
+/// a row of `stride` words.
+#[inline]
+fn run_through(row: &impl Row, stride: usize, x: usize) -> (usize, usize) {
+    let (w, b) = (x / WORD, x % WORD);
+    let word = row.word(w);
+    // Right: the set bits from x up.
+    let ones = (!(word >> b)).trailing_zeros() as usize;
+    let mut right = x + ones - 1;
+    if ones == WORD - b {
+        for next in w + 1..stride {
+            let t = row.word(next).trailing_ones() as usize;
+            right += t;
+            if t < WORD {
+                break;
+            }
+        }
+    }
+    // Left: the set bits from x down.
+    let ones = (!(word << (WORD - 1 - b))).leading_zeros() as usize;
+    let mut left = x + 1 - ones;
+    if ones == b + 1 {
+        for prev in (0..w).rev() {
+            let t = row.word(prev).leading_ones() as usize;
+            left -= t;
+            if t < WORD {
+                break;
+            }
+        }
+    }
+    (left, right)
 }
 
 /// Statistics of a segment, summed over its pixels (u = column, v = row).
@@ -205,6 +413,7 @@ pub struct Filler {
     stack: Vec<(u32, u32)>,
     /// Runs (y, x0, x1) of the last fill, to undo a failed white fill.
     runs: Vec<(u32, u32, u32)>,
+    classes: Classes,
 }
 
 impl Filler {
@@ -219,14 +428,14 @@ impl Filler {
         mode: Fill,
     ) -> FillResult {
         let width = image.width;
+        let stride = words_per_row(width);
         let mut stats = Stats::default();
         self.stack.clear();
         self.runs.clear();
-        let (dark_label, white_label) = (labels.dark(), labels.white());
-        let shift = map.shift();
-        let (mark, bounds, max_count) = match mode {
-            Fill::Dark => (dark_label, [0, 0, u32::MAX, u32::MAX], u64::MAX),
-            Fill::White { bounds, max_count } => (white_label, bounds, max_count),
+        self.classes.select(image, map);
+        let (bounds, max_count) = match mode {
+            Fill::Dark => ([0, 0, u32::MAX, u32::MAX], u64::MAX),
+            Fill::White { bounds, max_count } => (bounds, max_count),
         };
         let dark = mode == Fill::Dark;
         // Fill range in x and y. A white region that reaches the segment's
@@ -247,24 +456,6 @@ impl Filler {
                 (bounds[3] as usize).min(image.height - 1),
             )
         };
-        // The floor test only where there is floor: it sits in the inner loop.
-        let floor_row = |y: usize| if dark { map.floor_row(y) } else { None };
-        let fillable = |labels: &Labels,
-                        thresholds: &[u8],
-                        floor: Option<&[bool]>,
-                        x: usize,
-                        y: usize|
-         -> bool {
-            let i = y * width + x;
-            let p = image.pixels[i];
-            let l = labels.data[i];
-            let t = thresholds[x >> shift];
-            if dark {
-                p < t && l != dark_label && !floor.is_some_and(|f| f[x >> shift])
-            } else {
-                p >= t && l != dark_label && l != white_label
-            }
-        };
         let (sx, sy) = (seed.0 as usize, seed.1 as usize);
         if sx < x_lo || sx > x_hi || sy < y_lo || sy > y_hi {
             return FillResult {
@@ -272,6 +463,17 @@ impl Filler {
                 escaped: !dark,
             };
         }
+        // Dark fills take dark pixels of no dark segment yet; white fills
+        // light pixels of no segment of either kind.
+        let classes = &mut self.classes;
+        let fillable = |classes: &Classes, labels: &Labels, y: usize, w: usize| -> u64 {
+            let i = y * classes.stride + w;
+            if dark {
+                classes.dark[i] & !labels.dark_word(y, w)
+            } else {
+                classes.light[i] & !labels.any_word(y, w)
+            }
+        };
         self.stack.push(seed);
         let mut escaped = false;
         while let Some((x, y)) = self.stack.pop() {
@@ -285,26 +487,23 @@ impl Filler {
                 escaped = true;
                 break;
             }
-            let thresholds = map.row(y);
-            let floor = floor_row(y);
-            if !fillable(labels, thresholds, floor, x, y) {
+            classes.ensure(image, map, y);
+            if fillable(classes, labels, y, x / WORD) >> (x % WORD) & 1 == 0 {
                 continue;
             }
-            let mut left = x;
-            while left > x_lo && fillable(labels, thresholds, floor, left - 1, y) {
-                left -= 1;
-            }
-            let mut right = x;
-            while right < x_hi && fillable(labels, thresholds, floor, right + 1, y) {
-                right += 1;
-            }
+            let (left, right) = {
+                let (c, l) = (&*classes, &*labels);
+                let row = |w: usize| fillable(c, l, y, w);
+                run_through(&row, stride, x)
+            };
+            let (left, right) = (left.max(x_lo), right.min(x_hi));
+            set_bits(labels.row_mut(y, dark), left, right, true);
             let row = y * width;
-            labels.data[row + left..=row + right].fill(mark);
-            let sum_i: u64 = image.pixels[row + left..=row + right]
+            let sum_i: u32 = image.pixels[row + left..=row + right]
                 .iter()
-                .map(|&p| u64::from(p))
+                .map(|&p| u32::from(p))
                 .sum();
-            stats.add_run(y as u32, left as u32, right as u32, sum_i);
+            stats.add_run(y as u32, left as u32, right as u32, u64::from(sum_i));
             self.runs.push((y as u32, left as u32, right as u32));
             // Every pixel of a floor tile is dark, so a run touching one
             // belongs to the background floor, not to a marker. Filling the
@@ -329,19 +528,31 @@ impl Filler {
                 escaped = true;
                 break;
             }
+            // Seeds for the runs of the rows above and below that this run
+            // touches, one at each run's first pixel within it, left to
+            // right.
             for ny in [y.wrapping_sub(1), y + 1] {
                 if ny < y_lo || ny > y_hi {
                     continue;
                 }
-                let thresholds = map.row(ny);
-                let floor = floor_row(ny);
-                let mut in_run = false;
-                for nx in left..=right {
-                    let f = fillable(labels, thresholds, floor, nx, ny);
-                    if f && !in_run {
-                        self.stack.push((nx as u32, ny as u32));
+                classes.ensure(image, map, ny);
+                let (w0, w1) = (left / WORD, right / WORD);
+                let mut carry = 0u64;
+                for w in w0..=w1 {
+                    let mut m = fillable(classes, labels, ny, w);
+                    if w == w0 {
+                        m &= !0u64 << (left % WORD);
                     }
-                    in_run = f;
+                    if w == w1 {
+                        m &= !0u64 >> (WORD - 1 - right % WORD);
+                    }
+                    let mut starts = m & !((m << 1) | carry);
+                    carry = m >> (WORD - 1);
+                    while starts != 0 {
+                        let bit = starts.trailing_zeros() as usize;
+                        self.stack.push(((w * WORD + bit) as u32, ny as u32));
+                        starts &= starts - 1;
+                    }
                 }
             }
         }
@@ -350,10 +561,9 @@ impl Filler {
 
     /// Forgets the labels of the last fill (a white region that turned out
     /// not to be a marker's inside may be another candidate's).
-    pub fn undo_last(&self, labels: &mut Labels, width: usize) {
+    pub fn undo_last(&self, labels: &mut Labels) {
         for &(y, x0, x1) in &self.runs {
-            let row = y as usize * width;
-            labels.data[row + x0 as usize..=row + x1 as usize].fill(0);
+            set_bits(labels.row_mut(y as usize, false), x0 as usize, x1 as usize, false);
         }
     }
 }

@@ -12,11 +12,22 @@
 //! black and white levels.
 
 use std::collections::VecDeque;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Source of [`ThresholdMap::id`]s.
+static NEXT_MAP_ID: AtomicU64 = AtomicU64::new(0);
+
+fn next_map_id() -> u64 {
+    NEXT_MAP_ID.fetch_add(1, Ordering::Relaxed)
+}
 
 /// A threshold per tile: pixel (x, y) is dark when its value is below
 /// `values[(y >> shift) * cols + (x >> shift)]`.
 #[derive(Debug, Clone)]
 pub struct ThresholdMap {
+    /// Unique per map made (clones share it): what the fill's cache of
+    /// classified pixels is keyed by.
+    id: u64,
     shift: u32,
     cols: usize,
     /// First tile row held, and how many: a map may cover only a band of
@@ -60,6 +71,7 @@ impl ThresholdMap {
     /// The same threshold everywhere.
     pub fn constant(threshold: u8) -> ThresholdMap {
         ThresholdMap {
+            id: next_map_id(),
             shift: 31,
             cols: 1,
             row0: 0,
@@ -221,6 +233,12 @@ impl ThresholdMap {
         row[x0 >> self.shift..=x1 >> self.shift].iter().any(|&f| f)
     }
 
+    /// Tells this map from every other made in the process.
+    #[inline]
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
     #[inline]
     pub fn shift(&self) -> u32 {
         self.shift
@@ -327,6 +345,7 @@ impl ThresholdMap {
         if queue.is_empty() {
             // No contrast anywhere: nothing is dark.
             return ThresholdMap {
+                id: next_map_id(),
                 shift: TILE_SHIFT,
                 cols,
                 row0: first,
@@ -452,6 +471,7 @@ impl ThresholdMap {
             }
         }
         ThresholdMap {
+            id: next_map_id(),
             shift: TILE_SHIFT,
             cols,
             row0: first,
