@@ -517,15 +517,46 @@ fn noise_contrast(pixels: &[u8], width: usize, height: usize) -> u8 {
     0
 }
 
+/// The darkest and brightest pixel of a tile's row: one vector min and
+/// max per 16 pixels where the target has them.
 #[inline]
 fn chunk_min_max(chunk: &[u8]) -> (u8, u8) {
+    #[cfg(target_arch = "x86_64")]
+    if chunk.len() == 1 << TILE_SHIFT {
+        // SAFETY: SSE2 is part of x86_64; the load reads the chunk's 16
+        // bytes, unaligned.
+        unsafe {
+            use std::arch::x86_64::*;
+            let p = _mm_loadu_si128(chunk.as_ptr().cast());
+            let mut bytes = [0u8; 16];
+            // Halve the width three times: the min and max end in byte 0.
+            let (mut lo, mut hi) = (p, p);
+            lo = _mm_min_epu8(lo, _mm_srli_si128::<8>(lo));
+            hi = _mm_max_epu8(hi, _mm_srli_si128::<8>(hi));
+            lo = _mm_min_epu8(lo, _mm_srli_si128::<4>(lo));
+            hi = _mm_max_epu8(hi, _mm_srli_si128::<4>(hi));
+            lo = _mm_min_epu8(lo, _mm_srli_si128::<2>(lo));
+            hi = _mm_max_epu8(hi, _mm_srli_si128::<2>(hi));
+            lo = _mm_min_epu8(lo, _mm_srli_si128::<1>(lo));
+            hi = _mm_max_epu8(hi, _mm_srli_si128::<1>(hi));
+            _mm_storeu_si128(bytes.as_mut_ptr().cast(), _mm_unpacklo_epi8(lo, hi));
+            return (bytes[0], bytes[1]);
+        }
+    }
     chunk
         .iter()
         .fold((255u8, 0u8), |(l, h), &p| (l.min(p), h.max(p)))
 }
 
 /// Min or max over a (2r+1)² window of a grid, clipped at the borders.
-fn box_filter(grid: &[u8], cols: usize, rows: usize, r: usize, op: fn(u8, u8) -> u8) -> Vec<u8> {
+/// Generic over `op` so that it is inlined into the loops.
+fn box_filter(
+    grid: &[u8],
+    cols: usize,
+    rows: usize,
+    r: usize,
+    op: impl Fn(u8, u8) -> u8 + Copy,
+) -> Vec<u8> {
     let mut horizontal = vec![0u8; grid.len()];
     for y in 0..rows {
         let row = &grid[y * cols..(y + 1) * cols];
@@ -537,11 +568,13 @@ fn box_filter(grid: &[u8], cols: usize, rows: usize, r: usize, op: fn(u8, u8) ->
     let mut out = vec![0u8; grid.len()];
     for y in 0..rows {
         let (a, b) = (y.saturating_sub(r), (y + r).min(rows - 1));
-        for x in 0..cols {
-            out[y * cols + x] = (a..=b)
-                .map(|yy| horizontal[yy * cols + x])
-                .reduce(op)
-                .unwrap_or(0);
+        let out_row = &mut out[y * cols..(y + 1) * cols];
+        out_row.copy_from_slice(&horizontal[a * cols..(a + 1) * cols]);
+        for yy in a + 1..=b {
+            let src = &horizontal[yy * cols..(yy + 1) * cols];
+            for (o, &v) in out_row.iter_mut().zip(src) {
+                *o = op(*o, v);
+            }
         }
     }
     out
