@@ -118,7 +118,7 @@ impl Labels {
 
     /// The dark-segment marks of word `w` (pixels 64 w to 64 w + 63) of
     /// row `y`.
-    #[inline]
+    #[inline(always)]
     pub fn dark_word(&self, y: usize, w: usize) -> u64 {
         if self.stamps[y] == self.generation {
             self.dark[y * self.stride + w]
@@ -128,7 +128,7 @@ impl Labels {
     }
 
     /// The marks of either kind of word `w` of row `y`.
-    #[inline]
+    #[inline(always)]
     fn any_word(&self, y: usize, w: usize) -> u64 {
         if self.stamps[y] == self.generation {
             self.dark[y * self.stride + w] | self.white[y * self.stride + w]
@@ -218,6 +218,19 @@ impl Classes {
         }
     }
 
+    /// The pixels of word `w` of row `y` a fill may take: dark fills dark
+    /// pixels of no dark segment yet, white fills light pixels of no
+    /// segment of either kind.
+    #[inline(always)]
+    fn fillable(&self, labels: &Labels, dark: bool, y: usize, w: usize) -> u64 {
+        let i = y * self.stride + w;
+        if dark {
+            self.dark[i] & !labels.dark_word(y, w)
+        } else {
+            self.light[i] & !labels.any_word(y, w)
+        }
+    }
+
     /// Classifies row `y` unless it already is.
     #[inline]
     fn ensure(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
@@ -259,7 +272,7 @@ trait Row {
 }
 
 impl<F: Fn(usize) -> u64> Row for F {
-    #[inline]
+    #[inline(always)]
     fn word(&self, w: usize) -> u64 {
         self(w)
     }
@@ -495,16 +508,9 @@ impl Filler {
                 escaped: !dark,
             };
         }
-        // Dark fills take dark pixels of no dark segment yet; white fills
-        // light pixels of no segment of either kind.
         let classes = &mut self.classes;
-        let fillable = |classes: &Classes, labels: &Labels, y: usize, w: usize| -> u64 {
-            let i = y * classes.stride + w;
-            if dark {
-                classes.dark[i] & !labels.dark_word(y, w)
-            } else {
-                classes.light[i] & !labels.any_word(y, w)
-            }
+        let fillable = |classes: &Classes, labels: &Labels, y: usize, w: usize| {
+            classes.fillable(labels, dark, y, w)
         };
         self.stack.push(seed);
         let mut escaped = false;
