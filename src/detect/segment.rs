@@ -598,7 +598,12 @@ impl Filler {
     /// not to be a marker's inside may be another candidate's).
     pub fn undo_last(&self, labels: &mut Labels) {
         for &(y, x0, x1) in &self.runs {
-            set_bits(labels.row_mut(y as usize, false), x0 as usize, x1 as usize, false);
+            set_bits(
+                labels.row_mut(y as usize, false),
+                x0 as usize,
+                x1 as usize,
+                false,
+            );
         }
     }
 }
