@@ -14,6 +14,19 @@ use super::segment::Gray;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
 use crate::math::Ellipse;
 
+/// The original WhyCon's smallest outer segment (`minSize`, pixels): it
+/// never reports a marker whose black ring covers fewer pixels (its white
+/// segment must exceed as many too, which puts its limit higher still,
+/// about 15 px across at the ROS node's `minSize` of 30). At 100 pixels a
+/// face-on marker is 12.4 px across.
+pub const MIN_INK_PX: f64 = 100.0;
+
+/// True when the black ring inside `outer` (the black disc less WhyCon's
+/// white one) covers at least `min_ink_px` pixels.
+pub fn enough_ink(outer: &Ellipse, min_ink_px: f64) -> bool {
+    outer.area() * (1.0 - WHYCON_WHITE_RATIO * WHYCON_WHITE_RATIO) >= min_ink_px
+}
+
 /// An inner edge found along a ray: its radius relative to the outline,
 /// the outline's distance from the centre in pixels, the ray's parameter.
 type Edge = (f64, f64, f64);
