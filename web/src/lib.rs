@@ -11,7 +11,7 @@ use image::GrayImage;
 use serde::Deserialize;
 use wasm_bindgen::prelude::*;
 use whycode::detect::{Detector, DetectorConfig, Target};
-use whycode::family::{parse_id_list, Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MIN_BITS};
+use whycode::family::{parse_id_list, CountTable, Family, DEFAULT_BITS, DEFAULT_DISTANCE};
 use whycode::image_io;
 use whycode::manifest::Manifest;
 use whycode::render::job::{MarkerJob, SheetJob};
@@ -106,28 +106,11 @@ pub fn family_table(bits: u32, distance: u32, limit: usize) -> Result<String, Js
 #[wasm_bindgen]
 pub fn counts(bits: &[u32], distances: &[u32]) -> Result<String, JsError> {
     let inner = || -> Result<String> {
-        for &n in bits {
-            if !(MIN_BITS..=MAX_BITS).contains(&n) {
-                bail!("--bits: {n} is outside {MIN_BITS}..{MAX_BITS}");
-            }
-        }
-        let max_bits = bits.iter().max().copied().unwrap_or(0);
-        let mut rows = Vec::new();
-        for &d in distances {
-            if d == 0 || d > max_bits {
-                bail!("--distance: {d} is outside 1..{max_bits} (1 to the largest bit count)");
-            }
-            let mut row = Vec::new();
-            for &n in bits {
-                row.push(if d <= n {
-                    Some(Family::generate(n, d)?.len())
-                } else {
-                    None
-                });
-            }
-            rows.push(row);
-        }
-        Ok(serde_json::json!({ "bits": bits, "distances": distances, "counts": rows }).to_string())
+        let table = CountTable::new(bits, distances, "--")?;
+        Ok(
+            serde_json::json!({ "bits": bits, "distances": distances, "counts": table.counts })
+                .to_string(),
+        )
     };
     inner().map_err(js_error)
 }
