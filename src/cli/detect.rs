@@ -121,7 +121,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     if let Some(pixels) = args.min_ink {
         anyhow::ensure!(
             pixels.is_finite() && pixels >= 0.0,
-            "--min-ink: {pixels} is no pixel count (0 or more)"
+            "--min-ink: {pixels} is not a pixel count (give 0 or more)"
         );
         config.legacy_min_ink_px = pixels;
     }
