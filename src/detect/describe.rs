@@ -8,12 +8,13 @@ use std::ops::Deref;
 
 use super::manchester::{self, RingEvidence};
 use super::segment::Gray;
+use super::track::PoseMemory;
 use super::{ellipse, legacy, rectify, ring_model, Candidate, Detection, Detector};
 use crate::camera::Camera;
 use crate::family::{Family, MatchStatus};
 use crate::geometry::Design;
 use crate::math::Ellipse;
-use crate::pose::{self, Pose};
+use crate::pose::{self, CirclePose, Pose};
 
 /// What the ring reading and the marker's track tell the pose stage.
 #[derive(Debug, Clone, Copy)]
@@ -22,30 +23,40 @@ struct PoseHints {
     axis_point: Option<(f64, f64)>,
     centre_estimate: Option<(f64, f64)>,
     settled_normal: Option<Vector3<f64>>,
+    /// The circle pose the track fitted last frame.
+    previous: Option<CirclePose>,
     /// Bit count of the code ring, whose sector sides break its circles.
     bits: Option<u32>,
+}
+
+/// What the pose stage found for a candidate.
+#[derive(Debug, Clone, Copy)]
+struct Posed {
+    pose: Pose,
+    /// The normal was told apart from the other candidate with confidence.
+    settled: bool,
+    /// The circle pose fitted to the edges (before the rotation was
+    /// measured), where the next frame's fit starts.
+    fitted: CirclePose,
 }
 
 /// A followed marker's pose, its rotation measured on the known code's
 /// edges.
 #[derive(Debug, Clone, Copy)]
 struct FollowedPose {
-    pose: Pose,
-    /// The normal was told apart from the other candidate with confidence.
-    settled: bool,
+    posed: Posed,
     /// Image direction of +x at the projected centre.
     yaw: f64,
 }
 
 impl Detector {
-    /// The detection of a candidate, and its normal when that was told
-    /// apart from the other pose candidate with confidence (for the track).
+    /// The detection of a candidate, and what its pose tells the track.
     pub(super) fn describe<C: Deref<Target = [u8]>>(
         &mut self,
         image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,
-    ) -> (Detection, Option<Vector3<f64>>) {
+    ) -> (Detection, PoseMemory) {
         let quality = 1.0 - (c.area_error / self.area.tolerance()).min(1.0);
         let outer = c.outer;
         let mut d = Detection {
@@ -64,7 +75,7 @@ impl Detector {
         };
         let mut axis_point = None;
         let mut centre_estimate = None;
-        let mut settled_normal = None;
+        let mut memory = PoseMemory::default();
         // A marker followed from the last frames whose ID has been read
         // the same several times: its known code's edges give the yaw at a
         // fraction of a full read, and confirm the code on the way.
@@ -254,20 +265,22 @@ impl Detector {
                 axis_point,
                 centre_estimate,
                 settled_normal: c.track.and_then(|i| self.tracks[i].normal),
+                previous: c.track.and_then(|i| self.tracks[i].fitted),
                 bits: d.bits.or(self.config.target.family().map(Family::bits)),
             };
-            let (pose, settled) = match followed_pose {
-                Some(followed) => (Some(followed.pose), followed.settled),
-                None => match self.pose(&camera, diameter / 2.0, gray, c, &outer, hints) {
-                    Some((pose, settled)) => (Some(pose), settled),
-                    None => (None, false),
-                },
+            let posed = match followed_pose {
+                Some(followed) => Some(followed.posed),
+                None => self.pose(&camera, diameter / 2.0, gray, c, &outer, hints),
             };
-            d.pose = pose;
-            settled_normal = d
-                .pose
-                .filter(|_| settled)
-                .map(|p| p.rotation.column(2).into_owned());
+            d.pose = posed.map(|p| p.pose);
+            if let Some(posed) = posed {
+                memory = PoseMemory {
+                    settled_normal: posed
+                        .settled
+                        .then(|| posed.pose.rotation.column(2).into_owned()),
+                    fitted: Some(posed.fitted),
+                };
+            }
             let member_code = d.code.filter(|_| {
                 followed_pose.is_none()
                     && (d.bits.is_none() || d.bits == self.config.target.family().map(Family::bits))
@@ -295,7 +308,7 @@ impl Detector {
                 }
             }
         }
-        (d, settled_normal)
+        (d, memory)
     }
 
     /// The pose of a followed marker whose code is known, its rotation
@@ -320,12 +333,13 @@ impl Detector {
             axis_point: None,
             centre_estimate: None,
             settled_normal: track.normal,
+            previous: track.fitted,
             bits: Some(bits),
         };
-        let (pose, settled) = self.pose(&camera, radius_m, gray, c, &c.outer, hints)?;
-        let pose = rectify::refine_rotation(gray, &camera, &pose, radius_m, bits, code)?;
-        let yaw = pose.image_yaw(&camera)?;
-        Some(FollowedPose { pose, settled, yaw })
+        let mut posed = self.pose(&camera, radius_m, gray, c, &c.outer, hints)?;
+        posed.pose = rectify::refine_rotation(gray, &camera, &posed.pose, radius_m, bits, code)?;
+        let yaw = posed.pose.image_yaw(&camera)?;
+        Some(FollowedPose { posed, yaw })
     }
 
     /// The ring read through the motion blur its outline shows, when the
@@ -427,10 +441,10 @@ impl Detector {
 
     /// Position and normal from the outer edge, the two-fold ambiguity
     /// decided by where the ring shows the marker's centre, else by the
-    /// normal this marker's track settled on, else by the inner white
-    /// edges; then refined on the outer and inner edges together; the
-    /// rotation from the yaw. The flag says whether the normal was settled
-    /// (not left to the inner edges).
+    /// normal this marker's track settled on, else by the normal it was
+    /// fitted with last frame, else by the inner white edges; then refined
+    /// on the outer and inner edges together (from last frame's fit when
+    /// that still fits); the rotation from the yaw.
     fn pose(
         &mut self,
         camera: &Camera,
@@ -439,12 +453,13 @@ impl Detector {
         c: &Candidate,
         outer: &Ellipse,
         hints: PoseHints,
-    ) -> Option<(Pose, bool)> {
+    ) -> Option<Posed> {
         let PoseHints {
             yaw,
             axis_point,
             centre_estimate,
             settled_normal,
+            previous,
             bits,
         } = hints;
         let candidates = pose::circle_poses_from_points(camera, &c.edge, radius_m)
@@ -453,9 +468,17 @@ impl Detector {
             .and_then(|measured| pose::choose_by_centre_estimate(camera, &candidates, measured));
         let by_track = || pose::choose_by_settled_normal(&candidates, &settled_normal?);
         let settled = by_centre.or_else(by_track);
+        // The candidate nearer the normal fitted last frame: near face-on,
+        // where the two lie too close together for the track to settle,
+        // they differ by less than the fit corrects, and the inner edges'
+        // test (a third of a posed marker's time) is spared.
+        let by_previous = previous.map(|p| {
+            let turn = |k: usize| candidates[k].normal.angle(&p.normal);
+            usize::from(turn(1) < turn(0))
+        });
         let design = self.config.target.design();
         let mut errors = [0.0f64; 2];
-        if settled.is_none() {
+        if settled.is_none() && by_previous.is_none() {
             let mid = (c.black + c.white) / 2.0;
             for &ratio in design.inner_edge_ratios() {
                 ellipse::inner_edge_points(gray, &c.outer, ratio, mid, &mut self.inner_scratch);
@@ -470,7 +493,10 @@ impl Detector {
                 }
             }
         }
-        let chosen = candidates[usize::from(settled.map_or(errors[1] < errors[0], |k| k == 1))];
+        let pick = settled
+            .or(by_previous)
+            .unwrap_or(usize::from(errors[1] < errors[0]));
+        let chosen = candidates[pick];
         let rough = pose::full_pose_from_ring(camera, &chosen, yaw, axis_point);
         // The concentric edges sharpen the normal (see
         // `pose::refine_circle_pose`). A WhyCode ring's circles break
@@ -511,12 +537,26 @@ impl Detector {
                 points.extend(self.inner_scratch.iter().map(|&p| (p, radius)));
             }
         }
-        let circle = pose::refine_circle_pose(camera, &chosen, &points).unwrap_or(chosen);
+        // Last frame's fit, moved to this frame's centre, is a closer start
+        // than the closed-form candidate when it lies on the same side.
+        let refit = previous
+            .filter(|p| by_previous == Some(pick) && p.normal.dot(&chosen.center) < 0.0)
+            .and_then(|p| {
+                let start = CirclePose {
+                    center: chosen.center,
+                    normal: p.normal,
+                };
+                pose::refit_circle_pose(camera, &start, &points)
+            });
+        let circle = refit
+            .or_else(|| pose::refine_circle_pose(camera, &chosen, &points))
+            .unwrap_or(chosen);
         self.pose_points = points;
-        Some((
-            pose::full_pose_from_ring(camera, &circle, yaw, axis_point),
-            settled.is_some(),
-        ))
+        Some(Posed {
+            pose: pose::full_pose_from_ring(camera, &circle, yaw, axis_point),
+            settled: settled.is_some(),
+            fitted: circle,
+        })
     }
 }
 

@@ -4,6 +4,8 @@
 //! test tolerances follow the values the detector actually measures,
 //! slowly (x ← 0.99 x + 0.01 x_measured).
 
+use crate::pose::CirclePose;
+
 /// What the detector remembers about one marker between frames.
 #[derive(Debug, Clone)]
 pub struct Track {
@@ -40,6 +42,19 @@ pub struct Track {
     /// The marker's normal (camera frame) once the pose stage told it apart
     /// from the other candidate with confidence; later frames keep to it.
     pub normal: Option<nalgebra::Vector3<f64>>,
+    /// The circle pose fitted to the marker's edges last frame: this
+    /// frame's fit starts from it.
+    pub fitted: Option<CirclePose>,
+}
+
+/// What the pose stage learnt about a marker in this frame, for the next.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PoseMemory {
+    /// The normal, when it was told apart from the other candidate with
+    /// confidence.
+    pub settled_normal: Option<nalgebra::Vector3<f64>>,
+    /// The circle pose fitted to this frame's edges.
+    pub fitted: Option<CirclePose>,
 }
 
 impl Track {
@@ -65,6 +80,7 @@ impl Track {
             id_streak: 0,
             ids: None,
             normal: None,
+            fitted: None,
         }
     }
 

@@ -142,6 +142,40 @@ pub fn refine_circle_pose(
     initial: &CirclePose,
     points_px: &[RadialPoint],
 ) -> Option<CirclePose> {
+    // Outlier limits of the two rounds, pixels: loose around the
+    // closed-form start, tight around the first fit.
+    fit(camera, initial, points_px, &[(0.6, 3), (0.3, 1)], f64::INFINITY)
+}
+
+/// Median misfit (pixels) of this frame's edge points to a start taken from
+/// the last frame's fit, up to which that start counts as close: about
+/// three times the edge points' own scatter on a settled fit.
+const CLOSE_START_PX: f64 = 0.25;
+
+/// [`refine_circle_pose`] from a start already close to the optimum: a
+/// followed marker's fit from the last frame, moved to where this frame's
+/// outline puts its centre. One round with the tight outlier limit, whose
+/// first step is usually the last when the marker barely moved. `None`
+/// when the start does not fit this frame's edges (the marker turned) or
+/// the fit fails: callers refine from a closed-form candidate then.
+pub fn refit_circle_pose(
+    camera: &Camera,
+    start: &CirclePose,
+    points_px: &[RadialPoint],
+) -> Option<CirclePose> {
+    fit(camera, start, points_px, &[(0.3, 3)], CLOSE_START_PX)
+}
+
+/// Rounds of outlier rejection (limit floor in pixels, Gauss-Newton steps)
+/// and fitting from `initial`; `None` also when the median misfit at the
+/// start exceeds `close_px`.
+fn fit(
+    camera: &Camera,
+    initial: &CirclePose,
+    points_px: &[RadialPoint],
+    rounds: &[(f64, usize)],
+    close_px: f64,
+) -> Option<CirclePose> {
     const MIN_POINTS: usize = 12;
     if points_px.len() < MIN_POINTS {
         return None;
@@ -157,16 +191,18 @@ pub fn refine_circle_pose(
         focal: 0.5 * (camera.fx + camera.fy),
     };
     let mut circle = *initial;
-    // Outlier limits of the two rounds, pixels: loose around the
-    // closed-form start, tight around the first fit.
-    for (floor, steps) in [(0.6, 3), (0.3, 1)] {
+    for (round, &(floor, steps)) in rounds.iter().enumerate() {
         let mut residual = vec![0.0; observations.points.len()];
         if !observations.residuals(&circle, &mut residual) {
             return None;
         }
         let mut sorted: Vec<f64> = residual.iter().map(|r| r.abs()).collect();
-        sorted.sort_by(f64::total_cmp);
-        let limit = (3.0 * sorted[sorted.len() / 2]).max(floor);
+        let middle = sorted.len() / 2;
+        let median = *sorted.select_nth_unstable_by(middle, f64::total_cmp).1;
+        if round == 0 && median > close_px {
+            return None;
+        }
+        let limit = (3.0 * median).max(floor);
         let mut keep = residual.iter().map(|r| r.abs() <= limit);
         observations.points.retain(|_| keep.next().unwrap_or(false));
         if observations.points.len() < MIN_POINTS {
