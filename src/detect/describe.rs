@@ -515,6 +515,7 @@ impl Detector {
             1.0,
             min_rise,
             everywhere,
+            &mut self.spokes,
             &mut self.inner_scratch,
         );
         points.extend(self.inner_scratch.iter().map(|&p| (p, radius_m)));
@@ -532,6 +533,7 @@ impl Detector {
                     ratio,
                     min_rise,
                     wanted,
+                    &mut self.spokes,
                     &mut self.inner_scratch,
                 );
                 points.extend(self.inner_scratch.iter().map(|&p| (p, radius)));
@@ -573,9 +575,11 @@ fn clear_of_sector_sides(
     let Some(hit) = pose::intersect_marker_plane(camera, pose, point) else {
         return false;
     };
-    let angle = hit.y.atan2(hit.x).rem_euclid(std::f64::consts::TAU);
     let width = crate::geometry::sector_width(bits);
-    let into = angle.rem_euclid(width);
+    // A whole turn is a whole number of sectors: no need to bring the
+    // angle into [0, 2π) first.
+    let angle = hit.y.atan2(hit.x);
+    let into = angle - width * (angle / width).floor();
     let arc_m = radius_m * into.min(width - into);
     let pixel_m = pose.position.z / camera.fx;
     arc_m > 2.0 * pixel_m

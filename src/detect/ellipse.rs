@@ -180,6 +180,34 @@ fn smooth_sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
     Some(value)
 }
 
+/// The rays [`concentric_edge_points`] follows from an outline's centre to
+/// `count` points spread evenly (by the ellipse's parameter) over it, each
+/// as the offset to that point and its length: the same for every circle of
+/// the marker, so worked out once per outline and count.
+#[derive(Debug, Clone, Default)]
+pub struct Spokes {
+    outline: Option<Ellipse>,
+    rays: Vec<(f64, f64, f64)>,
+}
+
+impl Spokes {
+    fn around(&mut self, outline: &Ellipse, count: usize) -> &[(f64, f64, f64)] {
+        if self.outline != Some(*outline) || self.rays.len() != count {
+            self.outline = Some(*outline);
+            self.rays.clear();
+            let (sin, cos) = outline.angle.sin_cos();
+            self.rays.extend((0..count).map(|k| {
+                let t = std::f64::consts::TAU * (k as f64 + 0.5) / count as f64;
+                let (sin_t, cos_t) = t.sin_cos();
+                let (a, b) = (outline.semi_major * cos_t, outline.semi_minor * sin_t);
+                let (dx, dy) = (a * cos - b * sin, a * sin + b * cos);
+                (dx, dy, (dx * dx + dy * dy).sqrt())
+            }));
+        }
+        &self.rays
+    }
+}
+
 /// Edge points of a circle of the marker concentric with its outer edge,
 /// at `ratio` times the outer radius (1 for the outer edge itself), for the
 /// pose: each point is the centroid of the grey-level change across the
@@ -198,6 +226,7 @@ pub fn concentric_edge_points(
     ratio: f64,
     min_rise: f64,
     wanted: impl Fn((f64, f64)) -> bool,
+    spokes: &mut Spokes,
     out: &mut Vec<(f64, f64)>,
 ) {
     out.clear();
@@ -210,11 +239,7 @@ pub fn concentric_edge_points(
     let sign = if ratio >= 1.0 { 1.0 } else { -1.0 };
     const STEP: f64 = 1.0;
     let mut profile = [0.0f64; 16];
-    for k in 0..rays {
-        let t = std::f64::consts::TAU * (k as f64 + 0.5) / rays as f64;
-        let (px, py) = outer.point_at(t);
-        let (dx, dy) = (px - outer.u, py - outer.v);
-        let r = dx.hypot(dy);
+    for &(dx, dy, r) in spokes.around(outer, rays) {
         // The window stays clear of the neighbouring circles: the ring's
         // borders lie 0.257 R apart.
         let half = (0.2 * r).min(3.0);
