@@ -8,7 +8,7 @@ use std::ops::Deref;
 
 use super::manchester::{self, RingEvidence};
 use super::segment::Gray;
-use super::track::PoseMemory;
+use super::track::{Fitted, PoseMemory};
 use super::{ellipse, legacy, rectify, ring_model, Candidate, Detection, Detector};
 use crate::camera::Camera;
 use crate::family::{Family, MatchStatus};
@@ -24,7 +24,7 @@ struct PoseHints {
     centre_estimate: Option<(f64, f64)>,
     settled_normal: Option<Vector3<f64>>,
     /// The circle pose the track fitted last frame.
-    previous: Option<CirclePose>,
+    previous: Option<Fitted>,
     /// Bit count of the code ring, whose sector sides break its circles.
     bits: Option<u32>,
 }
@@ -37,7 +37,7 @@ struct Posed {
     settled: bool,
     /// The circle pose fitted to the edges (before the rotation was
     /// measured), where the next frame's fit starts.
-    fitted: CirclePose,
+    fitted: Fitted,
 }
 
 /// A followed marker's pose, its rotation measured on the known code's
@@ -473,7 +473,7 @@ impl Detector {
         // they differ by less than the fit corrects, and the inner edges'
         // test (a third of a posed marker's time) is spared.
         let by_previous = previous.map(|p| {
-            let turn = |k: usize| candidates[k].normal.angle(&p.normal);
+            let turn = |k: usize| candidates[k].normal.angle(&p.circle.normal);
             usize::from(turn(1) < turn(0))
         });
         let design = self.config.target.design();
@@ -539,15 +539,18 @@ impl Detector {
                 points.extend(self.inner_scratch.iter().map(|&p| (p, radius)));
             }
         }
-        // Last frame's fit, moved to this frame's centre, is a closer start
-        // than the closed-form candidate when it lies on the same side.
+        // Last frame's fit, moved as far as the closed-form centre moved,
+        // is a closer start than the closed-form candidate when it lies on
+        // the same side (a marker that stood still starts where its fit
+        // ends).
         let refit = previous
-            .filter(|p| by_previous == Some(pick) && p.normal.dot(&chosen.center) < 0.0)
-            .and_then(|p| {
-                let start = CirclePose {
-                    center: chosen.center,
-                    normal: p.normal,
-                };
+            .filter(|_| by_previous == Some(pick))
+            .map(|p| CirclePose {
+                center: p.circle.center + (chosen.center - p.closed_form_centre),
+                normal: p.circle.normal,
+            })
+            .filter(|start| start.normal.dot(&start.center) < 0.0)
+            .and_then(|start| {
                 pose::refit_circle_pose(camera, &start, &points)
             });
         let circle = refit
@@ -557,7 +560,10 @@ impl Detector {
         Some(Posed {
             pose: pose::full_pose_from_ring(camera, &circle, yaw, axis_point),
             settled: settled.is_some(),
-            fitted: circle,
+            fitted: Fitted {
+                circle,
+                closed_form_centre: chosen.center,
+            },
         })
     }
 }

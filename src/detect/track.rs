@@ -44,7 +44,16 @@ pub struct Track {
     pub normal: Option<nalgebra::Vector3<f64>>,
     /// The circle pose fitted to the marker's edges last frame: this
     /// frame's fit starts from it.
-    pub fitted: Option<CirclePose>,
+    pub fitted: Option<Fitted>,
+}
+
+/// A circle pose fitted to a marker's edges, and the closed-form
+/// candidate's centre it was fitted from: the next frame's fit starts from
+/// it moved by as much as that candidate's centre moved.
+#[derive(Debug, Clone, Copy)]
+pub struct Fitted {
+    pub circle: CirclePose,
+    pub closed_form_centre: nalgebra::Vector3<f64>,
 }
 
 /// What the pose stage learnt about a marker in this frame, for the next.
@@ -54,7 +63,7 @@ pub struct PoseMemory {
     /// confidence.
     pub settled_normal: Option<nalgebra::Vector3<f64>>,
     /// The circle pose fitted to this frame's edges.
-    pub fitted: Option<CirclePose>,
+    pub fitted: Option<Fitted>,
 }
 
 impl Track {
