@@ -12,7 +12,7 @@ use super::track::{Fitted, PoseMemory};
 use super::{ellipse, legacy, rectify, ring_model, Candidate, Detection, Detector};
 use crate::camera::Camera;
 use crate::family::{Family, MatchStatus};
-use crate::geometry::Design;
+use crate::geometry::{sector_is_black, sector_width, Design, WHYCODE_WHITE_RATIO};
 use crate::math::Ellipse;
 use crate::pose::{self, CirclePose, Pose};
 
@@ -27,6 +27,9 @@ struct PoseHints {
     previous: Option<Fitted>,
     /// Bit count of the code ring, whose sector sides break its circles.
     bits: Option<u32>,
+    /// The ring's code, whose sectors' colours say on which of the ring's
+    /// circles each shows an edge.
+    code: Option<u32>,
 }
 
 /// What the pose stage found for a candidate.
@@ -267,6 +270,7 @@ impl Detector {
                 settled_normal: c.track.and_then(|i| self.tracks[i].normal),
                 previous: c.track.and_then(|i| self.tracks[i].fitted),
                 bits: d.bits.or(self.config.target.family().map(Family::bits)),
+                code: d.code,
             };
             let posed = match followed_pose {
                 Some(followed) => Some(followed.posed),
@@ -335,6 +339,7 @@ impl Detector {
             settled_normal: track.normal,
             previous: track.fitted,
             bits: Some(bits),
+            code: Some(code),
         };
         let mut posed = self.pose(&camera, radius_m, gray, c, &c.outer, hints)?;
         posed.pose = rectify::refine_rotation(gray, &camera, &posed.pose, radius_m, bits, code)?;
@@ -461,6 +466,7 @@ impl Detector {
             settled_normal,
             previous,
             bits,
+            code,
         } = hints;
         let candidates = pose::circle_poses_from_points(camera, &c.edge, radius_m)
             .or_else(|| pose::try_circle_poses(camera, outer, radius_m))?;
@@ -500,10 +506,13 @@ impl Detector {
         let rough = pose::full_pose_from_ring(camera, &chosen, yaw, axis_point);
         // The concentric edges sharpen the normal (see
         // `pose::refine_circle_pose`). A WhyCode ring's circles break
-        // where its sectors meet; the ring's rotation says where.
+        // where its sectors meet; the ring's rotation says where, and
+        // its code which circle each sector borders.
         let sector_sides = match design {
             Design::WhyCon => Some(None),
-            Design::WhyCode => bits.filter(|_| yaw.is_some()).map(Some),
+            Design::WhyCode => bits
+                .filter(|_| yaw.is_some())
+                .map(|bits| Some(RingSides::new(camera, &rough, bits, code))),
         };
         let mut points = std::mem::take(&mut self.pose_points);
         points.clear();
@@ -522,10 +531,13 @@ impl Detector {
         if let Some(sides) = sector_sides {
             for &ratio in design.inner_edge_ratios() {
                 let radius = ratio * radius_m;
+                // The white centre meets the black sectors, the black
+                // annulus the white ones.
+                let edge_on_black = ratio < WHYCODE_WHITE_RATIO;
                 let wanted = |p: (f64, f64)| {
-                    sides.map_or(true, |bits| {
-                        clear_of_sector_sides(camera, &rough, bits, radius, p)
-                    })
+                    sides
+                        .as_ref()
+                        .map_or(true, |s| s.shows_edge(p, radius, edge_on_black))
                 };
                 ellipse::concentric_edge_points(
                     gray,
@@ -568,27 +580,63 @@ impl Detector {
     }
 }
 
-/// Whether an edge point of a ring circle (radius `radius_m`) lies far
-/// enough from the sides of the ring's sectors that its sample did not
-/// see them: two pixels of arc.
-fn clear_of_sector_sides(
-    camera: &Camera,
-    pose: &Pose,
+/// Where a WhyCode ring's circles show edges, for a rough pose: away from
+/// the sectors' sides, and (with the code known) only where a sector of the
+/// colour that borders the circle lies.
+struct RingSides {
+    camera: Camera,
+    /// Maps a pixel's viewing ray to the direction, in the marker plane's
+    /// x-y axes, of the point where it meets the plane (first two rows).
+    to_plane: [Vector3<f64>; 2],
     bits: u32,
-    radius_m: f64,
-    point: (f64, f64),
-) -> bool {
-    let Some(hit) = pose::intersect_marker_plane(camera, pose, point) else {
-        return false;
-    };
-    let width = crate::geometry::sector_width(bits);
-    // A whole turn is a whole number of sectors: no need to bring the
-    // angle into [0, 2π) first.
-    let angle = hit.y.atan2(hit.x);
-    let into = angle - width * (angle / width).floor();
-    let arc_m = radius_m * into.min(width - into);
-    let pixel_m = pose.position.z / camera.fx;
-    arc_m > 2.0 * pixel_m
+    code: Option<u32>,
+    /// Metres of marker plane per pixel near the marker.
+    pixel_m: f64,
+}
+
+impl RingSides {
+    fn new(camera: &Camera, pose: &Pose, bits: u32, code: Option<u32>) -> RingSides {
+        // A ray r meets the plane at t·r, t = n·c / n·r > 0, which is
+        // Rᵀ(t·r - c) in marker axes; times -n·r (positive for a plane
+        // facing the camera) that is ((Rᵀc) nᵀ - (n·c) Rᵀ) r: the same
+        // direction, without a division.
+        let (rotation, centre) = (pose.rotation, pose.position);
+        let normal = rotation.column(2).into_owned();
+        let local_centre = rotation.transpose() * centre;
+        let along = normal.dot(&centre);
+        let map = local_centre * normal.transpose() - along * rotation.transpose();
+        RingSides {
+            camera: *camera,
+            to_plane: [0, 1].map(|i| map.row(i).transpose()),
+            bits,
+            code,
+            pixel_m: centre.z / camera.fx,
+        }
+    }
+
+    /// Whether a ring circle of radius `radius_m` shows an edge at pixel
+    /// `point` whose sample did not see a sector's side (two pixels of
+    /// arc clear of it), and, with a code, where its sector is black
+    /// (`on_black`) or white.
+    fn shows_edge(&self, point: (f64, f64), radius_m: f64, on_black: bool) -> bool {
+        let ray = self.camera.ray(point.0, point.1);
+        let (x, y) = (self.to_plane[0].dot(&ray), self.to_plane[1].dot(&ray));
+        let width = sector_width(self.bits);
+        // A whole turn is a whole number of sectors: no need to bring the
+        // angle into [0, 2π) first.
+        let turns = y.atan2(x) / width;
+        let sector = turns.floor();
+        let into = width * (turns - sector);
+        let arc_m = radius_m * into.min(width - into);
+        if !(arc_m > 2.0 * self.pixel_m) {
+            return false;
+        }
+        self.code.map_or(true, |code| {
+            let sectors = 2 * self.bits as i64;
+            let k = (sector as i64).rem_euclid(sectors) as u32;
+            sector_is_black(self.bits, code, k) == on_black
+        })
+    }
 }
 
 /// Least sector width (pixels, see [`manchester::sector_pixels`]) at which
