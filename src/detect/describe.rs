@@ -562,9 +562,7 @@ impl Detector {
                 normal: p.circle.normal,
             })
             .filter(|start| start.normal.dot(&start.center) < 0.0)
-            .and_then(|start| {
-                pose::refit_circle_pose(camera, &start, &points)
-            });
+            .and_then(|start| pose::refit_circle_pose(camera, &start, &points));
         let circle = refit
             .or_else(|| pose::refine_circle_pose(camera, &chosen, &points))
             .unwrap_or(chosen);
@@ -628,14 +626,13 @@ impl RingSides {
         let sector = turns.floor();
         let into = width * (turns - sector);
         let arc_m = radius_m * into.min(width - into);
-        if !(arc_m > 2.0 * self.pixel_m) {
-            return false;
-        }
-        self.code.map_or(true, |code| {
-            let sectors = 2 * self.bits as i64;
-            let k = (sector as i64).rem_euclid(sectors) as u32;
-            sector_is_black(self.bits, code, k) == on_black
-        })
+        let clear = arc_m > 2.0 * self.pixel_m;
+        clear
+            && self.code.map_or(true, |code| {
+                let sectors = 2 * self.bits as i64;
+                let k = (sector as i64).rem_euclid(sectors) as u32;
+                sector_is_black(self.bits, code, k) == on_black
+            })
     }
 }
 
@@ -650,7 +647,8 @@ fn rough_atan2(y: f64, x: f64) -> f64 {
     }
     let a = low / high;
     let s = a * a;
-    let mut r = a * (0.999_866 + s * (-0.330_299_5 + s * (0.180_141 + s * (-0.085_133 + s * 0.020_835_1))));
+    let mut r =
+        a * (0.999_866 + s * (-0.330_299_5 + s * (0.180_141 + s * (-0.085_133 + s * 0.020_835_1))));
     if ay > ax {
         r = std::f64::consts::FRAC_PI_2 - r;
     }

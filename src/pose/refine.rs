@@ -91,7 +91,11 @@ impl Observations {
             )
         };
         let columns = [0, 1, 2].map(|k| g.column(k).into_owned());
-        for ((slot, row), &(x, y, r)) in residual.iter_mut().zip(jacobian.iter_mut()).zip(&self.points) {
+        for ((slot, row), &(x, y, r)) in residual
+            .iter_mut()
+            .zip(jacobian.iter_mut())
+            .zip(&self.points)
+        {
             let r2 = r * r;
             let plane = g * Vector3::new(x, y, 1.0);
             let weighted = Vector3::new(plane.x, plane.y, -r2 * plane.z);
@@ -192,7 +196,13 @@ pub fn refine_circle_pose(
 ) -> Option<CirclePose> {
     // Outlier limits of the two rounds, pixels: loose around the
     // closed-form start, tight around the first fit.
-    fit(camera, initial, points_px, &[(0.6, 3), (0.3, 1)], f64::INFINITY)
+    fit(
+        camera,
+        initial,
+        points_px,
+        &[(0.6, 3), (0.3, 1)],
+        f64::INFINITY,
+    )
 }
 
 /// Median misfit (pixels) of this frame's edge points to a start taken from
@@ -281,7 +291,10 @@ mod tests {
                 (0.13 + 0.06 * t.cos(), -0.05 + 0.05 * t.sin(), r)
             })
             .collect();
-        let observations = Observations { points, focal: 1000.0 };
+        let observations = Observations {
+            points,
+            focal: 1000.0,
+        };
         let n = observations.points.len();
         let basis = plane_basis(&circle.normal);
         let (mut residual, mut jacobian) = (vec![0.0; n], vec![[0.0; 5]; n]);
