@@ -10,7 +10,7 @@ use std::f64::consts::PI;
 use image::GrayImage;
 use nalgebra::Vector3;
 use whycode::camera::Camera;
-use whycode::detect::{Detection, Detector, DetectorConfig, Target};
+use whycode::detect::{legacy, Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::math::Pcg32;
@@ -78,6 +78,19 @@ fn main() {
         );
     }
 
+    println!(
+        "   legacy WhyCon by size (same scenes; the original's floor: a 100 px black ring, 12.4 px face-on)"
+    );
+    for size in [8.0, 10.0, 12.0, 13.0, 14.0, 16.0, 20.0, 30.0] {
+        let counts = sized_legacy_markers(size, 8, 24, legacy::MIN_INK_PX);
+        let unfloored = sized_legacy_markers(size, 8, 24, 0.0);
+        println!(
+            "   {size:>4} px: detected {:5.1} % ({:5.1} % without the floor)",
+            counts.percent(counts.detected),
+            unfloored.percent(unfloored.detected)
+        );
+    }
+
     println!("3. wrong family: rings of one bit count read with another");
     for (printed_bits, printed_distance, read_bits, read_distance) in
         [(12, 2, 8, 2), (12, 2, 12, 3), (8, 2, 12, 2), (16, 2, 8, 2)]
@@ -136,7 +149,19 @@ fn placement_at(camera: &Camera, (u, v): (f64, f64), diameter_px: f64, tilt: f64
     Placement::viewed(Vector3::new(x * z, y * z, z), tilt, 0.0, 0.0)
 }
 
+/// The scene of [`marker_scene`] with `family`'s markers, or legacy ones
+/// (None) in their places.
 fn marker_scene(family: &Family, size: f64, count: usize, rng: &mut Pcg32, seed: u64) -> Scene {
+    marker_scene_of(Some(family), size, count, rng, seed)
+}
+
+fn marker_scene_of(
+    family: Option<&Family>,
+    size: f64,
+    count: usize,
+    rng: &mut Pcg32,
+    seed: u64,
+) -> Scene {
     let cam = camera();
     let mut scene = Scene::new(cam);
     let cols = 6;
@@ -145,14 +170,23 @@ fn marker_scene(family: &Family, size: f64, count: usize, rng: &mut Pcg32, seed:
         let (col, row) = (k % cols, k / cols);
         let u = (col as f64 + 0.5) * 1280.0 / cols as f64 + rng.range(-20.0, 20.0);
         let v = (row as f64 + 0.5) * 720.0 / rows as f64 + rng.range(-20.0, 20.0);
-        let id = 1 + rng.next_u32() % family.len() as u32;
-        let code = family.code(id).expect("member");
+        let draw = rng.next_u32();
         let tilt = rng.range(0.0, 45.0) * DEG;
         let roll = rng.range(0.0, 2.0 * PI);
         let mut placement = placement_at(&cam, (u, v), size, tilt);
         placement.rotation *=
             *nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), roll).matrix();
-        let marker = Marker::whycode(family.bits(), code, DIAMETER_M * 1000.0);
+        let (marker, id) = match family {
+            Some(family) => {
+                let id = 1 + draw % family.len() as u32;
+                let code = family.code(id).expect("member");
+                (
+                    Marker::whycode(family.bits(), code, DIAMETER_M * 1000.0),
+                    id,
+                )
+            }
+            None => (Marker::whycon(DIAMETER_M * 1000.0), 0),
+        };
         scene
             .objects
             .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
@@ -182,6 +216,28 @@ fn sized_markers(family: &Family, size: f64, frames: usize, per_frame: usize) ->
                     counts.wrong += 1;
                 }
             }
+        }
+    }
+    counts
+}
+
+/// Legacy markers found among those of [`sized_markers`]'s scenes, with
+/// a black ring of at least `min_ink_px` pixels.
+fn sized_legacy_markers(size: f64, frames: usize, per_frame: usize, min_ink_px: f64) -> Counts {
+    let mut counts = Counts::default();
+    let mut detector = Detector::new(DetectorConfig {
+        legacy_min_ink_px: min_ink_px,
+        ..Default::default()
+    });
+    for f in 0..frames {
+        let mut rng = Pcg32::new(1000 + f as u64, 3);
+        let scene = marker_scene_of(None, size, per_frame, &mut rng, 1000 + f as u64);
+        let (image, truth) = simulate::render(&scene);
+        let found = detector.detect(&image);
+        for m in truth.markers.iter().filter(|m| m.visible) {
+            counts.total += 1;
+            counts.detected +=
+                usize::from(nearest(&found, m.u, m.v, 0.3 * m.diameter_px + 1.0).is_some());
         }
     }
     counts

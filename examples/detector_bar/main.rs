@@ -473,6 +473,7 @@ fn blur_and_tilt_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &R
 /// little focus blur and noise.
 fn smallest_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals) {
     let mut smallest_detect = None;
+    let mut smallest_legacy = None;
     let mut smallest_id = None;
     let mut smallest_rival: [Option<f64>; 2] = [None; 2];
     let mut by_size = Vec::new();
@@ -503,8 +504,11 @@ fn smallest_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals
             shown[0],
             shown[1]
         ));
-        if legacy.detection_rate() >= 0.9 && smallest_detect.is_none() {
+        if coded.detection_rate() >= 0.9 && smallest_detect.is_none() {
             smallest_detect = Some(d);
+        }
+        if legacy.detection_rate() >= 0.9 && smallest_legacy.is_none() {
+            smallest_legacy = Some(d);
         }
         if coded.id_rate() >= 0.9 && coded.wrong_id == 0 && smallest_id.is_none() {
             smallest_id = Some(d);
@@ -524,13 +528,15 @@ fn smallest_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals
     table.row(
         "7 smallest diameter (≥90% of markers)",
         format!(
-            "detected from {}, 8-bit ID read from {}",
+            "8-bit detected from {}, ID read from {}; legacy detected from {} (the original's size floor)",
             px(smallest_detect),
-            px(smallest_id)
+            px(smallest_id),
+            px(smallest_legacy)
         ),
         [0, 1].map(|k| rivals[k].map(|_| format!("ID read from {}", px(smallest_rival[k])))),
         "stops at 16 px",
         smallest_detect.is_some_and(|d| d < 16.0)
+            && smallest_legacy.is_some_and(|d| d < 16.0)
             && smallest_id
                 .is_some_and(|d| d <= 12.0 && smallest_rival.iter().flatten().all(|&t| d <= t)),
     );

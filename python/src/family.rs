@@ -3,7 +3,7 @@
 use crate::{guard, Error};
 use pyo3::prelude::*;
 use std::path::PathBuf;
-use whycode::family::{Decoder, Family, MatchStatus, MAX_BITS, MIN_BITS};
+use whycode::family::{CountTable, Decoder, Family, MatchStatus};
 
 /// A family of WhyCode IDs: rotation-free necklace codes with a least
 /// cyclic Hamming distance.
@@ -239,32 +239,9 @@ fn family_counts(
     bits: Vec<u32>,
     distances: Vec<u32>,
 ) -> PyResult<Py<pyo3::types::PyDict>> {
-    let counts = guard(|| {
-        for &n in &bits {
-            if !(MIN_BITS..=MAX_BITS).contains(&n) {
-                return Err(Error::value(format!(
-                    "bits: {n} is outside {MIN_BITS}..{MAX_BITS}"
-                )));
-            }
-        }
-        let max_bits = bits.iter().max().copied().unwrap_or(0);
-        for &d in &distances {
-            if d == 0 || d > max_bits {
-                return Err(Error::value(format!(
-                    "distance: {d} is outside 1..{max_bits} (1 to the largest bit count)"
-                )));
-            }
-        }
-        let mut counts = Vec::new();
-        for &n in &bits {
-            for &d in distances.iter().filter(|&&d| d <= n) {
-                counts.push(((n, d), Family::generate(n, d)?.len()));
-            }
-        }
-        Ok(counts)
-    })?;
+    let table = guard(|| Ok(CountTable::new(&bits, &distances, "")?))?;
     let dict = pyo3::types::PyDict::new(py);
-    for (key, count) in counts {
+    for (key, count) in table.entries() {
         dict.set_item(key, count)?;
     }
     Ok(dict.unbind())

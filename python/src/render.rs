@@ -5,13 +5,11 @@ use crate::{guard, Error};
 use pyo3::prelude::*;
 use pyo3::types::PyBytes;
 use std::path::{Path, PathBuf};
-use whycode::detect::Target;
 use whycode::family::Family;
 use whycode::geometry::Marker;
-use whycode::render::check::{check_marker_page, check_sheet, check_sheet_png};
-use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
-use whycode::render::sheet::{chosen_markers, id_range_error, layout, SheetSpec};
-use whycode::render::{encode_pages, write_all, Format, Template};
+use whycode::render::job::{MarkerJob, SheetJob};
+use whycode::render::sheet::id_range_error;
+use whycode::render::{write_all, Format, Template};
 
 /// The output format: from `output`'s extension, else from `format`.
 fn output_format(format: Option<&str>, output: Option<&Path>) -> crate::Result<Format> {
@@ -40,13 +38,6 @@ fn output_format(format: Option<&str>, output: Option<&Path>) -> crate::Result<F
             }
             Ok(by_path)
         }
-    }
-}
-
-fn target_of(family: &Option<Family>) -> Target {
-    match family {
-        Some(f) => Target::WhyCode(f.clone()),
-        None => Target::WhyCon,
     }
 }
 
@@ -135,49 +126,24 @@ fn render_marker<'py>(
             if let Some(path) = &output {
                 whycode::render::check_output_dir(path).map_err(crate::Error::os)?;
             }
-            let (marker, title) = match (&family, id) {
-                (Some(family), Some(id)) => {
-                    check_generated(family)?;
-                    let Some(code) = family.code(id) else {
-                        return Err(Error::value(id_range_error(family, id)));
-                    };
-                    (
-                        Marker::whycode(family.bits(), code, diameter),
-                        format!(
-                            "WhyCode {}-bit d{} ID {id}",
-                            family.bits(),
-                            family.distance()
-                        ),
-                    )
-                }
-                _ => (Marker::whycon(diameter), "WhyCon marker".to_string()),
-            };
-            let label = label.then(|| match &family {
-                Some(f) => marker_label(&marker, id, Some(f.distance())),
-                None => marker_label(&marker, None, None),
-            });
-            let options = MarkerOptions {
+            if let Some(family) = &family {
+                check_generated(family)?;
+            }
+            let job = MarkerJob {
+                family: family.as_ref(),
+                id,
+                diameter_mm: diameter,
                 margin_mm,
                 cross,
                 cut_guide,
                 label,
-                label_size_pt: (diameter / 8.0).clamp(DEFAULT_LABEL_PT, 14.0),
+                dpi,
+                self_check: check,
             };
-            let page = marker_page(&marker, &options)?;
-            if check {
-                let png_dpi = (format == Format::Png).then_some(dpi);
-                check_marker_page(
-                    &page,
-                    &marker,
-                    id.unwrap_or(0),
-                    &target_of(&family),
-                    png_dpi,
-                )?;
-            }
             let path = output
                 .clone()
                 .unwrap_or_else(|| PathBuf::from(format!("marker.{}", extension(format))));
-            let mut files = encode_pages(std::slice::from_ref(&page), &path, &title, dpi)?;
+            let (mut files, _) = job.print(&path)?;
             if output.is_some() {
                 write_all(&files)?;
             }
@@ -242,37 +208,29 @@ fn render_sheet<'py>(
             let template = Template::resolve(&template)?;
             if let Some(family) = &family {
                 check_generated(family)?;
-                if let Some(ids) = &ids {
-                    check_ids(ids)?;
-                }
             }
-            let (markers, family_ref) =
-                chosen_markers(family.as_ref(), ids.clone(), count, diameter, "")?;
-            let spec = SheetSpec {
-                markers,
+            let job = SheetJob {
+                family: family.as_ref(),
+                ids: ids.clone(),
+                count,
+                diameter_mm: diameter,
                 template,
                 name: name.clone(),
-                family: family_ref,
-                legacy,
+                dpi,
+                self_check: check,
+                option_prefix: "",
             };
-            let sheet = layout(&spec)?;
-            if check {
-                if format == Format::Png {
-                    check_sheet_png(&sheet, &target_of(&family), dpi)?;
-                } else {
-                    check_sheet(&sheet, &target_of(&family))?;
-                }
-            }
             let path = output
                 .clone()
                 .unwrap_or_else(|| PathBuf::from(format!("{name}.{}", extension(format))));
-            let mut files = encode_pages(&sheet.pages, &path, &name, dpi)?;
-            let manifest = sheet.manifest.to_json();
+            let printed = job.print(&path)?;
+            let manifest = printed.manifest.1.clone();
+            let pages = printed.pages.len();
+            let mut files = printed.into_files();
             if output.is_some() {
-                files.push((path.with_extension("json"), manifest.clone().into_bytes()));
                 write_all(&files)?;
-                files.pop();
             }
+            files.truncate(pages);
             Ok((files, manifest))
         })
     })?;
@@ -281,27 +239,6 @@ fn render_sheet<'py>(
         .map(|(_, bytes)| PyBytes::new(py, bytes))
         .collect();
     Ok((pages, crate::json_to_py(py, &manifest)?))
-}
-
-fn check_ids(ids: &[u32]) -> crate::Result<()> {
-    if ids.is_empty() {
-        return Err(Error::value("ids: no IDs given"));
-    }
-    if ids.contains(&0) {
-        return Err(Error::value("ids: ID 0 means \"unknown\"; IDs start at 1"));
-    }
-    if ids.len() > 100_000 {
-        return Err(Error::value("ids: the list names more than 100000 IDs"));
-    }
-    let mut sorted = ids.to_vec();
-    sorted.sort_unstable();
-    if let Some(pair) = sorted.windows(2).find(|w| w[0] == w[1]) {
-        return Err(Error::value(format!(
-            "ids: ID {} is listed more than once",
-            pair[0]
-        )));
-    }
-    Ok(())
 }
 
 /// One marker rendered into an HxW uint8 array (white margin around the

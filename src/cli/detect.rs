@@ -84,6 +84,18 @@ pub struct DetectArgs {
     /// (marked "unreadable"); by default they are not taken for markers
     #[arg(long, conflicts_with = "legacy")]
     unreadable: bool,
+
+    /// Smallest black ring of a legacy marker worth reporting, in pixels:
+    /// by default the original WhyCon's (100, a marker 12.4 px across
+    /// face-on); lower it for smaller markers, and bold letters 'o' may
+    /// pass for markers
+    #[arg(
+        long,
+        value_name = "PIXELS",
+        requires = "legacy",
+        allow_hyphen_values = true
+    )]
+    min_ink: Option<f64>,
 }
 
 fn parse_diameter(text: &str) -> Result<Length, String> {
@@ -106,6 +118,13 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         report_unreadable: args.unreadable,
         ..DetectorConfig::default()
     };
+    if let Some(pixels) = args.min_ink {
+        anyhow::ensure!(
+            pixels.is_finite() && pixels >= 0.0,
+            "--min-ink: {pixels} is not a pixel count (give 0 or more)"
+        );
+        config.legacy_min_ink_px = pixels;
+    }
     let family_bits = config.target.family().map(|f| f.bits());
     // In auto mode with a distance the IDs are there already; legacy
     // circles carry no ring.

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use whycode::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MIN_BITS};
+use whycode::family::{CountTable, Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS};
 
 const EXAMPLES: &str = "\
 Examples:
@@ -203,31 +203,7 @@ fn family_text(family: &Family, format: Format) -> String {
 }
 
 fn counts_text(bits: &[u32], distances: &[u32], format: Format) -> Result<String> {
-    for &n in bits {
-        if !(MIN_BITS..=MAX_BITS).contains(&n) {
-            bail!("--bits: {n} is outside {MIN_BITS}..{MAX_BITS}");
-        }
-    }
-    let max_bits = bits.iter().max().copied().unwrap_or(0);
-    for &d in distances {
-        if d == 0 || d > max_bits {
-            bail!("--distance: {d} is outside 1..{max_bits} (1 to the largest bit count)");
-        }
-    }
-    // counts[row = distance][column = bits]; None where the distance exceeds
-    // the bit count.
-    let mut counts = Vec::with_capacity(distances.len());
-    for &d in distances {
-        let mut row = Vec::with_capacity(bits.len());
-        for &n in bits {
-            row.push(if d <= n {
-                Some(Family::generate(n, d)?.len())
-            } else {
-                None
-            });
-        }
-        counts.push(row);
-    }
+    let counts = CountTable::new(bits, distances, "--")?.counts;
     let cell = |c: Option<usize>| c.map_or("-".to_string(), |c| c.to_string());
     let mut out = String::new();
     match format {

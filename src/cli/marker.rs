@@ -1,12 +1,9 @@
 use super::args::{whole_number, DpiArg, MarkerKindArgs};
-use anyhow::{bail, Result};
+use anyhow::Result;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use whycode::geometry::Marker;
-use whycode::render::check::check_marker_page;
-use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
-use whycode::render::sheet::id_range_error;
-use whycode::render::{encode_pages, write_all, Format};
+use whycode::render::job::MarkerJob;
+use whycode::render::write_all;
 use whycode::units::Length;
 
 /// Render one marker; the format follows the output's extension (.svg, .pdf, .png).
@@ -56,51 +53,23 @@ pub struct MarkerArgs {
 }
 
 pub fn run(args: MarkerArgs) -> Result<ExitCode> {
-    let format = Format::from_path(&args.output)?;
-    let dpi = args.dpi.dpi;
     whycode::render::check_output_dir(&args.output)?;
-    let diameter = args.diameter.mm();
     let target = args.kind.resolve()?;
-    let family = target.family();
-    let marker = match &family {
-        None => Marker::whycon(diameter),
-        Some(family) => {
-            let id = args.id.expect("clap requires --id without --legacy");
-            let Some(code) = family.code(id) else {
-                bail!("{}", id_range_error(family, id));
-            };
-            Marker::whycode(family.bits(), code, diameter)
-        }
-    };
-    let title = match &family {
-        None => "WhyCon marker".to_string(),
-        Some(family) => format!(
-            "WhyCode {}-bit d{} ID {}",
-            family.bits(),
-            family.distance(),
-            args.id.unwrap_or(0)
-        ),
-    };
-    let label = args.label.then(|| match &family {
-        None => marker_label(&marker, None, None),
-        Some(family) => marker_label(&marker, args.id, Some(family.distance())),
-    });
-    let options = MarkerOptions {
+    let job = MarkerJob {
+        family: target.family(),
+        id: args.id,
+        diameter_mm: args.diameter.mm(),
         margin_mm: args.margin.map(Length::mm),
         cross: args.cross,
         cut_guide: args.cut_guide,
-        label,
-        // Larger markers are looked at from further away: grow the label with them.
-        label_size_pt: (diameter / 8.0).clamp(DEFAULT_LABEL_PT, 14.0),
+        label: args.label,
+        dpi: args.dpi.dpi,
+        self_check: !args.no_check,
     };
-    let page = marker_page(&marker, &options)?;
-    if args.no_check {
+    let (files, check) = job.print(&args.output)?;
+    if check.is_none() {
         eprintln!("whycode: note: self-check skipped (--no-check): the marker was not read back before writing");
-    } else {
-        let png_dpi = (format == Format::Png).then_some(dpi);
-        check_marker_page(&page, &marker, args.id.unwrap_or(0), &target, png_dpi)?;
     }
-    let files = encode_pages(std::slice::from_ref(&page), &args.output, &title, dpi)?;
     write_all(&files)?;
     Ok(ExitCode::SUCCESS)
 }

@@ -3,10 +3,9 @@ use anyhow::{Context, Result};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use whycode::family::parse_id_list;
-use whycode::render::check::{check_sheet, check_sheet_png};
-use whycode::render::sheet::{chosen_markers, layout, SheetSpec};
+use whycode::render::job::SheetJob;
 use whycode::render::template::Template;
-use whycode::render::{encode_pages, write_all, Format};
+use whycode::render::write_all;
 use whycode::units::Length;
 
 /// Lay out markers on print pages; PDF gives one file, SVG and PNG one file
@@ -75,13 +74,7 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         }
         return Ok(ExitCode::SUCCESS);
     }
-    let output = args.output;
-    let diameter = args.diameter.mm();
-    let format = Format::from_path(&output)?;
-    let dpi = args.dpi.dpi;
-    let legacy = args.kind.legacy;
-    whycode::render::check_output_dir(&output)?;
-    let template = Template::resolve(&args.template)?;
+    whycode::render::check_output_dir(&args.output)?;
     let target = args.kind.resolve()?;
     let ids = args
         .ids
@@ -89,55 +82,30 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         .map(parse_id_list)
         .transpose()
         .context("--ids")?;
-    let count = args.count.map(|c| c as usize);
-    let (markers, family) = chosen_markers(target.family(), ids, count, diameter, "--")?;
-    let name = output
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let spec = SheetSpec {
-        markers,
-        template,
-        name: name.clone(),
-        family,
-        legacy,
+    let job = SheetJob {
+        family: target.family(),
+        ids,
+        count: args.count.map(|c| c as usize),
+        diameter_mm: args.diameter.mm(),
+        template: Template::resolve(&args.template)?,
+        name: args
+            .output
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        dpi: args.dpi.dpi,
+        self_check: !args.no_check,
+        option_prefix: "--",
     };
-    let sheet = layout(&spec)?;
-    if args.no_check {
-        eprintln!("whycode: note: self-check skipped (--no-check): the markers were not read back before writing");
-    } else {
-        let report = if format == Format::Png {
-            check_sheet_png(&sheet, &target, dpi)?
-        } else {
-            check_sheet(&sheet, &target)?
-        };
-        let dpis: Vec<String> = report.resolutions.iter().map(|d| format!("{d}")).collect();
-        let what = if legacy {
-            "found in place"
-        } else {
-            "read back as its own ID, upright,"
-        };
-        eprintln!(
-            "whycode: self-check passed: every marker {what} at {} dpi",
-            match dpis.split_last() {
-                Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
-                _ => dpis.join(""),
-            }
-        );
+    let printed = job.print(&args.output)?;
+    match &printed.check {
+        Some(report) => eprintln!("whycode: self-check passed: {}", report.summary()),
+        None => eprintln!("whycode: note: self-check skipped (--no-check): the markers were not read back before writing"),
     }
-    let mut files = encode_pages(&sheet.pages, &output, &name, dpi)?;
-    files.push((
-        output.with_extension("json"),
-        sheet.manifest.to_json().into_bytes(),
-    ));
+    let summary = printed.summary();
+    let files = printed.into_files();
     write_all(&files)?;
     let written: Vec<String> = files.iter().map(|(p, _)| p.display().to_string()).collect();
-    eprintln!(
-        "whycode: {} markers on {} page{}: {}",
-        sheet.manifest.markers.len(),
-        sheet.pages.len(),
-        if sheet.pages.len() == 1 { "" } else { "s" },
-        written.join(", ")
-    );
+    eprintln!("whycode: {summary}: {}", written.join(", "));
     Ok(ExitCode::SUCCESS)
 }

@@ -243,6 +243,9 @@ impl Detector {
             // than following it).
             let followed = c.track.is_some_and(|i| self.tracks[i].hits >= 3);
             let disc = || {
+                if !legacy::enough_ink(&c.outer, self.config.legacy_min_ink_px) {
+                    return false;
+                }
                 let inside = legacy::concentric_white_disc(gray, &c.outer, c.black, c.white);
                 let paper =
                     inside.and_then(|_| legacy::white_margin(gray, &c.outer, c.black, c.white));

@@ -8,11 +8,28 @@
 //! does not change), must then make a disc of a printed marker's area, no
 //! more elongated than the outline: a bold stroke-font 'o' or '0' keeps its
 //! pen's width all round, so its hole is narrower across than its outline.
+//! The disc is the paper the marker is printed on, no lighter than the
+//! margin round it (a hollow circle drawn on a darker ground is). Below the
+//! original's own size floor no test can tell a bold 'o' of WhyCon's
+//! proportions from a marker, and none is reported.
 
 use super::ellipse;
 use super::segment::Gray;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
 use crate::math::Ellipse;
+
+/// The original WhyCon's smallest outer segment (`minSize`, pixels): it
+/// never reports a marker whose black ring covers fewer pixels (its white
+/// segment must exceed as many too, which puts its limit higher still,
+/// about 15 px across at the ROS node's `minSize` of 30). At 100 pixels a
+/// face-on marker is 12.4 px across.
+pub const MIN_INK_PX: f64 = 100.0;
+
+/// True when the black ring inside `outer` (the black disc less WhyCon's
+/// white one) covers at least `min_ink_px` pixels.
+pub fn enough_ink(outer: &Ellipse, min_ink_px: f64) -> bool {
+    outer.area() * (1.0 - WHYCON_WHITE_RATIO * WHYCON_WHITE_RATIO) >= min_ink_px
+}
 
 /// An inner edge found along a ray: its radius relative to the outline,
 /// the outline's distance from the centre in pixels, the ray's parameter.
@@ -255,6 +272,19 @@ const MASS_DECENTRE_PERSPECTIVE: f64 = 0.0025;
 /// and stays clear of the outer edge's.
 const MASS_REACH: f64 = 0.72;
 
+/// Part of the outline's radii that is the white disc's middle, clear of
+/// its edge's blur on discs of some pixels.
+const MIDDLE: f64 = 0.25;
+
+/// Largest excess of the disc's middle over the margin's paper (share of
+/// the paper's contrast to the ink): a margin sampled inside the outer
+/// edge's blur is darker than the paper (blur 2 px, noise 5: up to 0.085);
+/// hollow circles drawn on a darker ground reach 0.28-0.34 on desk frames.
+const MAX_GLOW: f64 = 0.15;
+
+/// Three standard deviations of the median of n samples (1.25 σ / √n).
+const MEDIAN_SIGMAS: f64 = 3.75;
+
 /// Samples across the region weighed (sparser on large discs).
 const MASS_SAMPLES: f64 = 28.0;
 
@@ -307,7 +337,28 @@ pub fn white_disc_mass(gray: Gray<'_>, outer: &Ellipse, paper: f64) -> bool {
     // weighed carries too.
     let mut deviations: Vec<f64> = ink.iter().map(|g| (g - black).abs()).collect();
     let noise_grey = 1.4826 * *deviations.select_nth_unstable_by(middle, f64::total_cmp).1;
-    let contrast = paper - black;
+    // The white disc is the paper the marker is printed on, so its middle
+    // is no lighter than the margin beyond what the margin's blur and the
+    // noise explain: a light middle that outshines its surroundings is a
+    // hole onto something lighter (a washer, a ring drawn on a darker
+    // ground). Its light is then weighed against its own white, not the
+    // margin's, or a darker margin would make the disc look larger.
+    let mut middle: Vec<f64> = samples
+        .clone()
+        .filter(|t| t.2 <= MIDDLE * MIDDLE)
+        .map(|t| t.3)
+        .collect();
+    let mut white = paper;
+    if !middle.is_empty() {
+        let half = middle.len() / 2;
+        let light = *middle.select_nth_unstable_by(half, f64::total_cmp).1;
+        let slack = MEDIAN_SIGMAS * noise_grey / (middle.len() as f64).sqrt();
+        if light - paper > MAX_GLOW * (paper - black) + slack {
+            return false;
+        }
+        white = white.max(light);
+    }
+    let contrast = white - black;
     if contrast <= 0.0 {
         return false;
     }

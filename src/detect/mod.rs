@@ -81,6 +81,12 @@ pub struct DetectorConfig {
     /// Also report round candidates whose ring shows no Manchester code
     /// structure (flagged `unreadable`); by default they are not markers.
     pub report_unreadable: bool,
+    /// Smallest area, pixels, of a legacy WhyCon marker's black ring worth
+    /// reporting: the original's own floor (its `minSize`, 100 pixels of
+    /// the outer segment), below which a bold letter 'o' of WhyCon's
+    /// proportions is a marker to any test (legacy markers carry no ring
+    /// to tell them apart). Smaller ones are `unreadable`.
+    pub legacy_min_ink_px: f64,
 }
 
 impl Default for DetectorConfig {
@@ -96,6 +102,7 @@ impl Default for DetectorConfig {
             area_tolerance: 0.12,
             ratio_tolerance: 0.5,
             report_unreadable: false,
+            legacy_min_ink_px: legacy::MIN_INK_PX,
         }
     }
 }

@@ -58,15 +58,29 @@ pub fn parse_id_list(text: &str) -> Result<Vec<u32>, IdListError> {
             return Err(IdListError::TooMany);
         }
     }
+    check_id_list(&ids)?;
+    Ok(ids)
+}
+
+/// The rules [`parse_id_list`] applies, for lists that arrive already as
+/// numbers (the Python and web front ends): not empty, no ID 0, at most
+/// [`MAX_LISTED_IDS`], none twice.
+pub fn check_id_list(ids: &[u32]) -> Result<(), IdListError> {
     if ids.is_empty() {
         return Err(IdListError::Empty);
     }
-    let mut sorted = ids.clone();
+    if ids.contains(&0) {
+        return Err(IdListError::ZeroId("0".to_string()));
+    }
+    if ids.len() > MAX_LISTED_IDS {
+        return Err(IdListError::TooMany);
+    }
+    let mut sorted = ids.to_vec();
     sorted.sort_unstable();
     if let Some(pair) = sorted.windows(2).find(|w| w[0] == w[1]) {
         return Err(IdListError::Repeated(pair[0]));
     }
-    Ok(ids)
+    Ok(())
 }
 
 #[cfg(test)]

@@ -2,14 +2,16 @@
 //! distance, numbered exactly as the original WhyCode implementation numbers
 //! them (spec section 3), and the lookup that decodes ring readings into IDs.
 
+mod counts;
 mod file;
 mod id_list;
 pub mod lookup;
 pub mod necklace;
 mod stats;
 
+pub use counts::CountTable;
 pub use file::{FamilyFileError, FAMILY_FILE_FORMAT, FAMILY_FILE_VERSION};
-pub use id_list::{parse_id_list, IdListError, MAX_LISTED_IDS};
+pub use id_list::{check_id_list, parse_id_list, IdListError, MAX_LISTED_IDS};
 pub use lookup::{Decoded, Decoder, MatchStatus};
 pub use stats::FamilyStats;
 

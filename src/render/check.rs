@@ -62,6 +62,25 @@ pub struct CheckReport {
     pub resolutions: Vec<f64>,
     /// Marker readings checked (markers x resolutions).
     pub readings: usize,
+    /// What was checked: WhyCon circles only for their place, WhyCode
+    /// markers also for their ID and an upright yaw.
+    pub design: Design,
+}
+
+impl CheckReport {
+    /// "every marker read back as its own ID, upright, at 300 and 75 dpi".
+    pub fn summary(&self) -> String {
+        let what = match self.design {
+            Design::WhyCon => "found in place",
+            Design::WhyCode => "read back as its own ID, upright,",
+        };
+        let dpis: Vec<String> = self.resolutions.iter().map(|d| format!("{d}")).collect();
+        let dpis = match dpis.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
+            _ => dpis.join(""),
+        };
+        format!("every marker {what} at {dpis} dpi")
+    }
 }
 
 fn describe(m: &PrintedMarker) -> String {
@@ -228,5 +247,6 @@ fn check_pages(
     Ok(CheckReport {
         resolutions,
         readings,
+        design: target.design(),
     })
 }

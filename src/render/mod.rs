@@ -6,6 +6,7 @@
 
 pub mod check;
 pub mod font;
+pub mod job;
 pub mod marker;
 pub mod page;
 #[cfg(feature = "pdf")]

@@ -226,6 +226,33 @@ fn legacy_markers_have_no_id_and_no_yaw() {
 }
 
 #[test]
+fn legacy_markers_below_the_originals_size_floor_need_min_ink() {
+    // 11 px across: a black ring of some 80 pixels, under the original's
+    // 100.
+    let dir = tempfile::tempdir().unwrap();
+    let (image, truth) = marker_photo(Marker::whycon(50.0), 0, 11.0, 0.0);
+    let path = dir.path().join("small.png");
+    image.save(&path).unwrap();
+    let path = path.to_str().unwrap();
+    let markers = |extra: &[&str]| {
+        let mut args = vec!["detect", "--legacy", "--format", "json", path];
+        args.extend_from_slice(extra);
+        let out = whycode(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        json_lines(&out)[0]["markers"].as_array().unwrap().clone()
+    };
+    assert!(markers(&[]).is_empty());
+    let found = markers(&["--min-ink", "50"]);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!((found[0]["u"].as_f64().unwrap() - truth.u).abs() < 0.3);
+    let out = whycode(&["detect", "--legacy", "--min-ink", "-3", path]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("--min-ink"), "{}", stderr(&out));
+    let out = whycode(&["detect", "--min-ink", "50", path]);
+    assert!(!out.status.success(), "--min-ink without --legacy");
+}
+
+#[test]
 fn with_a_camera_and_a_diameter_the_pose_is_reported() {
     use nalgebra::Vector3;
     use whycode::camera::Camera;

@@ -4,7 +4,7 @@
 use crate::support::scenes::{match_detections, render, scatter, Look, Pinhole, Placement};
 use crate::support::Pcg32;
 use crate::support::{angle_diff, axis_angle_diff};
-use whycode::detect::{Detection, Detector, DetectorConfig, Target};
+use whycode::detect::{legacy, Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::{Marker, WHYCON_WHITE_RATIO};
 use whycode::math::Ellipse;
@@ -47,8 +47,18 @@ fn all_found<'a>(
     matched.into_iter().map(Option::unwrap).collect()
 }
 
+/// Legacy settings without the size floor, for markers smaller than the
+/// original reports.
+fn legacy_without_floor() -> Detector {
+    Detector::new(DetectorConfig {
+        legacy_min_ink_px: 0.0,
+        ..DetectorConfig::default()
+    })
+}
+
 #[test]
 fn face_on_legacy_markers_from_10_px_up_are_found_with_sub_pixel_centres() {
+    // Below the size floor (12.4 px face-on) only when asked for.
     let camera = Pinhole {
         f: 3000.0,
         cx: 600.0,
@@ -75,7 +85,7 @@ fn face_on_legacy_markers_from_10_px_up_are_found_with_sub_pixel_centres() {
         x += d * 0.7;
     }
     let image = render(1200, 800, &camera, &placements, Look::default());
-    let found = legacy().detect(&image);
+    let found = legacy_without_floor().detect(&image);
     let matched = all_found(&camera, &placements, &found);
     for (p, d) in placements.iter().zip(matched) {
         let truth = true_outline(&camera, p);
@@ -98,6 +108,80 @@ fn face_on_legacy_markers_from_10_px_up_are_found_with_sub_pixel_centres() {
             "axis error {size_error} at d={}",
             2.0 * truth.semi_major
         );
+    }
+}
+
+#[test]
+fn legacy_markers_from_the_originals_size_floor_up_are_all_found_and_smaller_ones_on_request() {
+    // The floor is the original's: a black ring of 100 pixels (12.4 px
+    // across face-on, more when tilted). Every marker above it is found,
+    // face-on or tilted, sharp or blurred; those below are reported only
+    // flagged unreadable on request, or when the floor is lowered.
+    let camera = Pinhole {
+        f: 2000.0,
+        cx: 600.0,
+        cy: 400.0,
+    };
+    let ink = |p: &Placement| {
+        let outline = true_outline(&camera, p);
+        outline.area() * (1.0 - WHYCON_WHITE_RATIO * WHYCON_WHITE_RATIO)
+    };
+    let mut rng = Pcg32::new(31, 0);
+    for (blur, noise) in [(0, 2.0), (1, 3.0)] {
+        let (mut above, mut below) = (Vec::new(), Vec::new());
+        for k in 0..60 {
+            let (u, v) = (
+                60.0 + (k % 12) as f64 * 95.0,
+                80.0 + (k / 12) as f64 * 150.0,
+            );
+            let diameter = rng.range(10.0, 18.0);
+            let tilt = rng.range(0.0, 35.0) * DEG;
+            let axis = rng.range(0.0, 180.0) * DEG;
+            let p = Placement::at(
+                &camera,
+                Marker::whycon(100.0),
+                (u, v),
+                diameter,
+                0.0,
+                tilt,
+                axis,
+            );
+            // Clear of the floor by the outline's measuring error.
+            match ink(&p) {
+                a if a >= 1.04 * legacy::MIN_INK_PX => above.push(p),
+                a if a <= 0.96 * legacy::MIN_INK_PX => below.push(p),
+                _ => {}
+            }
+        }
+        assert!(above.len() >= 20 && below.len() >= 15);
+        let look = Look {
+            blur,
+            noise,
+            ..Look::default()
+        };
+        let all: Vec<Placement> = above.iter().chain(&below).cloned().collect();
+        let image = render(1200, 800, &camera, &all, look);
+        let found = legacy().detect(&image);
+        all_found(&camera, &above, &found);
+        // What the detector sees below the floor (most of it, sharp; a
+        // few, blurred) it shows when asked, flagged.
+        let unfloored = legacy_without_floor().detect(&image);
+        let seen = match_detections(&camera, &below, &unfloored, 5.0);
+        let mut shown = Detector::new(DetectorConfig {
+            report_unreadable: true,
+            ..DetectorConfig::default()
+        });
+        let shown = shown.detect(&image);
+        let flagged = match_detections(&camera, &below, &shown, 5.0);
+        for (seen, flagged) in seen.iter().zip(&flagged) {
+            if seen.is_some() {
+                assert!(
+                    flagged.is_some_and(|d| d.unreadable),
+                    "blur {blur}: {seen:?} below the floor: {flagged:?}"
+                );
+            }
+        }
+        assert!(blur > 0 || seen.iter().all(Option::is_some));
     }
 }
 

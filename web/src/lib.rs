@@ -11,15 +11,11 @@ use image::GrayImage;
 use serde::Deserialize;
 use wasm_bindgen::prelude::*;
 use whycode::detect::{Detector, DetectorConfig, Target};
-use whycode::family::{parse_id_list, Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS, MIN_BITS};
-use whycode::geometry::Marker;
+use whycode::family::{parse_id_list, CountTable, Family, DEFAULT_BITS, DEFAULT_DISTANCE};
 use whycode::image_io;
 use whycode::manifest::Manifest;
-use whycode::render::check::{check_marker_page, check_sheet, check_sheet_png};
-use whycode::render::marker::{marker_label, marker_page, MarkerOptions, DEFAULT_LABEL_PT};
-use whycode::render::sheet::{chosen_markers, id_range_error, layout, SheetSpec};
+use whycode::render::job::{MarkerJob, SheetJob};
 use whycode::render::template::{builtin_names, Template};
-use whycode::render::{encode_pages, Format};
 use whycode::units::{trim_float, Length};
 use whycode::validate::{self, annotate, PhotoReport};
 
@@ -110,28 +106,11 @@ pub fn family_table(bits: u32, distance: u32, limit: usize) -> Result<String, Js
 #[wasm_bindgen]
 pub fn counts(bits: &[u32], distances: &[u32]) -> Result<String, JsError> {
     let inner = || -> Result<String> {
-        for &n in bits {
-            if !(MIN_BITS..=MAX_BITS).contains(&n) {
-                bail!("--bits: {n} is outside {MIN_BITS}..{MAX_BITS}");
-            }
-        }
-        let max_bits = bits.iter().max().copied().unwrap_or(0);
-        let mut rows = Vec::new();
-        for &d in distances {
-            if d == 0 || d > max_bits {
-                bail!("--distance: {d} is outside 1..{max_bits} (1 to the largest bit count)");
-            }
-            let mut row = Vec::new();
-            for &n in bits {
-                row.push(if d <= n {
-                    Some(Family::generate(n, d)?.len())
-                } else {
-                    None
-                });
-            }
-            rows.push(row);
-        }
-        Ok(serde_json::json!({ "bits": bits, "distances": distances, "counts": rows }).to_string())
+        let table = CountTable::new(bits, distances, "--")?;
+        Ok(
+            serde_json::json!({ "bits": bits, "distances": distances, "counts": table.counts })
+                .to_string(),
+        )
     };
     inner().map_err(js_error)
 }
@@ -237,10 +216,9 @@ pub fn sheet(options: &str) -> Result<Files, JsError> {
 fn sheet_files(options: &str) -> Result<Files> {
     let args: SheetOptions = serde_json::from_str(options).context("sheet options")?;
     let output = Path::new(&args.output);
-    let format = Format::from_path(output)?;
     let dpi = args.dpi.unwrap_or(300.0);
     check_dpi(dpi)?;
-    let diameter = length("--diameter", &args.diameter)?;
+    let diameter_mm = length("--diameter", &args.diameter)?;
     let template = match &args.template_toml {
         Some(text) => Template::parse(&args.template, text)
             .with_context(|| format!("template {}", args.template))?,
@@ -251,56 +229,31 @@ fn sheet_files(options: &str) -> Result<Files> {
         Some(list) if !list.is_empty() => Some(parse_id_list(list).context("--ids")?),
         _ => None,
     };
-    let (markers, family) = chosen_markers(target.family(), ids, args.count, diameter, "--")?;
-    let name = output
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let spec = SheetSpec {
-        markers,
+    let job = SheetJob {
+        family: target.family(),
+        ids,
+        count: args.count,
+        diameter_mm,
         template,
-        name: name.clone(),
-        family,
-        legacy: args.legacy,
+        name: output
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        dpi,
+        self_check: !args.no_check,
+        option_prefix: "--",
     };
-    let sheet = layout(&spec)?;
-    let mut notes = Vec::new();
-    if args.no_check {
-        notes.push("self-check skipped: the markers were not read back".to_string());
-    } else {
-        let report = if format == Format::Png {
-            check_sheet_png(&sheet, &target, dpi)?
-        } else {
-            check_sheet(&sheet, &target)?
-        };
-        let dpis: Vec<String> = report.resolutions.iter().map(|d| format!("{d}")).collect();
-        let what = if args.legacy {
-            "found in place"
-        } else {
-            "read back as its own ID, upright,"
-        };
-        let dpis = match dpis.split_last() {
-            Some((last, rest)) if !rest.is_empty() => format!("{} and {last}", rest.join(", ")),
-            _ => dpis.join(""),
-        };
-        notes.push(format!(
-            "self-check passed: every marker {what} at {dpis} dpi"
-        ));
-    }
-    let mut files: Vec<(String, Vec<u8>)> = encode_pages(&sheet.pages, output, &name, dpi)?
+    let printed = job.print(output)?;
+    let mut notes = vec![match &printed.check {
+        Some(report) => format!("self-check passed: {}", report.summary()),
+        None => "self-check skipped: the markers were not read back".to_string(),
+    }];
+    notes.push(printed.summary());
+    let files = printed
+        .into_files()
         .into_iter()
         .map(|(path, bytes)| (file_name(&path), bytes))
         .collect();
-    files.push((
-        file_name(&output.with_extension("json")),
-        sheet.manifest.to_json().into_bytes(),
-    ));
-    notes.push(format!(
-        "{} markers on {} page{}",
-        sheet.manifest.markers.len(),
-        sheet.pages.len(),
-        if sheet.pages.len() == 1 { "" } else { "s" },
-    ));
     Ok(Files { files, notes })
 }
 
@@ -336,55 +289,31 @@ pub fn marker(options: &str) -> Result<Files, JsError> {
 fn marker_files(options: &str) -> Result<Files> {
     let args: MarkerArgs = serde_json::from_str(options).context("marker options")?;
     let output = Path::new(&args.output);
-    let format = Format::from_path(output)?;
     let dpi = args.dpi.unwrap_or(300.0);
     check_dpi(dpi)?;
-    let diameter = length("--diameter", &args.diameter)?;
-    let distance = args.distance.unwrap_or(DEFAULT_DISTANCE);
+    let diameter_mm = length("--diameter", &args.diameter)?;
     let target = chosen_target(args.legacy, args.bits, args.distance)?;
-    let (marker, title) = match target.family() {
-        None => (Marker::whycon(diameter), "WhyCon marker".to_string()),
-        Some(family) => {
-            let Some(id) = args.id else {
-                bail!("--id: choose the marker's ID");
-            };
-            let Some(code) = family.code(id) else {
-                bail!("{}", id_range_error(family, id));
-            };
-            (
-                Marker::whycode(family.bits(), code, diameter),
-                format!("WhyCode {}-bit d{distance} ID {id}", family.bits()),
-            )
-        }
-    };
-    let label = args.label.then(|| {
-        if args.legacy {
-            marker_label(&marker, None, None)
-        } else {
-            marker_label(&marker, args.id, Some(distance))
-        }
-    });
     let margin_mm = match &args.margin {
         Some(text) if !text.trim().is_empty() => Some(length("--margin", text)?),
         _ => None,
     };
-    let options = MarkerOptions {
+    let job = MarkerJob {
+        family: target.family(),
+        id: args.id,
+        diameter_mm,
         margin_mm,
         cross: args.cross,
         cut_guide: args.cut_guide,
-        label,
-        label_size_pt: (diameter / 8.0).clamp(DEFAULT_LABEL_PT, 14.0),
+        label: args.label,
+        dpi,
+        self_check: !args.no_check,
     };
-    let page = marker_page(&marker, &options)?;
-    let mut notes = Vec::new();
-    if args.no_check {
-        notes.push("self-check skipped: the marker was not read back".to_string());
-    } else {
-        let png_dpi = (format == Format::Png).then_some(dpi);
-        check_marker_page(&page, &marker, args.id.unwrap_or(0), &target, png_dpi)?;
-        notes.push("self-check passed: the marker reads back as itself".to_string());
-    }
-    let files = encode_pages(std::slice::from_ref(&page), output, &title, dpi)?
+    let (files, check) = job.print(output)?;
+    let notes = vec![match check {
+        Some(_) => "self-check passed: the marker reads back as itself".to_string(),
+        None => "self-check skipped: the marker was not read back".to_string(),
+    }];
+    let files = files
         .into_iter()
         .map(|(path, bytes)| (file_name(&path), bytes))
         .collect();
