@@ -25,6 +25,8 @@ struct PoseHints {
     settled_normal: Option<Vector3<f64>>,
     /// The circle pose the track fitted last frame.
     previous: Option<Fitted>,
+    /// An unsure pick between the candidates is made afresh this frame.
+    recheck: bool,
     /// Bit count of the code ring, whose sector sides break its circles.
     bits: Option<u32>,
     /// The ring's code, whose sectors' colours say on which of the ring's
@@ -272,6 +274,7 @@ impl Detector {
                 centre_estimate,
                 settled_normal: c.track.and_then(|i| self.tracks[i].normal),
                 previous: c.track.and_then(|i| self.tracks[i].fitted),
+                recheck: c.track.is_none_or(|i| self.recheck(i)),
                 bits: d.bits.or(self.config.target.family().map(Family::bits)),
                 code: d.code,
             };
@@ -341,6 +344,7 @@ impl Detector {
             centre_estimate: None,
             settled_normal: track.normal,
             previous: track.fitted,
+            recheck: c.track.is_none_or(|i| self.recheck(i)),
             bits: Some(bits),
             code: Some(code),
         };
@@ -348,6 +352,12 @@ impl Detector {
         posed.pose = rectify::refine_rotation(gray, &camera, &posed.pose, radius_m, bits, code)?;
         let yaw = posed.pose.image_yaw(&camera)?;
         Some(FollowedPose { posed, yaw })
+    }
+
+    /// Whether track `index` makes its unsure pick between the pose
+    /// candidates afresh this frame.
+    fn recheck(&self, index: usize) -> bool {
+        (self.tracks[index].hits as usize + index) % RECHECK_FRAMES == 0
     }
 
     /// The ring read through the motion blur its outline shows, when the
@@ -468,6 +478,7 @@ impl Detector {
             centre_estimate,
             settled_normal,
             previous,
+            recheck,
             bits,
             code,
         } = hints;
@@ -477,14 +488,21 @@ impl Detector {
             .and_then(|measured| pose::choose_by_centre_estimate(camera, &candidates, measured));
         let by_track = || pose::choose_by_settled_normal(&candidates, &settled_normal?);
         let settled = by_centre.or_else(by_track);
-        // The candidate nearer the normal fitted last frame: near face-on,
-        // where the two lie too close together for the track to settle,
-        // they differ by less than the fit corrects, and the inner edges'
-        // test (a third of a posed marker's time) is spared.
-        let by_previous = previous.map(|p| {
+        // The candidate nearer the normal fitted last frame. It decides
+        // near face-on, where the two lie too close together for the track
+        // to settle: there they differ by less than the fit corrects, and
+        // the inner edges' test (a fifth of a posed marker's time) is
+        // spared. Farther apart, where neither the ring's centre nor the
+        // track settled the pick (a small or distant marker's view is
+        // nearly affine, and the inner edges' test all but a coin toss),
+        // the pick is kept between rechecks: an unsure pick (a marker cut
+        // by the border, say) outlives its frame by a few frames at most.
+        let nearer_previous = previous.map(|p| {
             let turn = |k: usize| candidates[k].normal.angle(&p.circle.normal);
             usize::from(turn(1) < turn(0))
         });
+        let close = candidates[0].normal.angle(&candidates[1].normal) < CLOSE_CANDIDATES_RAD;
+        let by_previous = nearer_previous.filter(|_| close || !recheck);
         let design = self.config.target.design();
         let mut errors = [0.0f64; 2];
         if settled.is_none() && by_previous.is_none() {
@@ -559,7 +577,7 @@ impl Detector {
         // the same side (a marker that stood still starts where its fit
         // ends).
         let refit = previous
-            .filter(|_| by_previous == Some(pick))
+            .filter(|_| nearer_previous == Some(pick))
             .map(|p| CirclePose {
                 center: p.circle.center + (chosen.center - p.closed_form_centre),
                 normal: p.circle.normal,
@@ -580,6 +598,16 @@ impl Detector {
         })
     }
 }
+
+/// Every this many frames a followed marker's unsure pick between the pose
+/// candidates is made afresh by the inner edges' test (markers take turns,
+/// so each frame rechecks a share of them).
+const RECHECK_FRAMES: usize = 4;
+
+/// Angle between the two candidates' normals under which last frame's
+/// fit picks between them: where a track's settled normal could not (see
+/// `pose::choose_by_settled_normal`, whose margin this is).
+const CLOSE_CANDIDATES_RAD: f64 = 0.1;
 
 /// Where a WhyCode ring's circles show edges, for a rough pose: away from
 /// the sectors' sides, and (with the code known) only where a sector of the
