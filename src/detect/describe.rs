@@ -274,7 +274,7 @@ impl Detector {
                 centre_estimate,
                 settled_normal: c.track.and_then(|i| self.tracks[i].normal),
                 previous: c.track.and_then(|i| self.tracks[i].fitted),
-                recheck: c.track.is_none_or(|i| self.recheck(i)),
+                recheck: c.track.map_or(true, |i| self.recheck(i)),
                 bits: d.bits.or(self.config.target.family().map(Family::bits)),
                 code: d.code,
             };
@@ -344,7 +344,7 @@ impl Detector {
             centre_estimate: None,
             settled_normal: track.normal,
             previous: track.fitted,
-            recheck: c.track.is_none_or(|i| self.recheck(i)),
+            recheck: c.track.map_or(true, |i| self.recheck(i)),
             bits: Some(bits),
             code: Some(code),
         };
