@@ -8,12 +8,13 @@ use std::ops::Deref;
 
 use super::manchester::{self, RingEvidence};
 use super::segment::Gray;
+use super::track::{Fitted, PoseMemory};
 use super::{ellipse, legacy, rectify, ring_model, Candidate, Detection, Detector};
 use crate::camera::Camera;
 use crate::family::{Family, MatchStatus};
-use crate::geometry::Design;
+use crate::geometry::{sector_is_black, sector_width, Design, WHYCODE_WHITE_RATIO};
 use crate::math::Ellipse;
-use crate::pose::{self, Pose};
+use crate::pose::{self, CirclePose, Pose};
 
 /// What the ring reading and the marker's track tell the pose stage.
 #[derive(Debug, Clone, Copy)]
@@ -22,30 +23,45 @@ struct PoseHints {
     axis_point: Option<(f64, f64)>,
     centre_estimate: Option<(f64, f64)>,
     settled_normal: Option<Vector3<f64>>,
+    /// The circle pose the track fitted last frame.
+    previous: Option<Fitted>,
+    /// An unsure pick between the candidates is made afresh this frame.
+    recheck: bool,
     /// Bit count of the code ring, whose sector sides break its circles.
     bits: Option<u32>,
+    /// The ring's code, whose sectors' colours say on which of the ring's
+    /// circles each shows an edge.
+    code: Option<u32>,
+}
+
+/// What the pose stage found for a candidate.
+#[derive(Debug, Clone, Copy)]
+struct Posed {
+    pose: Pose,
+    /// The normal was told apart from the other candidate with confidence.
+    settled: bool,
+    /// The circle pose fitted to the edges (before the rotation was
+    /// measured), where the next frame's fit starts.
+    fitted: Fitted,
 }
 
 /// A followed marker's pose, its rotation measured on the known code's
 /// edges.
 #[derive(Debug, Clone, Copy)]
 struct FollowedPose {
-    pose: Pose,
-    /// The normal was told apart from the other candidate with confidence.
-    settled: bool,
+    posed: Posed,
     /// Image direction of +x at the projected centre.
     yaw: f64,
 }
 
 impl Detector {
-    /// The detection of a candidate, and its normal when that was told
-    /// apart from the other pose candidate with confidence (for the track).
+    /// The detection of a candidate, and what its pose tells the track.
     pub(super) fn describe<C: Deref<Target = [u8]>>(
         &mut self,
         image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,
-    ) -> (Detection, Option<Vector3<f64>>) {
+    ) -> (Detection, PoseMemory) {
         let quality = 1.0 - (c.area_error / self.area.tolerance()).min(1.0);
         let outer = c.outer;
         let mut d = Detection {
@@ -64,7 +80,7 @@ impl Detector {
         };
         let mut axis_point = None;
         let mut centre_estimate = None;
-        let mut settled_normal = None;
+        let mut memory = PoseMemory::default();
         // A marker followed from the last frames whose ID has been read
         // the same several times: its known code's edges give the yaw at a
         // fraction of a full read, and confirm the code on the way.
@@ -257,20 +273,24 @@ impl Detector {
                 axis_point,
                 centre_estimate,
                 settled_normal: c.track.and_then(|i| self.tracks[i].normal),
+                previous: c.track.and_then(|i| self.tracks[i].fitted),
+                recheck: c.track.map_or(true, |i| self.recheck(i)),
                 bits: d.bits.or(self.config.target.family().map(Family::bits)),
+                code: d.code,
             };
-            let (pose, settled) = match followed_pose {
-                Some(followed) => (Some(followed.pose), followed.settled),
-                None => match self.pose(&camera, diameter / 2.0, gray, c, &outer, hints) {
-                    Some((pose, settled)) => (Some(pose), settled),
-                    None => (None, false),
-                },
+            let posed = match followed_pose {
+                Some(followed) => Some(followed.posed),
+                None => self.pose(&camera, diameter / 2.0, gray, c, &outer, hints),
             };
-            d.pose = pose;
-            settled_normal = d
-                .pose
-                .filter(|_| settled)
-                .map(|p| p.rotation.column(2).into_owned());
+            d.pose = posed.map(|p| p.pose);
+            if let Some(posed) = posed {
+                memory = PoseMemory {
+                    settled_normal: posed
+                        .settled
+                        .then(|| posed.pose.rotation.column(2).into_owned()),
+                    fitted: Some(posed.fitted),
+                };
+            }
             let member_code = d.code.filter(|_| {
                 followed_pose.is_none()
                     && (d.bits.is_none() || d.bits == self.config.target.family().map(Family::bits))
@@ -298,7 +318,7 @@ impl Detector {
                 }
             }
         }
-        (d, settled_normal)
+        (d, memory)
     }
 
     /// The pose of a followed marker whose code is known, its rotation
@@ -323,12 +343,21 @@ impl Detector {
             axis_point: None,
             centre_estimate: None,
             settled_normal: track.normal,
+            previous: track.fitted,
+            recheck: c.track.map_or(true, |i| self.recheck(i)),
             bits: Some(bits),
+            code: Some(code),
         };
-        let (pose, settled) = self.pose(&camera, radius_m, gray, c, &c.outer, hints)?;
-        let pose = rectify::refine_rotation(gray, &camera, &pose, radius_m, bits, code)?;
-        let yaw = pose.image_yaw(&camera)?;
-        Some(FollowedPose { pose, settled, yaw })
+        let mut posed = self.pose(&camera, radius_m, gray, c, &c.outer, hints)?;
+        posed.pose = rectify::refine_rotation(gray, &camera, &posed.pose, radius_m, bits, code)?;
+        let yaw = posed.pose.image_yaw(&camera)?;
+        Some(FollowedPose { posed, yaw })
+    }
+
+    /// Whether track `index` makes its unsure pick between the pose
+    /// candidates afresh this frame.
+    fn recheck(&self, index: usize) -> bool {
+        (self.tracks[index].hits as usize + index) % RECHECK_FRAMES == 0
     }
 
     /// The ring read through the motion blur its outline shows, when the
@@ -430,10 +459,10 @@ impl Detector {
 
     /// Position and normal from the outer edge, the two-fold ambiguity
     /// decided by where the ring shows the marker's centre, else by the
-    /// normal this marker's track settled on, else by the inner white
-    /// edges; then refined on the outer and inner edges together; the
-    /// rotation from the yaw. The flag says whether the normal was settled
-    /// (not left to the inner edges).
+    /// normal this marker's track settled on, else by the normal it was
+    /// fitted with last frame, else by the inner white edges; then refined
+    /// on the outer and inner edges together (from last frame's fit when
+    /// that still fits); the rotation from the yaw.
     fn pose(
         &mut self,
         camera: &Camera,
@@ -442,13 +471,16 @@ impl Detector {
         c: &Candidate,
         outer: &Ellipse,
         hints: PoseHints,
-    ) -> Option<(Pose, bool)> {
+    ) -> Option<Posed> {
         let PoseHints {
             yaw,
             axis_point,
             centre_estimate,
             settled_normal,
+            previous,
+            recheck,
             bits,
+            code,
         } = hints;
         let candidates = pose::circle_poses_from_points(camera, &c.edge, radius_m)
             .or_else(|| pose::try_circle_poses(camera, outer, radius_m))?;
@@ -456,9 +488,24 @@ impl Detector {
             .and_then(|measured| pose::choose_by_centre_estimate(camera, &candidates, measured));
         let by_track = || pose::choose_by_settled_normal(&candidates, &settled_normal?);
         let settled = by_centre.or_else(by_track);
+        // The candidate nearer the normal fitted last frame. It decides
+        // near face-on, where the two lie too close together for the track
+        // to settle: there they differ by less than the fit corrects, and
+        // the inner edges' test (a fifth of a posed marker's time) is
+        // spared. Farther apart, where neither the ring's centre nor the
+        // track settled the pick (a small or distant marker's view is
+        // nearly affine, and the inner edges' test all but a coin toss),
+        // the pick is kept between rechecks: an unsure pick (a marker cut
+        // by the border, say) outlives its frame by a few frames at most.
+        let nearer_previous = previous.map(|p| {
+            let turn = |k: usize| candidates[k].normal.angle(&p.circle.normal);
+            usize::from(turn(1) < turn(0))
+        });
+        let close = candidates[0].normal.angle(&candidates[1].normal) < CLOSE_CANDIDATES_RAD;
+        let by_previous = nearer_previous.filter(|_| close || !recheck);
         let design = self.config.target.design();
         let mut errors = [0.0f64; 2];
-        if settled.is_none() {
+        if settled.is_none() && by_previous.is_none() {
             let mid = (c.black + c.white) / 2.0;
             for &ratio in design.inner_edge_ratios() {
                 ellipse::inner_edge_points(gray, &c.outer, ratio, mid, &mut self.inner_scratch);
@@ -473,14 +520,20 @@ impl Detector {
                 }
             }
         }
-        let chosen = candidates[usize::from(settled.map_or(errors[1] < errors[0], |k| k == 1))];
+        let pick = settled
+            .or(by_previous)
+            .unwrap_or(usize::from(errors[1] < errors[0]));
+        let chosen = candidates[pick];
         let rough = pose::full_pose_from_ring(camera, &chosen, yaw, axis_point);
         // The concentric edges sharpen the normal (see
         // `pose::refine_circle_pose`). A WhyCode ring's circles break
-        // where its sectors meet; the ring's rotation says where.
+        // where its sectors meet; the ring's rotation says where, and
+        // its code which circle each sector borders.
         let sector_sides = match design {
             Design::WhyCon => Some(None),
-            Design::WhyCode => bits.filter(|_| yaw.is_some()).map(Some),
+            Design::WhyCode => bits
+                .filter(|_| yaw.is_some())
+                .map(|bits| Some(RingSides::new(camera, &rough, bits, code))),
         };
         let mut points = std::mem::take(&mut self.pose_points);
         points.clear();
@@ -492,16 +545,20 @@ impl Detector {
             1.0,
             min_rise,
             everywhere,
+            &mut self.spokes,
             &mut self.inner_scratch,
         );
         points.extend(self.inner_scratch.iter().map(|&p| (p, radius_m)));
         if let Some(sides) = sector_sides {
             for &ratio in design.inner_edge_ratios() {
                 let radius = ratio * radius_m;
+                // The white centre meets the black sectors, the black
+                // annulus the white ones.
+                let edge_on_black = ratio < WHYCODE_WHITE_RATIO;
                 let wanted = |p: (f64, f64)| {
-                    sides.map_or(true, |bits| {
-                        clear_of_sector_sides(camera, &rough, bits, radius, p)
-                    })
+                    sides
+                        .as_ref()
+                        .map_or(true, |s| s.shows_edge(p, radius, edge_on_black))
                 };
                 ellipse::concentric_edge_points(
                     gray,
@@ -509,39 +566,130 @@ impl Detector {
                     ratio,
                     min_rise,
                     wanted,
+                    &mut self.spokes,
                     &mut self.inner_scratch,
                 );
                 points.extend(self.inner_scratch.iter().map(|&p| (p, radius)));
             }
         }
-        let circle = pose::refine_circle_pose(camera, &chosen, &points).unwrap_or(chosen);
+        // Last frame's fit, moved as far as the closed-form centre moved,
+        // is a closer start than the closed-form candidate when it lies on
+        // the same side (a marker that stood still starts where its fit
+        // ends).
+        let refit = previous
+            .filter(|_| nearer_previous == Some(pick))
+            .map(|p| CirclePose {
+                center: p.circle.center + (chosen.center - p.closed_form_centre),
+                normal: p.circle.normal,
+            })
+            .filter(|start| start.normal.dot(&start.center) < 0.0)
+            .and_then(|start| pose::refit_circle_pose(camera, &start, &points));
+        let circle = refit
+            .or_else(|| pose::refine_circle_pose(camera, &chosen, &points))
+            .unwrap_or(chosen);
         self.pose_points = points;
-        Some((
-            pose::full_pose_from_ring(camera, &circle, yaw, axis_point),
-            settled.is_some(),
-        ))
+        Some(Posed {
+            pose: pose::full_pose_from_ring(camera, &circle, yaw, axis_point),
+            settled: settled.is_some(),
+            fitted: Fitted {
+                circle,
+                closed_form_centre: chosen.center,
+            },
+        })
     }
 }
 
-/// Whether an edge point of a ring circle (radius `radius_m`) lies far
-/// enough from the sides of the ring's sectors that its sample did not
-/// see them: two pixels of arc.
-fn clear_of_sector_sides(
-    camera: &Camera,
-    pose: &Pose,
+/// Every this many frames a followed marker's unsure pick between the pose
+/// candidates is made afresh by the inner edges' test (markers take turns,
+/// so each frame rechecks a share of them).
+const RECHECK_FRAMES: usize = 4;
+
+/// Angle between the two candidates' normals under which last frame's
+/// fit picks between them: where a track's settled normal could not (see
+/// `pose::choose_by_settled_normal`, whose margin this is).
+const CLOSE_CANDIDATES_RAD: f64 = 0.1;
+
+/// Where a WhyCode ring's circles show edges, for a rough pose: away from
+/// the sectors' sides, and (with the code known) only where a sector of the
+/// colour that borders the circle lies.
+struct RingSides {
+    camera: Camera,
+    /// Maps a pixel's viewing ray to the direction, in the marker plane's
+    /// x-y axes, of the point where it meets the plane (first two rows).
+    to_plane: [Vector3<f64>; 2],
     bits: u32,
-    radius_m: f64,
-    point: (f64, f64),
-) -> bool {
-    let Some(hit) = pose::intersect_marker_plane(camera, pose, point) else {
-        return false;
-    };
-    let angle = hit.y.atan2(hit.x).rem_euclid(std::f64::consts::TAU);
-    let width = crate::geometry::sector_width(bits);
-    let into = angle.rem_euclid(width);
-    let arc_m = radius_m * into.min(width - into);
-    let pixel_m = pose.position.z / camera.fx;
-    arc_m > 2.0 * pixel_m
+    code: Option<u32>,
+    /// Metres of marker plane per pixel near the marker.
+    pixel_m: f64,
+}
+
+impl RingSides {
+    fn new(camera: &Camera, pose: &Pose, bits: u32, code: Option<u32>) -> RingSides {
+        // A ray r meets the plane at t·r, t = n·c / n·r > 0, which is
+        // Rᵀ(t·r - c) in marker axes; times -n·r (positive for a plane
+        // facing the camera) that is ((Rᵀc) nᵀ - (n·c) Rᵀ) r: the same
+        // direction, without a division.
+        let (rotation, centre) = (pose.rotation, pose.position);
+        let normal = rotation.column(2).into_owned();
+        let local_centre = rotation.transpose() * centre;
+        let along = normal.dot(&centre);
+        let map = local_centre * normal.transpose() - along * rotation.transpose();
+        RingSides {
+            camera: *camera,
+            to_plane: [0, 1].map(|i| map.row(i).transpose()),
+            bits,
+            code,
+            pixel_m: centre.z / camera.fx,
+        }
+    }
+
+    /// Whether a ring circle of radius `radius_m` shows an edge at pixel
+    /// `point` whose sample did not see a sector's side (two pixels of
+    /// arc clear of it), and, with a code, where its sector is black
+    /// (`on_black`) or white.
+    fn shows_edge(&self, point: (f64, f64), radius_m: f64, on_black: bool) -> bool {
+        let ray = self.camera.ray(point.0, point.1);
+        let (x, y) = (self.to_plane[0].dot(&ray), self.to_plane[1].dot(&ray));
+        let width = sector_width(self.bits);
+        // A whole turn is a whole number of sectors: no need to bring the
+        // angle into [0, 2π) first.
+        let turns = rough_atan2(y, x) / width;
+        let sector = turns.floor();
+        let into = width * (turns - sector);
+        let arc_m = radius_m * into.min(width - into);
+        let clear = arc_m > 2.0 * self.pixel_m;
+        clear
+            && self.code.map_or(true, |code| {
+                let sectors = 2 * self.bits as i64;
+                let k = (sector as i64).rem_euclid(sectors) as u32;
+                sector_is_black(self.bits, code, k) == on_black
+            })
+    }
+}
+
+/// atan2 to within 2e-5 radians (Hastings' polynomial on the octant): the
+/// sector-side test needs two pixels of arc, a thousand times coarser,
+/// and the library call was a tenth of a followed marker's pose.
+fn rough_atan2(y: f64, x: f64) -> f64 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let (low, high) = (ax.min(ay), ax.max(ay));
+    if high == 0.0 {
+        return 0.0;
+    }
+    let a = low / high;
+    let s = a * a;
+    let mut r =
+        a * (0.999_866 + s * (-0.330_299_5 + s * (0.180_141 + s * (-0.085_133 + s * 0.020_835_1))));
+    if ay > ax {
+        r = std::f64::consts::FRAC_PI_2 - r;
+    }
+    if x < 0.0 {
+        r = std::f64::consts::PI - r;
+    }
+    if y < 0.0 {
+        r = -r;
+    }
+    r
 }
 
 /// Least sector width (pixels, see [`manchester::sector_pixels`]) at which
@@ -592,6 +740,24 @@ fn ring_evidence<C: Deref<Target = [u8]>>(
                 first.into_iter().chain(counts),
                 false,
             )
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn rough_atan2_is_within_its_stated_error_all_round() {
+        for k in 0..=3600 {
+            let angle = -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / 3600.0;
+            for length in [1e-3, 1.0, 250.0] {
+                let (y, x) = (length * angle.sin(), length * angle.cos());
+                let error = super::rough_atan2(y, x) - y.atan2(x);
+                // The same angle either side of ±π.
+                let error = (error + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                    - std::f64::consts::PI;
+                assert!(error.abs() < 2e-5, "{angle}: {error}");
+            }
         }
     }
 }

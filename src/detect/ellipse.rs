@@ -168,16 +168,49 @@ fn smooth_sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
         ]
     };
     let (wx, wy) = (weights(x - i), weights(y - j));
-    let (i, j) = (i as usize, j as usize);
-    let mut value = 0.0;
-    for (row, w) in image.pixels[(j - 1) * image.width..]
-        .chunks_exact(image.width)
-        .zip(wy)
-    {
-        let p = &row[i - 1..i + 2];
-        value += w * (wx[0] * f64::from(p[0]) + wx[1] * f64::from(p[1]) + wx[2] * f64::from(p[2]));
+    let (i, j, width) = (i as usize, j as usize, image.width);
+    // The 3×3 neighbourhood as one slice: one bounds check, not nine.
+    let start = (j - 1) * width + i - 1;
+    let p = &image.pixels[start..start + 2 * width + 3];
+    let row = |k: usize| {
+        let q = &p[k * width..k * width + 3];
+        wx[0] * f64::from(q[0]) + wx[1] * f64::from(q[1]) + wx[2] * f64::from(q[2])
+    };
+    Some(wy[0] * row(0) + wy[1] * row(1) + wy[2] * row(2))
+}
+
+/// The rays [`concentric_edge_points`] follows from an outline's centre to
+/// `count` points spread evenly (by the ellipse's parameter) over it, each
+/// as the offset to that point and its length: the same for every circle of
+/// the marker, so worked out once per outline and count.
+#[derive(Debug, Clone, Default)]
+pub struct Spokes {
+    outline: Option<Ellipse>,
+    rays: Vec<(f64, f64, f64)>,
+}
+
+impl Spokes {
+    fn around(&mut self, outline: &Ellipse, count: usize) -> &[(f64, f64, f64)] {
+        if self.outline != Some(*outline) || self.rays.len() != count {
+            self.outline = Some(*outline);
+            self.rays.clear();
+            let (sin, cos) = outline.angle.sin_cos();
+            // The parameter walks by a fixed rotation, from half a step.
+            let step = std::f64::consts::TAU / count as f64;
+            let (step_sin, step_cos) = step.sin_cos();
+            let (mut sin_t, mut cos_t) = (0.5 * step).sin_cos();
+            for _ in 0..count {
+                let (a, b) = (outline.semi_major * cos_t, outline.semi_minor * sin_t);
+                let (dx, dy) = (a * cos - b * sin, a * sin + b * cos);
+                self.rays.push((dx, dy, (dx * dx + dy * dy).sqrt()));
+                (sin_t, cos_t) = (
+                    sin_t * step_cos + cos_t * step_sin,
+                    cos_t * step_cos - sin_t * step_sin,
+                );
+            }
+        }
+        &self.rays
     }
-    Some(value)
 }
 
 /// Edge points of a circle of the marker concentric with its outer edge,
@@ -198,6 +231,7 @@ pub fn concentric_edge_points(
     ratio: f64,
     min_rise: f64,
     wanted: impl Fn((f64, f64)) -> bool,
+    spokes: &mut Spokes,
     out: &mut Vec<(f64, f64)>,
 ) {
     out.clear();
@@ -210,11 +244,7 @@ pub fn concentric_edge_points(
     let sign = if ratio >= 1.0 { 1.0 } else { -1.0 };
     const STEP: f64 = 1.0;
     let mut profile = [0.0f64; 16];
-    for k in 0..rays {
-        let t = std::f64::consts::TAU * (k as f64 + 0.5) / rays as f64;
-        let (px, py) = outer.point_at(t);
-        let (dx, dy) = (px - outer.u, py - outer.v);
-        let r = dx.hypot(dy);
+    for &(dx, dy, r) in spokes.around(outer, rays) {
         // The window stays clear of the neighbouring circles: the ring's
         // borders lie 0.257 R apart.
         let half = (0.2 * r).min(3.0);

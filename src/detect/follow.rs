@@ -2,11 +2,9 @@
 //! found by its edges (or, failing that, by a flood fill from its predicted
 //! centre), and the tracks updated from what the frame showed.
 
-use nalgebra::Vector3;
-
 use super::segment::Gray;
 use super::threshold::ThresholdMap;
-use super::track::Track;
+use super::track::{PoseMemory, Track};
 use super::{ellipse, Candidate, Detection, Detector};
 use crate::math::Ellipse;
 
@@ -114,7 +112,7 @@ impl Detector {
         &mut self,
         found: &[Candidate],
         detections: &[Detection],
-        settled_normals: &[Option<Vector3<f64>>],
+        poses: &[PoseMemory],
     ) {
         let mut next: Vec<Track> = Vec::with_capacity(found.len());
         let mut taken = vec![false; self.tracks.len()];
@@ -123,7 +121,7 @@ impl Detector {
                 taken[i] = true;
             }
         }
-        for ((c, d), settled) in found.iter().zip(detections).zip(settled_normals) {
+        for ((c, d), pose) in found.iter().zip(detections).zip(poses) {
             let threshold = ((c.black + c.white) / 2.0).round().clamp(1.0, 255.0) as u8;
             let (u, v, a, b) = (c.outer.u, c.outer.v, c.outer.semi_major, c.outer.semi_minor);
             let index = c.track.or_else(|| {
@@ -145,7 +143,8 @@ impl Detector {
                     t.update(u, v, a, b, threshold);
                     t.observe_appearance(c.outer.angle, c.black, c.white);
                     t.observe_identity(d);
-                    t.normal = settled.or(t.normal);
+                    t.normal = pose.settled_normal.or(t.normal);
+                    t.fitted = pose.fitted;
                     next.push(t);
                 }
                 None => {
@@ -155,7 +154,8 @@ impl Detector {
                         t.observe_reading(family.len(), d);
                     }
                     t.observe_identity(d);
-                    t.normal = *settled;
+                    t.normal = pose.settled_normal;
+                    t.fitted = pose.fitted;
                     next.push(t);
                 }
             }

@@ -189,6 +189,7 @@ pub struct Detector {
     filler: Filler,
     edge_scratch: Vec<(f64, f64)>,
     inner_scratch: Vec<(f64, f64)>,
+    spokes: ellipse::Spokes,
     pose_points: Vec<crate::pose::RadialPoint>,
     /// Scan tiles covered by markers followed this frame.
     occupied: Vec<bool>,
@@ -249,6 +250,7 @@ impl Detector {
             filler: Filler::default(),
             edge_scratch: Vec::new(),
             inner_scratch: Vec::new(),
+            spokes: ellipse::Spokes::default(),
             pose_points: Vec::new(),
             occupied: Vec::new(),
             follow_filled: false,

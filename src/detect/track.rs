@@ -4,6 +4,8 @@
 //! test tolerances follow the values the detector actually measures,
 //! slowly (x ← 0.99 x + 0.01 x_measured).
 
+use crate::pose::CirclePose;
+
 /// What the detector remembers about one marker between frames.
 #[derive(Debug, Clone)]
 pub struct Track {
@@ -40,6 +42,28 @@ pub struct Track {
     /// The marker's normal (camera frame) once the pose stage told it apart
     /// from the other candidate with confidence; later frames keep to it.
     pub normal: Option<nalgebra::Vector3<f64>>,
+    /// The circle pose fitted to the marker's edges last frame: this
+    /// frame's fit starts from it.
+    pub fitted: Option<Fitted>,
+}
+
+/// A circle pose fitted to a marker's edges, and the closed-form
+/// candidate's centre it was fitted from: the next frame's fit starts from
+/// it moved by as much as that candidate's centre moved.
+#[derive(Debug, Clone, Copy)]
+pub struct Fitted {
+    pub circle: CirclePose,
+    pub closed_form_centre: nalgebra::Vector3<f64>,
+}
+
+/// What the pose stage learnt about a marker in this frame, for the next.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PoseMemory {
+    /// The normal, when it was told apart from the other candidate with
+    /// confidence.
+    pub settled_normal: Option<nalgebra::Vector3<f64>>,
+    /// The circle pose fitted to this frame's edges.
+    pub fitted: Option<Fitted>,
 }
 
 impl Track {
@@ -65,6 +89,7 @@ impl Track {
             id_streak: 0,
             ids: None,
             normal: None,
+            fitted: None,
         }
     }
 

@@ -32,7 +32,7 @@ pub use full::{
     estimate_pose, full_pose, full_pose_from_ring, full_pose_from_yaw, intersect_marker_plane,
     project_marker_point, reprojection_rms, PointMatch, Pose, PoseEstimate,
 };
-pub use refine::refine_circle_pose;
+pub use refine::{refine_circle_pose, refit_circle_pose};
 
 /// One solution for a circle in space: its centre (camera frame, metres)
 /// and unit plane normal pointing towards the camera.

@@ -62,39 +62,95 @@ impl Observations {
         }
         true
     }
+
+    /// The residuals at `circle` and their derivatives by the parameters
+    /// of [`moved`] at zero (`basis` is the plane basis of its normal),
+    /// worked out in closed form: tilting the normal towards a basis vector
+    /// turns that vector towards the old normal, and the residual, which
+    /// does not depend on how the basis is turned in its plane, follows.
+    fn linearise(
+        &self,
+        circle: &CirclePose,
+        basis: &(Vector3<f64>, Vector3<f64>),
+        residual: &mut [f64],
+        jacobian: &mut [[f64; 5]],
+    ) -> bool {
+        let Some(g) = Matrix3::from_columns(&[basis.0, basis.1, circle.center]).try_inverse()
+        else {
+            return false;
+        };
+        let scale = circle.center.norm();
+        let n = circle.normal;
+        let gn = g * n;
+        let rows = [0, 1, 2].map(|i| g.row(i).transpose());
+        // g^T D v, first two components, for D = diag(1, 1, -r²).
+        let through = |v: &Vector3<f64>, r2: f64| {
+            (
+                v.x * rows[0].x + v.y * rows[1].x - r2 * v.z * rows[2].x,
+                v.x * rows[0].y + v.y * rows[1].y - r2 * v.z * rows[2].y,
+            )
+        };
+        let columns = [0, 1, 2].map(|k| g.column(k).into_owned());
+        for ((slot, row), &(x, y, r)) in residual
+            .iter_mut()
+            .zip(jacobian.iter_mut())
+            .zip(&self.points)
+        {
+            let r2 = r * r;
+            let plane = g * Vector3::new(x, y, 1.0);
+            let weighted = Vector3::new(plane.x, plane.y, -r2 * plane.z);
+            let value = plane.dot(&weighted);
+            let dual = plane.x * rows[0] + plane.y * rows[1] - r2 * plane.z * rows[2];
+            let half_norm = dual.x.hypot(dual.y);
+            if !(half_norm > 0.0 && value.is_finite()) {
+                return false;
+            }
+            let norm = 2.0 * half_norm;
+            *slot = self.focal * value / norm;
+            let derivative = |d_value: f64, d_dual: (f64, f64)| {
+                let d_norm = 2.0 * (dual.x * d_dual.0 + dual.y * d_dual.1) / half_norm;
+                self.focal * (d_value * norm - value * d_norm) / (norm * norm)
+            };
+            for (k, column) in columns.iter().enumerate() {
+                let b = through(column, r2);
+                let d_dual = (
+                    -scale * (plane.z * b.0 + dual[k] * rows[2].x),
+                    -scale * (plane.z * b.1 + dual[k] * rows[2].y),
+                );
+                row[k] = derivative(-2.0 * scale * plane.z * dual[k], d_dual);
+            }
+            let a = through(&gn, r2);
+            let along_normal = n.dot(&dual);
+            let weighted_normal = weighted.dot(&gn);
+            for (k, along) in [(3, plane.x), (4, plane.y)] {
+                let d_dual = (
+                    along * a.0 + along_normal * rows[k - 3].x,
+                    along * a.1 + along_normal * rows[k - 3].y,
+                );
+                row[k] = derivative(2.0 * along * weighted_normal, d_dual);
+            }
+        }
+        true
+    }
 }
 
-/// Gauss-Newton on the five pose parameters, halving a step that does not
-/// lower the cost; the start is close (the closed-form pose, then the first
-/// round's fit), so a few steps converge.
-fn solve(
-    observations: &Observations,
-    initial: &CirclePose,
-    basis: &(Vector3<f64>, Vector3<f64>),
-    steps: usize,
-) -> Option<Params> {
+/// Gauss-Newton on the five pose parameters, relinearised around each
+/// accepted step, halving a step that does not lower the cost; the start
+/// is close (the closed-form pose, then the first round's fit, or the last
+/// frame's fit), so a few steps converge.
+fn solve(observations: &Observations, initial: &CirclePose, steps: usize) -> Option<CirclePose> {
     let n = observations.points.len();
     let mut residual = vec![0.0; n];
     let mut trial = vec![0.0; n];
     let mut jacobian = vec![[0.0f64; 5]; n];
-    let mut p = Params::zeros();
     let cost = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
-    if !observations.residuals(initial, &mut residual) {
-        return None;
-    }
-    let mut current = cost(&residual);
-    const DELTA: f64 = 1e-7;
+    let mut circle = *initial;
     for _ in 0..steps {
-        for k in 0..5 {
-            let mut q = p;
-            q[k] += DELTA;
-            if !observations.residuals(&moved(initial, basis, &q), &mut trial) {
-                return None;
-            }
-            for (row, (s, r)) in jacobian.iter_mut().zip(trial.iter().zip(&residual)) {
-                row[k] = (s - r) / DELTA;
-            }
+        let basis = plane_basis(&circle.normal);
+        if !observations.linearise(&circle, &basis, &mut residual, &mut jacobian) {
+            return None;
         }
+        let current = cost(&residual);
         let mut normal = SMatrix::<f64, 5, 5>::zeros();
         let mut gradient = Params::zeros();
         for (row, r) in jacobian.iter().zip(&residual) {
@@ -103,17 +159,13 @@ fn solve(
             gradient += j * *r;
         }
         let Some(mut step) = normal.cholesky().map(|c| c.solve(&-gradient)) else {
-            return Some(p);
+            break;
         };
         let mut accepted = false;
         for _ in 0..4 {
-            let q = p + step;
-            if observations.residuals(&moved(initial, basis, &q), &mut trial)
-                && cost(&trial) <= current
-            {
-                p = q;
-                current = cost(&trial);
-                std::mem::swap(&mut residual, &mut trial);
+            let q = moved(&circle, &basis, &step);
+            if observations.residuals(&q, &mut trial) && cost(&trial) <= current {
+                circle = q;
                 accepted = true;
                 break;
             }
@@ -125,7 +177,7 @@ fn solve(
             break;
         }
     }
-    Some(p)
+    Some(circle)
 }
 
 /// The circle pose that best explains edge points of several concentric
@@ -142,6 +194,46 @@ pub fn refine_circle_pose(
     initial: &CirclePose,
     points_px: &[RadialPoint],
 ) -> Option<CirclePose> {
+    // Outlier limits of the two rounds, pixels: loose around the
+    // closed-form start, tight around the first fit.
+    fit(
+        camera,
+        initial,
+        points_px,
+        &[(0.6, 3), (0.3, 1)],
+        f64::INFINITY,
+    )
+}
+
+/// Median misfit (pixels) of this frame's edge points to a start taken from
+/// the last frame's fit, up to which that start counts as close: about
+/// three times the edge points' own scatter on a settled fit.
+const CLOSE_START_PX: f64 = 0.25;
+
+/// [`refine_circle_pose`] from a start already close to the optimum: a
+/// followed marker's fit from the last frame, moved to where this frame's
+/// outline puts its centre. One round with the tight outlier limit, whose
+/// first step is usually the last when the marker barely moved. `None`
+/// when the start does not fit this frame's edges (the marker turned) or
+/// the fit fails: callers refine from a closed-form candidate then.
+pub fn refit_circle_pose(
+    camera: &Camera,
+    start: &CirclePose,
+    points_px: &[RadialPoint],
+) -> Option<CirclePose> {
+    fit(camera, start, points_px, &[(0.3, 3)], CLOSE_START_PX)
+}
+
+/// Rounds of outlier rejection (limit floor in pixels, Gauss-Newton steps)
+/// and fitting from `initial`; `None` also when the median misfit at the
+/// start exceeds `close_px`.
+fn fit(
+    camera: &Camera,
+    initial: &CirclePose,
+    points_px: &[RadialPoint],
+    rounds: &[(f64, usize)],
+    close_px: f64,
+) -> Option<CirclePose> {
     const MIN_POINTS: usize = 12;
     if points_px.len() < MIN_POINTS {
         return None;
@@ -157,26 +249,76 @@ pub fn refine_circle_pose(
         focal: 0.5 * (camera.fx + camera.fy),
     };
     let mut circle = *initial;
-    // Outlier limits of the two rounds, pixels: loose around the
-    // closed-form start, tight around the first fit.
-    for (floor, steps) in [(0.6, 3), (0.3, 1)] {
+    for (round, &(floor, steps)) in rounds.iter().enumerate() {
         let mut residual = vec![0.0; observations.points.len()];
         if !observations.residuals(&circle, &mut residual) {
             return None;
         }
         let mut sorted: Vec<f64> = residual.iter().map(|r| r.abs()).collect();
-        sorted.sort_by(f64::total_cmp);
-        let limit = (3.0 * sorted[sorted.len() / 2]).max(floor);
+        let middle = sorted.len() / 2;
+        let median = *sorted.select_nth_unstable_by(middle, f64::total_cmp).1;
+        if round == 0 && median > close_px {
+            return None;
+        }
+        let limit = (3.0 * median).max(floor);
         let mut keep = residual.iter().map(|r| r.abs() <= limit);
         observations.points.retain(|_| keep.next().unwrap_or(false));
         if observations.points.len() < MIN_POINTS {
             return None;
         }
-        let basis = plane_basis(&circle.normal);
-        let p = solve(&observations, &circle, &basis, steps)?;
-        circle = moved(&circle, &basis, &p);
+        circle = solve(&observations, &circle, steps)?;
     }
     let facing = circle.normal.dot(&circle.center) < 0.0;
     (facing && circle.center.z > 0.0 && circle.center.iter().all(|x| x.is_finite()))
         .then_some(circle)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The closed-form derivatives agree with finite differences.
+    #[test]
+    fn linearised_residuals_match_finite_differences() {
+        let circle = CirclePose {
+            center: Vector3::new(0.12, -0.05, 0.9),
+            normal: Vector3::new(0.3, -0.2, -1.0).normalize(),
+        };
+        let points: Vec<(f64, f64, f64)> = (0..24)
+            .map(|k| {
+                let t = k as f64 * 0.41;
+                let r = [0.05, 0.03, 0.017][k % 3];
+                (0.13 + 0.06 * t.cos(), -0.05 + 0.05 * t.sin(), r)
+            })
+            .collect();
+        let observations = Observations {
+            points,
+            focal: 1000.0,
+        };
+        let n = observations.points.len();
+        let basis = plane_basis(&circle.normal);
+        let (mut residual, mut jacobian) = (vec![0.0; n], vec![[0.0; 5]; n]);
+        assert!(observations.linearise(&circle, &basis, &mut residual, &mut jacobian));
+        let mut plain = vec![0.0; n];
+        assert!(observations.residuals(&circle, &mut plain));
+        let (mut ahead, mut behind) = (vec![0.0; n], vec![0.0; n]);
+        const DELTA: f64 = 1e-6;
+        for k in 0..5 {
+            let mut p = Params::zeros();
+            p[k] = DELTA;
+            assert!(observations.residuals(&moved(&circle, &basis, &p), &mut ahead));
+            p[k] = -DELTA;
+            assert!(observations.residuals(&moved(&circle, &basis, &p), &mut behind));
+            for i in 0..n {
+                assert!((residual[i] - plain[i]).abs() < 1e-9);
+                let numeric = (ahead[i] - behind[i]) / (2.0 * DELTA);
+                let scale = numeric.abs().max(1.0);
+                assert!(
+                    (jacobian[i][k] - numeric).abs() < 1e-4 * scale,
+                    "point {i}, parameter {k}: {} against {numeric}",
+                    jacobian[i][k]
+                );
+            }
+        }
+    }
 }
