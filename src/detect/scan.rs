@@ -162,6 +162,10 @@ impl Detector {
         if roundness.abs() >= self.roundness.tolerance() {
             return None;
         }
+        let dark = Stats {
+            sum_i: self.filler.grey_sum(gray),
+            ..dark
+        };
         let (cu, cv) = dark.centroid();
         // The white inside may come next to the segment's bounding box only
         // when the annulus is one pixel wide, on markers of a few pixels:
@@ -292,7 +296,10 @@ impl Detector {
                 return None;
             }
             if result.stats.count > 0 {
-                return Some(result.stats);
+                return Some(Stats {
+                    sum_i: self.filler.grey_sum(gray),
+                    ..result.stats
+                });
             }
         }
         None
