@@ -66,6 +66,9 @@ const MIN_ID_MARGIN: f64 = 1.6;
 /// blur and the pixels).
 const BLURRED_LENGTHS: [f64; 3] = [1.0, 1.15, 1.3];
 
+/// Patterns whose sums are accumulated side by side.
+const LANES: usize = 4;
+
 /// Pixels compared on a blurred ring (a subset, evenly spread, on large ones).
 const COMPARED_PIXELS: f64 = 1200.0;
 
@@ -222,7 +225,7 @@ fn compare<C: Deref<Target = [u8]>>(
     for y in (y0 as u32..=y1 as u32).step_by(stride as usize) {
         for x in (x0 as u32..=x1 as u32).step_by(stride as usize) {
             let (p, q) = to_marker(f64::from(x), f64::from(y));
-            if p.hypot(q) <= COMPARED_RADIUS {
+            if radius(p, q) <= COMPARED_RADIUS {
                 pixels.push((
                     f64::from(x),
                     f64::from(y),
@@ -288,7 +291,7 @@ fn compare<C: Deref<Target = [u8]>>(
             let mut inside = Vec::new();
             for &(dx, dy, w) in offsets {
                 let (p, q) = to_marker(x + dx, y + dy);
-                let rho = p.hypot(q);
+                let rho = radius(p, q);
                 if !(RING_INNER_RATIO..1.0).contains(&rho) {
                     white += w;
                 } else if rho < WHYCODE_WHITE_RATIO {
@@ -321,7 +324,7 @@ fn compare<C: Deref<Target = [u8]>>(
                 // A footprint covers a few sectors: keep only those.
                 touched.clear();
                 for &(t, w) in samples {
-                    let index = (((t - phase) / sector).floor() as i64).rem_euclid(sectors as i64);
+                    let index = floor_to_int((t - phase) / sector).rem_euclid(sectors as i64);
                     let index = index as usize;
                     if weights[index] == 0.0 {
                         touched.push(index);
@@ -342,33 +345,46 @@ fn compare<C: Deref<Target = [u8]>>(
                     weights[i] = 0.0;
                 }
             }
-            for (id, rotation, white) in &patterns {
-                let mut sm = sum_fixed;
-                let mut smm = ff;
-                let mut sym = yf;
-                for &i in white {
-                    sm += w_sum[i];
-                    smm += 2.0 * w_fixed[i];
-                    sym += w_y[i];
-                    for &j in white {
-                        smm += gram[i * sectors + j];
+            // Four patterns at a time, each summed in its own order: a
+            // pattern's sums are chains of dependent additions, which leave
+            // the adder idle between them; four independent chains do not.
+            for group in patterns.chunks(LANES) {
+                let white: [&[usize]; LANES] =
+                    std::array::from_fn(|k| group[k.min(group.len() - 1)].2.as_slice());
+                let mut sm = [sum_fixed; LANES];
+                let mut smm = [ff; LANES];
+                let mut sym = [yf; LANES];
+                for b in 0..bits as usize {
+                    for k in 0..LANES {
+                        let i = white[k][b];
+                        sm[k] += w_sum[i];
+                        smm[k] += 2.0 * w_fixed[i];
+                        sym[k] += w_y[i];
+                    }
+                    for b2 in 0..bits as usize {
+                        for k in 0..LANES {
+                            smm[k] += gram[white[k][b] * sectors + white[k][b2]];
+                        }
                     }
                 }
-                let sym_c = sym - sum_y * sm / count;
-                let smm_c = smm - sm * sm / count;
-                if sym_c <= 0.0 || smm_c <= 0.0 {
-                    continue;
-                }
-                let sse = syy - sym_c * sym_c / smm_c;
-                let slot = &mut per_member[*id as usize];
-                *slot = slot.min(sse);
-                if best.as_ref().map_or(true, |b| sse < b.sse) {
-                    best = Some(Best {
-                        sse,
-                        id: *id,
-                        rotation: *rotation,
-                        phase,
-                    });
+                for (k, (id, rotation, _)) in group.iter().enumerate() {
+                    let (sm, smm, sym) = (sm[k], smm[k], sym[k]);
+                    let sym_c = sym - sum_y * sm / count;
+                    let smm_c = smm - sm * sm / count;
+                    if sym_c <= 0.0 || smm_c <= 0.0 {
+                        continue;
+                    }
+                    let sse = syy - sym_c * sym_c / smm_c;
+                    let slot = &mut per_member[*id as usize];
+                    *slot = slot.min(sse);
+                    if best.as_ref().map_or(true, |b| sse < b.sse) {
+                        best = Some(Best {
+                            sse,
+                            id: *id,
+                            rotation: *rotation,
+                            phase,
+                        });
+                    }
                 }
             }
         }
@@ -400,6 +416,37 @@ fn compare<C: Deref<Target = [u8]>>(
         margin,
         structure_ratio,
     })
+}
+
+/// The radii the model's pixels are sorted by.
+const RADIUS_BOUNDS: [f64; 4] = [RING_INNER_RATIO, WHYCODE_WHITE_RATIO, COMPARED_RADIUS, 1.0];
+
+/// hypot(p, q) as far as the comparisons with [`RADIUS_BOUNDS`] can tell:
+/// the plain square root is a few times cheaper than `hypot` (a library
+/// call), and differs from it by an ulp or so, which matters only within
+/// a hair of a bound, where `hypot` decides as before. The model is
+/// compared at 75 sub-samples per pixel, on every small round candidate
+/// of a cluttered frame.
+#[inline]
+fn radius(p: f64, q: f64) -> f64 {
+    let r = (p * p + q * q).sqrt();
+    if RADIUS_BOUNDS.iter().any(|&b| (r - b).abs() <= 1e-9) {
+        p.hypot(q)
+    } else {
+        r
+    }
+}
+
+/// `x.floor() as i64` for the small finite values of a sector index,
+/// without the library call `floor` is on targets without SSE4.1.
+#[inline]
+fn floor_to_int(x: f64) -> i64 {
+    let i = x as i64;
+    if (i as f64) > x {
+        i - 1
+    } else {
+        i
+    }
 }
 
 /// Least-squares residual of y ≈ α + β·u + γ·v over the pixels.
