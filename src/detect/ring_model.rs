@@ -324,8 +324,14 @@ fn compare<C: Deref<Target = [u8]>>(
                 // A footprint covers a few sectors: keep only those.
                 touched.clear();
                 for &(t, w) in samples {
-                    let index = floor_to_int((t - phase) / sector).rem_euclid(sectors as i64);
-                    let index = index as usize;
+                    let index = floor_to_int((t - phase) / sector);
+                    // Within a turn of the range but for rounding: spare
+                    // the integer division of `rem_euclid`.
+                    let index = if (0..sectors as i64).contains(&index) {
+                        index as usize
+                    } else {
+                        index.rem_euclid(sectors as i64) as usize
+                    };
                     if weights[index] == 0.0 {
                         touched.push(index);
                     }
