@@ -316,6 +316,20 @@ impl ThresholdMap {
         let lo = box_filter(&lo, cols, rows, NEIGHBOURHOOD_TILES, u8::min);
         let hi = box_filter(&own_hi, cols, rows, NEIGHBOURHOOD_TILES, u8::max);
         const UNSET: u16 = u16::MAX;
+        // The ratio level's powers of each grey level, once per map rather
+        // than twice per tile.
+        let powers: Vec<(f64, f64)> = match level {
+            Level::Mid => Vec::new(),
+            Level::Ratio => {
+                let c = f64::from(noise_floor) / 2.0;
+                (0..=255u8)
+                    .map(|g| {
+                        let g = f64::from(g) + c;
+                        (g.powf(2.0 / 3.0), g.powf(1.0 / 3.0))
+                    })
+                    .collect()
+            }
+        };
         let mut thresholds: Vec<u16> = lo
             .iter()
             .zip(&hi)
@@ -328,9 +342,7 @@ impl ThresholdMap {
                             let c = f64::from(noise_floor) / 2.0;
                             // A third of the way up in log light: shade
                             // to 1/5 keeps paper above it.
-                            let g = (f64::from(l) + c).powf(2.0 / 3.0)
-                                * (f64::from(h) + c).powf(1.0 / 3.0)
-                                - c;
+                            let g = powers[usize::from(l)].0 * powers[usize::from(h)].1 - c;
                             (g.round() as u16).max(u16::from(l) + u16::from(noise_floor) / 2)
                         }
                     }
