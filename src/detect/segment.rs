@@ -52,7 +52,7 @@ pub fn below_mask(chunk: &[u8], t: u8) -> u16 {
 /// The sum of a run's grey values: sixteen at a time where the target
 /// has a sum-of-absolute-differences instruction (to zero).
 #[inline]
-fn sum_bytes(run: &[u8]) -> u64 {
+pub(super) fn sum_bytes(run: &[u8]) -> u64 {
     #[cfg(target_arch = "x86_64")]
     {
         let mut blocks = run.chunks_exact(CHUNK);

@@ -131,7 +131,7 @@ impl ThresholdMap {
         {
             let t = (y >> self.shift) * self.cols;
             for (k, chunk) in row.chunks(tile).enumerate() {
-                sums[t + k] += chunk.iter().map(|&p| u32::from(p)).sum::<u32>();
+                sums[t + k] += super::segment::sum_bytes(chunk) as u32;
                 counts[t + k] += chunk.len() as u32;
             }
         }
@@ -670,13 +670,21 @@ impl ThresholdSearch {
 /// Grey-level histogram of every fourth row: enough to tell which global
 /// levels split the image.
 pub fn sampled_histogram(pixels: &[u8], width: usize) -> [u64; 256] {
-    let mut histogram = [0u64; 256];
+    // Four counts per level, for consecutive pixels: runs of one grey
+    // value then increment different counters instead of waiting on one.
+    let mut counts = [[0u32; 256]; 4];
     for row in pixels.chunks_exact(width.max(1)).step_by(4) {
-        for &p in row {
-            histogram[usize::from(p)] += 1;
+        let mut quads = row.chunks_exact(4);
+        for q in &mut quads {
+            for (lane, &p) in q.iter().enumerate() {
+                counts[lane][usize::from(p)] += 1;
+            }
+        }
+        for &p in quads.remainder() {
+            counts[0][usize::from(p)] += 1;
         }
     }
-    histogram
+    std::array::from_fn(|g| counts.iter().map(|c| u64::from(c[g])).sum())
 }
 
 #[cfg(test)]
