@@ -406,7 +406,7 @@ impl Detector {
                 // family's ring test stands between grey clutter (which
                 // looks shaded too) and a report.
                 let ratio_map =
-                    ThresholdMap::adaptive_ratio(gray.pixels, width, height, rows.clone());
+                    ThresholdMap::adaptive_ratio(gray.pixels, width, height, rows.clone(), &map);
                 self.labels.begin(width, height);
                 let mut again = Vec::new();
                 self.scan_tiles(gray, &ratio_map, rows, map.near_shaded(), &mut again, limit);

@@ -49,6 +49,8 @@ pub struct ThresholdMap {
     /// (what [`ThresholdMap::blind_tiles`] needs); empty for a constant map.
     near_lo: Vec<u8>,
     near_hi: Vec<u8>,
+    /// Per tile, its own brightest pixel; empty for a constant map.
+    own_hi: Vec<u8>,
 }
 
 /// Shift of the adaptive map's tiles: 16 x 16 pixels.
@@ -83,6 +85,7 @@ impl ThresholdMap {
             near_shaded: Vec::new(),
             near_lo: Vec::new(),
             near_hi: Vec::new(),
+            own_hi: Vec::new(),
         }
     }
 
@@ -265,7 +268,7 @@ impl ThresholdMap {
         height: usize,
         band: std::ops::Range<usize>,
     ) -> ThresholdMap {
-        ThresholdMap::adaptive_with(pixels, width, height, band, Level::Mid)
+        ThresholdMap::adaptive_with(pixels, width, height, band, Level::Mid, None)
     }
 
     /// The local map of `band` with each tile's threshold a third of the
@@ -273,14 +276,17 @@ impl ThresholdMap {
     /// noise floor) rather than at the mid-level: light multiplies, so paper in a shadow
     /// keeps its ratio to the ink beside it while falling below the
     /// mid-level of lit paper and ink. Lower than the mid-level everywhere,
-    /// so it is kept for a second look at shaded rows.
+    /// so it is kept for a second look at shaded rows. The tiles' levels
+    /// are taken from `mid` (the mid-level map of the same image) where it
+    /// holds the same tile rows, as it does unless the band is narrow.
     pub fn adaptive_ratio(
         pixels: &[u8],
         width: usize,
         height: usize,
         band: std::ops::Range<usize>,
+        mid: &ThresholdMap,
     ) -> ThresholdMap {
-        ThresholdMap::adaptive_with(pixels, width, height, band, Level::Ratio)
+        ThresholdMap::adaptive_with(pixels, width, height, band, Level::Ratio, Some(mid))
     }
 
     fn adaptive_with(
@@ -289,6 +295,7 @@ impl ThresholdMap {
         height: usize,
         band: std::ops::Range<usize>,
         level: Level,
+        base: Option<&ThresholdMap>,
     ) -> ThresholdMap {
         let tile = 1usize << TILE_SHIFT;
         let cols = width.div_ceil(tile).max(1);
@@ -297,24 +304,19 @@ impl ThresholdMap {
         let last = (last + NEIGHBOURHOOD_TILES).min(height.max(1).div_ceil(tile) - 1);
         let rows = (last + 1 - first).max(1);
         let (y_start, y_end) = (first << TILE_SHIFT, ((last + 1) << TILE_SHIFT).min(height));
-        let band_pixels =
-            &pixels[(y_start * width).min(pixels.len())..(y_end * width).min(pixels.len())];
-        let mut lo = vec![255u8; cols * rows];
-        let mut hi = vec![0u8; cols * rows];
-        for (y, row) in band_pixels.chunks_exact(width.max(1)).enumerate() {
-            let t = (y >> TILE_SHIFT) * cols;
-            let (lo_row, hi_row) = (&mut lo[t..t + cols], &mut hi[t..t + cols]);
-            for ((chunk, l), h) in row.chunks(tile).zip(lo_row).zip(hi_row) {
-                let (cl, ch) = chunk_min_max(chunk);
-                *l = (*l).min(cl);
-                *h = (*h).max(ch);
-            }
-        }
-        let noise_floor = MIN_CONTRAST.max(noise_contrast(band_pixels, width, y_end - y_start));
-
-        let own_hi = hi;
-        let lo = box_filter(&lo, cols, rows, NEIGHBOURHOOD_TILES, u8::min);
-        let hi = box_filter(&own_hi, cols, rows, NEIGHBOURHOOD_TILES, u8::max);
+        let same_tiles = base.filter(|b| {
+            b.row0 == first && b.rows == rows && b.cols == cols && !b.own_hi.is_empty()
+        });
+        let (own_hi, lo, hi, noise_floor) = match same_tiles {
+            // The levels below depend on the tile rows' pixels only.
+            Some(b) => (
+                b.own_hi.clone(),
+                b.near_lo.clone(),
+                b.near_hi.clone(),
+                b.min_contrast,
+            ),
+            None => tile_levels(pixels, width, cols, rows, y_start..y_end),
+        };
         const UNSET: u16 = u16::MAX;
         // The ratio level's powers of each grey level, once per map rather
         // than twice per tile.
@@ -369,6 +371,7 @@ impl ThresholdMap {
                 near_shaded: Vec::new(),
                 near_lo: lo,
                 near_hi: hi,
+                own_hi,
             };
         }
         while let Some(i) = queue.pop_front() {
@@ -495,8 +498,38 @@ impl ThresholdMap {
             near_shaded,
             near_lo: lo,
             near_hi: hi,
+            own_hi,
         }
     }
+}
+
+/// Per tile of the pixel rows `y` (whole tile rows), its own brightest
+/// pixel and its neighbourhood's darkest and brightest; and the noise
+/// floor of those rows.
+fn tile_levels(
+    pixels: &[u8],
+    width: usize,
+    cols: usize,
+    rows: usize,
+    y: std::ops::Range<usize>,
+) -> (Vec<u8>, Vec<u8>, Vec<u8>, u8) {
+    let tile = 1usize << TILE_SHIFT;
+    let band_pixels = &pixels[(y.start * width).min(pixels.len())..(y.end * width).min(pixels.len())];
+    let mut lo = vec![255u8; cols * rows];
+    let mut hi = vec![0u8; cols * rows];
+    for (y, row) in band_pixels.chunks_exact(width.max(1)).enumerate() {
+        let t = (y >> TILE_SHIFT) * cols;
+        let (lo_row, hi_row) = (&mut lo[t..t + cols], &mut hi[t..t + cols]);
+        for ((chunk, l), h) in row.chunks(tile).zip(lo_row).zip(hi_row) {
+            let (cl, ch) = chunk_min_max(chunk);
+            *l = (*l).min(cl);
+            *h = (*h).max(ch);
+        }
+    }
+    let noise_floor = MIN_CONTRAST.max(noise_contrast(band_pixels, width, y.end - y.start));
+    let near_lo = box_filter(&lo, cols, rows, NEIGHBOURHOOD_TILES, u8::min);
+    let near_hi = box_filter(&hi, cols, rows, NEIGHBOURHOOD_TILES, u8::max);
+    (hi, near_lo, near_hi, noise_floor)
 }
 
 /// Where between a tile's black and white levels its threshold lies.
