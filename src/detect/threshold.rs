@@ -514,7 +514,8 @@ fn tile_levels(
     y: std::ops::Range<usize>,
 ) -> (Vec<u8>, Vec<u8>, Vec<u8>, u8) {
     let tile = 1usize << TILE_SHIFT;
-    let band_pixels = &pixels[(y.start * width).min(pixels.len())..(y.end * width).min(pixels.len())];
+    let band_pixels =
+        &pixels[(y.start * width).min(pixels.len())..(y.end * width).min(pixels.len())];
     let mut lo = vec![255u8; cols * rows];
     let mut hi = vec![0u8; cols * rows];
     for (y, row) in band_pixels.chunks_exact(width.max(1)).enumerate() {
