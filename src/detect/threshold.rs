@@ -126,6 +126,16 @@ impl ThresholdMap {
         let tile = 1usize << self.shift;
         let y_start = self.row0 << self.shift;
         let y_end = ((self.row0 + self.rows) << self.shift).min(height);
+        let low_range = |i: usize| {
+            u16::from(self.near_hi[i] - self.near_lo[i]) < 2 * u16::from(self.min_contrast)
+        };
+        // Only tiles whose neighbourhood holds a tile of low range can
+        // matter below: their means alone are read off the pixels.
+        let flags: Vec<u8> = (0..n).map(|i| u8::from(low_range(i))).collect();
+        if !flags.contains(&1) {
+            return vec![(0, 0); n];
+        }
+        let needed = box_filter(&flags, self.cols, self.rows, NEIGHBOURHOOD_TILES, u8::max);
         let mut sums = vec![0u32; n];
         let mut counts = vec![0u32; n];
         for (y, row) in pixels[y_start * width..y_end * width]
@@ -134,8 +144,10 @@ impl ThresholdMap {
         {
             let t = (y >> self.shift) * self.cols;
             for (k, chunk) in row.chunks(tile).enumerate() {
-                sums[t + k] += super::segment::sum_bytes(chunk) as u32;
-                counts[t + k] += chunk.len() as u32;
+                if needed[t + k] != 0 {
+                    sums[t + k] += super::segment::sum_bytes(chunk) as u32;
+                    counts[t + k] += chunk.len() as u32;
+                }
             }
         }
         let means: Vec<u8> = sums
@@ -150,10 +162,7 @@ impl ThresholdMap {
         let structure = (self.min_contrast / 8).max(2);
         (0..n)
             .map(|i| {
-                let range = u16::from(self.near_hi[i] - self.near_lo[i]);
-                if range < 2 * u16::from(self.min_contrast)
-                    && brightest[i] - darkest[i] >= structure
-                {
+                if low_range(i) && brightest[i] - darkest[i] >= structure {
                     (self.near_lo[i], self.near_hi[i])
                 } else {
                     (0, 0)
