@@ -82,9 +82,22 @@ impl Detector {
         let shift = map.shift();
         let margin = map.seed_margin();
         let cols = gray.width.div_ceil(CHUNK);
+        // Tile rows with a tile left to scan: a look at a few tiles (the
+        // global walk's blind ones) passes over the others' rows at once.
+        let open_rows: Vec<bool> = if self.occupied.is_empty() {
+            Vec::new()
+        } else {
+            self.occupied
+                .chunks(cols)
+                .map(|tiles| tiles.contains(&false))
+                .collect()
+        };
         for y in rows {
             if found.len() >= limit {
                 return;
+            }
+            if open_rows.get(y / CHUNK) == Some(&false) {
+                continue;
             }
             let row_start = y * gray.width;
             let row = &gray.pixels[row_start..row_start + gray.width];
