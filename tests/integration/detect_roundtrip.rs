@@ -537,6 +537,35 @@ fn tracked_whycode_markers_keep_ids_and_yaw_while_turning() {
     }
 }
 
+/// A tracking detector and a fresh one for 10 cm markers of `family` seen
+/// through `camera` (an ideal pinhole of `size` pixels), both with pose:
+/// the tracked path is judged against what a fresh look makes of each frame.
+fn tracked_and_fresh_with_pose(
+    family: &Family,
+    camera: &Pinhole,
+    (width, height): (u32, u32),
+) -> (Detector, Detector) {
+    let config = DetectorConfig {
+        target: Target::WhyCode(family.clone()),
+        camera: Some(whycode::Camera {
+            fx: camera.f,
+            fy: camera.f,
+            cx: camera.cx,
+            cy: camera.cy,
+            distortion: [0.0; 5],
+            width,
+            height,
+        }),
+        diameter_m: Some(0.1),
+        ..DetectorConfig::default()
+    };
+    let tracked = Detector::new(DetectorConfig {
+        tracking: true,
+        ..config.clone()
+    });
+    (tracked, Detector::new(config))
+}
+
 /// Tracked markers with a pose: once a marker's ID is settled, its
 /// rotation comes from the known code's edges on the rectified ring alone.
 /// IDs, yaw and normal stay as good as a fresh detection's, frame after
@@ -549,25 +578,7 @@ fn tracked_markers_with_pose_keep_ids_yaw_and_normal_while_turning() {
         cx: 400.0,
         cy: 300.0,
     };
-    let config = DetectorConfig {
-        target: Target::WhyCode(family.clone()),
-        camera: Some(whycode::Camera {
-            fx: camera.f,
-            fy: camera.f,
-            cx: camera.cx,
-            cy: camera.cy,
-            distortion: [0.0; 5],
-            width: 800,
-            height: 600,
-        }),
-        diameter_m: Some(0.1),
-        ..DetectorConfig::default()
-    };
-    let mut tracked = Detector::new(DetectorConfig {
-        tracking: true,
-        ..config.clone()
-    });
-    let mut fresh = Detector::new(config);
+    let (mut tracked, mut fresh) = tracked_and_fresh_with_pose(&family, &camera, (800, 600));
     for frame in 0..8 {
         let placements: Vec<Placement> = (0..6)
             .map(|k| {
@@ -642,25 +653,7 @@ fn followed_face_on_markers_keep_the_fresh_normal_and_centre() {
         cx: 400.0,
         cy: 300.0,
     };
-    let config = DetectorConfig {
-        target: Target::WhyCode(family.clone()),
-        camera: Some(whycode::Camera {
-            fx: camera.f,
-            fy: camera.f,
-            cx: camera.cx,
-            cy: camera.cy,
-            distortion: [0.0; 5],
-            width: 800,
-            height: 600,
-        }),
-        diameter_m: Some(0.1),
-        ..DetectorConfig::default()
-    };
-    let mut tracked = Detector::new(DetectorConfig {
-        tracking: true,
-        ..config.clone()
-    });
-    let mut fresh = Detector::new(config);
+    let (mut tracked, mut fresh) = tracked_and_fresh_with_pose(&family, &camera, (800, 600));
     for frame in 0..10 {
         let f = frame as f64;
         let placements: Vec<Placement> = (0..6)
@@ -731,25 +724,7 @@ fn an_unsure_pose_pick_does_not_outlive_its_recheck() {
         cx: 640.0,
         cy: 360.0,
     };
-    let config = DetectorConfig {
-        target: Target::WhyCode(family.clone()),
-        camera: Some(whycode::Camera {
-            fx: camera.f,
-            fy: camera.f,
-            cx: camera.cx,
-            cy: camera.cy,
-            distortion: [0.0; 5],
-            width: 1280,
-            height: 720,
-        }),
-        diameter_m: Some(0.1),
-        ..DetectorConfig::default()
-    };
-    let mut tracked = Detector::new(DetectorConfig {
-        tracking: true,
-        ..config.clone()
-    });
-    let mut fresh = Detector::new(config);
+    let (mut tracked, mut fresh) = tracked_and_fresh_with_pose(&family, &camera, (1280, 720));
     let (mut fresh_right_since, mut worst_lag) = (None, 0);
     for frame in 11..20 {
         let f = frame as f64;
