@@ -70,6 +70,35 @@ impl PlaneProjection {
         let inverse = 1.0 / h.z;
         Some((h.x * inverse, h.y * inverse))
     }
+
+    /// [`PlaneProjection::project`] of the points at angle (cos, sin) on
+    /// circles of the given radii about the origin: the direction is worked
+    /// out once for them all (a ring profile reads three radii per angle).
+    #[inline]
+    pub fn project_radii<const N: usize>(
+        &self,
+        (c, s): (f64, f64),
+        radii: &[f64; N],
+    ) -> [Option<(f64, f64)>; N] {
+        let mut points = [None; N];
+        if self.distorted {
+            for (point, &r) in points.iter_mut().zip(radii) {
+                *point = self.project(r * c, r * s);
+            }
+            return points;
+        }
+        let direction = self.pixel_x * c + self.pixel_y * s;
+        // A loop, not `radii.map`: the closure behind an array map of
+        // options was not inlined.
+        for (point, &r) in points.iter_mut().zip(radii) {
+            let h = self.pixel_origin + direction * r;
+            if h.z > MIN_DEPTH && h.x.is_finite() && h.y.is_finite() {
+                let inverse = 1.0 / h.z;
+                *point = Some((h.x * inverse, h.y * inverse));
+            }
+        }
+        points
+    }
 }
 
 impl Camera {
@@ -194,11 +223,20 @@ impl Camera {
     /// distortion polynomial is invertible, which holds inside the image for
     /// real calibrations; beyond the radius where the polynomial folds back
     /// it returns the finite point of least residual.
+    // Inlined, with the lens's Newton iteration out of line: the pose
+    // stages undistort a few hundred edge points per marker, mostly with
+    // cameras without distortion.
+    #[inline]
     pub fn undistort(&self, u: f64, v: f64) -> (f64, f64) {
         let target = Vector2::new((u - self.cx) / self.fx, (v - self.cy) / self.fy);
         if !self.has_distortion() || !target.x.is_finite() || !target.y.is_finite() {
             return (target.x, target.y);
         }
+        self.undistort_lens(target)
+    }
+
+    #[inline(never)]
+    fn undistort_lens(&self, target: Vector2<f64>) -> (f64, f64) {
         // Damped Newton on distort(x) = target. The plain fixed-point
         // iteration OpenCV uses stalls in image corners with strong barrel
         // distortion; Newton converges in a handful of steps there.

@@ -482,8 +482,16 @@ impl Detector {
             bits,
             code,
         } = hints;
-        let candidates = pose::circle_poses_from_points(camera, &c.edge, radius_m)
-            .or_else(|| pose::try_circle_poses(camera, outer, radius_m))?;
+        // The outline was fitted to the edge points in pixels; without lens
+        // distortion its conic maps exactly into the camera's coordinates,
+        // and fitting the points again there (a fifteenth of a posed
+        // marker's time) gives the same cone.
+        let candidates = if camera.has_distortion() {
+            pose::circle_poses_from_points(camera, &c.edge, radius_m)
+                .or_else(|| pose::try_circle_poses(camera, outer, radius_m))?
+        } else {
+            pose::try_circle_poses(camera, outer, radius_m)?
+        };
         let by_centre = centre_estimate
             .and_then(|measured| pose::choose_by_centre_estimate(camera, &candidates, measured));
         let by_track = || pose::choose_by_settled_normal(&candidates, &settled_normal?);

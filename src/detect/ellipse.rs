@@ -150,16 +150,25 @@ pub fn inner_edge_points(
 /// bilinear samples keep, would move the gradient's centroid with the
 /// edge's phase against the grid. `None` unless the 3×3 neighbourhood is
 /// in the image.
-#[inline]
+#[inline(always)]
 fn smooth_sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
-    if !(x >= 0.5 && y >= 0.5) {
+    // Rounding by truncation of the coordinates plus a half, which must
+    // lie in [1, size - 1) for the 3×3 neighbourhood to be inside. The
+    // limits go through i64, not usize: a signed conversion is one
+    // instruction, an unsigned one a dozen, and this runs a thousand times
+    // per posed marker.
+    let (tx, ty) = (x + 0.5, y + 0.5);
+    let (x_end, y_end) = (
+        (image.width as i64 - 1) as f64,
+        (image.height as i64 - 1) as f64,
+    );
+    if !(x >= 0.5 && y >= 0.5 && tx < x_end && ty < y_end) {
         return None;
     }
-    // Rounding by truncation: the coordinates are positive.
-    let (i, j) = ((x + 0.5) as usize as f64, (y + 0.5) as usize as f64);
-    if !(i + 1.0 < image.width as f64 && j + 1.0 < image.height as f64) {
-        return None;
-    }
+    // SAFETY: tx and ty are finite, at least 1 and below the image's size,
+    // so they fit an i64; the conversion is the bare truncation without the
+    // saturation checks a plain `as` adds.
+    let (i, j) = unsafe { (tx.to_int_unchecked::<i64>(), ty.to_int_unchecked::<i64>()) };
     let weights = |d: f64| {
         [
             0.5 * (0.5 - d) * (0.5 - d),
@@ -167,7 +176,7 @@ fn smooth_sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
             0.5 * (0.5 + d) * (0.5 + d),
         ]
     };
-    let (wx, wy) = (weights(x - i), weights(y - j));
+    let (wx, wy) = (weights(x - i as f64), weights(y - j as f64));
     let (i, j, width) = (i as usize, j as usize, image.width);
     // The 3×3 neighbourhood as one slice: one bounds check, not nine.
     let start = (j - 1) * width + i - 1;
@@ -472,10 +481,7 @@ pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) 
     let rays = edge_points(image, coarse, scratch);
     let scale = coarse.semi_major.max(1.0);
     let first = Ellipse::fit_near(scratch, (coarse.u, coarse.v), scale)?;
-    let residuals: Vec<f64> = scratch
-        .iter()
-        .map(|&(x, y)| first.radial_distance(x, y))
-        .collect();
+    let residuals: Vec<f64> = first.radial_distances(scratch).collect();
     let mut sorted = residuals.clone();
     sorted.sort_by(f64::total_cmp);
     let median = sorted[sorted.len() / 2];
@@ -515,10 +521,7 @@ pub fn refine(image: Gray<'_>, coarse: &Ellipse, scratch: &mut Vec<(f64, f64)>) 
     if !consistent {
         return None;
     }
-    let sum_sq: f64 = scratch
-        .iter()
-        .map(|&(x, y)| fitted.radial_distance(x, y).powi(2))
-        .sum();
+    let sum_sq: f64 = fitted.radial_distances(scratch).map(|d| d.powi(2)).sum();
     Some(Refined {
         ellipse: fitted,
         rms: (sum_sq / scratch.len() as f64).sqrt(),

@@ -64,10 +64,9 @@ impl Detector {
             return None;
         }
         let fitted = Ellipse::fit_near(&self.edge_scratch, (pu, pv), track.a)?;
-        let rms = (self
-            .edge_scratch
-            .iter()
-            .map(|&(x, y)| fitted.radial_distance(x, y).powi(2))
+        let rms = (fitted
+            .radial_distances(&self.edge_scratch)
+            .map(|d| d.powi(2))
             .sum::<f64>()
             / self.edge_scratch.len() as f64)
             .sqrt();

@@ -8,7 +8,10 @@
 
 use super::ellipse::sample;
 use super::segment::Gray;
+use std::sync::OnceLock;
+
 use crate::camera::Camera;
+use crate::family::MAX_BITS;
 use crate::geometry::{sector_is_black, sector_width, RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
 use crate::math::Ellipse;
 use crate::pose::Pose;
@@ -27,28 +30,32 @@ pub fn refine_rotation(
     bits: u32,
     code: u32,
 ) -> Option<Pose> {
+    if !(1..=MAX_BITS).contains(&bits) {
+        return None;
+    }
     let sectors = 2 * bits as usize;
-    let n = sectors * SAMPLES_PER_SECTOR;
+    let per_sector = samples_per_sector(camera, pose, radius_m, sectors);
+    let n = sectors * per_sector;
     let x = pose.rotation.column(0).into_owned();
     let z = pose.rotation.column(2).into_owned();
     let y = z.cross(&x);
     let radii = [0.25, 0.5, 0.75]
         .map(|k| (RING_INNER_RATIO + (WHYCODE_WHITE_RATIO - RING_INNER_RATIO) * k) * radius_m);
-    let mut profile = Vec::with_capacity(n);
     let plane = camera.plane_projection(pose.position, x, y);
-    // Walk the angle by a fixed rotation instead of a sine per sample.
-    let (step_sin, step_cos) = (std::f64::consts::TAU / n as f64).sin_cos();
-    let (mut s, mut c) = (0.0f64, 1.0f64);
-    for _ in 0..n {
+    // The three radii of an angle share its direction in the image and
+    // are read independently of one another and of the angle before (its
+    // cosine and sine come from a table, not from a rotation walked sample
+    // by sample): this loop was a fifth of a tracked frame with pose.
+    let mut profile = Vec::with_capacity(n);
+    for &angle in unit_circle(n) {
         let mut sum = 0.0;
-        for r in radii {
-            let (u, v) = plane.project(r * c, r * s)?;
+        for point in plane.project_radii(angle, &radii) {
+            let (u, v) = point?;
             sum += sample(image, u, v)?;
         }
         profile.push(sum / radii.len() as f64);
-        (s, c) = (s * step_cos + c * step_sin, c * step_cos - s * step_sin);
     }
-    let phi = edge_phase(&profile, bits, code, SAMPLES_PER_SECTOR, 1.0)?;
+    let phi = edge_phase(&profile, bits, code, per_sector, 1.0)?;
     // The edges sit at angle φ in the current frame: +x turns by φ.
     let (s, c) = phi.sin_cos();
     let new_x = x * c + y * s;
@@ -57,6 +64,48 @@ pub fn refine_rotation(
         pose.position,
         nalgebra::Matrix3::from_columns(&[new_x, new_y, z]),
     ))
+}
+
+/// Samples per sector along the rectified ring: about [`SAMPLE_SPACING_PX`]
+/// apart on the ring's middle circle, [`MIN_SAMPLES_PER_SECTOR`] to
+/// [`SAMPLES_PER_SECTOR`]. Closer samples than that only interpolate the
+/// same pixels again, and a 14-bit ring of a 90 px marker has sectors under
+/// 5 px long.
+fn samples_per_sector(camera: &Camera, pose: &Pose, radius_m: f64, sectors: usize) -> usize {
+    let middle_m = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO) * radius_m;
+    let middle_px = middle_m * 0.5 * (camera.fx + camera.fy) / pose.position.z;
+    let arc_px = std::f64::consts::TAU * middle_px / sectors as f64;
+    let sp: f64 = std::env::var("SPACING")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(SAMPLE_SPACING_PX);
+    let wanted = (arc_px / sp).ceil();
+    if wanted.is_nan() {
+        return SAMPLES_PER_SECTOR;
+    }
+    (wanted as usize).clamp(MIN_SAMPLES_PER_SECTOR, SAMPLES_PER_SECTOR)
+}
+
+const SAMPLE_SPACING_PX: f64 = 0.75;
+const MIN_SAMPLES_PER_SECTOR: usize = 6;
+const MAX_SAMPLES: usize = 2 * MAX_BITS as usize * SAMPLES_PER_SECTOR;
+
+/// The cosines and sines of `n` angles evenly spread round the circle from
+/// angle 0, worked out once per count by walking a fixed rotation.
+fn unit_circle(n: usize) -> &'static [(f64, f64)] {
+    static TABLES: [OnceLock<Vec<(f64, f64)>>; MAX_SAMPLES + 1] =
+        [const { OnceLock::new() }; MAX_SAMPLES + 1];
+    TABLES[n].get_or_init(|| {
+        let (step_sin, step_cos) = (std::f64::consts::TAU / n as f64).sin_cos();
+        let (mut s, mut c) = (0.0f64, 1.0f64);
+        (0..n)
+            .map(|_| {
+                let angle = (c, s);
+                (s, c) = (s * step_cos + c * step_sin, c * step_cos - s * step_sin);
+                angle
+            })
+            .collect()
+    })
 }
 
 /// Where the code's sector edges are in a ring profile sampled at equal
@@ -75,17 +124,16 @@ fn edge_phase(
     let w = sector_width(bits);
     // Grey levels of the black and the white sectors as they are now.
     let (mut black, mut white, mut nb, mut nw) = (0.0, 0.0, 0, 0);
-    for (j, &p) in profile.iter().enumerate() {
-        let within = j % per_sector;
-        if !(per_sector / 4..per_sector * 3 / 4).contains(&within) {
-            continue;
-        }
-        if sector_is_black(bits, code, (j / per_sector) as u32) {
-            black += p;
-            nb += 1;
+    for (k, sector) in profile.chunks_exact(per_sector).enumerate() {
+        let middle = &sector[per_sector / 4..per_sector * 3 / 4];
+        let (sum, count) = if sector_is_black(bits, code, k as u32) {
+            (&mut black, &mut nb)
         } else {
-            white += p;
-            nw += 1;
+            (&mut white, &mut nw)
+        };
+        for &p in middle {
+            *sum += p;
+            *count += 1;
         }
     }
     if nb == 0 || nw == 0 {
@@ -96,7 +144,17 @@ fn edge_phase(
         return None;
     }
     let mid = (black + white) / 2.0;
-    let at = |j: isize| profile[j.rem_euclid(n as isize) as usize];
+    // The windows reach at most half a sector past either end.
+    let at = |j: isize| {
+        let n = n as isize;
+        profile[(if j < 0 {
+            j + n
+        } else if j >= n {
+            j - n
+        } else {
+            j
+        }) as usize]
+    };
     let mut offsets = Vec::new();
     let mut edges = 0;
     for k in 0..sectors {

@@ -214,7 +214,22 @@ impl Ellipse {
     /// Approximate distance of a point from the ellipse (exact on the axes),
     /// via the radial scaling of the point onto the curve.
     pub fn radial_distance(&self, x: f64, y: f64) -> f64 {
-        let (s, c) = self.angle.sin_cos();
+        self.radial_distance_turned(self.angle.sin_cos(), x, y)
+    }
+
+    /// [`Ellipse::radial_distance`] of each point, the axes' direction
+    /// worked out once (a sine and cosine per point were most of the cost).
+    pub fn radial_distances<'a>(
+        &'a self,
+        points: &'a [(f64, f64)],
+    ) -> impl Iterator<Item = f64> + 'a {
+        let turn = self.angle.sin_cos();
+        points
+            .iter()
+            .map(move |&(x, y)| self.radial_distance_turned(turn, x, y))
+    }
+
+    fn radial_distance_turned(&self, (s, c): (f64, f64), x: f64, y: f64) -> f64 {
         let (dx, dy) = (x - self.u, y - self.v);
         let (p, q) = (dx * c + dy * s, -dx * s + dy * c);
         let r = p.hypot(q);

@@ -101,7 +101,8 @@ impl Observations {
             let weighted = Vector3::new(plane.x, plane.y, -r2 * plane.z);
             let value = plane.dot(&weighted);
             let dual = plane.x * rows[0] + plane.y * rows[1] - r2 * plane.z * rows[2];
-            let half_norm = dual.x.hypot(dual.y);
+            // Not `hypot`, a library call: the terms are far from overflow.
+            let half_norm = (dual.x * dual.x + dual.y * dual.y).sqrt();
             if !(half_norm > 0.0 && value.is_finite()) {
                 return false;
             }
@@ -161,6 +162,14 @@ fn solve(observations: &Observations, initial: &CirclePose, steps: usize) -> Opt
         let Some(mut step) = normal.cholesky().map(|c| c.solve(&-gradient)) else {
             break;
         };
+        // Converged (see below): a step this small is taken without the
+        // trial that checks it lowers the cost. A followed marker's fit
+        // starts at last frame's optimum and mostly ends here, sparing
+        // residuals whose change is lost in rounding anyway.
+        if step.norm() < CONVERGED_STEP {
+            circle = moved(&circle, &basis, &step);
+            break;
+        }
         let mut accepted = false;
         for _ in 0..4 {
             let q = moved(&circle, &basis, &step);
@@ -171,14 +180,17 @@ fn solve(observations: &Observations, initial: &CirclePose, steps: usize) -> Opt
             }
             step *= 0.5;
         }
-        // Converged: the normal turns by less than 0.0006°, the centre
-        // moves by less than 1e-6 of its distance.
-        if !accepted || step.norm() < 1e-5 {
+        if !accepted || step.norm() < CONVERGED_STEP {
             break;
         }
     }
     Some(circle)
 }
+
+/// Step norm (relative centre shift, normal tilt in radians) under which
+/// the fit has converged: the normal turns by less than 0.0006°, the centre
+/// moves by less than 1e-6 of its distance.
+const CONVERGED_STEP: f64 = 1e-5;
 
 /// The circle pose that best explains edge points of several concentric
 /// circles of the marker (each image point with the radius, metres, of the
