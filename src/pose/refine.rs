@@ -68,12 +68,15 @@ impl Observations {
     /// worked out in closed form: tilting the normal towards a basis vector
     /// turns that vector towards the old normal, and the residual, which
     /// does not depend on how the basis is turned in its plane, follows.
+    ///
+    /// Each point's residual and row of derivatives go to `take`, in the
+    /// points' order (the solver sums them into its normal equations as
+    /// they come, with no table of rows to fill and clear).
     fn linearise(
         &self,
         circle: &CirclePose,
         basis: &(Vector3<f64>, Vector3<f64>),
-        residual: &mut [f64],
-        jacobian: &mut [[f64; 5]],
+        mut take: impl FnMut(f64, &[f64; 5]),
     ) -> bool {
         let Some(g) = Matrix3::from_columns(&[basis.0, basis.1, circle.center]).try_inverse()
         else {
@@ -91,11 +94,8 @@ impl Observations {
             )
         };
         let columns = [0, 1, 2].map(|k| g.column(k).into_owned());
-        for ((slot, row), &(x, y, r)) in residual
-            .iter_mut()
-            .zip(jacobian.iter_mut())
-            .zip(&self.points)
-        {
+        let mut row = [0.0f64; 5];
+        for &(x, y, r) in &self.points {
             let r2 = r * r;
             let plane = g * Vector3::new(x, y, 1.0);
             let weighted = Vector3::new(plane.x, plane.y, -r2 * plane.z);
@@ -107,7 +107,7 @@ impl Observations {
                 return false;
             }
             let norm = 2.0 * half_norm;
-            *slot = self.focal * value / norm;
+            let residual = self.focal * value / norm;
             let derivative = |d_value: f64, d_dual: (f64, f64)| {
                 let d_norm = 2.0 * (dual.x * d_dual.0 + dual.y * d_dual.1) / half_norm;
                 self.focal * (d_value * norm - value * d_norm) / (norm * norm)
@@ -130,6 +130,7 @@ impl Observations {
                 );
                 row[k] = derivative(2.0 * along * weighted_normal, d_dual);
             }
+            take(residual, &row);
         }
         true
     }
@@ -141,23 +142,22 @@ impl Observations {
 /// frame's fit), so a few steps converge.
 fn solve(observations: &Observations, initial: &CirclePose, steps: usize) -> Option<CirclePose> {
     let n = observations.points.len();
-    let mut residual = vec![0.0; n];
     let mut trial = vec![0.0; n];
-    let mut jacobian = vec![[0.0f64; 5]; n];
     let cost = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
     let mut circle = *initial;
     for _ in 0..steps {
         let basis = plane_basis(&circle.normal);
-        if !observations.linearise(&circle, &basis, &mut residual, &mut jacobian) {
-            return None;
-        }
-        let current = cost(&residual);
         let mut normal = SMatrix::<f64, 5, 5>::zeros();
         let mut gradient = Params::zeros();
-        for (row, r) in jacobian.iter().zip(&residual) {
+        let mut current = 0.0;
+        let linearised = observations.linearise(&circle, &basis, |r, row| {
             let j = Params::from_column_slice(row);
             normal += j * j.transpose();
-            gradient += j * *r;
+            gradient += j * r;
+            current += r * r;
+        });
+        if !linearised {
+            return None;
         }
         let Some(mut step) = normal.cholesky().map(|c| c.solve(&-gradient)) else {
             break;
@@ -309,8 +309,11 @@ mod tests {
         };
         let n = observations.points.len();
         let basis = plane_basis(&circle.normal);
-        let (mut residual, mut jacobian) = (vec![0.0; n], vec![[0.0; 5]; n]);
-        assert!(observations.linearise(&circle, &basis, &mut residual, &mut jacobian));
+        let (mut residual, mut jacobian) = (Vec::new(), Vec::new());
+        assert!(observations.linearise(&circle, &basis, |r, row| {
+            residual.push(r);
+            jacobian.push(*row);
+        }));
         let mut plain = vec![0.0; n];
         assert!(observations.residuals(&circle, &mut plain));
         let (mut ahead, mut behind) = (vec![0.0; n], vec![0.0; n]);
