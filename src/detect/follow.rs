@@ -8,6 +8,12 @@ use super::track::{PoseMemory, Track};
 use super::{ellipse, Candidate, Detection, Detector};
 use crate::math::Ellipse;
 
+/// How far past its predicted outline a tracked marker's edge is looked
+/// for, pixels (`a`: the predicted semi-major axis).
+pub(super) fn edge_window(a: f64) -> f64 {
+    (3.5 + 0.03 * a).min(23.0)
+}
+
 impl Detector {
     /// Looks for a tracked marker where it should be now. First the cheap
     /// way: edge points around the predicted outline, a conic fit, and a
@@ -51,7 +57,7 @@ impl Detector {
             angle: track.angle,
         };
         let mid = (track.black + track.white) / 2.0;
-        let window = (3.5 + 0.03 * track.a).min(23.0);
+        let window = edge_window(track.a);
         let rays = ellipse::scanline_edge_points(
             gray,
             &guess,

@@ -354,10 +354,9 @@ impl Detector {
                     break;
                 }
                 if let Some(next) = self.tracks.get(index + 1) {
-                    // The edge search reaches a window (at most 23 px)
-                    // past the outline.
+                    // The edge search reaches a window past the outline.
                     let (u, v) = next.predicted();
-                    preload_disc(gray, u, v, next.a + 12.0);
+                    preload_disc(gray, u, v, next.a + follow::edge_window(next.a) + 1.0);
                 }
                 if let Some(mut c) = self.follow(gray, index) {
                     c.track = Some(index);
