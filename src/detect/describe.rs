@@ -13,7 +13,7 @@ use super::{ellipse, legacy, rectify, ring_model, Candidate, Detection, Detector
 use crate::camera::Camera;
 use crate::family::{Family, MatchStatus};
 use crate::geometry::{sector_is_black, sector_width, Design, WHYCODE_WHITE_RATIO};
-use crate::math::Ellipse;
+use crate::math::{angle, Ellipse};
 use crate::pose::{self, CirclePose, Pose};
 
 /// What the ring reading and the marker's track tell the pose stage.
@@ -662,14 +662,14 @@ impl RingSides {
         // A whole turn is a whole number of sectors: no need to bring the
         // angle into [0, 2π) first.
         let turns = rough_atan2(y, x) / width;
-        let sector = turns.floor();
-        let into = width * (turns - sector);
+        let index = angle::floor_to_int(turns);
+        let into = width * (turns - index as f64);
         let arc_m = radius_m * into.min(width - into);
         let clear = arc_m > 2.0 * self.pixel_m;
         clear
             && self.code.map_or(true, |code| {
                 let sectors = 2 * self.bits as i64;
-                let k = (sector as i64).rem_euclid(sectors) as u32;
+                let k = index.rem_euclid(sectors) as u32;
                 sector_is_black(self.bits, code, k) == on_black
             })
     }

@@ -238,31 +238,43 @@ fn blend_3x3(p: &[u8], width: usize, wx: [f32; 3], wy: [f32; 3]) -> f32 {
 /// the marker, so worked out once per outline and count.
 #[derive(Debug, Clone, Default)]
 pub struct Spokes {
-    outline: Option<Ellipse>,
-    rays: Vec<(f64, f64, f64)>,
+    /// The two latest outlines and counts with their rays: a marker's
+    /// circles take one or two counts (a small marker's inner circle is
+    /// given fewer rays), asked for in turn.
+    sets: [(Option<(Ellipse, usize)>, Vec<(f64, f64, f64)>); 2],
+    /// The set to replace next.
+    older: usize,
 }
 
 impl Spokes {
     fn around(&mut self, outline: &Ellipse, count: usize) -> &[(f64, f64, f64)] {
-        if self.outline != Some(*outline) || self.rays.len() != count {
-            self.outline = Some(*outline);
-            self.rays.clear();
-            let (sin, cos) = outline.angle.sin_cos();
-            // The parameter walks by a fixed rotation, from half a step.
-            let step = std::f64::consts::TAU / count as f64;
-            let (step_sin, step_cos) = step.sin_cos();
-            let (mut sin_t, mut cos_t) = (0.5 * step).sin_cos();
-            for _ in 0..count {
-                let (a, b) = (outline.semi_major * cos_t, outline.semi_minor * sin_t);
-                let (dx, dy) = (a * cos - b * sin, a * sin + b * cos);
-                self.rays.push((dx, dy, (dx * dx + dy * dy).sqrt()));
-                (sin_t, cos_t) = (
-                    sin_t * step_cos + cos_t * step_sin,
-                    cos_t * step_cos - sin_t * step_sin,
-                );
+        let key = Some((*outline, count));
+        let slot = match self.sets.iter().position(|(k, _)| *k == key) {
+            Some(slot) => slot,
+            None => {
+                let slot = self.older;
+                self.older = 1 - slot;
+                let (k, rays) = &mut self.sets[slot];
+                *k = key;
+                rays.clear();
+                let (sin, cos) = outline.angle.sin_cos();
+                // The parameter walks by a fixed rotation, from half a step.
+                let step = std::f64::consts::TAU / count as f64;
+                let (step_sin, step_cos) = step.sin_cos();
+                let (mut sin_t, mut cos_t) = (0.5 * step).sin_cos();
+                for _ in 0..count {
+                    let (a, b) = (outline.semi_major * cos_t, outline.semi_minor * sin_t);
+                    let (dx, dy) = (a * cos - b * sin, a * sin + b * cos);
+                    rays.push((dx, dy, (dx * dx + dy * dy).sqrt()));
+                    (sin_t, cos_t) = (
+                        sin_t * step_cos + cos_t * step_sin,
+                        cos_t * step_cos - sin_t * step_sin,
+                    );
+                }
+                slot
             }
-        }
-        &self.rays
+        };
+        &self.sets[slot].1
     }
 }
 

@@ -29,6 +29,7 @@ use image::{ImageBuffer, Luma};
 use super::ellipse::LinearBlur;
 use crate::family::{necklace, Family};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
+use crate::math::angle;
 use crate::math::Ellipse as ImageEllipse;
 
 /// Semi-major axis (pixels) up to which a steep view of the marker is
@@ -324,7 +325,7 @@ fn compare<C: Deref<Target = [u8]>>(
                 // A footprint covers a few sectors: keep only those.
                 touched.clear();
                 for &(t, w) in samples {
-                    let index = floor_to_int((t - phase) / sector);
+                    let index = angle::floor_to_int((t - phase) / sector);
                     // Within a turn of the range but for rounding: spare
                     // the integer division of `rem_euclid`.
                     let index = if (0..sectors as i64).contains(&index) {
@@ -440,18 +441,6 @@ fn radius(p: f64, q: f64) -> f64 {
         p.hypot(q)
     } else {
         r
-    }
-}
-
-/// `x.floor() as i64` for the small finite values of a sector index,
-/// without the library call `floor` is on targets without SSE4.1.
-#[inline]
-fn floor_to_int(x: f64) -> i64 {
-    let i = x as i64;
-    if (i as f64) > x {
-        i - 1
-    } else {
-        i
     }
 }
 

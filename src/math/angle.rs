@@ -29,6 +29,18 @@ pub fn normalize_axis_angle(angle: f64) -> f64 {
     a
 }
 
+/// `x.floor() as i64` for the small finite values of a sector index,
+/// without the library call `floor` is on targets without SSE4.1.
+#[inline]
+pub(crate) fn floor_to_int(x: f64) -> i64 {
+    let i = x as i64;
+    if (i as f64) > x {
+        i - 1
+    } else {
+        i
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
