@@ -516,7 +516,14 @@ impl Detector {
         if settled.is_none() && by_previous.is_none() {
             let mid = (c.black + c.white) / 2.0;
             for &ratio in design.inner_edge_ratios() {
-                ellipse::inner_edge_points(gray, &c.outer, ratio, mid, &mut self.inner_scratch);
+                ellipse::inner_edge_points(
+                    gray,
+                    &c.outer,
+                    ratio,
+                    mid,
+                    &mut self.spokes,
+                    &mut self.inner_scratch,
+                );
                 let found = pose::inner_edge_errors(
                     camera,
                     &candidates,

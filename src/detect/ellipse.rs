@@ -116,15 +116,11 @@ pub fn inner_edge_points(
     outer: &Ellipse,
     ratio: f64,
     mid: f64,
+    spokes: &mut Spokes,
     out: &mut Vec<(f64, f64)>,
 ) {
     out.clear();
-    let rays = 48;
-    for k in 0..rays {
-        let t = std::f64::consts::TAU * (k as f64 + 0.5) / f64::from(rays);
-        let (px, py) = outer.point_at(t);
-        let (dx, dy) = (px - outer.u, py - outer.v);
-        let r = dx.hypot(dy);
+    for &(dx, dy, r) in spokes.around(outer, 48) {
         let (s0, s1) = ((ratio - 0.07) * r, (ratio + 0.07) * r);
         let steps = (((s1 - s0) * 2.0) as usize).max(4);
         let at = |s: f64| sample(image, outer.u + dx / r * s, outer.v + dy / r * s);
