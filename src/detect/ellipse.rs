@@ -228,6 +228,9 @@ fn blend_3x3(p: &[u8], width: usize, wx: [f32; 3], wy: [f32; 3]) -> f32 {
     (column(0) * wx[0] + column(2) * wx[2]) + column(1) * wx[1]
 }
 
+/// Each ray as the offset to its outline point and its length.
+type Rays = Vec<(f64, f64, f64)>;
+
 /// The rays [`concentric_edge_points`] follows from an outline's centre to
 /// `count` points spread evenly (by the ellipse's parameter) over it, each
 /// as the offset to that point and its length: the same for every circle of
@@ -237,7 +240,7 @@ pub struct Spokes {
     /// The two latest outlines and counts with their rays: a marker's
     /// circles take one or two counts (a small marker's inner circle is
     /// given fewer rays), asked for in turn.
-    sets: [(Option<(Ellipse, usize)>, Vec<(f64, f64, f64)>); 2],
+    sets: [(Option<(Ellipse, usize)>, Rays); 2],
     /// The set to replace next.
     older: usize,
 }
