@@ -5,7 +5,7 @@
 
 use std::f64::consts::PI;
 
-use super::segment::{below_mask, Fill, Gray, Stats};
+use super::segment::{below_mask, below_word, Fill, Gray, Stats};
 use super::threshold::ThresholdMap;
 use super::{ellipse, Candidate, Detector, SCAN_CHUNK};
 use crate::geometry::Design;
@@ -105,18 +105,28 @@ impl Detector {
             let floor = map.floor_row(y);
             let tile_row = (y / CHUNK) * cols;
             for (w, block) in row.chunks(WORD).enumerate() {
-                let mut seeds = 0u64;
-                for (q, chunk) in block.chunks(CHUNK).enumerate() {
+                // The chunks that may seed: not followed, not floor.
+                let mut open = 0u64;
+                for q in 0..block.len().div_ceil(CHUNK) {
                     let x0 = w * WORD + q * CHUNK;
-                    if (!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
-                        || floor.is_some_and(|f| f[x0 >> shift])
+                    if !((!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
+                        || floor.is_some_and(|f| f[x0 >> shift]))
                     {
-                        continue;
+                        open |= 0xffff << (q * CHUNK);
                     }
-                    let t = thresholds[x0 >> shift].saturating_sub(margin);
-                    seeds |= u64::from(below_mask(chunk, t)) << (q * CHUNK);
                 }
-                seeds &= !self.labels.dark_word(y, w);
+                if open == 0 {
+                    continue;
+                }
+                let t = |x0: usize| thresholds[x0 >> shift].saturating_sub(margin);
+                let mut seeds = if block.len() == WORD {
+                    below_word(block, |q| t(w * WORD + q * CHUNK))
+                } else {
+                    block.chunks(CHUNK).enumerate().fold(0u64, |m, (q, chunk)| {
+                        m | u64::from(below_mask(chunk, t(w * WORD + q * CHUNK))) << (q * CHUNK)
+                    })
+                };
+                seeds &= open & !self.labels.dark_word(y, w);
                 while seeds != 0 {
                     let x = w * WORD + seeds.trailing_zeros() as usize;
                     if let Some(c) = self.evaluate(gray, map, (x as u32, y as u32)) {

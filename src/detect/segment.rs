@@ -49,6 +49,32 @@ pub fn below_mask(chunk: &[u8], t: u8) -> u16 {
         .fold(0u16, |m, (i, &p)| m | u16::from(p < t) << i)
 }
 
+/// Bit `i` set when `block[i]` (64 pixels) lies below its chunk's
+/// threshold, `t(q)` for pixels 16 q to 16 q + 15.
+#[inline(always)]
+pub fn below_word(block: &[u8], t: impl Fn(usize) -> u8) -> u64 {
+    let block: &[u8; WORD] = block.try_into().expect("a whole word of pixels");
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of x86_64; each load reads 16 of the block's
+    // 64 bytes, unaligned. Bytes are compared as signed after flipping
+    // their top bit, which orders them as unsigned; nothing is below 0.
+    unsafe {
+        use std::arch::x86_64::*;
+        let flip = _mm_set1_epi8(i8::MIN);
+        let mut bits = 0u64;
+        for q in 0..WORD / CHUNK {
+            let p = _mm_loadu_si128(block.as_ptr().add(q * CHUNK).cast());
+            let below = _mm_cmplt_epi8(_mm_xor_si128(p, flip), _mm_set1_epi8((t(q) ^ 0x80) as i8));
+            bits |= u64::from(_mm_movemask_epi8(below) as u16) << (q * CHUNK);
+        }
+        bits
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    (0..WORD / CHUNK).fold(0u64, |bits, q| {
+        bits | u64::from(below_mask(&block[q * CHUNK..(q + 1) * CHUNK], t(q))) << (q * CHUNK)
+    })
+}
+
 /// The sum of a run's grey values: sixteen at a time where the target
 /// has a sum-of-absolute-differences instruction (to zero).
 #[inline]
@@ -234,9 +260,12 @@ impl Classes {
     /// Classifies row `y` unless it already is.
     #[inline]
     fn ensure(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
-        if self.stamps[y] == self.generation {
-            return;
+        if self.stamps[y] != self.generation {
+            self.classify(image, map, y);
         }
+    }
+
+    fn classify(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
         self.stamps[y] = self.generation;
         let thresholds = map.row(y);
         let floor = map.floor_row(y);
@@ -244,13 +273,31 @@ impl Classes {
         let pixels = &image.pixels[y * image.width..(y + 1) * image.width];
         let range = y * self.stride..(y + 1) * self.stride;
         let (dark, light) = (&mut self.dark[range.clone()], &mut self.light[range]);
-        for (w, (block, (d, l))) in pixels
-            .chunks(WORD)
-            .zip(dark.iter_mut().zip(light.iter_mut()))
+        // Whole words first: four chunks, no partial chunk to mask.
+        let mut blocks = pixels.chunks_exact(WORD);
+        for (w, ((block, d), l)) in (&mut blocks)
+            .zip(dark.iter_mut())
+            .zip(light.iter_mut())
             .enumerate()
         {
+            let x0 = w * WORD;
+            let below = below_word(block, |q| thresholds[(x0 + q * CHUNK) >> shift]);
+            let mut dw = below;
+            if let Some(f) = floor {
+                for q in 0..WORD / CHUNK {
+                    if f[(x0 + q * CHUNK) >> shift] {
+                        dw &= !(0xffff << (q * CHUNK));
+                    }
+                }
+            }
+            *d = dw;
+            *l = !below;
+        }
+        let tail = blocks.remainder();
+        if !tail.is_empty() {
+            let w = pixels.len() / WORD;
             let (mut dw, mut lw) = (0u64, 0u64);
-            for (q, chunk) in block.chunks(CHUNK).enumerate() {
+            for (q, chunk) in tail.chunks(CHUNK).enumerate() {
                 let x0 = w * WORD + q * CHUNK;
                 let below = below_mask(chunk, thresholds[x0 >> shift]);
                 let valid = (1u32 << chunk.len()) - 1;
@@ -260,8 +307,8 @@ impl Classes {
                 }
                 lw |= u64::from(!below & valid as u16) << (q * CHUNK);
             }
-            *d = dw;
-            *l = lw;
+            dark[w] = dw;
+            light[w] = lw;
         }
     }
 }
