@@ -185,10 +185,11 @@ impl Detector {
         if roundness.abs() >= self.roundness.tolerance() {
             return None;
         }
-        let dark = Stats {
-            sum_i: self.filler.grey_sum(gray),
-            ..dark
-        };
+        // The grey values are read only for segments that pass every test
+        // up to the contrast test, which is most of all a round blob of
+        // clutter with no white inside is not: the dark fill's runs are
+        // kept aside for it while the white fill runs.
+        self.filler.keep_runs();
         let (cu, cv) = dark.centroid();
         // The white inside may come next to the segment's bounding box only
         // when the annulus is one pixel wide, on markers of a few pixels:
@@ -238,8 +239,16 @@ impl Detector {
         if area_error.abs() >= self.area.tolerance() + 0.5 / coarse.semi_minor {
             return None;
         }
-        let black = dark.mean_intensity();
-        let white_level = white.mean_intensity();
+        let black = Stats {
+            sum_i: self.filler.kept_grey_sum(gray),
+            ..dark
+        }
+        .mean_intensity();
+        let white_level = Stats {
+            sum_i: self.filler.grey_sum(gray),
+            ..white
+        }
+        .mean_intensity();
         if white_level - black < map.min_contrast() {
             return None;
         }
@@ -268,7 +277,8 @@ impl Detector {
     }
 
     /// Fills the white region around the dark segment's centroid; None when
-    /// it is not enclosed by the segment. When the centroid lands on ink
+    /// it is not enclosed by the segment. Its grey values are left to
+    /// [`Filler::grey_sum`], the fill's runs being the filler's last. When the centroid lands on ink
     /// (the ring, or a printed centring cross, whose lines a local
     /// threshold cuts as dark inside the white disc), the fill starts at
     /// the nearest light pixel within `reach` pixels, on one of eight
@@ -319,10 +329,7 @@ impl Detector {
                 return None;
             }
             if result.stats.count > 0 {
-                return Some(Stats {
-                    sum_i: self.filler.grey_sum(gray),
-                    ..result.stats
-                });
+                return Some(result.stats);
             }
         }
         None

@@ -116,6 +116,8 @@ pub(super) fn sum_bytes(run: &[u8]) -> u64 {
 pub struct Labels {
     dark: Vec<u64>,
     white: Vec<u64>,
+    /// A row of clear marks, for rows not yet written in this pass.
+    zeros: Vec<u64>,
     stamps: Vec<u32>,
     stride: usize,
     width: usize,
@@ -130,6 +132,7 @@ impl Labels {
             self.stride = words_per_row(width);
             self.dark = vec![0; self.stride * height];
             self.white = vec![0; self.stride * height];
+            self.zeros = vec![0; self.stride];
             self.stamps = vec![0; height];
             self.width = width;
             self.height = height;
@@ -153,13 +156,14 @@ impl Labels {
         }
     }
 
-    /// The marks of either kind of word `w` of row `y`.
+    /// Row `y`'s dark and white marks.
     #[inline(always)]
-    fn any_word(&self, y: usize, w: usize) -> u64 {
+    fn marks(&self, y: usize) -> (&[u64], &[u64]) {
         if self.stamps[y] == self.generation {
-            self.dark[y * self.stride + w] | self.white[y * self.stride + w]
+            let range = y * self.stride..(y + 1) * self.stride;
+            (&self.dark[range.clone()], &self.white[range])
         } else {
-            0
+            (&self.zeros, &self.zeros)
         }
     }
 
@@ -244,19 +248,6 @@ impl Classes {
         }
     }
 
-    /// The pixels of word `w` of row `y` a fill may take: dark fills dark
-    /// pixels of no dark segment yet, white fills light pixels of no
-    /// segment of either kind.
-    #[inline(always)]
-    fn fillable(&self, labels: &Labels, dark: bool, y: usize, w: usize) -> u64 {
-        let i = y * self.stride + w;
-        if dark {
-            self.dark[i] & !labels.dark_word(y, w)
-        } else {
-            self.light[i] & !labels.any_word(y, w)
-        }
-    }
-
     /// Classifies row `y` unless it already is.
     #[inline]
     fn ensure(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
@@ -274,25 +265,26 @@ impl Classes {
         let range = y * self.stride..(y + 1) * self.stride;
         let (dark, light) = (&mut self.dark[range.clone()], &mut self.light[range]);
         // Whole words first: four chunks, no partial chunk to mask.
-        let mut blocks = pixels.chunks_exact(WORD);
-        for (w, ((block, d), l)) in (&mut blocks)
-            .zip(dark.iter_mut())
-            .zip(light.iter_mut())
-            .enumerate()
-        {
+        let full = pixels.len() / WORD;
+        let (dark_full, light_full) = (&mut dark[..full], &mut light[..full]);
+        for w in 0..full {
             let x0 = w * WORD;
-            let below = below_word(block, |q| thresholds[(x0 + q * CHUNK) >> shift]);
-            let mut dw = below;
-            if let Some(f) = floor {
+            let below = below_word(&pixels[x0..x0 + WORD], |q| {
+                thresholds[(x0 + q * CHUNK) >> shift]
+            });
+            dark_full[w] = below;
+            light_full[w] = !below;
+        }
+        if let Some(f) = floor {
+            for (w, d) in dark_full.iter_mut().enumerate() {
                 for q in 0..WORD / CHUNK {
-                    if f[(x0 + q * CHUNK) >> shift] {
-                        dw &= !(0xffff << (q * CHUNK));
+                    if f[(w * WORD + q * CHUNK) >> shift] {
+                        *d &= !(0xffff << (q * CHUNK));
                     }
                 }
             }
-            *d = dw;
-            *l = !below;
         }
+        let blocks = pixels.chunks_exact(WORD);
         let tail = blocks.remainder();
         if !tail.is_empty() {
             let w = pixels.len() / WORD;
@@ -309,6 +301,46 @@ impl Classes {
             }
             dark[w] = dw;
             light[w] = lw;
+        }
+    }
+}
+
+/// The pixels of one row a fill may take: dark fills dark pixels of no
+/// dark segment yet, white fills light pixels of no segment of either
+/// kind. The row's words are borrowed once rather than looked up per word.
+struct Fillable<'a> {
+    class: &'a [u64],
+    dark_marks: &'a [u64],
+    white_marks: &'a [u64],
+    dark: bool,
+}
+
+impl<'a> Fillable<'a> {
+    #[inline(always)]
+    fn new(classes: &'a Classes, labels: &'a Labels, dark: bool, y: usize) -> Fillable<'a> {
+        let range = y * classes.stride..(y + 1) * classes.stride;
+        let class = if dark {
+            &classes.dark[range]
+        } else {
+            &classes.light[range]
+        };
+        let (dark_marks, white_marks) = labels.marks(y);
+        Fillable {
+            class,
+            dark_marks,
+            white_marks,
+            dark,
+        }
+    }
+}
+
+impl Row for Fillable<'_> {
+    #[inline(always)]
+    fn word(&self, w: usize) -> u64 {
+        if self.dark {
+            self.class[w] & !self.dark_marks[w]
+        } else {
+            self.class[w] & !(self.dark_marks[w] | self.white_marks[w])
         }
     }
 }
@@ -506,6 +538,8 @@ pub struct Filler {
     stack: Vec<(u32, u32)>,
     /// Runs (y, x0, x1) of the last fill, to undo a failed white fill.
     runs: Vec<(u32, u32, u32)>,
+    /// Runs of an earlier fill, set aside by [`Filler::keep_runs`].
+    kept: Vec<(u32, u32, u32)>,
     classes: Classes,
 }
 
@@ -557,9 +591,8 @@ impl Filler {
             };
         }
         let classes = &mut self.classes;
-        let fillable = |classes: &Classes, labels: &Labels, y: usize, w: usize| {
-            classes.fillable(labels, dark, y, w)
-        };
+        let held = map.held_rows();
+        let has_floor = dark && map.has_floor();
         self.stack.push(seed);
         let mut escaped = false;
         while let Some((x, y)) = self.stack.pop() {
@@ -569,17 +602,16 @@ impl Filler {
             // was sized for, and following it would flood the floor
             // outside the band (most of a tracked frame's time on cards
             // lying on a grey floor).
-            if dark && !map.holds_row(y) {
+            if dark && !held.contains(&y) {
                 escaped = true;
                 break;
             }
             classes.ensure(image, map, y);
-            if fillable(classes, labels, y, x / WORD) >> (x % WORD) & 1 == 0 {
-                continue;
-            }
             let (left, right) = {
-                let (c, l) = (&*classes, &*labels);
-                let row = |w: usize| fillable(c, l, y, w);
+                let row = Fillable::new(classes, labels, dark, y);
+                if row.word(x / WORD) >> (x % WORD) & 1 == 0 {
+                    continue;
+                }
                 run_through(&row, stride, x)
             };
             let (left, right) = (left.max(x_lo), right.min(x_hi));
@@ -590,7 +622,7 @@ impl Filler {
             // belongs to the background floor, not to a marker. Filling the
             // rest of the segment first (to label it once) cost tracked
             // frames, whose band scan reached the whole floor's fringe.
-            if dark
+            if has_floor
                 && (map.is_floor(left.saturating_sub(1), y)
                     || map.is_floor((right + 1).min(width - 1), y)
                     || (y > 0 && map.floor_between(y - 1, left, right))
@@ -617,10 +649,11 @@ impl Filler {
                     continue;
                 }
                 classes.ensure(image, map, ny);
+                let row = Fillable::new(classes, labels, dark, ny);
                 let (w0, w1) = (left / WORD, right / WORD);
                 let mut carry = 0u64;
                 for w in w0..=w1 {
-                    let mut m = fillable(classes, labels, ny, w);
+                    let mut m = row.word(w);
                     if w == w0 {
                         m &= !0u64 << (left % WORD);
                     }
@@ -640,18 +673,22 @@ impl Filler {
         FillResult { stats, escaped }
     }
 
+    /// Sets the last fill's runs aside for [`Filler::kept_grey_sum`].
+    pub fn keep_runs(&mut self) {
+        std::mem::swap(&mut self.kept, &mut self.runs);
+    }
+
+    /// [`Filler::grey_sum`] of the runs set aside by [`Filler::keep_runs`].
+    pub fn kept_grey_sum(&self, image: Gray<'_>) -> u64 {
+        runs_grey_sum(&self.kept, image)
+    }
+
     /// The sum of the grey values of the last fill's pixels. The fill
     /// leaves [`Stats::sum_i`] at zero: most segments of a cluttered frame
     /// fail a test that needs no brightness, so only those that get as far
     /// as the contrast test pay for reading their pixels again.
     pub fn grey_sum(&self, image: Gray<'_>) -> u64 {
-        self.runs
-            .iter()
-            .map(|&(y, x0, x1)| {
-                let row = y as usize * image.width;
-                sum_bytes(&image.pixels[row + x0 as usize..=row + x1 as usize])
-            })
-            .sum()
+        runs_grey_sum(&self.runs, image)
     }
 
     /// Forgets the labels of the last fill (a white region that turned out
@@ -666,6 +703,16 @@ impl Filler {
             );
         }
     }
+}
+
+/// The sum of the grey values of `runs` (y, x0, x1).
+fn runs_grey_sum(runs: &[(u32, u32, u32)], image: Gray<'_>) -> u64 {
+    runs.iter()
+        .map(|&(y, x0, x1)| {
+            let row = y as usize * image.width;
+            sum_bytes(&image.pixels[row + x0 as usize..=row + x1 as usize])
+        })
+        .sum()
 }
 
 #[cfg(test)]

@@ -188,12 +188,18 @@ impl ThresholdMap {
         &self.values[r * self.cols..(r + 1) * self.cols]
     }
 
-    /// Whether the map was computed for pixel row `y` (a band map holds
-    /// only its band and margins; the others borrow the nearest thresholds
-    /// and know nothing of the floor there).
+    /// The pixel rows the map was computed for (a band map holds only
+    /// its band and margins; the others borrow the nearest thresholds and
+    /// know nothing of the floor there).
     #[inline]
-    pub fn holds_row(&self, y: usize) -> bool {
-        (self.row0..self.row0 + self.rows).contains(&(y >> self.shift))
+    pub fn held_rows(&self) -> std::ops::Range<usize> {
+        (self.row0 << self.shift)..((self.row0 + self.rows) << self.shift)
+    }
+
+    /// Whether any tile is floor.
+    #[inline]
+    pub fn has_floor(&self) -> bool {
+        !self.floor.is_empty()
     }
 
     /// Least black-to-white difference that counts as a real edge here.
