@@ -5,7 +5,7 @@
 
 use std::f64::consts::PI;
 
-use super::segment::{below_mask, below_word, Fill, Gray, Stats};
+use super::segment::{below_mask, below_word, word_thresholds, Fill, Gray, Stats};
 use super::threshold::ThresholdMap;
 use super::{ellipse, Candidate, Detector, SCAN_CHUNK};
 use crate::geometry::Design;
@@ -106,21 +106,26 @@ impl Detector {
             let tile_row = (y / CHUNK) * cols;
             for (w, block) in row.chunks(WORD).enumerate() {
                 // The chunks that may seed: not followed, not floor.
-                let mut open = 0u64;
-                for q in 0..block.len().div_ceil(CHUNK) {
-                    let x0 = w * WORD + q * CHUNK;
-                    if !((!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
-                        || floor.is_some_and(|f| f[x0 >> shift]))
-                    {
-                        open |= 0xffff << (q * CHUNK);
+                let mut open = !0u64;
+                if !self.occupied.is_empty() || floor.is_some() {
+                    for q in 0..block.len().div_ceil(CHUNK) {
+                        let x0 = w * WORD + q * CHUNK;
+                        if (!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
+                            || floor.is_some_and(|f| f[x0 >> shift])
+                        {
+                            open &= !(0xffff << (q * CHUNK));
+                        }
                     }
-                }
-                if open == 0 {
-                    continue;
+                    if open == 0 {
+                        continue;
+                    }
                 }
                 let t = |x0: usize| thresholds[x0 >> shift].saturating_sub(margin);
                 let mut seeds = if block.len() == WORD {
-                    below_word(block, |q| t(w * WORD + q * CHUNK))
+                    below_word(
+                        block,
+                        word_thresholds(thresholds, shift, w).map(|t| t.saturating_sub(margin)),
+                    )
                 } else {
                     block.chunks(CHUNK).enumerate().fold(0u64, |m, (q, chunk)| {
                         m | u64::from(below_mask(chunk, t(w * WORD + q * CHUNK))) << (q * CHUNK)

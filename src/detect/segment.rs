@@ -50,9 +50,9 @@ pub fn below_mask(chunk: &[u8], t: u8) -> u16 {
 }
 
 /// Bit `i` set when `block[i]` (64 pixels) lies below its chunk's
-/// threshold, `t(q)` for pixels 16 q to 16 q + 15.
+/// threshold, `t[q]` for pixels 16 q to 16 q + 15.
 #[inline(always)]
-pub fn below_word(block: &[u8], t: impl Fn(usize) -> u8) -> u64 {
+pub fn below_word(block: &[u8], t: [u8; 4]) -> u64 {
     let block: &[u8; WORD] = block.try_into().expect("a whole word of pixels");
     #[cfg(target_arch = "x86_64")]
     // SAFETY: SSE2 is part of x86_64; each load reads 16 of the block's
@@ -61,18 +61,40 @@ pub fn below_word(block: &[u8], t: impl Fn(usize) -> u8) -> u64 {
     unsafe {
         use std::arch::x86_64::*;
         let flip = _mm_set1_epi8(i8::MIN);
+        // The four thresholds spread to four bytes each, then each to a
+        // whole vector: fewer shuffles than four broadcasts.
+        let t = _mm_xor_si128(_mm_cvtsi32_si128(i32::from_le_bytes(t)), flip);
+        let t = _mm_unpacklo_epi8(t, t);
+        let t = _mm_unpacklo_epi16(t, t);
+        let ts = [
+            _mm_shuffle_epi32::<0x00>(t),
+            _mm_shuffle_epi32::<0x55>(t),
+            _mm_shuffle_epi32::<0xaa>(t),
+            _mm_shuffle_epi32::<0xff>(t),
+        ];
         let mut bits = 0u64;
-        for q in 0..WORD / CHUNK {
+        for (q, &tq) in ts.iter().enumerate() {
             let p = _mm_loadu_si128(block.as_ptr().add(q * CHUNK).cast());
-            let below = _mm_cmplt_epi8(_mm_xor_si128(p, flip), _mm_set1_epi8((t(q) ^ 0x80) as i8));
+            let below = _mm_cmplt_epi8(_mm_xor_si128(p, flip), tq);
             bits |= u64::from(_mm_movemask_epi8(below) as u16) << (q * CHUNK);
         }
         bits
     }
     #[cfg(not(target_arch = "x86_64"))]
     (0..WORD / CHUNK).fold(0u64, |bits, q| {
-        bits | u64::from(below_mask(&block[q * CHUNK..(q + 1) * CHUNK], t(q))) << (q * CHUNK)
+        bits | u64::from(below_mask(&block[q * CHUNK..(q + 1) * CHUNK], t[q])) << (q * CHUNK)
     })
+}
+
+/// The thresholds of the four chunks of word `w` of a row (see
+/// [`ThresholdMap::row`]).
+#[inline(always)]
+pub fn word_thresholds(thresholds: &[u8], shift: u32, w: usize) -> [u8; 4] {
+    if shift == CHUNK.trailing_zeros() {
+        thresholds[w * 4..w * 4 + 4].try_into().expect("four tiles")
+    } else {
+        std::array::from_fn(|q| thresholds[(w * WORD + q * CHUNK) >> shift])
+    }
 }
 
 /// The sum of a run's grey values: sixteen at a time where the target
@@ -269,9 +291,10 @@ impl Classes {
         let (dark_full, light_full) = (&mut dark[..full], &mut light[..full]);
         for w in 0..full {
             let x0 = w * WORD;
-            let below = below_word(&pixels[x0..x0 + WORD], |q| {
-                thresholds[(x0 + q * CHUNK) >> shift]
-            });
+            let below = below_word(
+                &pixels[x0..x0 + WORD],
+                word_thresholds(thresholds, shift, w),
+            );
             dark_full[w] = below;
             light_full[w] = !below;
         }
