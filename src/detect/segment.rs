@@ -616,9 +616,11 @@ impl Filler {
         let classes = &mut self.classes;
         let held = map.held_rows();
         let has_floor = dark && map.has_floor();
-        self.stack.push(seed);
+        // The seed pushed last is popped next: it waits in `next` instead
+        // of going through the stack.
+        let mut next = Some(seed);
         let mut escaped = false;
-        while let Some((x, y)) = self.stack.pop() {
+        while let Some((x, y)) = next.take().or_else(|| self.stack.pop()) {
             let (x, y) = (x as usize, y as usize);
             // Past the rows of a band map the floor is unknown: a dark
             // segment that gets there is larger than any marker the band
@@ -687,7 +689,9 @@ impl Filler {
                     carry = m >> (WORD - 1);
                     while starts != 0 {
                         let bit = starts.trailing_zeros() as usize;
-                        self.stack.push(((w * WORD + bit) as u32, ny as u32));
+                        if let Some(waiting) = next.replace(((w * WORD + bit) as u32, ny as u32)) {
+                            self.stack.push(waiting);
+                        }
                         starts &= starts - 1;
                     }
                 }
