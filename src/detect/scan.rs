@@ -322,6 +322,13 @@ impl Detector {
             {
                 continue;
             }
+            // A probe on ink would fill nothing.
+            if !self
+                .filler
+                .takes(gray, map, &self.labels, (x as u32, y as u32), false)
+            {
+                continue;
+            }
             let result = self.filler.fill(
                 gray,
                 map,

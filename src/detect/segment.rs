@@ -700,6 +700,22 @@ impl Filler {
         FillResult { stats, escaped }
     }
 
+    /// Whether a fill (dark or white) from `at` would take that pixel at
+    /// all: most of the white fill's probes of a blob land on ink.
+    pub fn takes(
+        &mut self,
+        image: Gray<'_>,
+        map: &ThresholdMap,
+        labels: &Labels,
+        at: (u32, u32),
+        dark: bool,
+    ) -> bool {
+        let (x, y) = (at.0 as usize, at.1 as usize);
+        self.classes.select(image, map);
+        self.classes.ensure(image, map, y);
+        Fillable::new(&self.classes, labels, dark, y).word(x / WORD) >> (x % WORD) & 1 == 1
+    }
+
     /// Sets the last fill's runs aside for [`Filler::kept_grey_sum`].
     pub fn keep_runs(&mut self) {
         std::mem::swap(&mut self.kept, &mut self.runs);
