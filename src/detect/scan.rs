@@ -92,6 +92,8 @@ impl Detector {
                 .map(|tiles| tiles.contains(&false))
                 .collect()
         };
+        let rows_start = rows.start;
+        let mut open_words: Vec<u64> = Vec::new();
         for y in rows {
             if found.len() >= limit {
                 return;
@@ -102,23 +104,31 @@ impl Detector {
             let row_start = y * gray.width;
             let row = &gray.pixels[row_start..row_start + gray.width];
             let thresholds = map.row(y);
-            let floor = map.floor_row(y);
-            let tile_row = (y / CHUNK) * cols;
-            for (w, block) in row.chunks(WORD).enumerate() {
-                // The chunks that may seed: not followed, not floor.
-                let mut open = !0u64;
-                if !self.occupied.is_empty() || floor.is_some() {
-                    for q in 0..block.len().div_ceil(CHUNK) {
-                        let x0 = w * WORD + q * CHUNK;
-                        if (!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
-                            || floor.is_some_and(|f| f[x0 >> shift])
-                        {
-                            open &= !(0xffff << (q * CHUNK));
+            if y == rows_start || y % CHUNK == 0 {
+                // The chunks that may seed, not followed and not floor:
+                // the same for the tile row's sixteen pixel rows.
+                let floor = map.floor_row(y);
+                let tile_row = (y / CHUNK) * cols;
+                open_words.clear();
+                open_words.extend((0..gray.width.div_ceil(WORD)).map(|w| {
+                    let mut open = !0u64;
+                    if !self.occupied.is_empty() || floor.is_some() {
+                        for q in 0..(gray.width - w * WORD).div_ceil(CHUNK).min(WORD / CHUNK) {
+                            let x0 = w * WORD + q * CHUNK;
+                            if (!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
+                                || floor.is_some_and(|f| f[x0 >> shift])
+                            {
+                                open &= !(0xffff << (q * CHUNK));
+                            }
                         }
                     }
-                    if open == 0 {
-                        continue;
-                    }
+                    open
+                }));
+            }
+            for (w, block) in row.chunks(WORD).enumerate() {
+                let open = open_words[w];
+                if open == 0 {
+                    continue;
                 }
                 let t = |x0: usize| thresholds[x0 >> shift].saturating_sub(margin);
                 let mut seeds = if block.len() == WORD {

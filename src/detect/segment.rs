@@ -86,6 +86,17 @@ pub fn below_word(block: &[u8], t: [u8; 4]) -> u64 {
     })
 }
 
+/// The floor flags of the four chunks of word `w` of a row (see
+/// [`ThresholdMap::floor_row`]).
+#[inline(always)]
+fn word_floor(floor: &[bool], shift: u32, w: usize) -> [bool; 4] {
+    if shift == CHUNK.trailing_zeros() {
+        floor[w * 4..w * 4 + 4].try_into().expect("four tiles")
+    } else {
+        std::array::from_fn(|q| floor[(w * WORD + q * CHUNK) >> shift])
+    }
+}
+
 /// The thresholds of the four chunks of word `w` of a row (see
 /// [`ThresholdMap::row`]).
 #[inline(always)]
@@ -216,6 +227,15 @@ impl Labels {
 /// Sets (or clears) bits x0..=x1 of a row of words.
 fn set_bits(row: &mut [u64], x0: usize, x1: usize, on: bool) {
     let (w0, w1) = (x0 / WORD, x1 / WORD);
+    if w0 == w1 {
+        let mask = (!0u64 << (x0 % WORD)) & (!0u64 >> (WORD - 1 - x1 % WORD));
+        if on {
+            row[w0] |= mask;
+        } else {
+            row[w0] &= !mask;
+        }
+        return;
+    }
     for (w, word) in row.iter_mut().enumerate().take(w1 + 1).skip(w0) {
         let mut mask = !0u64;
         if w == w0 {
@@ -300,8 +320,9 @@ impl Classes {
         }
         if let Some(f) = floor {
             for (w, d) in dark_full.iter_mut().enumerate() {
-                for q in 0..WORD / CHUNK {
-                    if f[(w * WORD + q * CHUNK) >> shift] {
+                let tiles = word_floor(f, shift, w);
+                if tiles != [false; 4] {
+                    for (q, _) in tiles.iter().enumerate().filter(|(_, &t)| t) {
                         *d &= !(0xffff << (q * CHUNK));
                     }
                 }
