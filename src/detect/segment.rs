@@ -225,6 +225,7 @@ impl Labels {
 }
 
 /// Sets (or clears) bits x0..=x1 of a row of words.
+#[inline]
 fn set_bits(row: &mut [u64], x0: usize, x1: usize, on: bool) {
     let (w0, w1) = (x0 / WORD, x1 / WORD);
     if w0 == w1 {
