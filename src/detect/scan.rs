@@ -292,13 +292,13 @@ impl Detector {
     }
 
     /// Fills the white region around the dark segment's centroid; None when
-    /// it is not enclosed by the segment. Its grey values are left to
-    /// [`Filler::grey_sum`], the fill's runs being the filler's last. When the centroid lands on ink
+    /// it is not enclosed by the segment. When the centroid lands on ink
     /// (the ring, or a printed centring cross, whose lines a local
     /// threshold cuts as dark inside the white disc), the fill starts at
     /// the nearest light pixel within `reach` pixels, on one of eight
     /// rays: further off, the white's centroid would fail concentricity
-    /// anyway.
+    /// anyway. The region's grey values are left for later (its runs are
+    /// the filler's last, see `Filler::grey_sum`).
     fn fill_inside(
         &mut self,
         gray: Gray<'_>,
