@@ -421,7 +421,7 @@ impl Detector {
                 // `ThresholdMap::blind_tiles`) can a level find what it
                 // missed; a level that cuts no blind tile is not scanned.
                 let histogram = threshold::sampled_histogram(gray.pixels, width);
-                let blind = map.blind_tiles(gray.pixels, width, height);
+                let blind = map.blind_tiles(width, height);
                 let mut best = 0;
                 let mut seeds = Vec::new();
                 for t in self.search.levels_after_miss(&histogram) {

@@ -5,7 +5,7 @@
 
 use std::f64::consts::PI;
 
-use super::segment::{below_mask, Fill, Gray, Stats};
+use super::segment::{below_mask, below_word, word_thresholds, Fill, Gray, Stats};
 use super::threshold::ThresholdMap;
 use super::{ellipse, Candidate, Detector, SCAN_CHUNK};
 use crate::geometry::Design;
@@ -92,6 +92,8 @@ impl Detector {
                 .map(|tiles| tiles.contains(&false))
                 .collect()
         };
+        let rows_start = rows.start;
+        let mut open_words: Vec<u64> = Vec::new();
         for y in rows {
             if found.len() >= limit {
                 return;
@@ -102,21 +104,44 @@ impl Detector {
             let row_start = y * gray.width;
             let row = &gray.pixels[row_start..row_start + gray.width];
             let thresholds = map.row(y);
-            let floor = map.floor_row(y);
-            let tile_row = (y / CHUNK) * cols;
-            for (w, block) in row.chunks(WORD).enumerate() {
-                let mut seeds = 0u64;
-                for (q, chunk) in block.chunks(CHUNK).enumerate() {
-                    let x0 = w * WORD + q * CHUNK;
-                    if (!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
-                        || floor.is_some_and(|f| f[x0 >> shift])
-                    {
-                        continue;
+            if y == rows_start || y % CHUNK == 0 {
+                // The chunks that may seed, not followed and not floor:
+                // the same for the tile row's sixteen pixel rows.
+                let floor = map.floor_row(y);
+                let tile_row = (y / CHUNK) * cols;
+                open_words.clear();
+                open_words.extend((0..gray.width.div_ceil(WORD)).map(|w| {
+                    let mut open = !0u64;
+                    if !self.occupied.is_empty() || floor.is_some() {
+                        for q in 0..(gray.width - w * WORD).div_ceil(CHUNK).min(WORD / CHUNK) {
+                            let x0 = w * WORD + q * CHUNK;
+                            if (!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
+                                || floor.is_some_and(|f| f[x0 >> shift])
+                            {
+                                open &= !(0xffff << (q * CHUNK));
+                            }
+                        }
                     }
-                    let t = thresholds[x0 >> shift].saturating_sub(margin);
-                    seeds |= u64::from(below_mask(chunk, t)) << (q * CHUNK);
+                    open
+                }));
+            }
+            for (w, block) in row.chunks(WORD).enumerate() {
+                let open = open_words[w];
+                if open == 0 {
+                    continue;
                 }
-                seeds &= !self.labels.dark_word(y, w);
+                let t = |x0: usize| thresholds[x0 >> shift].saturating_sub(margin);
+                let mut seeds = if block.len() == WORD {
+                    below_word(
+                        block,
+                        word_thresholds(thresholds, shift, w).map(|t| t.saturating_sub(margin)),
+                    )
+                } else {
+                    block.chunks(CHUNK).enumerate().fold(0u64, |m, (q, chunk)| {
+                        m | u64::from(below_mask(chunk, t(w * WORD + q * CHUNK))) << (q * CHUNK)
+                    })
+                };
+                seeds &= open & !self.labels.dark_word(y, w);
                 while seeds != 0 {
                     let x = w * WORD + seeds.trailing_zeros() as usize;
                     if let Some(c) = self.evaluate(gray, map, (x as u32, y as u32)) {
@@ -175,10 +200,11 @@ impl Detector {
         if roundness.abs() >= self.roundness.tolerance() {
             return None;
         }
-        let dark = Stats {
-            sum_i: self.filler.grey_sum(gray),
-            ..dark
-        };
+        // The grey values are read only for segments that pass every test
+        // up to the contrast test, which is most of all a round blob of
+        // clutter with no white inside is not: the dark fill's runs are
+        // kept aside for it while the white fill runs.
+        self.filler.keep_runs();
         let (cu, cv) = dark.centroid();
         // The white inside may come next to the segment's bounding box only
         // when the annulus is one pixel wide, on markers of a few pixels:
@@ -228,8 +254,16 @@ impl Detector {
         if area_error.abs() >= self.area.tolerance() + 0.5 / coarse.semi_minor {
             return None;
         }
-        let black = dark.mean_intensity();
-        let white_level = white.mean_intensity();
+        let black = Stats {
+            sum_i: self.filler.kept_grey_sum(gray),
+            ..dark
+        }
+        .mean_intensity();
+        let white_level = Stats {
+            sum_i: self.filler.grey_sum(gray),
+            ..white
+        }
+        .mean_intensity();
         if white_level - black < map.min_contrast() {
             return None;
         }
@@ -263,7 +297,8 @@ impl Detector {
     /// threshold cuts as dark inside the white disc), the fill starts at
     /// the nearest light pixel within `reach` pixels, on one of eight
     /// rays: further off, the white's centroid would fail concentricity
-    /// anyway.
+    /// anyway. The region's grey values are left for later (its runs are
+    /// the filler's last, see `Filler::grey_sum`).
     fn fill_inside(
         &mut self,
         gray: Gray<'_>,
@@ -297,6 +332,13 @@ impl Detector {
             {
                 continue;
             }
+            // A probe on ink would fill nothing.
+            if !self
+                .filler
+                .takes(gray, map, &self.labels, (x as u32, y as u32), false)
+            {
+                continue;
+            }
             let result = self.filler.fill(
                 gray,
                 map,
@@ -309,10 +351,7 @@ impl Detector {
                 return None;
             }
             if result.stats.count > 0 {
-                return Some(Stats {
-                    sum_i: self.filler.grey_sum(gray),
-                    ..result.stats
-                });
+                return Some(result.stats);
             }
         }
         None

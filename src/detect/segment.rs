@@ -49,6 +49,65 @@ pub fn below_mask(chunk: &[u8], t: u8) -> u16 {
         .fold(0u16, |m, (i, &p)| m | u16::from(p < t) << i)
 }
 
+/// Bit `i` set when `block[i]` (64 pixels) lies below its chunk's
+/// threshold, `t[q]` for pixels 16 q to 16 q + 15.
+#[inline(always)]
+pub fn below_word(block: &[u8], t: [u8; 4]) -> u64 {
+    let block: &[u8; WORD] = block.try_into().expect("a whole word of pixels");
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of x86_64; each load reads 16 of the block's
+    // 64 bytes, unaligned. Bytes are compared as signed after flipping
+    // their top bit, which orders them as unsigned; nothing is below 0.
+    unsafe {
+        use std::arch::x86_64::*;
+        let flip = _mm_set1_epi8(i8::MIN);
+        // The four thresholds spread to four bytes each, then each to a
+        // whole vector: fewer shuffles than four broadcasts.
+        let t = _mm_xor_si128(_mm_cvtsi32_si128(i32::from_le_bytes(t)), flip);
+        let t = _mm_unpacklo_epi8(t, t);
+        let t = _mm_unpacklo_epi16(t, t);
+        let ts = [
+            _mm_shuffle_epi32::<0x00>(t),
+            _mm_shuffle_epi32::<0x55>(t),
+            _mm_shuffle_epi32::<0xaa>(t),
+            _mm_shuffle_epi32::<0xff>(t),
+        ];
+        let mut bits = 0u64;
+        for (q, &tq) in ts.iter().enumerate() {
+            let p = _mm_loadu_si128(block.as_ptr().add(q * CHUNK).cast());
+            let below = _mm_cmplt_epi8(_mm_xor_si128(p, flip), tq);
+            bits |= u64::from(_mm_movemask_epi8(below) as u16) << (q * CHUNK);
+        }
+        bits
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    (0..WORD / CHUNK).fold(0u64, |bits, q| {
+        bits | u64::from(below_mask(&block[q * CHUNK..(q + 1) * CHUNK], t[q])) << (q * CHUNK)
+    })
+}
+
+/// The floor flags of the four chunks of word `w` of a row (see
+/// [`ThresholdMap::floor_row`]).
+#[inline(always)]
+fn word_floor(floor: &[bool], shift: u32, w: usize) -> [bool; 4] {
+    if shift == CHUNK.trailing_zeros() {
+        floor[w * 4..w * 4 + 4].try_into().expect("four tiles")
+    } else {
+        std::array::from_fn(|q| floor[(w * WORD + q * CHUNK) >> shift])
+    }
+}
+
+/// The thresholds of the four chunks of word `w` of a row (see
+/// [`ThresholdMap::row`]).
+#[inline(always)]
+pub fn word_thresholds(thresholds: &[u8], shift: u32, w: usize) -> [u8; 4] {
+    if shift == CHUNK.trailing_zeros() {
+        thresholds[w * 4..w * 4 + 4].try_into().expect("four tiles")
+    } else {
+        std::array::from_fn(|q| thresholds[(w * WORD + q * CHUNK) >> shift])
+    }
+}
+
 /// The sum of a run's grey values: sixteen at a time where the target
 /// has a sum-of-absolute-differences instruction (to zero).
 #[inline]
@@ -90,6 +149,8 @@ pub(super) fn sum_bytes(run: &[u8]) -> u64 {
 pub struct Labels {
     dark: Vec<u64>,
     white: Vec<u64>,
+    /// A row of clear marks, for rows not yet written in this pass.
+    zeros: Vec<u64>,
     stamps: Vec<u32>,
     stride: usize,
     width: usize,
@@ -104,6 +165,7 @@ impl Labels {
             self.stride = words_per_row(width);
             self.dark = vec![0; self.stride * height];
             self.white = vec![0; self.stride * height];
+            self.zeros = vec![0; self.stride];
             self.stamps = vec![0; height];
             self.width = width;
             self.height = height;
@@ -127,13 +189,14 @@ impl Labels {
         }
     }
 
-    /// The marks of either kind of word `w` of row `y`.
+    /// Row `y`'s dark and white marks.
     #[inline(always)]
-    fn any_word(&self, y: usize, w: usize) -> u64 {
+    fn marks(&self, y: usize) -> (&[u64], &[u64]) {
         if self.stamps[y] == self.generation {
-            self.dark[y * self.stride + w] | self.white[y * self.stride + w]
+            let range = y * self.stride..(y + 1) * self.stride;
+            (&self.dark[range.clone()], &self.white[range])
         } else {
-            0
+            (&self.zeros, &self.zeros)
         }
     }
 
@@ -162,8 +225,18 @@ impl Labels {
 }
 
 /// Sets (or clears) bits x0..=x1 of a row of words.
+#[inline]
 fn set_bits(row: &mut [u64], x0: usize, x1: usize, on: bool) {
     let (w0, w1) = (x0 / WORD, x1 / WORD);
+    if w0 == w1 {
+        let mask = (!0u64 << (x0 % WORD)) & (!0u64 >> (WORD - 1 - x1 % WORD));
+        if on {
+            row[w0] |= mask;
+        } else {
+            row[w0] &= !mask;
+        }
+        return;
+    }
     for (w, word) in row.iter_mut().enumerate().take(w1 + 1).skip(w0) {
         let mut mask = !0u64;
         if w == w0 {
@@ -218,25 +291,15 @@ impl Classes {
         }
     }
 
-    /// The pixels of word `w` of row `y` a fill may take: dark fills dark
-    /// pixels of no dark segment yet, white fills light pixels of no
-    /// segment of either kind.
-    #[inline(always)]
-    fn fillable(&self, labels: &Labels, dark: bool, y: usize, w: usize) -> u64 {
-        let i = y * self.stride + w;
-        if dark {
-            self.dark[i] & !labels.dark_word(y, w)
-        } else {
-            self.light[i] & !labels.any_word(y, w)
-        }
-    }
-
     /// Classifies row `y` unless it already is.
     #[inline]
     fn ensure(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
-        if self.stamps[y] == self.generation {
-            return;
+        if self.stamps[y] != self.generation {
+            self.classify(image, map, y);
         }
+    }
+
+    fn classify(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
         self.stamps[y] = self.generation;
         let thresholds = map.row(y);
         let floor = map.floor_row(y);
@@ -244,13 +307,34 @@ impl Classes {
         let pixels = &image.pixels[y * image.width..(y + 1) * image.width];
         let range = y * self.stride..(y + 1) * self.stride;
         let (dark, light) = (&mut self.dark[range.clone()], &mut self.light[range]);
-        for (w, (block, (d, l))) in pixels
-            .chunks(WORD)
-            .zip(dark.iter_mut().zip(light.iter_mut()))
-            .enumerate()
-        {
+        // Whole words first: four chunks, no partial chunk to mask.
+        let full = pixels.len() / WORD;
+        let (dark_full, light_full) = (&mut dark[..full], &mut light[..full]);
+        for w in 0..full {
+            let x0 = w * WORD;
+            let below = below_word(
+                &pixels[x0..x0 + WORD],
+                word_thresholds(thresholds, shift, w),
+            );
+            dark_full[w] = below;
+            light_full[w] = !below;
+        }
+        if let Some(f) = floor {
+            for (w, d) in dark_full.iter_mut().enumerate() {
+                let tiles = word_floor(f, shift, w);
+                if tiles != [false; 4] {
+                    for (q, _) in tiles.iter().enumerate().filter(|(_, &t)| t) {
+                        *d &= !(0xffff << (q * CHUNK));
+                    }
+                }
+            }
+        }
+        let blocks = pixels.chunks_exact(WORD);
+        let tail = blocks.remainder();
+        if !tail.is_empty() {
+            let w = pixels.len() / WORD;
             let (mut dw, mut lw) = (0u64, 0u64);
-            for (q, chunk) in block.chunks(CHUNK).enumerate() {
+            for (q, chunk) in tail.chunks(CHUNK).enumerate() {
                 let x0 = w * WORD + q * CHUNK;
                 let below = below_mask(chunk, thresholds[x0 >> shift]);
                 let valid = (1u32 << chunk.len()) - 1;
@@ -260,8 +344,48 @@ impl Classes {
                 }
                 lw |= u64::from(!below & valid as u16) << (q * CHUNK);
             }
-            *d = dw;
-            *l = lw;
+            dark[w] = dw;
+            light[w] = lw;
+        }
+    }
+}
+
+/// The pixels of one row a fill may take: dark fills dark pixels of no
+/// dark segment yet, white fills light pixels of no segment of either
+/// kind. The row's words are borrowed once rather than looked up per word.
+struct Fillable<'a> {
+    class: &'a [u64],
+    dark_marks: &'a [u64],
+    white_marks: &'a [u64],
+    dark: bool,
+}
+
+impl<'a> Fillable<'a> {
+    #[inline(always)]
+    fn new(classes: &'a Classes, labels: &'a Labels, dark: bool, y: usize) -> Fillable<'a> {
+        let range = y * classes.stride..(y + 1) * classes.stride;
+        let class = if dark {
+            &classes.dark[range]
+        } else {
+            &classes.light[range]
+        };
+        let (dark_marks, white_marks) = labels.marks(y);
+        Fillable {
+            class,
+            dark_marks,
+            white_marks,
+            dark,
+        }
+    }
+}
+
+impl Row for Fillable<'_> {
+    #[inline(always)]
+    fn word(&self, w: usize) -> u64 {
+        if self.dark {
+            self.class[w] & !self.dark_marks[w]
+        } else {
+            self.class[w] & !(self.dark_marks[w] | self.white_marks[w])
         }
     }
 }
@@ -459,6 +583,8 @@ pub struct Filler {
     stack: Vec<(u32, u32)>,
     /// Runs (y, x0, x1) of the last fill, to undo a failed white fill.
     runs: Vec<(u32, u32, u32)>,
+    /// Runs of an earlier fill, set aside by [`Filler::keep_runs`].
+    kept: Vec<(u32, u32, u32)>,
     classes: Classes,
 }
 
@@ -510,29 +636,29 @@ impl Filler {
             };
         }
         let classes = &mut self.classes;
-        let fillable = |classes: &Classes, labels: &Labels, y: usize, w: usize| {
-            classes.fillable(labels, dark, y, w)
-        };
-        self.stack.push(seed);
+        let held = map.held_rows();
+        let has_floor = dark && map.has_floor();
+        // The seed pushed last is popped next: it waits in `next` instead
+        // of going through the stack.
+        let mut next = Some(seed);
         let mut escaped = false;
-        while let Some((x, y)) = self.stack.pop() {
+        while let Some((x, y)) = next.take().or_else(|| self.stack.pop()) {
             let (x, y) = (x as usize, y as usize);
             // Past the rows of a band map the floor is unknown: a dark
             // segment that gets there is larger than any marker the band
             // was sized for, and following it would flood the floor
             // outside the band (most of a tracked frame's time on cards
             // lying on a grey floor).
-            if dark && !map.holds_row(y) {
+            if dark && !held.contains(&y) {
                 escaped = true;
                 break;
             }
             classes.ensure(image, map, y);
-            if fillable(classes, labels, y, x / WORD) >> (x % WORD) & 1 == 0 {
-                continue;
-            }
             let (left, right) = {
-                let (c, l) = (&*classes, &*labels);
-                let row = |w: usize| fillable(c, l, y, w);
+                let row = Fillable::new(classes, labels, dark, y);
+                if row.word(x / WORD) >> (x % WORD) & 1 == 0 {
+                    continue;
+                }
                 run_through(&row, stride, x)
             };
             let (left, right) = (left.max(x_lo), right.min(x_hi));
@@ -543,7 +669,7 @@ impl Filler {
             // belongs to the background floor, not to a marker. Filling the
             // rest of the segment first (to label it once) cost tracked
             // frames, whose band scan reached the whole floor's fringe.
-            if dark
+            if has_floor
                 && (map.is_floor(left.saturating_sub(1), y)
                     || map.is_floor((right + 1).min(width - 1), y)
                     || (y > 0 && map.floor_between(y - 1, left, right))
@@ -570,10 +696,11 @@ impl Filler {
                     continue;
                 }
                 classes.ensure(image, map, ny);
+                let row = Fillable::new(classes, labels, dark, ny);
                 let (w0, w1) = (left / WORD, right / WORD);
                 let mut carry = 0u64;
                 for w in w0..=w1 {
-                    let mut m = fillable(classes, labels, ny, w);
+                    let mut m = row.word(w);
                     if w == w0 {
                         m &= !0u64 << (left % WORD);
                     }
@@ -584,7 +711,9 @@ impl Filler {
                     carry = m >> (WORD - 1);
                     while starts != 0 {
                         let bit = starts.trailing_zeros() as usize;
-                        self.stack.push(((w * WORD + bit) as u32, ny as u32));
+                        if let Some(waiting) = next.replace(((w * WORD + bit) as u32, ny as u32)) {
+                            self.stack.push(waiting);
+                        }
                         starts &= starts - 1;
                     }
                 }
@@ -593,18 +722,38 @@ impl Filler {
         FillResult { stats, escaped }
     }
 
+    /// Whether a fill (dark or white) from `at` would take that pixel at
+    /// all: most of the white fill's probes of a blob land on ink.
+    pub fn takes(
+        &mut self,
+        image: Gray<'_>,
+        map: &ThresholdMap,
+        labels: &Labels,
+        at: (u32, u32),
+        dark: bool,
+    ) -> bool {
+        let (x, y) = (at.0 as usize, at.1 as usize);
+        self.classes.select(image, map);
+        self.classes.ensure(image, map, y);
+        Fillable::new(&self.classes, labels, dark, y).word(x / WORD) >> (x % WORD) & 1 == 1
+    }
+
+    /// Sets the last fill's runs aside for [`Filler::kept_grey_sum`].
+    pub fn keep_runs(&mut self) {
+        std::mem::swap(&mut self.kept, &mut self.runs);
+    }
+
+    /// [`Filler::grey_sum`] of the runs set aside by [`Filler::keep_runs`].
+    pub fn kept_grey_sum(&self, image: Gray<'_>) -> u64 {
+        runs_grey_sum(&self.kept, image)
+    }
+
     /// The sum of the grey values of the last fill's pixels. The fill
     /// leaves [`Stats::sum_i`] at zero: most segments of a cluttered frame
     /// fail a test that needs no brightness, so only those that get as far
     /// as the contrast test pay for reading their pixels again.
     pub fn grey_sum(&self, image: Gray<'_>) -> u64 {
-        self.runs
-            .iter()
-            .map(|&(y, x0, x1)| {
-                let row = y as usize * image.width;
-                sum_bytes(&image.pixels[row + x0 as usize..=row + x1 as usize])
-            })
-            .sum()
+        runs_grey_sum(&self.runs, image)
     }
 
     /// Forgets the labels of the last fill (a white region that turned out
@@ -619,6 +768,16 @@ impl Filler {
             );
         }
     }
+}
+
+/// The sum of the grey values of `runs` (y, x0, x1).
+fn runs_grey_sum(runs: &[(u32, u32, u32)], image: Gray<'_>) -> u64 {
+    runs.iter()
+        .map(|&(y, x0, x1)| {
+            let row = y as usize * image.width;
+            sum_bytes(&image.pixels[row + x0 as usize..=row + x1 as usize])
+        })
+        .sum()
 }
 
 #[cfg(test)]

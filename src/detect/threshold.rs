@@ -51,6 +51,8 @@ pub struct ThresholdMap {
     near_hi: Vec<u8>,
     /// Per tile, its own brightest pixel; empty for a constant map.
     own_hi: Vec<u8>,
+    /// Per tile, the sum of its pixels; empty for a constant map.
+    sums: Vec<u32>,
 }
 
 /// Shift of the adaptive map's tiles: 16 x 16 pixels.
@@ -86,6 +88,7 @@ impl ThresholdMap {
             near_lo: Vec::new(),
             near_hi: Vec::new(),
             own_hi: Vec::new(),
+            sums: Vec::new(),
         }
     }
 
@@ -118,7 +121,7 @@ impl ThresholdMap {
     /// large shapes and edges of clear contrast are not blind: a global
     /// level finds nothing there that the local map missed, yet it filled
     /// them whole at every level of the walk.
-    pub fn blind_tiles(&self, pixels: &[u8], width: usize, height: usize) -> Vec<(u8, u8)> {
+    pub fn blind_tiles(&self, width: usize, height: usize) -> Vec<(u8, u8)> {
         let n = self.near_lo.len();
         if n == 0 {
             return Vec::new();
@@ -130,30 +133,35 @@ impl ThresholdMap {
             u16::from(self.near_hi[i] - self.near_lo[i]) < 2 * u16::from(self.min_contrast)
         };
         // Only tiles whose neighbourhood holds a tile of low range can
-        // matter below: their means alone are read off the pixels.
+        // matter below: their means alone are needed.
         let flags: Vec<u8> = (0..n).map(|i| u8::from(low_range(i))).collect();
         if !flags.contains(&1) {
             return vec![(0, 0); n];
         }
         let needed = box_filter(&flags, self.cols, self.rows, NEIGHBOURHOOD_TILES, u8::max);
-        let mut sums = vec![0u32; n];
-        let mut counts = vec![0u32; n];
-        for (y, row) in pixels[y_start * width..y_end * width]
-            .chunks_exact(width)
-            .enumerate()
-        {
-            let t = (y >> self.shift) * self.cols;
-            for (k, chunk) in row.chunks(tile).enumerate() {
-                if needed[t + k] != 0 {
-                    sums[t + k] += super::segment::sum_bytes(chunk) as u32;
-                    counts[t + k] += chunk.len() as u32;
+        // The tiles' sums were taken with their levels; the last column
+        // and row of tiles may be cut short by the image's edges.
+        let (last_w, last_h) = (
+            width - ((self.cols - 1) << self.shift),
+            y_end - y_start - ((self.rows - 1) << self.shift),
+        );
+        let means: Vec<u8> = (0..n)
+            .map(|i| {
+                if needed[i] == 0 {
+                    return 0;
                 }
-            }
-        }
-        let means: Vec<u8> = sums
-            .iter()
-            .zip(&counts)
-            .map(|(&s, &c)| (s / c.max(1)) as u8)
+                let w = if i % self.cols + 1 == self.cols {
+                    last_w
+                } else {
+                    tile
+                };
+                let h = if i / self.cols + 1 == self.rows {
+                    last_h
+                } else {
+                    tile
+                };
+                (self.sums[i] / (w * h).max(1) as u32) as u8
+            })
             .collect();
         let darkest = box_filter(&means, self.cols, self.rows, NEIGHBOURHOOD_TILES, u8::min);
         let brightest = box_filter(&means, self.cols, self.rows, NEIGHBOURHOOD_TILES, u8::max);
@@ -180,12 +188,18 @@ impl ThresholdMap {
         &self.values[r * self.cols..(r + 1) * self.cols]
     }
 
-    /// Whether the map was computed for pixel row `y` (a band map holds
-    /// only its band and margins; the others borrow the nearest thresholds
-    /// and know nothing of the floor there).
+    /// The pixel rows the map was computed for (a band map holds only
+    /// its band and margins; the others borrow the nearest thresholds and
+    /// know nothing of the floor there).
     #[inline]
-    pub fn holds_row(&self, y: usize) -> bool {
-        (self.row0..self.row0 + self.rows).contains(&(y >> self.shift))
+    pub fn held_rows(&self) -> std::ops::Range<usize> {
+        (self.row0 << self.shift)..((self.row0 + self.rows) << self.shift)
+    }
+
+    /// Whether any tile is floor.
+    #[inline]
+    pub fn has_floor(&self) -> bool {
+        !self.floor.is_empty()
     }
 
     /// Least black-to-white difference that counts as a real edge here.
@@ -316,14 +330,21 @@ impl ThresholdMap {
         let same_tiles = base.filter(|b| {
             b.row0 == first && b.rows == rows && b.cols == cols && !b.own_hi.is_empty()
         });
-        let (own_hi, lo, hi, noise_floor) = match same_tiles {
+        let TileLevels {
+            own_hi,
+            near_lo: lo,
+            near_hi: hi,
+            noise_floor,
+            sums,
+        } = match same_tiles {
             // The levels below depend on the tile rows' pixels only.
-            Some(b) => (
-                b.own_hi.clone(),
-                b.near_lo.clone(),
-                b.near_hi.clone(),
-                b.min_contrast,
-            ),
+            Some(b) => TileLevels {
+                own_hi: b.own_hi.clone(),
+                near_lo: b.near_lo.clone(),
+                near_hi: b.near_hi.clone(),
+                noise_floor: b.min_contrast,
+                sums: b.sums.clone(),
+            },
             None => tile_levels(pixels, width, cols, rows, y_start..y_end),
         };
         const UNSET: u16 = u16::MAX;
@@ -381,6 +402,7 @@ impl ThresholdMap {
                 near_lo: lo,
                 near_hi: hi,
                 own_hi,
+                sums,
             };
         }
         while let Some(i) = queue.pop_front() {
@@ -508,38 +530,106 @@ impl ThresholdMap {
             near_lo: lo,
             near_hi: hi,
             own_hi,
+            sums,
         }
     }
 }
 
 /// Per tile of the pixel rows `y` (whole tile rows), its own brightest
-/// pixel and its neighbourhood's darkest and brightest; and the noise
-/// floor of those rows.
+/// pixel, its neighbourhood's darkest and brightest, and the sum of its
+/// pixels; and the noise floor of those rows.
 fn tile_levels(
     pixels: &[u8],
     width: usize,
     cols: usize,
     rows: usize,
     y: std::ops::Range<usize>,
-) -> (Vec<u8>, Vec<u8>, Vec<u8>, u8) {
+) -> TileLevels {
     let tile = 1usize << TILE_SHIFT;
     let band_pixels =
         &pixels[(y.start * width).min(pixels.len())..(y.end * width).min(pixels.len())];
     let mut lo = vec![255u8; cols * rows];
     let mut hi = vec![0u8; cols * rows];
-    for (y, row) in band_pixels.chunks_exact(width.max(1)).enumerate() {
-        let t = (y >> TILE_SHIFT) * cols;
-        let (lo_row, hi_row) = (&mut lo[t..t + cols], &mut hi[t..t + cols]);
-        for ((chunk, l), h) in row.chunks(tile).zip(lo_row).zip(hi_row) {
-            let (cl, ch) = chunk_min_max(chunk);
-            *l = (*l).min(cl);
-            *h = (*h).max(ch);
+    let mut sums = vec![0u32; cols * rows];
+    // A tile row at a time, each tile's column of chunks folded row by
+    // row and reduced once: the reduction across a chunk's bytes costs
+    // more than the folds, and was paid per row.
+    for (r, band) in band_pixels.chunks(width.max(1) * tile).enumerate() {
+        let t = r * cols;
+        for (c, x0) in (0..width).step_by(tile).enumerate() {
+            let x1 = (x0 + tile).min(width);
+            let (l, h, s) = tile_min_max_sum(band, width, x0..x1);
+            lo[t + c] = l;
+            hi[t + c] = h;
+            sums[t + c] = s;
         }
     }
     let noise_floor = MIN_CONTRAST.max(noise_contrast(band_pixels, width, y.end - y.start));
     let near_lo = box_filter(&lo, cols, rows, NEIGHBOURHOOD_TILES, u8::min);
     let near_hi = box_filter(&hi, cols, rows, NEIGHBOURHOOD_TILES, u8::max);
-    (hi, near_lo, near_hi, noise_floor)
+    TileLevels {
+        own_hi: hi,
+        near_lo,
+        near_hi,
+        noise_floor,
+        sums,
+    }
+}
+
+/// What [`tile_levels`] gives.
+struct TileLevels {
+    own_hi: Vec<u8>,
+    near_lo: Vec<u8>,
+    near_hi: Vec<u8>,
+    noise_floor: u8,
+    sums: Vec<u32>,
+}
+
+/// The darkest and brightest pixel and the sum of the pixels of columns
+/// `x` of the rows of `band` (rows of `width` pixels): one vector min,
+/// max and sum of absolute differences per row of a full tile where the
+/// target has them.
+#[inline]
+fn tile_min_max_sum(band: &[u8], width: usize, x: std::ops::Range<usize>) -> (u8, u8, u32) {
+    #[cfg(target_arch = "x86_64")]
+    if x.len() == 1 << TILE_SHIFT && !band.is_empty() {
+        let n_rows = band.len() / width;
+        // SAFETY: SSE2 is part of x86_64; each load reads 16 bytes of one
+        // row from column x.start, which x.end <= width keeps in the row.
+        unsafe {
+            use std::arch::x86_64::*;
+            let base = band.as_ptr().add(x.start);
+            let first = _mm_loadu_si128(base.cast());
+            let (mut lo, mut hi) = (first, first);
+            let zero = _mm_setzero_si128();
+            let mut sum = _mm_sad_epu8(first, zero);
+            for k in 1..n_rows {
+                let p = _mm_loadu_si128(base.add(k * width).cast());
+                lo = _mm_min_epu8(lo, p);
+                hi = _mm_max_epu8(hi, p);
+                sum = _mm_add_epi64(sum, _mm_sad_epu8(p, zero));
+            }
+            // Halve the width four times: the min and max end in byte 0.
+            lo = _mm_min_epu8(lo, _mm_srli_si128::<8>(lo));
+            hi = _mm_max_epu8(hi, _mm_srli_si128::<8>(hi));
+            lo = _mm_min_epu8(lo, _mm_srli_si128::<4>(lo));
+            hi = _mm_max_epu8(hi, _mm_srli_si128::<4>(hi));
+            lo = _mm_min_epu8(lo, _mm_srli_si128::<2>(lo));
+            hi = _mm_max_epu8(hi, _mm_srli_si128::<2>(hi));
+            lo = _mm_min_epu8(lo, _mm_srli_si128::<1>(lo));
+            hi = _mm_max_epu8(hi, _mm_srli_si128::<1>(hi));
+            let mut bytes = [0u8; 16];
+            _mm_storeu_si128(bytes.as_mut_ptr().cast(), _mm_unpacklo_epi8(lo, hi));
+            let mut lanes = [0u64; 2];
+            _mm_storeu_si128(lanes.as_mut_ptr().cast(), sum);
+            return (bytes[0], bytes[1], (lanes[0] + lanes[1]) as u32);
+        }
+    }
+    band.chunks_exact(width.max(1))
+        .flat_map(|row| &row[x.clone()])
+        .fold((255u8, 0u8, 0u32), |(l, h, s), &p| {
+            (l.min(p), h.max(p), s + u32::from(p))
+        })
 }
 
 /// Where between a tile's black and white levels its threshold lies.
@@ -555,13 +645,27 @@ enum Level {
 /// the median difference between horizontal neighbours (≈ 0.95 σ), which
 /// edges, being few pixels, do not move.
 fn noise_contrast(pixels: &[u8], width: usize, height: usize) -> u8 {
-    let mut histogram = [0u64; 256];
+    let mut diffs = Vec::with_capacity(width * height.div_ceil(8));
     for row in pixels.chunks_exact(width.max(1)).take(height).step_by(8) {
-        for pair in row.windows(2) {
-            histogram[usize::from(pair[0].abs_diff(pair[1]))] += 1;
+        diffs.extend(row.iter().zip(&row[1..]).map(|(&a, &b)| a.abs_diff(b)));
+    }
+    let total = diffs.len() as u64;
+    // The median of a noisy frame's differences is a few grey levels:
+    // counting those at most 0, 1, 2, ... (whole vectors at a time) gets
+    // there before a histogram of every difference would be filled.
+    for diff in 0..16u8 {
+        let seen: u64 = diffs
+            .chunks(255)
+            .map(|c| u64::from(c.iter().fold(0u8, |n, &d| n + u8::from(d <= diff))))
+            .sum();
+        if 2 * seen >= total {
+            return diff * 8;
         }
     }
-    let total: u64 = histogram.iter().sum();
+    let mut histogram = [0u64; 256];
+    for &d in &diffs {
+        histogram[usize::from(d)] += 1;
+    }
     let mut seen = 0;
     for (diff, &count) in histogram.iter().enumerate() {
         seen += count;
@@ -570,37 +674,6 @@ fn noise_contrast(pixels: &[u8], width: usize, height: usize) -> u8 {
         }
     }
     0
-}
-
-/// The darkest and brightest pixel of a tile's row: one vector min and
-/// max per 16 pixels where the target has them.
-#[inline]
-fn chunk_min_max(chunk: &[u8]) -> (u8, u8) {
-    #[cfg(target_arch = "x86_64")]
-    if chunk.len() == 1 << TILE_SHIFT {
-        // SAFETY: SSE2 is part of x86_64; the load reads the chunk's 16
-        // bytes, unaligned.
-        unsafe {
-            use std::arch::x86_64::*;
-            let p = _mm_loadu_si128(chunk.as_ptr().cast());
-            let mut bytes = [0u8; 16];
-            // Halve the width three times: the min and max end in byte 0.
-            let (mut lo, mut hi) = (p, p);
-            lo = _mm_min_epu8(lo, _mm_srli_si128::<8>(lo));
-            hi = _mm_max_epu8(hi, _mm_srli_si128::<8>(hi));
-            lo = _mm_min_epu8(lo, _mm_srli_si128::<4>(lo));
-            hi = _mm_max_epu8(hi, _mm_srli_si128::<4>(hi));
-            lo = _mm_min_epu8(lo, _mm_srli_si128::<2>(lo));
-            hi = _mm_max_epu8(hi, _mm_srli_si128::<2>(hi));
-            lo = _mm_min_epu8(lo, _mm_srli_si128::<1>(lo));
-            hi = _mm_max_epu8(hi, _mm_srli_si128::<1>(hi));
-            _mm_storeu_si128(bytes.as_mut_ptr().cast(), _mm_unpacklo_epi8(lo, hi));
-            return (bytes[0], bytes[1]);
-        }
-    }
-    chunk
-        .iter()
-        .fold((255u8, 0u8), |(l, h), &p| (l.min(p), h.max(p)))
 }
 
 /// Min or max over a (2r+1)² window of a grid, clipped at the borders.
@@ -612,12 +685,20 @@ fn box_filter(
     r: usize,
     op: impl Fn(u8, u8) -> u8 + Copy,
 ) -> Vec<u8> {
-    let mut horizontal = vec![0u8; grid.len()];
-    for y in 0..rows {
-        let row = &grid[y * cols..(y + 1) * cols];
-        for x in 0..cols {
-            let (a, b) = (x.saturating_sub(r), (x + r).min(cols - 1));
-            horizontal[y * cols + x] = row[a..=b].iter().copied().reduce(op).unwrap_or(0);
+    // `op` is a min or a max: the window is folded in one shifted row
+    // at a time, whole rows at once.
+    let mut horizontal = grid.to_vec();
+    for (row, out) in grid
+        .chunks_exact(cols)
+        .zip(horizontal.chunks_exact_mut(cols))
+    {
+        for d in 1..=r.min(cols - 1) {
+            for (o, &v) in out[..cols - d].iter_mut().zip(&row[d..]) {
+                *o = op(*o, v);
+            }
+            for (o, &v) in out[d..].iter_mut().zip(&row[..cols - d]) {
+                *o = op(*o, v);
+            }
         }
     }
     let mut out = vec![0u8; grid.len()];
@@ -825,7 +906,7 @@ mod tests {
             })
             .collect();
         let map = ThresholdMap::adaptive(&px, w, h);
-        let blind = map.blind_tiles(&px, w, h);
+        let blind = map.blind_tiles(w, h);
         let cols = w.div_ceil(16);
         let at = |x: usize, y: usize| blind[(y / 16) * cols + x / 16];
         let (lo, hi) = at(80, 80);
