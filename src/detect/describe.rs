@@ -632,6 +632,9 @@ struct RingSides {
     /// Maps a pixel's viewing ray to the direction, in the marker plane's
     /// x-y axes, of the point where it meets the plane (first two rows).
     to_plane: [Vector3<f64>; 2],
+    /// The same map from a pixel (u, v, 1), the camera's intrinsics folded
+    /// in, where the lens has no distortion to undo.
+    from_pixel: Option<[Vector3<f64>; 2]>,
     bits: u32,
     code: Option<u32>,
     /// Metres of marker plane per pixel near the marker.
@@ -649,9 +652,18 @@ impl RingSides {
         let local_centre = rotation.transpose() * centre;
         let along = normal.dot(&centre);
         let map = local_centre * normal.transpose() - along * rotation.transpose();
+        let to_plane = [0, 1].map(|i| map.row(i).transpose());
+        // The ray of pixel (u, v) is ((u - cx) / fx, (v - cy) / fy, 1).
+        let from_pixel = (!camera.has_distortion()).then(|| {
+            to_plane.map(|t| {
+                let (a, b) = (t.x / camera.fx, t.y / camera.fy);
+                Vector3::new(a, b, t.z - a * camera.cx - b * camera.cy)
+            })
+        });
         RingSides {
             camera: *camera,
-            to_plane: [0, 1].map(|i| map.row(i).transpose()),
+            to_plane,
+            from_pixel,
             bits,
             code,
             pixel_m: centre.z / camera.fx,
@@ -663,8 +675,16 @@ impl RingSides {
     /// arc clear of it), and, with a code, where its sector is black
     /// (`on_black`) or white.
     fn shows_edge(&self, point: (f64, f64), radius_m: f64, on_black: bool) -> bool {
-        let ray = self.camera.ray(point.0, point.1);
-        let (x, y) = (self.to_plane[0].dot(&ray), self.to_plane[1].dot(&ray));
+        let (x, y) = match &self.from_pixel {
+            Some([tx, ty]) => {
+                let pixel = Vector3::new(point.0, point.1, 1.0);
+                (tx.dot(&pixel), ty.dot(&pixel))
+            }
+            None => {
+                let ray = self.camera.ray(point.0, point.1);
+                (self.to_plane[0].dot(&ray), self.to_plane[1].dot(&ray))
+            }
+        };
         let width = sector_width(self.bits);
         // A whole turn is a whole number of sectors: no need to bring the
         // angle into [0, 2π) first.
