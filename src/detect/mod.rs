@@ -348,6 +348,11 @@ impl Detector {
         let mut found: Vec<Candidate> = Vec::new();
         let tracking = self.config.tracking;
         self.follow_filled = false;
+        // A followed marker is described as soon as it is found, while its
+        // pixels are still in the cache from following it (on a large
+        // frame they would have left it by the time every other marker is
+        // followed, and be fetched a second time).
+        let mut described: Vec<(Detection, track::PoseMemory)> = Vec::new();
         if tracking {
             for index in 0..self.tracks.len() {
                 if found.len() >= limit {
@@ -360,6 +365,7 @@ impl Detector {
                 }
                 if let Some(mut c) = self.follow(gray, index) {
                     c.track = Some(index);
+                    described.push(self.describe(image, gray, &c));
                     found.push(c);
                 }
             }
@@ -467,7 +473,11 @@ impl Detector {
         found.truncate(limit);
         let mut detections: Vec<Detection> = Vec::with_capacity(found.len());
         let mut settled_normals = Vec::with_capacity(found.len());
-        for (k, c) in found.iter().enumerate() {
+        for (d, settled) in described {
+            detections.push(d);
+            settled_normals.push(settled);
+        }
+        for (k, c) in found.iter().enumerate().skip(followed) {
             if let Some(next) = found.get(k + 1) {
                 let e = &next.outer;
                 preload_disc(gray, e.u, e.v, e.semi_major + 2.0);
