@@ -165,9 +165,10 @@ pub fn examine<C: Deref<Target = [u8]>>(
     let mut model = Model::new(pixels_per_sample, count);
     let mut test_profile = |profile: &[f64], counts: &[u32]| -> Vec<Tested> {
         let ring = Profile::new(profile);
-        counts
-            .iter()
-            .map(|&n| test_bits(&ring, n, contrast, &mut model))
+        boundary_phases(&ring, counts)
+            .into_iter()
+            .zip(counts)
+            .map(|(boundaries, &n)| test_bits(&ring, n, boundaries, contrast, &mut model))
             .collect()
     };
     let best = |tested: &[Tested]| {
@@ -301,10 +302,17 @@ impl Profile<'_> {
     }
 }
 
-/// The structure test for `bits` bits on a profile of the ring.
-fn test_bits(profile: &Profile, bits: u32, disc_contrast: f64, model: &mut Model) -> Tested {
+/// The structure test for `bits` bits on a profile of the ring whose
+/// sector boundaries for that count are `(phase, coherence)`
+/// ([`boundary_phases`]).
+fn test_bits(
+    profile: &Profile,
+    bits: u32,
+    (phase, coherence): (f64, f64),
+    disc_contrast: f64,
+    model: &mut Model,
+) -> Tested {
     let sector = PI / f64::from(bits);
-    let (phase, coherence) = boundary_phase(profile, bits);
     // Which boundaries are the mid-bit ones is clear from a varied code,
     // but a code with long runs of equal bits reads almost as well paired
     // the other way: both pairings are judged.
@@ -375,30 +383,52 @@ fn pairing(
 /// Parameter (radians, within one sector) of the sector boundaries: the
 /// phase of the 2n-th harmonic of the gradient magnitude, where every edge
 /// of a Manchester ring sits; and how much of the gradient that harmonic
-/// holds (1 when every edge sits on an n-bit boundary).
-fn boundary_phase(profile: &Profile, bits: u32) -> (f64, f64) {
+/// holds (1 when every edge sits on an n-bit boundary). For every count in
+/// `counts`.
+fn boundary_phases(profile: &Profile, counts: &[u32]) -> Vec<(f64, f64)> {
+    // Each count's sum is a chain of dependent steps a sample long; four
+    // counts walked side by side keep the processor busy between the
+    // steps of one (each lane's arithmetic as it would be alone).
+    const LANES: usize = 4;
     let gradient = &profile.gradient;
     let count = gradient.len() as f64;
-    let harmonic = f64::from(2 * bits);
-    let (mut re, mut im) = (0.0, 0.0);
-    // exp(i·h·t) at t = 2π(j + 0.5)/count (the gradient between samples j
-    // and j+1), advanced by one rotation per sample instead of a sine and
-    // a cosine each.
-    let (step_sin, step_cos) = (harmonic * 2.0 * PI / count).sin_cos();
-    let (mut s, mut c) = (harmonic * PI / count).sin_cos();
-    for g in gradient {
-        re += g * c;
-        im -= g * s;
-        (s, c) = (s * step_cos + c * step_sin, c * step_cos - s * step_sin);
+    let mut out = Vec::with_capacity(counts.len());
+    for group in counts.chunks(LANES) {
+        // Short groups fill up with their last count, read and dropped.
+        let harmonic: [f64; LANES] =
+            std::array::from_fn(|i| f64::from(2 * group[i.min(group.len() - 1)]));
+        let (mut re, mut im) = ([0.0; LANES], [0.0; LANES]);
+        // exp(i·h·t) at t = 2π(j + 0.5)/count (the gradient between
+        // samples j and j+1), advanced by one rotation per sample instead
+        // of a sine and a cosine each.
+        let step = harmonic.map(|h| (h * 2.0 * PI / count).sin_cos());
+        let (mut s, mut c): ([f64; LANES], [f64; LANES]) = {
+            let first = harmonic.map(|h| (h * PI / count).sin_cos());
+            (first.map(|x| x.0), first.map(|x| x.1))
+        };
+        for g in gradient {
+            for i in 0..LANES {
+                re[i] += g * c[i];
+                im[i] -= g * s[i];
+                let (step_sin, step_cos) = step[i];
+                (s[i], c[i]) = (
+                    s[i] * step_cos + c[i] * step_sin,
+                    c[i] * step_cos - s[i] * step_sin,
+                );
+            }
+        }
+        for (i, &bits) in group.iter().enumerate() {
+            let phase = -im[i].atan2(re[i]) / harmonic[i];
+            let total = profile.gradient_total;
+            let coherence = if total > 0.0 {
+                re[i].hypot(im[i]) / total
+            } else {
+                0.0
+            };
+            out.push((phase.rem_euclid(PI / f64::from(bits)), coherence));
+        }
     }
-    let phase = -im.atan2(re) / harmonic;
-    let total = profile.gradient_total;
-    let coherence = if total > 0.0 {
-        re.hypot(im) / total
-    } else {
-        0.0
-    };
-    (phase.rem_euclid(PI / f64::from(bits)), coherence)
+    out
 }
 
 /// Gaussian widths (pixels) the Manchester model is blurred by.
@@ -409,9 +439,11 @@ const MODEL_BLURS: [f64; 3] = [0.4, 0.8, 1.4];
 /// buffers every count's model is built in.
 struct Model {
     kernels: [Kernel; 3],
+    /// Parameter of every sample.
+    angles: Vec<f64>,
     square: Vec<f64>,
     padded: Vec<f64>,
-    blurred: Vec<f64>,
+    blurred: [Vec<f64>; 3],
 }
 
 /// Gaussian taps from the centre out (`reach` + 1 of them), and their
@@ -425,9 +457,12 @@ impl Model {
     fn new(pixels_per_sample: f64, count: usize) -> Model {
         Model {
             kernels: MODEL_BLURS.map(|sigma_px| Kernel::new(sigma_px / pixels_per_sample, count)),
+            angles: (0..count)
+                .map(|j| 2.0 * PI * j as f64 / count as f64)
+                .collect(),
             square: Vec::with_capacity(count),
             padded: Vec::with_capacity(2 * count),
-            blurred: Vec::with_capacity(count),
+            blurred: std::array::from_fn(|_| Vec::with_capacity(count)),
         }
     }
 
@@ -435,12 +470,10 @@ impl Model {
     /// wave of `word` (bit 0 from `start`), blurred by one of
     /// [`MODEL_BLURS`].
     fn fit(&mut self, profile: &Profile, bits: u32, start: f64, word: u32) -> f64 {
-        let count = profile.samples.len();
         let sector = PI / f64::from(bits);
         let sectors = i64::from(2 * bits);
         self.square.clear();
-        self.square.extend((0..count).map(|j| {
-            let t = 2.0 * PI * j as f64 / count as f64;
+        self.square.extend(self.angles.iter().map(|&t| {
             // floor_to_int: `floor` is a library call on targets without
             // SSE4.1, and this runs for every sample of every model.
             let k = angle::floor_to_int((t - start) / sector).rem_euclid(sectors) as u32;
@@ -449,12 +482,12 @@ impl Model {
             let white = (bit == 1) == (k % 2 == 0);
             f64::from(u8::from(white))
         }));
-        let mut best = 0.0;
-        for kernel in &self.kernels {
-            kernel.blur(&self.square, &mut self.padded, &mut self.blurred);
-            best = f64::max(best, correlation(profile, &self.blurred).powi(2));
+        for (kernel, blurred) in self.kernels.iter().zip(&mut self.blurred) {
+            kernel.blur(&self.square, &mut self.padded, blurred);
         }
-        best
+        correlations(profile, &self.blurred)
+            .into_iter()
+            .fold(0.0, |best, r| f64::max(best, r.powi(2)))
     }
 }
 
@@ -505,20 +538,34 @@ impl Kernel {
     }
 }
 
-/// Correlation of the profile with a model of it.
-fn correlation(profile: &Profile, model: &[f64]) -> f64 {
-    let n = model.len() as f64;
-    let (ma, mb) = (profile.mean, model.iter().sum::<f64>() / n);
-    let (mut ab, mut bb) = (0.0, 0.0);
-    for (x, y) in profile.samples.iter().zip(model) {
-        let (dx, dy) = (x - ma, y - mb);
-        ab += dx * dy;
-        bb += dy * dy;
+/// Correlation of the profile with each of three models of it, side by
+/// side for the same reason as [`boundary_phases`]' lanes.
+fn correlations(profile: &Profile, models: &[Vec<f64>; 3]) -> [f64; 3] {
+    let [m0, m1, m2] = models;
+    let n = m0.len() as f64;
+    let mut sums = [0.0; 3];
+    for ((a, b), c) in m0.iter().zip(m1).zip(m2) {
+        sums[0] += a;
+        sums[1] += b;
+        sums[2] += c;
+    }
+    let ma = profile.mean;
+    let mb = sums.map(|sum| sum / n);
+    let (mut ab, mut bb) = ([0.0; 3], [0.0; 3]);
+    for (((x, a), b), c) in profile.samples.iter().zip(m0).zip(m1).zip(m2) {
+        let dx = x - ma;
+        for (i, y) in [a, b, c].into_iter().enumerate() {
+            let dy = y - mb[i];
+            ab[i] += dx * dy;
+            bb[i] += dy * dy;
+        }
     }
     let aa = profile.spread;
-    if aa <= 0.0 || bb <= 0.0 {
-        0.0
-    } else {
-        ab / (aa * bb).sqrt()
-    }
+    std::array::from_fn(|i| {
+        if aa <= 0.0 || bb[i] <= 0.0 {
+            0.0
+        } else {
+            ab[i] / (aa * bb[i]).sqrt()
+        }
+    })
 }
