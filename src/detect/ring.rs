@@ -659,7 +659,13 @@ impl EllipseFrame {
     }
 
     /// Image point at radius `rho`·R along a rectified `direction`.
+    #[inline]
     fn at(&self, direction: (f64, f64), rho: f64) -> (f64, f64) {
+        // Without a perspective term the divisor below is exactly 1: the
+        // same point without two divisions (the ring tests' samples).
+        if self.m == (0.0, 0.0) {
+            return self.at_affine(direction, rho);
+        }
         let y0 = self.rectified_centre.0 + rho * direction.0;
         let y1 = self.rectified_centre.1 + rho * direction.1;
         let w = 1.0 - self.m.0 * y0 - self.m.1 * y1;
@@ -710,19 +716,12 @@ pub(super) fn sample_profile<C: Deref<Target = [u8]>>(
     // Walk the parameter by a fixed rotation instead of a sine per sample.
     let (step_sin, step_cos) = (2.0 * PI / count as f64).sin_cos();
     let (mut s, mut c) = (0.0f64, 1.0f64);
-    // Without a perspective term the homography's divisor is exactly 1:
-    // the same points without two divisions each.
-    let affine = frame.m == (0.0, 0.0);
     for _ in 0..count {
         let direction = frame.direction_of(s, c);
         (s, c) = (s * step_cos + c * step_sin, c * step_cos - s * step_sin);
         let mut sum = 0.0;
         for &rho in radii {
-            let (x, y) = if affine {
-                frame.at_affine(direction, rho)
-            } else {
-                frame.at(direction, rho)
-            };
+            let (x, y) = frame.at(direction, rho);
             sum += plane.at(x, y, Border::Interior)?;
         }
         profile.push(sum / radii.len() as f64);
