@@ -892,7 +892,7 @@ pub(super) fn half_sector_means(profile: &[f64], bits: u32, start: f64) -> Vec<f
 }
 
 /// `x.rem_euclid(count)` (bit for bit) without the library's `fmod` for
-/// the parameters one turn either side of the profile, where the ring
+/// the parameters within the profile's turn or the next, where the ring
 /// tests ask for all but a few: a turn off is an exact subtraction there.
 #[inline]
 fn wrap_samples(x: f64, count: f64) -> f64 {
