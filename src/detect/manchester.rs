@@ -35,6 +35,7 @@ use super::ring::{
 };
 use crate::family::necklace;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
+use crate::math::angle;
 use crate::math::Ellipse as ImageEllipse;
 
 /// Bit counts a ring may carry (the family generator's range).
@@ -161,20 +162,14 @@ pub fn examine<C: Deref<Target = [u8]>>(
     let count = ((2.0 * arc).ceil() as usize).clamp(16 * 24, 2048);
     let pixels_per_sample =
         2.0 * PI * mid_ratio * (outer.semi_major * outer.semi_minor).sqrt() / count as f64;
-    let test_profile = |profile: &[f64], counts: &[u32]| -> Vec<Tested> {
-        let gradient: Vec<f64> = (0..count)
-            .map(|j| (profile[(j + 1) % count] - profile[j]).abs())
-            .collect();
-        counts
-            .iter()
-            .map(|&n| test_bits(profile, &gradient, n, contrast, pixels_per_sample))
+    let mut model = Model::new(pixels_per_sample, count);
+    let mut test_profile = |profile: &[f64], counts: &[u32]| -> Vec<Tested> {
+        let ring = Profile::new(profile);
+        boundary_phases(&ring, counts)
+            .into_iter()
+            .zip(counts)
+            .map(|(boundaries, &n)| test_bits(&ring, n, boundaries, contrast, &mut model))
             .collect()
-    };
-    let test = |frame: &EllipseFrame, counts: &[u32]| -> Option<Vec<Tested>> {
-        Some(test_profile(
-            &sample_profile(image, frame, radii, count)?,
-            counts,
-        ))
     };
     let best = |tested: &[Tested]| {
         tested
@@ -191,10 +186,14 @@ pub fn examine<C: Deref<Target = [u8]>>(
     let Some(profile) = sample_profile(image, &frame, radii, count) else {
         return RingEvidence::TooSmall;
     };
-    if let Some(ring) = best(&test_profile(&profile, &counts[..1])).filter(|r| r.fit >= SURE_FIT) {
+    let first = test_profile(&profile, &counts[..1]);
+    if let Some(ring) = best(&first).filter(|r| r.fit >= SURE_FIT) {
         return RingEvidence::Manchester(ring);
     }
-    let tested = test_profile(&profile, &counts);
+    let tested: Vec<Tested> = first
+        .into_iter()
+        .chain(test_profile(&profile, &counts[1..]))
+        .collect();
     let plain = best(&tested);
     // A steep view whose ring fits no count surely may fit a wrong count
     // best (an 8-bit ring at 60° passes for 7 bits): it is read again
@@ -230,7 +229,10 @@ pub fn examine<C: Deref<Target = [u8]>>(
         .filter_map(|&k| {
             let centre = refined_centre(image, &frame, tested[k].phase, counts[k], mid_level)?;
             let frame = EllipseFrame::with_projected_centre(outer, centre)?;
-            best(&test(&frame, &counts)?)
+            best(&test_profile(
+                &sample_profile(image, &frame, radii, count)?,
+                &counts,
+            ))
         })
         .max_by(|a, b| a.fit.total_cmp(&b.fit));
     let found = [plain, again]
@@ -266,22 +268,57 @@ struct Tested {
     coherence: f64,
 }
 
-/// The structure test for `bits` bits on a profile of the ring.
+/// A ring's angular profile and what every count's test reads of it alike.
+struct Profile<'a> {
+    samples: &'a [f64],
+    /// Change between neighbouring samples, and its sum.
+    gradient: Vec<f64>,
+    gradient_total: f64,
+    /// Mean, and sum of squared deviations from it (for [`correlation`]).
+    mean: f64,
+    spread: f64,
+}
+
+impl Profile<'_> {
+    fn new(samples: &[f64]) -> Profile<'_> {
+        let count = samples.len();
+        let gradient: Vec<f64> = (0..count)
+            .map(|j| (samples[(j + 1) % count] - samples[j]).abs())
+            .collect();
+        let gradient_total = gradient.iter().sum();
+        let mean = samples.iter().sum::<f64>() / count as f64;
+        let mut spread = 0.0;
+        for x in samples {
+            let dx = x - mean;
+            spread += dx * dx;
+        }
+        Profile {
+            samples,
+            gradient,
+            gradient_total,
+            mean,
+            spread,
+        }
+    }
+}
+
+/// The structure test for `bits` bits on a profile of the ring whose
+/// sector boundaries for that count are `(phase, coherence)`
+/// ([`boundary_phases`]).
 fn test_bits(
-    profile: &[f64],
-    gradient: &[f64],
+    profile: &Profile,
     bits: u32,
+    (phase, coherence): (f64, f64),
     disc_contrast: f64,
-    pixels_per_sample: f64,
+    model: &mut Model,
 ) -> Tested {
     let sector = PI / f64::from(bits);
-    let (phase, coherence) = boundary_phase(gradient, bits);
     // Which boundaries are the mid-bit ones is clear from a varied code,
     // but a code with long runs of equal bits reads almost as well paired
     // the other way: both pairings are judged.
     let ring = [phase, phase + sector]
         .into_iter()
-        .filter_map(|start| pairing(profile, bits, start, disc_contrast, pixels_per_sample))
+        .filter_map(|start| pairing(profile, bits, start, disc_contrast, model))
         .max_by(|a, b| a.fit.total_cmp(&b.fit));
     Tested {
         ring,
@@ -293,13 +330,13 @@ fn test_bits(
 /// The structure test for one pairing of half-sectors into bits, the first
 /// bit starting at `start`.
 fn pairing(
-    profile: &[f64],
+    profile: &Profile,
     bits: u32,
     start: f64,
     disc_contrast: f64,
-    pixels_per_sample: f64,
+    model: &mut Model,
 ) -> Option<RingStructure> {
-    let halves = half_sector_means(profile, bits, start);
+    let halves = half_sector_means(profile.samples, bits, start);
     let diffs = bit_differences(&halves);
     let (mut bright, mut dark) = (0.0, 0.0);
     for pair in halves.chunks_exact(2) {
@@ -310,14 +347,14 @@ fn pairing(
     if ring_contrast < MIN_CONTRAST * disc_contrast {
         return None;
     }
-    let edges: Vec<f64> = diffs.iter().map(|d| d.abs() / ring_contrast).collect();
-    let weak = edges.iter().filter(|&&e| e < MIN_BIT_EDGE).count() as u32;
+    let edge = |d: &f64| d.abs() / ring_contrast;
+    let weak = diffs.iter().filter(|d| edge(d) < MIN_BIT_EDGE).count() as u32;
     // A smudge or a glint may hide one bit's edge of a long code; a ring
     // of the wrong bit count loses many.
     if weak > bits / 16 {
         return None;
     }
-    let weakest_bit = edges.iter().copied().fold(f64::INFINITY, f64::min);
+    let weakest_bit = diffs.iter().map(edge).fold(f64::INFINITY, f64::min);
     let mut word = 0u32;
     for (j, d) in diffs.iter().enumerate() {
         if *d > 0.0 {
@@ -332,7 +369,7 @@ fn pairing(
     if bits < 8 && necklace::is_periodic(word, bits) {
         return None;
     }
-    let fit = model_fit(profile, bits, start, word, pixels_per_sample);
+    let fit = model.fit(profile, bits, start, word);
     Some(RingStructure {
         bits,
         code: necklace::min_rotation(word, bits).0,
@@ -346,102 +383,203 @@ fn pairing(
 /// Parameter (radians, within one sector) of the sector boundaries: the
 /// phase of the 2n-th harmonic of the gradient magnitude, where every edge
 /// of a Manchester ring sits; and how much of the gradient that harmonic
-/// holds (1 when every edge sits on an n-bit boundary).
-fn boundary_phase(gradient: &[f64], bits: u32) -> (f64, f64) {
+/// holds (1 when every edge sits on an n-bit boundary). For every count in
+/// `counts`.
+fn boundary_phases(profile: &Profile, counts: &[u32]) -> Vec<(f64, f64)> {
+    // Each count's sum is a chain of dependent steps a sample long; four
+    // counts walked side by side keep the processor busy between the
+    // steps of one (each lane's arithmetic as it would be alone).
+    const LANES: usize = 4;
+    let gradient = &profile.gradient;
     let count = gradient.len() as f64;
-    let harmonic = f64::from(2 * bits);
-    let (mut re, mut im) = (0.0, 0.0);
-    // exp(i·h·t) at t = 2π(j + 0.5)/count (the gradient between samples j
-    // and j+1), advanced by one rotation per sample instead of a sine and
-    // a cosine each.
-    let (step_sin, step_cos) = (harmonic * 2.0 * PI / count).sin_cos();
-    let (mut s, mut c) = (harmonic * PI / count).sin_cos();
-    for g in gradient {
-        re += g * c;
-        im -= g * s;
-        (s, c) = (s * step_cos + c * step_sin, c * step_cos - s * step_sin);
+    let mut out = Vec::with_capacity(counts.len());
+    for group in counts.chunks(LANES) {
+        // Short groups fill up with their last count, read and dropped.
+        let harmonic: [f64; LANES] =
+            std::array::from_fn(|i| f64::from(2 * group[i.min(group.len() - 1)]));
+        let (mut re, mut im) = ([0.0; LANES], [0.0; LANES]);
+        // exp(i·h·t) at t = 2π(j + 0.5)/count (the gradient between
+        // samples j and j+1), advanced by one rotation per sample instead
+        // of a sine and a cosine each.
+        let step = harmonic.map(|h| (h * 2.0 * PI / count).sin_cos());
+        let (mut s, mut c): ([f64; LANES], [f64; LANES]) = {
+            let first = harmonic.map(|h| (h * PI / count).sin_cos());
+            (first.map(|x| x.0), first.map(|x| x.1))
+        };
+        for g in gradient {
+            for i in 0..LANES {
+                re[i] += g * c[i];
+                im[i] -= g * s[i];
+                let (step_sin, step_cos) = step[i];
+                (s[i], c[i]) = (
+                    s[i] * step_cos + c[i] * step_sin,
+                    c[i] * step_cos - s[i] * step_sin,
+                );
+            }
+        }
+        for (i, &bits) in group.iter().enumerate() {
+            let phase = -im[i].atan2(re[i]) / harmonic[i];
+            let total = profile.gradient_total;
+            let coherence = if total > 0.0 {
+                re[i].hypot(im[i]) / total
+            } else {
+                0.0
+            };
+            out.push((phase.rem_euclid(PI / f64::from(bits)), coherence));
+        }
     }
-    let phase = -im.atan2(re) / harmonic;
-    let total: f64 = gradient.iter().sum();
-    let coherence = if total > 0.0 {
-        re.hypot(im) / total
-    } else {
-        0.0
-    };
-    (phase.rem_euclid(PI / f64::from(bits)), coherence)
+    out
 }
 
-/// Best squared correlation of the profile with the Manchester square wave
-/// of `word` (bit 0 from `start`), blurred by one of a few Gaussian widths.
-fn model_fit(profile: &[f64], bits: u32, start: f64, word: u32, pixels_per_sample: f64) -> f64 {
-    let count = profile.len();
-    let sector = PI / f64::from(bits);
-    let square: Vec<f64> = (0..count)
-        .map(|j| {
-            let t = 2.0 * PI * j as f64 / count as f64;
-            let k = ((t - start) / sector)
-                .floor()
-                .rem_euclid(f64::from(2 * bits)) as u32;
+/// Gaussian widths (pixels) the Manchester model is blurred by.
+const MODEL_BLURS: [f64; 3] = [0.4, 0.8, 1.4];
+
+/// The blurred Manchester models of one ring's profiles: the kernels,
+/// which depend on the sample spacing only, made once per ring, and the
+/// buffers every count's model is built in.
+struct Model {
+    kernels: [Kernel; 3],
+    /// Parameter of every sample.
+    angles: Vec<f64>,
+    square: Vec<f64>,
+    padded: Vec<f64>,
+    blurred: [Vec<f64>; 3],
+}
+
+/// Gaussian taps from the centre out (`reach` + 1 of them), and their
+/// sum over both sides.
+struct Kernel {
+    weights: Vec<f64>,
+    norm: f64,
+}
+
+impl Model {
+    fn new(pixels_per_sample: f64, count: usize) -> Model {
+        Model {
+            kernels: MODEL_BLURS.map(|sigma_px| Kernel::new(sigma_px / pixels_per_sample, count)),
+            angles: (0..count)
+                .map(|j| 2.0 * PI * j as f64 / count as f64)
+                .collect(),
+            square: Vec::with_capacity(count),
+            padded: Vec::with_capacity(2 * count),
+            blurred: std::array::from_fn(|_| Vec::with_capacity(count)),
+        }
+    }
+
+    /// Best squared correlation of the profile with the Manchester square
+    /// wave of `word` (bit 0 from `start`), blurred by one of
+    /// [`MODEL_BLURS`].
+    fn fit(&mut self, profile: &Profile, bits: u32, start: f64, word: u32) -> f64 {
+        let sector = PI / f64::from(bits);
+        let sectors = i64::from(2 * bits);
+        self.square.clear();
+        self.square.extend(self.angles.iter().map(|&t| {
+            // floor_to_int: `floor` is a library call on targets without
+            // SSE4.1, and this runs for every sample of every model.
+            let k = wrap_sector(angle::floor_to_int((t - start) / sector), sectors);
             let bit = word >> (bits - 1 - k / 2) & 1;
             // A 1 is white then black.
             let white = (bit == 1) == (k % 2 == 0);
             f64::from(u8::from(white))
-        })
-        .collect();
-    [0.4, 0.8, 1.4]
-        .iter()
-        .map(|&sigma_px| {
-            let blurred = circular_blur(&square, sigma_px / pixels_per_sample);
-            correlation(profile, &blurred).powi(2)
-        })
-        .fold(0.0, f64::max)
+        }));
+        for (kernel, blurred) in self.kernels.iter().zip(&mut self.blurred) {
+            kernel.blur(&self.square, &mut self.padded, blurred);
+        }
+        correlations(profile, &self.blurred)
+            .into_iter()
+            .fold(0.0, |best, r| f64::max(best, r.powi(2)))
+    }
 }
 
-/// Gaussian blur of a circular signal, `sigma` in samples.
-fn circular_blur(signal: &[f64], sigma: f64) -> Vec<f64> {
-    let count = signal.len();
-    let reach = ((3.0 * sigma).ceil() as usize).min(count / 2);
-    if reach == 0 {
-        return signal.to_vec();
-    }
-    let kernel: Vec<f64> = (0..=reach)
-        .map(|k| (-0.5 * (k as f64 / sigma).powi(2)).exp())
-        .collect();
-    let norm = kernel[0] + 2.0 * kernel[1..].iter().sum::<f64>();
-    // The signal with `reach` samples wrapped round on either side, so the
-    // inner loop indexes without a division per tap (the ring test's
-    // hottest loop).
-    let padded: Vec<f64> = signal[count - reach..]
-        .iter()
-        .chain(signal)
-        .chain(&signal[..reach])
-        .copied()
-        .collect();
-    (0..count)
-        .map(|j| {
-            let centre = j + reach;
-            let mut sum = kernel[0] * padded[centre];
-            for (k, w) in kernel.iter().enumerate().skip(1) {
-                sum += w * (padded[centre + k] + padded[centre - k]);
-            }
-            sum / norm
-        })
-        .collect()
-}
-
-fn correlation(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len() as f64;
-    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
-    let (mut ab, mut aa, mut bb) = (0.0, 0.0, 0.0);
-    for (x, y) in a.iter().zip(b) {
-        let (dx, dy) = (x - ma, y - mb);
-        ab += dx * dy;
-        aa += dx * dx;
-        bb += dy * dy;
-    }
-    if aa <= 0.0 || bb <= 0.0 {
-        0.0
+/// `k.rem_euclid(sectors)` without the integer division for the sector
+/// indices within a turn either side, which are all but a few.
+#[inline]
+fn wrap_sector(k: i64, sectors: i64) -> u32 {
+    let k = if (0..sectors).contains(&k) {
+        k
+    } else if (-sectors..0).contains(&k) {
+        k + sectors
     } else {
-        ab / (aa * bb).sqrt()
+        k.rem_euclid(sectors)
+    };
+    k as u32
+}
+
+impl Kernel {
+    /// A Gaussian of `sigma` samples for a circular signal of `count`.
+    fn new(sigma: f64, count: usize) -> Kernel {
+        let reach = ((3.0 * sigma).ceil() as usize).min(count / 2);
+        let weights: Vec<f64> = (0..=reach)
+            .map(|k| (-0.5 * (k as f64 / sigma).powi(2)).exp())
+            .collect();
+        let norm = weights[0] + 2.0 * weights[1..].iter().sum::<f64>();
+        Kernel { weights, norm }
     }
+
+    /// The circular `signal` blurred into `out`.
+    fn blur(&self, signal: &[f64], padded: &mut Vec<f64>, out: &mut Vec<f64>) {
+        let count = signal.len();
+        let reach = self.weights.len() - 1;
+        out.clear();
+        if reach == 0 {
+            out.extend_from_slice(signal);
+            return;
+        }
+        // The signal with `reach` samples wrapped round on either side, so
+        // the taps index without a division.
+        padded.clear();
+        padded.extend_from_slice(&signal[count - reach..]);
+        padded.extend_from_slice(signal);
+        padded.extend_from_slice(&signal[..reach]);
+        // Tap by tap over the whole signal (each sample's sum still taken
+        // from the centre out): the inner loop runs over neighbouring
+        // samples, which vectorises.
+        out.extend(
+            padded[reach..reach + count]
+                .iter()
+                .map(|x| self.weights[0] * x),
+        );
+        for (k, &w) in self.weights.iter().enumerate().skip(1) {
+            let ahead = &padded[reach + k..reach + k + count];
+            let behind = &padded[reach - k..reach - k + count];
+            for ((sum, a), b) in out.iter_mut().zip(ahead).zip(behind) {
+                *sum += w * (a + b);
+            }
+        }
+        for sum in out.iter_mut() {
+            *sum /= self.norm;
+        }
+    }
+}
+
+/// Correlation of the profile with each of three models of it, side by
+/// side for the same reason as [`boundary_phases`]' lanes.
+fn correlations(profile: &Profile, models: &[Vec<f64>; 3]) -> [f64; 3] {
+    let [m0, m1, m2] = models;
+    let n = m0.len() as f64;
+    let mut sums = [0.0; 3];
+    for ((a, b), c) in m0.iter().zip(m1).zip(m2) {
+        sums[0] += a;
+        sums[1] += b;
+        sums[2] += c;
+    }
+    let ma = profile.mean;
+    let mb = sums.map(|sum| sum / n);
+    let (mut ab, mut bb) = ([0.0; 3], [0.0; 3]);
+    for (((x, a), b), c) in profile.samples.iter().zip(m0).zip(m1).zip(m2) {
+        let dx = x - ma;
+        for (i, y) in [a, b, c].into_iter().enumerate() {
+            let dy = y - mb[i];
+            ab[i] += dx * dy;
+            bb[i] += dy * dy;
+        }
+    }
+    let aa = profile.spread;
+    std::array::from_fn(|i| {
+        if aa <= 0.0 || bb[i] <= 0.0 {
+            0.0
+        } else {
+            ab[i] / (aa * bb[i]).sqrt()
+        }
+    })
 }

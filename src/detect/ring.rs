@@ -43,7 +43,7 @@ use image::{ImageBuffer, Luma};
 use std::ops::Deref;
 
 use crate::math::sample::{Border, Plane};
-use crate::math::Ellipse;
+use crate::math::{angle, Ellipse};
 use std::f64::consts::PI;
 
 /// Rings whose sectors are narrower than this many pixels (at the sample
@@ -659,13 +659,30 @@ impl EllipseFrame {
     }
 
     /// Image point at radius `rho`·R along a rectified `direction`.
+    #[inline]
     fn at(&self, direction: (f64, f64), rho: f64) -> (f64, f64) {
+        // Without a perspective term the divisor below is exactly 1: the
+        // same point without two divisions (the ring tests' samples).
+        if self.m == (0.0, 0.0) {
+            return self.at_affine(direction, rho);
+        }
         let y0 = self.rectified_centre.0 + rho * direction.0;
         let y1 = self.rectified_centre.1 + rho * direction.1;
         let w = 1.0 - self.m.0 * y0 - self.m.1 * y1;
         (
             self.centre.0 + self.scale * y0 / w,
             self.centre.1 + self.scale * y1 / w,
+        )
+    }
+
+    /// [`Self::at`] of a frame without perspective (`m` zero).
+    #[inline]
+    fn at_affine(&self, direction: (f64, f64), rho: f64) -> (f64, f64) {
+        let y0 = self.rectified_centre.0 + rho * direction.0;
+        let y1 = self.rectified_centre.1 + rho * direction.1;
+        (
+            self.centre.0 + self.scale * y0,
+            self.centre.1 + self.scale * y1,
         )
     }
 
@@ -855,16 +872,37 @@ pub(super) fn half_sector_means(profile: &[f64], bits: u32, start: f64) -> Vec<f
                 .iter()
                 .map(|f| {
                     let t = start + (f64::from(k) + f) * sector;
-                    let x = (t / (2.0 * PI) * count).rem_euclid(count);
-                    let j = x.floor();
-                    let frac = x - j;
-                    let j = j as usize % profile.len();
-                    profile[j] * (1.0 - frac) + profile[(j + 1) % profile.len()] * frac
+                    let x = wrap_samples(t / (2.0 * PI) * count, count);
+                    // x ≥ 0 (or NaN, which reads as sample 0 and stays NaN).
+                    let j = angle::floor_to_int(x);
+                    let frac = x - j as f64;
+                    let len = profile.len();
+                    let j = if (j as usize) < len {
+                        j as usize
+                    } else {
+                        j as usize % len
+                    };
+                    let next = if j + 1 == len { 0 } else { j + 1 };
+                    profile[j] * (1.0 - frac) + profile[next] * frac
                 })
                 .sum();
             sum / POINTS.len() as f64
         })
         .collect()
+}
+
+/// `x.rem_euclid(count)` (bit for bit) without the library's `fmod` for
+/// the parameters within the profile's turn or the next, where the ring
+/// tests ask for all but a few: a turn off is an exact subtraction there.
+#[inline]
+fn wrap_samples(x: f64, count: f64) -> f64 {
+    if (0.0..count).contains(&x) {
+        x
+    } else if (count..2.0 * count).contains(&x) {
+        x - count
+    } else {
+        x.rem_euclid(count)
+    }
 }
 
 /// First half minus second half of every bit: positive means white then
