@@ -63,12 +63,7 @@ impl PlaneProjection {
                 .camera
                 .project(&(self.origin + self.x_axis * a + self.y_axis * b));
         }
-        let h = self.pixel_origin + self.pixel_x * a + self.pixel_y * b;
-        if h.z.is_nan() || h.z <= MIN_DEPTH || !h.x.is_finite() || !h.y.is_finite() {
-            return None;
-        }
-        let inverse = 1.0 / h.z;
-        Some((h.x * inverse, h.y * inverse))
+        dehomogenise(self.pixel_origin + self.pixel_x * a + self.pixel_y * b)
     }
 
     /// [`PlaneProjection::project`] of the points at angle (cos, sin) on
@@ -91,14 +86,21 @@ impl PlaneProjection {
         // A loop, not `radii.map`: the closure behind an array map of
         // options was not inlined.
         for (point, &r) in points.iter_mut().zip(radii) {
-            let h = self.pixel_origin + direction * r;
-            if h.z > MIN_DEPTH && h.x.is_finite() && h.y.is_finite() {
-                let inverse = 1.0 / h.z;
-                *point = Some((h.x * inverse, h.y * inverse));
-            }
+            *point = dehomogenise(self.pixel_origin + direction * r);
         }
         points
     }
+}
+
+/// The pixel of homogeneous pixel coordinates `h`: `None` behind or at
+/// the camera, or where they are not finite.
+#[inline]
+fn dehomogenise(h: Vector3<f64>) -> Option<(f64, f64)> {
+    // Not above the least depth also when NaN.
+    (h.z > MIN_DEPTH && h.x.is_finite() && h.y.is_finite()).then(|| {
+        let inverse = 1.0 / h.z;
+        (h.x * inverse, h.y * inverse)
+    })
 }
 
 impl Camera {

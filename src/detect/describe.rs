@@ -695,8 +695,7 @@ impl RingSides {
         let clear = arc_m > 2.0 * self.pixel_m;
         clear
             && self.code.map_or(true, |code| {
-                let sectors = 2 * self.bits as i64;
-                let k = index.rem_euclid(sectors) as u32;
+                let k = angle::wrap_index(index, 2 * i64::from(self.bits)) as u32;
                 sector_is_black(self.bits, code, k) == on_black
             })
     }

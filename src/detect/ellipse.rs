@@ -8,7 +8,7 @@
 //! point does not move with symmetric blur) and fits a conic to those points.
 
 use super::segment::{Gray, Stats};
-use crate::math::sample::Border;
+use crate::math::sample::{floor_inside, Border};
 use crate::math::Ellipse;
 
 /// Bilinear grey level; None unless the 2×2 neighbourhood is in the image.
@@ -148,23 +148,11 @@ pub fn inner_edge_points(
 /// in the image.
 #[inline(always)]
 fn smooth_sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
-    // Rounding by truncation of the coordinates plus a half, which must
-    // lie in [1, size - 1) for the 3×3 neighbourhood to be inside. The
-    // limits go through i64, not usize: a signed conversion is one
-    // instruction, an unsigned one a dozen, and this runs a thousand times
-    // per posed marker.
-    let (tx, ty) = (x + 0.5, y + 0.5);
-    let (x_end, y_end) = (
-        (image.width as i64 - 1) as f64,
-        (image.height as i64 - 1) as f64,
-    );
-    if !(x >= 0.5 && y >= 0.5 && tx < x_end && ty < y_end) {
+    // The nearest pixel, which must have a neighbour on either side.
+    let (i, j) = floor_inside(x + 0.5, y + 0.5, image.width, image.height)?;
+    if i == 0 || j == 0 {
         return None;
     }
-    // SAFETY: tx and ty are finite, at least 1 and below the image's size,
-    // so they fit an i64; the conversion is the bare truncation without the
-    // saturation checks a plain `as` adds.
-    let (i, j) = unsafe { (tx.to_int_unchecked::<i64>(), ty.to_int_unchecked::<i64>()) };
     let weights = |d: f64| {
         [
             0.5 * (0.5 - d) * (0.5 - d),

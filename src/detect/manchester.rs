@@ -476,7 +476,7 @@ impl Model {
         self.square.extend(self.angles.iter().map(|&t| {
             // floor_to_int: `floor` is a library call on targets without
             // SSE4.1, and this runs for every sample of every model.
-            let k = wrap_sector(angle::floor_to_int((t - start) / sector), sectors);
+            let k = angle::wrap_index(angle::floor_to_int((t - start) / sector), sectors) as u32;
             let bit = word >> (bits - 1 - k / 2) & 1;
             // A 1 is white then black.
             let white = (bit == 1) == (k % 2 == 0);
@@ -489,20 +489,6 @@ impl Model {
             .into_iter()
             .fold(0.0, |best, r| f64::max(best, r.powi(2)))
     }
-}
-
-/// `k.rem_euclid(sectors)` without the integer division for the sector
-/// indices within a turn either side, which are all but a few.
-#[inline]
-fn wrap_sector(k: i64, sectors: i64) -> u32 {
-    let k = if (0..sectors).contains(&k) {
-        k
-    } else if (-sectors..0).contains(&k) {
-        k + sectors
-    } else {
-        k.rem_euclid(sectors)
-    };
-    k as u32
 }
 
 impl Kernel {

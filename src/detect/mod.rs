@@ -352,7 +352,8 @@ impl Detector {
         // pixels are still in the cache from following it (on a large
         // frame they would have left it by the time every other marker is
         // followed, and be fetched a second time).
-        let mut described: Vec<(Detection, track::PoseMemory)> = Vec::new();
+        let mut detections: Vec<Detection> = Vec::new();
+        let mut settled_normals = Vec::new();
         if tracking {
             for index in 0..self.tracks.len() {
                 if found.len() >= limit {
@@ -365,7 +366,9 @@ impl Detector {
                 }
                 if let Some(mut c) = self.follow(gray, index) {
                     c.track = Some(index);
-                    described.push(self.describe(image, gray, &c));
+                    let (d, settled) = self.describe(image, gray, &c);
+                    detections.push(d);
+                    settled_normals.push(settled);
                     found.push(c);
                 }
             }
@@ -471,12 +474,6 @@ impl Detector {
         found.truncate(followed);
         found.extend(fresh);
         found.truncate(limit);
-        let mut detections: Vec<Detection> = Vec::with_capacity(found.len());
-        let mut settled_normals = Vec::with_capacity(found.len());
-        for (d, settled) in described {
-            detections.push(d);
-            settled_normals.push(settled);
-        }
         for (k, c) in found.iter().enumerate().skip(followed) {
             if let Some(next) = found.get(k + 1) {
                 let e = &next.outer;

@@ -13,7 +13,7 @@ use std::sync::OnceLock;
 use crate::camera::Camera;
 use crate::family::MAX_BITS;
 use crate::geometry::{sector_is_black, sector_width, RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
-use crate::math::Ellipse;
+use crate::math::{angle, Ellipse};
 use crate::pose::Pose;
 
 /// Samples per ring sector along the rectified circle.
@@ -143,17 +143,7 @@ fn edge_phase(
         return None;
     }
     let mid = (black + white) / 2.0;
-    // The windows reach at most half a sector past either end.
-    let at = |j: isize| {
-        let n = n as isize;
-        profile[(if j < 0 {
-            j + n
-        } else if j >= n {
-            j - n
-        } else {
-            j
-        }) as usize]
-    };
+    let at = |j: isize| profile[angle::wrap_index(j as i64, n as i64)];
     let mut offsets = Vec::new();
     let mut edges = 0;
     for k in 0..sectors {

@@ -325,14 +325,10 @@ fn compare<C: Deref<Target = [u8]>>(
                 // A footprint covers a few sectors: keep only those.
                 touched.clear();
                 for &(t, w) in samples {
-                    let index = angle::floor_to_int((t - phase) / sector);
-                    // Within a turn of the range but for rounding: spare
-                    // the integer division of `rem_euclid`.
-                    let index = if (0..sectors as i64).contains(&index) {
-                        index as usize
-                    } else {
-                        index.rem_euclid(sectors as i64) as usize
-                    };
+                    let index = angle::wrap_index(
+                        angle::floor_to_int((t - phase) / sector),
+                        sectors as i64,
+                    );
                     if weights[index] == 0.0 {
                         touched.push(index);
                     }

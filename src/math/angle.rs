@@ -41,6 +41,21 @@ pub(crate) fn floor_to_int(x: f64) -> i64 {
     }
 }
 
+/// `k.rem_euclid(n)` as an index, without the integer division for the
+/// values within a turn either side, which are nearly all a ring's
+/// sector or sample indices.
+#[inline]
+pub(crate) fn wrap_index(k: i64, n: i64) -> usize {
+    let k = if (0..n).contains(&k) {
+        k
+    } else if (-n..0).contains(&k) {
+        k + n
+    } else {
+        k.rem_euclid(n)
+    };
+    k as usize
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -31,6 +31,22 @@ pub enum Border {
     Clamp,
 }
 
+/// `(floor(x), floor(y))` where the pixel after each is still inside a
+/// plane of `width` × `height` (0 ≤ x < width - 1, 0 ≤ y < height - 1),
+/// else `None`. Signed, and the floor a bare truncation: an unsigned
+/// conversion either way, or a saturating one, is a dozen instructions,
+/// and the ring and pose stages sample a thousand times per marker.
+#[inline(always)]
+pub(crate) fn floor_inside(x: f64, y: f64, width: usize, height: usize) -> Option<(i64, i64)> {
+    let (x_end, y_end) = ((width as i64 - 1) as f64, (height as i64 - 1) as f64);
+    if !(x >= 0.0 && y >= 0.0 && x < x_end && y < y_end) {
+        return None;
+    }
+    // SAFETY: x and y are finite, non-negative and below a usize, so they
+    // fit an i64; truncation is floor for non-negative values.
+    Some(unsafe { (x.to_int_unchecked::<i64>(), y.to_int_unchecked::<i64>()) })
+}
+
 /// A pixel type the sampler can blend, and the precision it blends in.
 pub trait Texel: Copy {
     /// What a blend computes in: f64 for bytes, so blends never round in
@@ -90,20 +106,8 @@ impl<'a, T: Texel> Plane<'a, T> {
         let (w, h) = (self.width, self.height);
         let (x0, y0, x1, y1, fx, fy) = match border {
             Border::Interior => {
-                // The whole 2×2 neighbourhood inside: 0 ≤ floor(x) < w - 1.
-                // The limits go through i64, not usize: a signed conversion
-                // is one instruction, an unsigned one a dozen, and the ring
-                // and pose stages sample a thousand times per marker.
-                let (x_end, y_end) = ((w as i64 - 1) as f64, (h as i64 - 1) as f64);
-                if !(x >= 0.0 && y >= 0.0 && x < x_end && y < y_end) {
-                    return None;
-                }
-                // SAFETY: x and y are finite, non-negative and below the
-                // plane's size, so they fit an i64; the conversion is the
-                // bare truncation (floor for non-negative values) without
-                // the saturation checks a plain `as` adds.
-                let (x0, y0) =
-                    unsafe { (x.to_int_unchecked::<i64>(), y.to_int_unchecked::<i64>()) };
+                // The whole 2×2 neighbourhood inside.
+                let (x0, y0) = floor_inside(x, y, w, h)?;
                 let (fx, fy) = (x - x0 as f64, y - y0 as f64);
                 // The four pixels as one slice: one bounds check, not four.
                 let start = y0 as usize * w + x0 as usize;
