@@ -399,11 +399,11 @@ impl Detector {
                     self.tracks.iter().map(|t| 2.0 * t.a).fold(0.0, f64::max) as usize + SCAN_CHUNK;
                 let map_rows = rows.start.saturating_sub(reach)..(rows.end + reach).min(height);
                 let map = ThresholdMap::adaptive_rows(gray.pixels, width, height, map_rows);
-                self.scan(gray, &map, rows, &mut found, limit);
+                self.scan(gray, &map, rows, &[], &mut found);
             }
         } else {
             let map = ThresholdMap::adaptive(gray.pixels, width, height);
-            self.scan(gray, &map, 0..height, &mut found, limit);
+            self.scan(gray, &map, 0..height, &[], &mut found);
             let shaded = map
                 .shaded_rows()
                 .filter(|_| self.config.target.family().is_some());
@@ -417,7 +417,14 @@ impl Detector {
                     ThresholdMap::adaptive_ratio(gray.pixels, width, height, rows.clone(), &map);
                 self.labels.begin(width, height);
                 let mut again = Vec::new();
-                self.scan_tiles(gray, &ratio_map, rows, map.near_shaded(), &mut again, limit);
+                self.scan_tiles(
+                    gray,
+                    &ratio_map,
+                    rows,
+                    map.near_shaded(),
+                    &found,
+                    &mut again,
+                );
                 merge_new(&mut found, again, limit);
             }
             if found.is_empty() {
@@ -446,8 +453,8 @@ impl Detector {
                         &ThresholdMap::constant(t),
                         0..height,
                         &seeds,
+                        &[],
                         &mut level,
-                        limit,
                     );
                     if level.len() > best {
                         best = level.len();

@@ -51,8 +51,8 @@ impl Detector {
         map: &ThresholdMap,
         rows: std::ops::Range<usize>,
         seed_tiles: &[bool],
+        known: &[Candidate],
         found: &mut Vec<Candidate>,
-        limit: usize,
     ) {
         if !seed_tiles.contains(&true) {
             return;
@@ -61,20 +61,24 @@ impl Detector {
         self.occupied.extend(
             (0..seed_tiles.len()).map(|i| !seed_tiles[i] || followed.get(i) == Some(&true)),
         );
-        self.scan(gray, map, rows, found, limit);
+        self.scan(gray, map, rows, known, found);
         self.occupied = followed;
     }
 
     /// Scans the rows for dark pixels not yet visited and tests the
-    /// segment each one starts.
+    /// segment each one starts, until `found` holds the most markers the
+    /// configuration allows. Segments of the markers in `known` (found by
+    /// an earlier look at the frame) are passed over, see
+    /// [`Detector::evaluate`].
     pub(super) fn scan(
         &mut self,
         gray: Gray<'_>,
         map: &ThresholdMap,
         rows: std::ops::Range<usize>,
+        known: &[Candidate],
         found: &mut Vec<Candidate>,
-        limit: usize,
     ) {
+        let limit = self.config.max_markers;
         const CHUNK: usize = SCAN_CHUNK;
         // Seeds are gathered a 64-bit word (four chunks) at a time: the
         // chunks' seed pixels as bits, less those already in a segment.
@@ -144,7 +148,7 @@ impl Detector {
                 seeds &= open & !self.labels.dark_word(y, w);
                 while seeds != 0 {
                     let x = w * WORD + seeds.trailing_zeros() as usize;
-                    if let Some(c) = self.evaluate(gray, map, (x as u32, y as u32)) {
+                    if let Some(c) = self.evaluate(gray, map, (x as u32, y as u32), known) {
                         found.push(c);
                         if found.len() >= limit {
                             return;
@@ -158,12 +162,16 @@ impl Detector {
         }
     }
 
-    /// Runs the tests on the dark segment that contains `seed`.
+    /// Runs the tests on the dark segment that contains `seed`. A segment
+    /// centred on a marker of `known` and lying within its outline's reach
+    /// is that marker seen again (under another threshold map): it is not
+    /// tested a second time.
     pub(super) fn evaluate(
         &mut self,
         gray: Gray<'_>,
         map: &ThresholdMap,
         seed: (u32, u32),
+        known: &[Candidate],
     ) -> Option<Candidate> {
         let design = self.config.target.design();
         let dark = self
@@ -183,6 +191,21 @@ impl Detector {
         let (bw, bh) = (f64::from(dark.width()), f64::from(dark.height()));
         if bw < 4.0 || bh < 4.0 {
             return None;
+        }
+        if !known.is_empty() {
+            let (cu, cv) = dark.centroid();
+            let seen_before = known.iter().any(|k| {
+                let e = &k.outer;
+                let reach = e.semi_major + 2.0;
+                (cu - e.u).hypot(cv - e.v) < 0.5 * e.semi_minor
+                    && f64::from(dark.min_u) >= e.u - reach
+                    && f64::from(dark.max_u) <= e.u + reach
+                    && f64::from(dark.min_v) >= e.v - reach
+                    && f64::from(dark.max_v) <= e.v + reach
+            });
+            if seen_before {
+                return None;
+            }
         }
         // Eq. 1: the dark pixels fill the expected share of the bounding
         // box's inscribed ellipse. An ellipse whose axes are slanted to the

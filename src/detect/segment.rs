@@ -352,37 +352,39 @@ impl Classes {
 
 /// The pixels of one row a fill may take: dark fills dark pixels of no
 /// dark segment yet, white fills light pixels of no segment of either
-/// kind. The row's words are borrowed once rather than looked up per word.
-struct Fillable<'a> {
+/// kind. The row's words are borrowed once rather than looked up per word;
+/// the kind is a constant so that the fill's inner loops do not test it.
+struct Fillable<'a, const DARK: bool> {
     class: &'a [u64],
     dark_marks: &'a [u64],
     white_marks: &'a [u64],
-    dark: bool,
 }
 
-impl<'a> Fillable<'a> {
+impl<'a, const DARK: bool> Fillable<'a, DARK> {
     #[inline(always)]
-    fn new(classes: &'a Classes, labels: &'a Labels, dark: bool, y: usize) -> Fillable<'a> {
+    fn new(classes: &'a Classes, labels: &'a Labels, y: usize) -> Fillable<'a, DARK> {
         let range = y * classes.stride..(y + 1) * classes.stride;
-        let class = if dark {
+        let class = if DARK {
             &classes.dark[range]
         } else {
             &classes.light[range]
         };
         let (dark_marks, white_marks) = labels.marks(y);
+        // One length for the three rows, so that indexing one of them
+        // checks the index for all.
+        let n = class.len();
         Fillable {
             class,
-            dark_marks,
-            white_marks,
-            dark,
+            dark_marks: &dark_marks[..n],
+            white_marks: &white_marks[..n],
         }
     }
 }
 
-impl Row for Fillable<'_> {
+impl<const DARK: bool> Row for Fillable<'_, DARK> {
     #[inline(always)]
     fn word(&self, w: usize) -> u64 {
-        if self.dark {
+        if DARK {
             self.class[w] & !self.dark_marks[w]
         } else {
             self.class[w] & !(self.dark_marks[w] | self.white_marks[w])
@@ -599,9 +601,27 @@ impl Filler {
         seed: (u32, u32),
         mode: Fill,
     ) -> FillResult {
+        match mode {
+            Fill::Dark => self.fill_as::<true>(image, map, labels, seed, mode),
+            Fill::White { .. } => self.fill_as::<false>(image, map, labels, seed, mode),
+        }
+    }
+
+    /// [`Filler::fill`] for one kind of fill, `DARK` when `mode` is
+    /// [`Fill::Dark`].
+    fn fill_as<const DARK: bool>(
+        &mut self,
+        image: Gray<'_>,
+        map: &ThresholdMap,
+        labels: &mut Labels,
+        seed: (u32, u32),
+        mode: Fill,
+    ) -> FillResult {
         let width = image.width;
         let stride = words_per_row(width);
-        let mut stats = Stats::default();
+        // The moments are summed over the runs once the fill is done: the
+        // loop keeps only the count, and fewer values in registers.
+        let mut count = 0u64;
         self.stack.clear();
         self.runs.clear();
         self.classes.select(image, map);
@@ -609,7 +629,7 @@ impl Filler {
             Fill::Dark => ([0, 0, u32::MAX, u32::MAX], u64::MAX),
             Fill::White { bounds, max_count } => (bounds, max_count),
         };
-        let dark = mode == Fill::Dark;
+        let dark = DARK;
         // Fill range in x and y. A white region that reaches the segment's
         // bounding box is not enclosed by it (the box's outermost row and
         // column hold the segment's own extreme pixels, with nothing of it
@@ -631,18 +651,16 @@ impl Filler {
         let (sx, sy) = (seed.0 as usize, seed.1 as usize);
         if sx < x_lo || sx > x_hi || sy < y_lo || sy > y_hi {
             return FillResult {
-                stats,
+                stats: Stats::default(),
                 escaped: !dark,
             };
         }
         let classes = &mut self.classes;
         let held = map.held_rows();
         let has_floor = dark && map.has_floor();
-        // The seed pushed last is popped next: it waits in `next` instead
-        // of going through the stack.
-        let mut next = Some(seed);
+        self.stack.push(seed);
         let mut escaped = false;
-        while let Some((x, y)) = next.take().or_else(|| self.stack.pop()) {
+        while let Some((x, y)) = self.stack.pop() {
             let (x, y) = (x as usize, y as usize);
             // Past the rows of a band map the floor is unknown: a dark
             // segment that gets there is larger than any marker the band
@@ -655,7 +673,7 @@ impl Filler {
             }
             classes.ensure(image, map, y);
             let (left, right) = {
-                let row = Fillable::new(classes, labels, dark, y);
+                let row = Fillable::<DARK>::new(classes, labels, y);
                 if row.word(x / WORD) >> (x % WORD) & 1 == 0 {
                     continue;
                 }
@@ -663,7 +681,7 @@ impl Filler {
             };
             let (left, right) = (left.max(x_lo), right.min(x_hi));
             set_bits(labels.row_mut(y, dark), left, right, true);
-            stats.add_run(y as u32, left as u32, right as u32, 0);
+            count += (right - left + 1) as u64;
             self.runs.push((y as u32, left as u32, right as u32));
             // Every pixel of a floor tile is dark, so a run touching one
             // belongs to the background floor, not to a marker. Filling the
@@ -679,11 +697,7 @@ impl Filler {
                 break;
             }
             if !dark
-                && (left == x_lo
-                    || right == x_hi
-                    || y == y_lo
-                    || y == y_hi
-                    || stats.count > max_count)
+                && (left == x_lo || right == x_hi || y == y_lo || y == y_hi || count > max_count)
             {
                 escaped = true;
                 break;
@@ -696,7 +710,7 @@ impl Filler {
                     continue;
                 }
                 classes.ensure(image, map, ny);
-                let row = Fillable::new(classes, labels, dark, ny);
+                let row = Fillable::<DARK>::new(classes, labels, ny);
                 let (w0, w1) = (left / WORD, right / WORD);
                 let mut carry = 0u64;
                 for w in w0..=w1 {
@@ -711,13 +725,15 @@ impl Filler {
                     carry = m >> (WORD - 1);
                     while starts != 0 {
                         let bit = starts.trailing_zeros() as usize;
-                        if let Some(waiting) = next.replace(((w * WORD + bit) as u32, ny as u32)) {
-                            self.stack.push(waiting);
-                        }
+                        self.stack.push(((w * WORD + bit) as u32, ny as u32));
                         starts &= starts - 1;
                     }
                 }
             }
+        }
+        let mut stats = Stats::default();
+        for &(y, x0, x1) in &self.runs {
+            stats.add_run(y, x0, x1, 0);
         }
         FillResult { stats, escaped }
     }
@@ -735,7 +751,12 @@ impl Filler {
         let (x, y) = (at.0 as usize, at.1 as usize);
         self.classes.select(image, map);
         self.classes.ensure(image, map, y);
-        Fillable::new(&self.classes, labels, dark, y).word(x / WORD) >> (x % WORD) & 1 == 1
+        let word = if dark {
+            Fillable::<true>::new(&self.classes, labels, y).word(x / WORD)
+        } else {
+            Fillable::<false>::new(&self.classes, labels, y).word(x / WORD)
+        };
+        word >> (x % WORD) & 1 == 1
     }
 
     /// Sets the last fill's runs aside for [`Filler::kept_grey_sum`].
