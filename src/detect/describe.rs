@@ -220,6 +220,25 @@ impl Detector {
                 axis_point = reading.axis_point;
                 centre_estimate = reading.centre_estimate;
             }
+            if let (Some(bits), RingEvidence::TooSmall, true) = (family_bits, evidence, d.id != 0) {
+                // Too fine to test for the family's count, the ring may
+                // still show a coarser count's structure: then the member
+                // read is not what was printed (a 16-bit ring 43 px across
+                // matched a member of an 18-bit family, dense as long
+                // families are). Only the ID goes: the candidate was judged
+                // a marker or not as before.
+                if let Some(ring) = coarser_ring(image, &outer, c, bits) {
+                    d.id = 0;
+                    d.bits = Some(ring.bits);
+                    d.code = Some(ring.code);
+                    d.status = None;
+                    d.confidence *= ring.fit;
+                    // The yaw, rim point and centre were the member's.
+                    d.yaw = None;
+                    axis_point = None;
+                    centre_estimate = None;
+                }
+            }
             let family_ring = match evidence {
                 RingEvidence::Manchester(ring) => Some(ring.bits) == family_bits,
                 RingEvidence::Absent => true,
@@ -724,6 +743,26 @@ fn rough_atan2(y: f64, x: f64) -> f64 {
         r = -r;
     }
     r
+}
+
+/// The Manchester structure of a count at least two below `bits` that a
+/// ring too small to test for `bits` shows (a neighbouring count may pass
+/// for the ring's own when its sectors are this fine; see
+/// [`manchester::examine`]). Counts of 8 bits and more: on so small a ring
+/// the lobes of a blurred finer code pass for a short one (8-bit markers
+/// 10 px across lost a sixth of their IDs to 4- to 6-bit readings).
+fn coarser_ring<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    outer: &Ellipse,
+    c: &Candidate,
+    bits: u32,
+) -> Option<manchester::RingStructure> {
+    let coarser =
+        manchester::BITS.filter(|&n| n >= 8 && n + 2 <= bits && manchester::testable(outer, n));
+    match manchester::examine(image, outer, c.black, c.white, coarser, false) {
+        RingEvidence::Manchester(ring) => Some(ring),
+        _ => None,
+    }
 }
 
 /// Least sector width (pixels, see [`manchester::sector_pixels`]) at which

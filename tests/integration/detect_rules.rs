@@ -171,6 +171,33 @@ fn no_family_of_another_bit_count_names_a_marker() {
     }
 }
 
+/// A ring too fine to be tested for a long family's count may still show
+/// its own, coarser count: a 16-bit marker 40 px across at 34° matched a
+/// member of the dense 18-bit family before that count was looked for.
+#[test]
+fn a_ring_showing_a_coarser_count_names_no_member_of_a_long_family() {
+    let sixteen = Family::generate(16, 2).unwrap();
+    let eighteen = Family::generate(18, 2).unwrap();
+    let cam = camera();
+    let mut scene = Scene::new(cam);
+    let code = sixteen.code(4).unwrap();
+    scene.objects.push(SceneObject::Marker(LooseMarker::new(
+        Marker::whycode(16, code, DIAMETER_M * 1000.0),
+        4,
+        placement(&cam, (80.0, 240.0), 40.0, 34.455 * PI / 180.0, 1.057),
+    )));
+    scene.noise = 2.0;
+    scene.seed = 2;
+    let (image, _) = render(&scene);
+    let own = with_family(&sixteen).detect(&image);
+    assert_eq!(own.iter().map(|d| d.id).collect::<Vec<_>>(), [4], "{own:?}");
+    let other = with_family(&eighteen).detect(&image);
+    for d in &other {
+        assert_eq!(d.id, 0, "{d:?}");
+        assert_eq!(d.bits, Some(16), "{d:?}");
+    }
+}
+
 #[test]
 fn auto_mode_names_the_bit_count_of_every_marker_in_a_mixed_frame() {
     let mut markers = Vec::new();
