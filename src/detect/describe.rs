@@ -7,6 +7,7 @@ use nalgebra::Vector3;
 use std::ops::Deref;
 
 use super::manchester::{self, RingEvidence};
+use super::ring_model::SmallRing;
 use super::segment::Gray;
 use super::track::{Fitted, PoseMemory};
 use super::{ellipse, legacy, rectify, ring_model, Candidate, Detection, Detector};
@@ -130,7 +131,17 @@ impl Detector {
             // for the sector test).
             let small = match (self.config.target.family(), evidence) {
                 (Some(family), RingEvidence::TooSmall) => {
-                    ring_model::read_small_ring(image, &outer, family)
+                    ring_model::read_small_ring(image, &outer, family).map(|ring| {
+                        let refuted = ring.id != 0
+                            && ring_model::neighbour_count_fits_better(
+                                image, &outer, family, &ring,
+                            );
+                        SmallRing {
+                            id: if refuted { 0 } else { ring.id },
+                            yaw: ring.yaw.filter(|_| !refuted),
+                            ..ring
+                        }
+                    })
                 }
                 _ => None,
             };

@@ -93,6 +93,8 @@ pub struct SmallRing {
     pub margin: f64,
     /// Residual of the best member over the best structureless ring's.
     pub structure_ratio: f64,
+    /// Residual of the best member (sum of squared grey differences).
+    pub residual: f64,
 }
 
 /// Compares the pixels inside `outer` with every member of `family` at
@@ -105,6 +107,34 @@ pub fn read_small_ring<C: Deref<Target = [u8]>>(
 ) -> Option<SmallRing> {
     let footprints: Vec<Footprint> = BLURS.iter().map(|&blur| gaussian_footprint(blur)).collect();
     compare(image, outer, family, &footprints, 1, Thresholds::SMALL)
+}
+
+/// Whether the pixels inside `outer` look more like a ring of a
+/// neighbouring bit count (up to two more or fewer than the family's: any
+/// aperiodic code of that count) than like `read`, the family's best
+/// member. A ring too small to count its sectors otherwise matches a
+/// member of the family one count off (a 9-bit marker 16 px across read as
+/// ID 10 of the 8-bit family). Counts whose codes are too many to compare
+/// refute nothing.
+pub fn neighbour_count_fits_better<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    outer: &ImageEllipse,
+    family: &Family,
+    read: &SmallRing,
+) -> bool {
+    let footprints: Vec<Footprint> = BLURS.iter().map(|&blur| gaussian_footprint(blur)).collect();
+    let bits = family.bits();
+    [
+        bits.saturating_sub(2),
+        bits.saturating_sub(1),
+        bits + 1,
+        bits + 2,
+    ]
+    .into_iter()
+    .filter(|n| super::manchester::BITS.contains(n))
+    .filter_map(|n| Family::generate(n, 1).ok())
+    .filter_map(|every| compare(image, outer, &every, &footprints, 1, Thresholds::SMALL))
+    .any(|other| other.residual < read.residual)
 }
 
 /// Reads a ring smeared by the motion blur `blur` (measured on the outline,
@@ -418,6 +448,7 @@ fn compare<C: Deref<Target = [u8]>>(
         yaw: named.then(|| ay.atan2(ax)),
         margin,
         structure_ratio,
+        residual: best.sse,
     })
 }
 

@@ -198,6 +198,37 @@ fn a_ring_showing_a_coarser_count_names_no_member_of_a_long_family() {
     }
 }
 
+/// A ring too small to count its sectors matched a member of a family one
+/// count off: a 9-bit marker 16 px across at 43° read as ID 10 of the
+/// 8-bit family, a 4-bit one as ID 3 of the 5-bit family. Any code of a
+/// neighbouring count explains such a ring better than the member.
+#[test]
+fn a_small_ring_of_a_neighbouring_count_names_no_member() {
+    let cam = camera();
+    // (printed bits, ID, tilt in degrees, roll, seed), read with a family
+    // of `read` bits.
+    for (bits, id, tilt, roll, seed, read) in
+        [(9, 8, 42.669, 3.8375, 3, 8), (4, 1, 46.889, 3.5450, 0, 5)]
+    {
+        let printed = Family::generate(bits, 2).unwrap();
+        let mut scene = Scene::new(cam);
+        scene.objects.push(SceneObject::Marker(LooseMarker::new(
+            Marker::whycode(bits, printed.code(id).unwrap(), DIAMETER_M * 1000.0),
+            id,
+            placement(&cam, (80.0, 400.0), 16.0, tilt * PI / 180.0, roll),
+        )));
+        scene.noise = 2.0;
+        scene.seed = seed;
+        let (image, _) = render(&scene);
+        let other = Family::generate(read, 2).unwrap();
+        let found = with_family(&other).detect(&image);
+        assert!(
+            found.iter().all(|d| d.id == 0),
+            "{bits}-bit read as {read}-bit: {found:?}"
+        );
+    }
+}
+
 #[test]
 fn auto_mode_names_the_bit_count_of_every_marker_in_a_mixed_frame() {
     let mut markers = Vec::new();
