@@ -103,6 +103,49 @@ fn main() {
              {known} of {total} known IDs ({wrong} not the printed one), {corrected} by correction"
         );
     }
+
+    println!("4. small rings: markers 10-16 px across read with families one or two counts off");
+    let (known, total, named, own) = small_neighbours();
+    println!(
+        "   4-16 bits d=2: {known} known IDs in {total} readings with a family of 1-2 bits \
+         more or fewer; their own family named {named} of {own}"
+    );
+}
+
+/// Known IDs in readings of small markers (4-16 bits, 10-16 px, 0-45°)
+/// with the families of up to two counts more or fewer, out of how many
+/// readings; and how many of the markers their own family names.
+fn small_neighbours() -> (usize, usize, usize, usize) {
+    let (mut known, mut total, mut named, mut own) = (0, 0, 0, 0);
+    for bits in 4..=16u32 {
+        let printed = Family::generate(bits, 2).expect("family");
+        for (f, size) in [10.0, 12.0, 14.0, 16.0].into_iter().enumerate() {
+            let seed = 500 + u64::from(bits) * 10 + f as u64;
+            let mut rng = Pcg32::new(seed, 5);
+            let scene = marker_scene(&printed, size, 12, &mut rng, seed);
+            let (image, truth) = simulate::render(&scene);
+            let mut own_detector = detector(Kind::Family(printed.clone())).expect("family");
+            own += truth.markers.len();
+            named += own_detector
+                .detect(&image)
+                .iter()
+                .filter(|d| {
+                    d.id != 0
+                        && nearest_truth(&truth.markers, d)
+                            .is_some_and(|m| m.id == d.id && (m.u - d.u).hypot(m.v - d.v) < 3.0)
+                })
+                .count();
+            for read_bits in [bits.saturating_sub(2), bits - 1, bits + 1, bits + 2] {
+                let Ok(read) = Family::generate(read_bits, 2) else {
+                    continue;
+                };
+                let mut other = detector(Kind::Family(read)).expect("family");
+                total += truth.markers.len();
+                known += other.detect(&image).iter().filter(|d| d.id != 0).count();
+            }
+        }
+    }
+    (known, total, named, own)
 }
 
 enum Kind {
