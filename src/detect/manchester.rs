@@ -192,6 +192,13 @@ pub fn examine<C: Deref<Target = [u8]>>(
     }
     let steep = outer.semi_major > STEEP_AXIS_RATIO * outer.semi_minor;
     let mid_level = 0.5 * (black_level + white_level);
+    // The ring's profile through the rectification that the sides of
+    // `bits` bits at `phase` show (see `refined_centre`).
+    let rectified_profile = |phase: f64, bits: u32| {
+        let centre = refined_centre(image, &frame, phase, bits, mid_level)?;
+        let frame = EllipseFrame::with_projected_centre(outer, centre)?;
+        sample_profile(image, &frame, radii, count)
+    };
     // Short of a steep view, perspective still bends the sectors enough
     // to cost a family's count its sure fit (a 30° view of a marker 80 px
     // across reads 0.88). Read through the rectification its own sides
@@ -200,9 +207,7 @@ pub fn examine<C: Deref<Target = [u8]>>(
     // stands, as it would have among the other counts.
     if expected && !steep {
         if let Some(plain) = best(&first) {
-            let settled = refined_centre(image, &frame, first[0].phase, counts[0], mid_level)
-                .and_then(|centre| EllipseFrame::with_projected_centre(outer, centre))
-                .and_then(|frame| sample_profile(image, &frame, radii, count))
+            let settled = rectified_profile(first[0].phase, counts[0])
                 .and_then(|profile| test_profile(&profile, &counts[..1]).pop()?.ring)
                 .is_some_and(|r| r.fit >= SURE_FIT && r.code == plain.code);
             if settled {
@@ -245,10 +250,8 @@ pub fn examine<C: Deref<Target = [u8]>>(
     }]
         .iter()
         .filter_map(|&k| {
-            let centre = refined_centre(image, &frame, tested[k].phase, counts[k], mid_level)?;
-            let frame = EllipseFrame::with_projected_centre(outer, centre)?;
             best(&test_profile(
-                &sample_profile(image, &frame, radii, count)?,
+                &rectified_profile(tested[k].phase, counts[k])?,
                 &counts,
             ))
         })

@@ -224,6 +224,14 @@ struct Candidate {
     track: Option<usize>,
 }
 
+impl Candidate {
+    /// How far from its centre the marker's pixels reach: the outline's
+    /// semi-major axis and the blurred edge beyond it.
+    fn reach(&self) -> f64 {
+        self.outer.semi_major + 2.0
+    }
+}
+
 /// Width of the scan's chunks (and of the tiles of the followed-marker mask).
 const SCAN_CHUNK: usize = 16;
 // The scan's tiles are the threshold map's (seed masks come from the map).
@@ -483,8 +491,7 @@ impl Detector {
         found.truncate(limit);
         for (k, c) in found.iter().enumerate().skip(followed) {
             if let Some(next) = found.get(k + 1) {
-                let e = &next.outer;
-                preload_disc(gray, e.u, e.v, e.semi_major + 2.0);
+                preload_disc(gray, next.outer.u, next.outer.v, next.reach());
             }
             let (d, settled) = self.describe(image, gray, c);
             detections.push(d);

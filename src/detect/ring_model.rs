@@ -105,8 +105,20 @@ pub fn read_small_ring<C: Deref<Target = [u8]>>(
     outer: &ImageEllipse,
     family: &Family,
 ) -> Option<SmallRing> {
-    let footprints: Vec<Footprint> = BLURS.iter().map(|&blur| gaussian_footprint(blur)).collect();
-    compare(image, outer, family, &footprints, 1, Thresholds::SMALL)
+    compare(
+        image,
+        outer,
+        family,
+        &small_footprints(),
+        1,
+        Thresholds::SMALL,
+    )
+}
+
+/// The pixel footprints a small ring is compared through: one per blur of
+/// [`BLURS`].
+fn small_footprints() -> Vec<Footprint> {
+    BLURS.iter().map(|&blur| gaussian_footprint(blur)).collect()
 }
 
 /// Whether the pixels inside `outer` look more like a ring of a
@@ -122,7 +134,7 @@ pub fn neighbour_count_fits_better<C: Deref<Target = [u8]>>(
     family: &Family,
     read: &SmallRing,
 ) -> bool {
-    let footprints: Vec<Footprint> = BLURS.iter().map(|&blur| gaussian_footprint(blur)).collect();
+    let footprints = small_footprints();
     let bits = family.bits();
     [
         bits.saturating_sub(2),

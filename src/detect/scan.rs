@@ -31,7 +31,7 @@ impl Detector {
         }
         self.occupied.resize(cols * rows, false);
         for c in found {
-            let reach = c.outer.semi_major + 2.0;
+            let reach = c.reach();
             let x0 = ((c.outer.u - reach).max(0.0) as usize) / SCAN_CHUNK;
             let x1 = ((c.outer.u + reach).max(0.0) as usize / SCAN_CHUNK).min(cols - 1);
             let y0 = ((c.outer.v - reach).max(0.0) as usize) / SCAN_CHUNK;
@@ -192,11 +192,10 @@ impl Detector {
         if bw < 4.0 || bh < 4.0 {
             return None;
         }
+        let (cu, cv) = dark.centroid();
         if !known.is_empty() {
-            let (cu, cv) = dark.centroid();
             let seen_before = known.iter().any(|k| {
-                let e = &k.outer;
-                let reach = e.semi_major + 2.0;
+                let (e, reach) = (&k.outer, k.reach());
                 (cu - e.u).hypot(cv - e.v) < 0.5 * e.semi_minor
                     && f64::from(dark.min_u) >= e.u - reach
                     && f64::from(dark.max_u) <= e.u + reach
@@ -228,7 +227,6 @@ impl Detector {
         // clutter with no white inside is not: the dark fill's runs are
         // kept aside for it while the white fill runs.
         self.filler.keep_runs();
-        let (cu, cv) = dark.centroid();
         // The white inside may come next to the segment's bounding box only
         // when the annulus is one pixel wide, on markers of a few pixels:
         // those need a family's ring model to be told from blobs.
