@@ -61,6 +61,7 @@ mod parallel;
 pub mod pose;
 pub mod render;
 pub mod simulate;
+pub mod spec;
 pub mod units;
 pub mod validate;
 

@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use std::sync::Mutex;
 use whycode::detect::report::FrameReport;
 use whycode::detect::{Detection, Detector, DetectorConfig, Target};
-use whycode::family::Family;
+use whycode::spec::{DetectSpec, TargetSpec};
 
 /// Finds WhyCode markers (or legacy WhyCon circles) in frames.
 ///
@@ -66,42 +66,24 @@ impl PyDetector {
         tracking: bool,
         max_markers: Option<usize>,
     ) -> PyResult<PyDetector> {
-        if legacy && family.is_some() {
+        let spec = DetectSpec {
+            target: match family {
+                Some(f) => TargetSpec::of_family(Some(&f.family)),
+                None if legacy => TargetSpec::legacy(),
+                None => TargetSpec::default(),
+            },
+            diameter: diameter.map(|d| crate::length(d, "diameter")).transpose()?,
+            camera: camera.map(|c| c.camera),
+            max_markers,
+            tracking,
+            ..DetectSpec::default()
+        };
+        if legacy && spec.target.family.is_some() {
             return Err(
                 Error::value("legacy markers have no family: pass one or the other").into(),
             );
         }
-        let diameter_m = diameter
-            .map(|d| crate::length(d, "diameter").map(|l| l.m()))
-            .transpose()?;
-        if diameter_m.is_some() != camera.is_some() {
-            return Err(
-                Error::value("pose needs both diameter and camera (pass both or neither)").into(),
-            );
-        }
-        let target = if legacy {
-            Target::WhyCon
-        } else {
-            Target::WhyCode(match family {
-                Some(f) => f.family.clone(),
-                None => guard(|| {
-                    Ok(Family::generate(
-                        whycode::family::DEFAULT_BITS,
-                        whycode::family::DEFAULT_DISTANCE,
-                    )?)
-                })?,
-            })
-        };
-        let mut config = DetectorConfig {
-            target,
-            diameter_m,
-            camera: camera.map(|c| c.camera),
-            tracking,
-            ..DetectorConfig::default()
-        };
-        if let Some(n) = max_markers {
-            config.max_markers = n;
-        }
+        let config = guard(|| spec.build().map_err(crate::spec_error))?;
         let fresh = guard(|| Ok(Detector::new(config.clone())))?;
         Ok(PyDetector {
             config,

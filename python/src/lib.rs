@@ -53,6 +53,27 @@ impl From<anyhow::Error> for Error {
     }
 }
 
+/// A library spec's error in Python's words: the keyword as it is spelled
+/// here (`camera_distance: ...`); a file that could not be read is an
+/// `OSError`, anything else a `ValueError`.
+pub(crate) fn spec_error(err: whycode::spec::SpecError) -> Error {
+    let message = err.message_with(str::to_string);
+    if err.is_io() {
+        Error::Os(message)
+    } else {
+        Error::Value(message)
+    }
+}
+
+impl From<whycode::render::job::PrintError> for Error {
+    fn from(err: whycode::render::job::PrintError) -> Error {
+        match err {
+            whycode::render::job::PrintError::Option(err) => spec_error(err),
+            whycode::render::job::PrintError::Render(err) => err.into(),
+        }
+    }
+}
+
 impl From<whycode::family::FamilyError> for Error {
     fn from(err: whycode::family::FamilyError) -> Error {
         Error::Value(err.to_string())

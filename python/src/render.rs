@@ -10,6 +10,7 @@ use whycode::geometry::Marker;
 use whycode::render::job::{MarkerJob, SheetJob};
 use whycode::render::sheet::id_range_error;
 use whycode::render::{write_all, Format, Template};
+use whycode::spec::TargetSpec;
 
 /// The output format: from `output`'s extension, else from `format`.
 fn output_format(format: Option<&str>, output: Option<&Path>) -> crate::Result<Format> {
@@ -49,23 +50,19 @@ fn extension(format: Format) -> &'static str {
     }
 }
 
-fn check_dpi(format: Format, dpi: f64, max: f64) -> crate::Result<()> {
-    if format == Format::Png && !(dpi.is_finite() && (10.0..=max).contains(&dpi)) {
-        return Err(Error::value(format!(
-            "dpi must be between 10 and {max}, got {dpi}"
-        )));
+/// The family a print job draws (`None`: legacy circles), resolved as
+/// every front end resolves it.
+fn printed_family(
+    family: Option<PyRef<'_, PyFamily>>,
+    legacy: bool,
+) -> crate::Result<Option<Family>> {
+    TargetSpec {
+        legacy,
+        family: family.map(|f| f.family.clone()),
+        ..TargetSpec::default()
     }
-    Ok(())
-}
-
-fn default_family(family: Option<PyRef<'_, PyFamily>>) -> crate::Result<Family> {
-    Ok(match family {
-        Some(f) => f.family.clone(),
-        None => Family::generate(
-            whycode::family::DEFAULT_BITS,
-            whycode::family::DEFAULT_DISTANCE,
-        )?,
-    })
+    .printable_family()
+    .map_err(crate::spec_error)
 }
 
 /// Print files name families by bits and distance: a family from a file
@@ -109,18 +106,7 @@ fn render_marker<'py>(
         .map(|m| crate::length(m, "margin").map(|l| l.mm()))
         .transpose()?;
     let format = output_format(format, output.as_deref())?;
-    check_dpi(format, dpi, 4800.0)?;
-    if legacy && (family.is_some() || id.is_some()) {
-        return Err(Error::value("a legacy marker has no family and no ID").into());
-    }
-    if !legacy && id.is_none() {
-        return Err(Error::value("render_marker needs an id (or legacy=True)").into());
-    }
-    let family = if legacy {
-        None
-    } else {
-        Some(default_family(family)?)
-    };
+    let family = printed_family(family, legacy)?;
     let bytes = py.detach(|| {
         guard(|| {
             if let Some(path) = &output {
@@ -179,18 +165,13 @@ fn render_sheet<'py>(
         None => 40.0,
     };
     let format = output_format(format, output.as_deref())?;
-    check_dpi(format, dpi, 1200.0)?;
-    if legacy && (family.is_some() || ids.is_some()) {
-        return Err(Error::value("legacy markers have no family and no IDs (give count)").into());
+    if legacy && ids.is_some() {
+        return Err(Error::value("ids: legacy circles have no IDs (give count)").into());
     }
     if legacy != count.is_some() {
         return Err(Error::value("count goes with legacy=True (and legacy needs a count)").into());
     }
-    let family = if legacy {
-        None
-    } else {
-        Some(default_family(family)?)
-    };
+    let family = printed_family(family, legacy)?;
     let name = match (&name, &output) {
         (Some(n), _) => n.clone(),
         (None, Some(path)) => path
@@ -218,7 +199,6 @@ fn render_sheet<'py>(
                 name: name.clone(),
                 dpi,
                 self_check: check,
-                option_prefix: "",
             };
             let path = output
                 .clone()
@@ -260,19 +240,19 @@ fn render_marker_image<'py>(
     if !(margin_px.is_finite() && (0.0..=20_000.0).contains(&margin_px)) {
         return Err(Error::value("margin_px must be between 0 and 20000").into());
     }
-    if legacy && (family.is_some() || id.is_some()) {
-        return Err(Error::value("a legacy marker has no family and no ID").into());
-    }
-    let marker = if legacy {
-        Marker::whycon(diameter_px / 10.0)
-    } else {
-        let family = default_family(family)?;
-        let id =
-            id.ok_or_else(|| Error::value("render_marker_image needs an id (or legacy=True)"))?;
-        let code = family
-            .code(id)
-            .ok_or_else(|| Error::value(id_range_error(&family, id)))?;
-        Marker::whycode(family.bits(), code, diameter_px / 10.0)
+    let marker = match printed_family(family, legacy)? {
+        None if id.is_some() => {
+            return Err(Error::value("id: a legacy WhyCon marker has no ID").into())
+        }
+        None => Marker::whycon(diameter_px / 10.0),
+        Some(family) => {
+            let id =
+                id.ok_or_else(|| Error::value("render_marker_image needs an id (or legacy=True)"))?;
+            let code = family
+                .code(id)
+                .ok_or_else(|| Error::value(id_range_error(&family, id)))?;
+            Marker::whycode(family.bits(), code, diameter_px / 10.0)
+        }
     };
     // 254 dpi is 10 pixels per millimetre: millimetres are tenths of pixels.
     let image = py.detach(|| {

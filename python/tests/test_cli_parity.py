@@ -116,6 +116,38 @@ def test_pose_matches_the_cli(tmp_path: Path, cli: Callable[..., Any],
         assert np.linalg.norm(m.position - np.array(true["position"])) < 0.01
 
 
+@pytest.mark.parametrize("layout", ["grid", "scatter"])
+def test_every_loose_layout_matches_the_cli(layout: str, tmp_path: Path,
+                                            cli: Callable[..., Any]) -> None:
+    image, truth = whycode.simulate(ids=range(1, 9), layout=layout, size=(640, 480),
+                                    camera_distance="0.9m", tilt=15, seed=4)
+    cli("simulate", "--ids", "1-8", "--layout", layout, "--size", "640x480",
+        "--camera-distance", "0.9m", "--tilt", "15deg", "--seed", "4", "-o", f"{layout}.png")
+    assert np.array_equal(image, whycode.load_image(tmp_path / f"{layout}.png"))
+    assert truth == json.loads((tmp_path / f"{layout}.json").read_text())
+    assert sorted(t["id"] for t in truth["markers"]) == list(range(1, 9))
+
+
+def test_a_scatter_that_cannot_place_every_marker_is_refused_as_on_the_cli(
+        tmp_path: Path, cli: Callable[..., Any]) -> None:
+    # 16 markers of 20 cm at 30 cm from a small view cannot all fit.
+    with pytest.raises(ValueError, match=r"^layout: only \d+ of 16 markers fit"):
+        whycode.simulate(ids=range(1, 17), layout="scatter", size=(320, 240),
+                         diameter="200mm", camera_distance="0.3m")
+    out = cli("simulate", "--ids", "1-16", "--layout", "scatter", "--size", "320x240",
+              "--diameter", "200mm", "--camera-distance", "0.3m", "-o", "s.png", ok=False)
+    assert out.returncode == 1
+    assert "--layout: only " in out.stderr and "of 16 markers fit" in out.stderr
+    assert not (tmp_path / "s.png").exists()
+
+
+def test_options_of_the_other_subject_are_refused_not_ignored(sheet: Path) -> None:
+    with pytest.raises(ValueError, match="^diameter: describes loose markers"):
+        whycode.simulate(manifest=sheet, diameter="30mm")
+    with pytest.raises(ValueError, match="^print_scale: applies to a sheet's page"):
+        whycode.simulate(ids=[1, 2], print_scale=0.97)
+
+
 @pytest.mark.skipif(not COMPAT.is_dir(), reason="compat files absent")
 def test_compat_files_match_the_cli(cli_json: Callable[..., Any]) -> None:
     many = COMPAT / "many.png"

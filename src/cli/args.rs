@@ -4,25 +4,25 @@
 use anyhow::{bail, Result};
 use std::path::PathBuf;
 use whycode::detect::Target;
-use whycode::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
-use whycode::units::{format_number, Length};
+use whycode::render::job::PrintError;
+use whycode::spec::{cli_option, limits, Bits, SpecError, TargetSpec};
+use whycode::units::Length;
 
 /// Which ID family: generated from `--bits` and `--distance`, or loaded
 /// from a family file.
 #[derive(Debug, clap::Args)]
 pub struct FamilyArgs {
-    /// Code length of the ID family, 2 to 24 bits; `detect` also takes
-    /// `auto`: each ring's bit count (4-24) read from the ring
+    /// Code length of the ID family, 2 to 24 bits [default: 8]; `detect`
+    /// also takes `auto`: each ring's bit count (4-24) read from the ring
     #[arg(
         long,
         short = 'b',
         value_name = "BITS",
-        default_value_t = DEFAULT_BITS,
         value_parser = bits_or_auto,
         allow_hyphen_values = true,
         conflicts_with = "family"
     )]
-    pub bits: u32,
+    pub bits: Option<Bits>,
 
     /// Minimum cyclic Hamming distance between the family's IDs, 1 to the
     /// bit count (2 detects a misread bit, 3 corrects it) [default: 2]
@@ -78,19 +78,16 @@ fn parse_distance(text: &str) -> Result<DistanceArg, String> {
     }
 }
 
-/// A whole number, refused with one message whatever the typo (a sign, a
-/// fraction, a huge value).
-/// `--bits auto` (stands for no fixed count).
-pub const AUTO_BITS: u32 = 0;
-
-fn bits_or_auto(text: &str) -> Result<u32, String> {
+fn bits_or_auto(text: &str) -> Result<Bits, String> {
     if text.trim().eq_ignore_ascii_case("auto") {
-        Ok(AUTO_BITS)
+        Ok(Bits::Auto)
     } else {
-        whole_number(text)
+        whole_number(text).map(Bits::Count)
     }
 }
 
+/// A whole number, refused with one message whatever the typo (a sign, a
+/// fraction, a huge value).
 pub fn whole_number(text: &str) -> Result<u32, String> {
     let t = text.trim();
     t.parse::<u32>().map_err(|_| {
@@ -117,62 +114,56 @@ fn shorten_digits(digits: &str) -> String {
 }
 
 impl FamilyArgs {
-    /// The Hamming distance given (or the default); a length is refused.
-    pub fn hamming(&self) -> Result<u32> {
+    /// The Hamming distance given; a length is refused.
+    fn hamming(&self) -> Result<Option<u32>> {
         match &self.distance {
-            None => Ok(DEFAULT_DISTANCE),
-            Some(DistanceArg::Hamming(d)) => Ok(*d),
+            None => Ok(None),
+            Some(DistanceArg::Hamming(d)) => Ok(Some(*d)),
             Some(DistanceArg::Length { text, .. }) => bail!(
                 "--distance '{text}': --distance is the family's Hamming distance, a whole number (2, 3, ...)"
             ),
         }
     }
 
-    /// The family these flags name.
-    pub fn resolve(&self) -> Result<Family> {
-        match &self.family {
-            Some(path) => Ok(Family::load(path)?),
-            None if self.bits == AUTO_BITS => {
-                bail!("--bits auto reads each marker's bit count from its ring: only `detect` takes it")
-            }
-            None => Ok(Family::generate(self.bits, self.hamming()?)?),
-        }
-    }
-
-    /// Flags naming the family, for messages ("--bits 8 --distance 2" or
-    /// "--family lab.json").
-    pub fn describe(&self) -> String {
-        match &self.family {
-            Some(path) => format!("--family {}", path.display()),
-            None => match self.hamming() {
-                Ok(d) => format!("--bits {} --distance {d}", self.bits),
-                Err(_) => format!("--bits {}", self.bits),
-            },
-        }
+    /// The library's spec of the family these flags name.
+    pub fn spec(&self) -> Result<TargetSpec> {
+        Ok(TargetSpec {
+            bits: self.bits,
+            distance: self.hamming()?,
+            family_file: self.family.clone(),
+            ..TargetSpec::default()
+        })
     }
 }
 
 impl MarkerKindArgs {
-    /// Which markers these flags name: legacy circles, or WhyCode markers
-    /// of the family.
-    pub fn resolve(&self) -> Result<Target> {
-        if self.legacy {
-            Ok(Target::WhyCon)
-        } else if self.family.bits == AUTO_BITS && self.family.family.is_none() {
-            let distance = match self.family.distance {
-                Some(_) => {
-                    let d = self.family.hamming()?;
-                    // A distance no bit count accepts is refused up front.
-                    Family::generate(DEFAULT_BITS.max(d), d)?;
-                    Some(d)
-                }
-                None => None,
-            };
-            Ok(Target::AnyBits { distance })
-        } else {
-            self.family.resolve().map(Target::WhyCode)
-        }
+    /// The library's spec of the markers these flags name.
+    pub fn spec(&self) -> Result<TargetSpec> {
+        Ok(TargetSpec {
+            legacy: self.legacy,
+            ..self.family.spec()?
+        })
     }
+
+    /// Which markers these flags name: legacy circles, or WhyCode markers
+    /// of the family (or of any bit count).
+    pub fn resolve(&self) -> Result<Target> {
+        self.spec()?.resolve().map_err(spec_error)
+    }
+}
+
+/// A print job's error in the command line's words.
+pub fn print_error(err: PrintError) -> anyhow::Error {
+    match err {
+        PrintError::Option(err) => spec_error(err),
+        PrintError::Render(err) => err,
+    }
+}
+
+/// A library spec's error in the command line's words (`--camera-distance`
+/// where the spec says `camera_distance`).
+pub fn spec_error(err: SpecError) -> anyhow::Error {
+    anyhow::anyhow!(err.message_with(cli_option))
 }
 
 /// Output formats of the subcommands that print records.
@@ -194,10 +185,6 @@ pub struct FormatArg {
     pub format: Format,
 }
 
-/// Lowest and highest PNG resolution. Above 1200 dpi a page is hundreds of
-/// megapixels; PDF and SVG are exact at any size.
-pub const DPI_RANGE: std::ops::RangeInclusive<f64> = 10.0..=1200.0;
-
 /// `--dpi`.
 #[derive(Debug, clap::Args)]
 pub struct DpiArg {
@@ -209,15 +196,7 @@ pub struct DpiArg {
 
 fn parse_dpi(text: &str) -> Result<f64, String> {
     let value = parse_plain_number(text)?;
-    if !DPI_RANGE.contains(&value) {
-        return Err(format!(
-            "{} dpi is outside {} to {} dpi",
-            format_number(value),
-            DPI_RANGE.start(),
-            DPI_RANGE.end()
-        ));
-    }
-    Ok(value)
+    limits::DPI.check(value).map_err(|e| e.to_string())
 }
 
 /// A finite decimal number ("3", "0.5", "-2", "1e3").

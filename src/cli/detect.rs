@@ -1,9 +1,10 @@
 //! `whycode detect`: find markers in images and print IDs, yaw and pose.
 
-use super::args::{Format, FormatArg, MarkerKindArgs};
+use super::args::{spec_error, Format, FormatArg, MarkerKindArgs};
+use super::output;
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -12,6 +13,7 @@ use whycode::detect::family_check::FamilyCheck;
 use whycode::detect::report::{FrameReport, CSV_HEADER};
 use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::image_io::load_gray;
+use whycode::spec::DetectSpec;
 use whycode::units::Length;
 
 const EXAMPLES: &str = "\
@@ -109,22 +111,17 @@ enum Job {
 }
 
 pub fn run(args: DetectArgs) -> Result<ExitCode> {
-    let target = args.kind.resolve()?;
-    let camera = args.camera.as_deref().map(Camera::load).transpose()?;
-    let mut config = DetectorConfig {
-        target,
-        diameter_m: args.diameter.map(Length::m),
-        camera,
-        report_unreadable: args.unreadable,
-        ..DetectorConfig::default()
-    };
-    if let Some(pixels) = args.min_ink {
-        anyhow::ensure!(
-            pixels.is_finite() && pixels >= 0.0,
-            "--min-ink: {pixels} is not a pixel count (give 0 or more)"
-        );
-        config.legacy_min_ink_px = pixels;
+    let config = DetectSpec {
+        target: args.kind.spec()?,
+        diameter: args.diameter,
+        camera: args.camera.as_deref().map(Camera::load).transpose()?,
+        max_markers: args.max_markers,
+        tracking: false,
+        unreadable: args.unreadable,
+        min_ink: args.min_ink,
     }
+    .build()
+    .map_err(spec_error)?;
     let family_bits = config.target.family().map(|f| f.bits());
     // In auto mode with a distance the IDs are there already; legacy
     // circles carry no ring.
@@ -132,10 +129,6 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         config.target,
         Target::WhyCode(_) | Target::AnyBits { distance: None }
     );
-    if let Some(n) = args.max_markers {
-        config.max_markers = n;
-    }
-
     let jobs = collect_jobs(&args.inputs, args.no_tracking)?;
     if let Some(dir) = &args.annotate {
         std::fs::create_dir_all(dir)
@@ -188,12 +181,11 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         .collect();
     progress.finish_and_clear();
 
-    let stdout = std::io::stdout();
-    let mut out = std::io::BufWriter::new(stdout.lock());
+    let mut out = output::Stdout::new();
     let mut failures = 0;
     let several = total > 1;
     if args.format.format == Format::Csv {
-        writeln!(out, "{CSV_HEADER}")?;
+        out.line(CSV_HEADER)?;
     }
     let mut check = FamilyCheck::new(family_bits);
     for result in results.into_iter().flatten() {
@@ -201,14 +193,14 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
             Ok(frame) => {
                 check.observe(&frame.markers);
                 match args.format.format {
-                    Format::Json => writeln!(out, "{}", frame.to_json())?,
-                    Format::Csv => out.write_all(frame.to_csv_rows().as_bytes())?,
-                    Format::Table => out.write_all(frame.to_table(several).as_bytes())?,
+                    Format::Json => out.line(frame.to_json())?,
+                    Format::Csv => out.write(&frame.to_csv_rows())?,
+                    Format::Table => out.write(&frame.to_table(several))?,
                 }
             }
             Err(err) => {
                 out.flush()?;
-                eprintln!("whycode: error: {}", super::one_line(&err));
+                output::error(super::one_line(&err));
                 failures += 1;
             }
         }
@@ -216,7 +208,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     out.flush()?;
     if wants_note {
         if let Some(note) = check.note() {
-            eprintln!("whycode: note: {note}");
+            output::note(note);
         }
     }
     Ok(if failures > 0 {

@@ -1,12 +1,13 @@
 //! `whycode ids`: a family's IDs and codes, or the count matrix.
 
-use super::args::{Format, FormatArg};
-use anyhow::{bail, Context, Result};
+use super::args::{spec_error, Format, FormatArg};
+use super::output;
+use anyhow::{bail, Result};
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use whycode::family::{CountTable, Family, DEFAULT_BITS, DEFAULT_DISTANCE, MAX_BITS};
+use whycode::family::{CountTable, Family, MAX_BITS};
+use whycode::spec::{Bits, TargetSpec};
 
 const EXAMPLES: &str = "\
 Examples:
@@ -61,46 +62,32 @@ pub fn run(args: IdsArgs) -> Result<ExitCode> {
         let distances = parse_list(args.distance.as_deref().unwrap_or("1..4"), "--distance")?;
         counts_text(&bits, &distances, format)?
     } else {
-        let family = match &args.family {
-            Some(path) => {
-                if args.bits.is_some() || args.distance.is_some() {
-                    bail!("--family takes bits and distance from the file; drop --bits and --distance");
-                }
-                Family::load(path)?
-            }
-            None => {
-                let bits = parse_single(args.bits.as_deref(), "--bits", DEFAULT_BITS)?;
-                let distance =
-                    parse_single(args.distance.as_deref(), "--distance", DEFAULT_DISTANCE)?;
-                Family::generate(bits, distance)?
-            }
-        };
+        if args.family.is_some() && (args.bits.is_some() || args.distance.is_some()) {
+            bail!("--family takes bits and distance from the file; drop --bits and --distance");
+        }
+        let family = TargetSpec {
+            bits: parse_single(args.bits.as_deref(), "--bits")?.map(Bits::Count),
+            distance: parse_single(args.distance.as_deref(), "--distance")?,
+            family_file: args.family.clone(),
+            ..TargetSpec::default()
+        }
+        .family()
+        .map_err(spec_error)?;
         family_text(&family, format)
     };
     match &args.output {
         Some(path) => whycode::io::write_atomic(path, text.as_bytes())?,
-        None => {
-            let mut stdout = std::io::stdout().lock();
-            if let Err(err) = stdout
-                .write_all(text.as_bytes())
-                .and_then(|_| stdout.flush())
-            {
-                // A reader that stops early (`| head`) is not an error.
-                if err.kind() != std::io::ErrorKind::BrokenPipe {
-                    return Err(err).context("cannot write to standard output");
-                }
-            }
-        }
+        None => output::print(&text)?,
     }
     Ok(ExitCode::SUCCESS)
 }
 
-fn parse_single(text: Option<&str>, option: &str, default: u32) -> Result<u32> {
+fn parse_single(text: Option<&str>, option: &str) -> Result<Option<u32>> {
     let Some(text) = text else {
-        return Ok(default);
+        return Ok(None);
     };
     match text.trim().parse::<u32>() {
-        Ok(value) => Ok(value),
+        Ok(value) => Ok(Some(value)),
         Err(_) if text.contains("..") || text.contains(',') => {
             bail!("{option}: '{text}' is a list; lists need --counts")
         }
@@ -203,7 +190,7 @@ fn family_text(family: &Family, format: Format) -> String {
 }
 
 fn counts_text(bits: &[u32], distances: &[u32], format: Format) -> Result<String> {
-    let counts = CountTable::new(bits, distances, "--")?.counts;
+    let counts = CountTable::new(bits, distances).map_err(spec_error)?.counts;
     let cell = |c: Option<usize>| c.map_or("-".to_string(), |c| c.to_string());
     let mut out = String::new();
     match format {

@@ -1,4 +1,5 @@
-use super::args::{whole_number, DpiArg, MarkerKindArgs};
+use super::args::{print_error, whole_number, DpiArg, MarkerKindArgs};
+use super::output;
 use anyhow::Result;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -66,9 +67,11 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
         dpi: args.dpi.dpi,
         self_check: !args.no_check,
     };
-    let (files, check) = job.print(&args.output)?;
+    let (files, check) = job.print(&args.output).map_err(print_error)?;
     if check.is_none() {
-        eprintln!("whycode: note: self-check skipped (--no-check): the marker was not read back before writing");
+        output::note(
+            "self-check skipped (--no-check): the marker was not read back before writing",
+        );
     }
     write_all(&files)?;
     Ok(ExitCode::SUCCESS)

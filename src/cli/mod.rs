@@ -8,6 +8,7 @@ mod args;
 mod detect;
 mod ids;
 mod marker;
+mod output;
 mod sheet;
 mod simulate;
 mod validate;
@@ -55,8 +56,10 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(code) => code,
+        // The reader had what it wanted (`| head`): not a failure.
+        Err(err) if err.is::<output::ReaderGone>() => ExitCode::SUCCESS,
         Err(err) => {
-            eprintln!("whycode: error: {}", one_line(&err));
+            output::error(one_line(&err));
             ExitCode::FAILURE
         }
     }
@@ -85,10 +88,10 @@ fn usage_error(err: clap::Error) -> ExitCode {
         Some(name) => format!("whycode {name} --help"),
         None => "whycode --help".to_string(),
     };
-    eprintln!(
-        "whycode: error: {} (see '{help}')",
+    output::error(format_args!(
+        "{} (see '{help}')",
         one_line_usage(&err.render().to_string())
-    );
+    ));
     ExitCode::FAILURE
 }
 

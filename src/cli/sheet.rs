@@ -1,4 +1,5 @@
-use super::args::{whole_number, DpiArg, MarkerKindArgs};
+use super::args::{print_error, whole_number, DpiArg, MarkerKindArgs};
+use super::output;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -62,16 +63,18 @@ pub struct SheetArgs {
 
 pub fn run(args: SheetArgs) -> Result<ExitCode> {
     if args.list_templates {
+        let mut list = String::new();
         for t in Template::all_builtin() {
-            println!(
-                "{:<8} {:>6} x {:<6} mm  margin {} mm  {}",
+            list.push_str(&format!(
+                "{:<8} {:>6} x {:<6} mm  margin {} mm  {}\n",
                 t.name,
                 whycode::units::trim_float(t.page_width_mm),
                 whycode::units::trim_float(t.page_height_mm),
                 whycode::units::trim_float(t.margin_mm),
                 t.description
-            );
+            ));
         }
+        output::print(&list)?;
         return Ok(ExitCode::SUCCESS);
     }
     whycode::render::check_output_dir(&args.output)?;
@@ -95,17 +98,18 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
             .unwrap_or_default(),
         dpi: args.dpi.dpi,
         self_check: !args.no_check,
-        option_prefix: "--",
     };
-    let printed = job.print(&args.output)?;
+    let printed = job.print(&args.output).map_err(print_error)?;
     match &printed.check {
-        Some(report) => eprintln!("whycode: self-check passed: {}", report.summary()),
-        None => eprintln!("whycode: note: self-check skipped (--no-check): the markers were not read back before writing"),
+        Some(report) => output::say(format_args!("self-check passed: {}", report.summary())),
+        None => output::note(
+            "self-check skipped (--no-check): the markers were not read back before writing",
+        ),
     }
     let summary = printed.summary();
     let files = printed.into_files();
     write_all(&files)?;
     let written: Vec<String> = files.iter().map(|(p, _)| p.display().to_string()).collect();
-    eprintln!("whycode: {summary}: {}", written.join(", "));
+    output::say(format_args!("{summary}: {}", written.join(", ")));
     Ok(ExitCode::SUCCESS)
 }

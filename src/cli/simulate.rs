@@ -1,15 +1,16 @@
 //! `whycode simulate`: render a synthetic camera view with ground truth.
 
-use super::args::{parse_plain_number, whole_number, DistanceArg, FamilyArgs};
+use super::args::{parse_plain_number, spec_error, whole_number, DistanceArg, FamilyArgs};
+use super::output;
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use whycode::camera::Camera;
 use whycode::family::parse_id_list;
-use whycode::geometry::Marker;
-use whycode::manifest::Manifest;
-use whycode::simulate::{self, layout, Background, MotionBlur, Scene, SceneObject, SheetPage};
+use whycode::image_io::ImageFormat;
+use whycode::simulate;
+use whycode::spec::{BackgroundKind, Layout, SceneSpec};
 use whycode::units::{Angle, Length};
 
 #[derive(Debug, clap::Args)]
@@ -37,11 +38,12 @@ struct SimulateOptions {
     #[arg(long, value_name = "FILE", conflicts_with_all = ["bits", "family", "ids"])]
     manifest: Option<PathBuf>,
     /// Page of the sheet to show
-    #[arg(long, default_value_t = 1, value_parser = whole_number, allow_hyphen_values = true)]
-    page: u32,
-    /// Scale the printer applied to the content, e.g. 0.97 or 97%
-    #[arg(long, default_value = "1", value_parser = parse_scale, allow_hyphen_values = true)]
-    print_scale: f64,
+    /// [default: 1]
+    #[arg(long, value_parser = whole_number, allow_hyphen_values = true)]
+    page: Option<u32>,
+    /// Scale the printer applied to the content, e.g. 0.97 or 97% [default: 1]
+    #[arg(long, value_parser = parse_scale, allow_hyphen_values = true)]
+    print_scale: Option<f64>,
     #[command(flatten)]
     family: FamilyArgs,
     /// Old name of --distance (the Hamming distance), kept for one release
@@ -50,21 +52,21 @@ struct SimulateOptions {
     /// Loose markers: IDs, e.g. 1-20 or 1,4,9-12
     #[arg(long)]
     ids: Option<String>,
-    /// Loose markers: diameter of the black disc
-    #[arg(long, default_value = "50mm", allow_hyphen_values = true)]
-    diameter: Length,
-    /// Loose markers: arrangement
-    #[arg(long, value_enum, default_value_t = Layout::Grid)]
-    layout: Layout,
+    /// Loose markers: diameter of the black disc [default: 50mm]
+    #[arg(long, allow_hyphen_values = true)]
+    diameter: Option<Length>,
+    /// Loose markers: arrangement [default: grid]
+    #[arg(long, value_enum)]
+    layout: Option<LayoutArg>,
     /// Camera calibration (ROS camera_info or OpenCV YAML)
     #[arg(long, value_name = "FILE")]
     camera: Option<PathBuf>,
-    /// Image size of the ideal camera, WIDTHxHEIGHT
-    #[arg(long, default_value = "1920x1080", conflicts_with = "camera")]
-    size: String,
-    /// Horizontal field of view of the ideal camera
-    #[arg(long, default_value = "60deg", conflicts_with = "camera")]
-    fov: Angle,
+    /// Image size of the ideal camera, WIDTHxHEIGHT [default: 1920x1080]
+    #[arg(long, value_parser = parse_size, conflicts_with = "camera")]
+    size: Option<(u32, u32)>,
+    /// Horizontal field of view of the ideal camera [default: 60deg]
+    #[arg(long, conflicts_with = "camera")]
+    fov: Option<Angle>,
     /// Distance from the camera to the page centre / marker board, with a
     /// unit (default: a page fills 80 % of the frame; loose markers 1 m)
     #[arg(long, value_name = "LENGTH", allow_hyphen_values = true)]
@@ -123,7 +125,7 @@ struct SimulateOptions {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum Layout {
+enum LayoutArg {
     /// A flat board of markers in rows, centred in the view
     Grid,
     /// Markers scattered at random through the view, none overlapping; an
@@ -140,191 +142,78 @@ enum BackgroundArg {
 
 fn parse_scale(text: &str) -> Result<f64, String> {
     let t = text.trim();
-    let value = match t.strip_suffix('%') {
+    match t.strip_suffix('%') {
         Some(p) => p.trim().parse::<f64>().map(|p| p / 100.0),
         None => t.parse::<f64>(),
     }
-    .map_err(|_| format!("'{text}' is not a scale (write e.g. 0.97 or 97%)"))?;
-    if !(value > 0.1 && value < 10.0) {
-        return Err(format!("'{text}' is not a plausible print scale"));
-    }
-    Ok(value)
+    .map_err(|_| format!("'{text}' is not a scale (write e.g. 0.97 or 97%)"))
 }
 
 fn parse_pixels(text: &str) -> Result<f64, String> {
     let t = text.trim();
     let number = t.strip_suffix("px").unwrap_or(t).trim();
-    // Blur cost grows with its length; beyond a few hundred pixels nothing
-    // is left to see anyway, and an unbounded value runs for hours.
-    const MAX_BLUR_PX: f64 = 500.0;
-    match number.parse::<f64>() {
-        Ok(v) if v.is_finite() && (0.0..=MAX_BLUR_PX).contains(&v) => Ok(v),
-        Ok(v) if v.is_finite() && v > MAX_BLUR_PX => Err(format!(
-            "'{text}' is more blur than this simulates (at most {MAX_BLUR_PX}px)"
-        )),
-        _ => Err(format!(
-            "'{text}' is not a length in pixels (write e.g. 2px)"
-        )),
-    }
+    number
+        .parse::<f64>()
+        .map_err(|_| format!("'{text}' is not a length in pixels (write e.g. 2px)"))
 }
 
-fn parse_size(text: &str) -> Result<(u32, u32)> {
+fn parse_size(text: &str) -> Result<(u32, u32), String> {
     let (w, h) = text
         .split_once(['x', 'X'])
-        .with_context(|| format!("--size '{text}': write WIDTHxHEIGHT, e.g. 1920x1080"))?;
-    let parse = |s: &str| {
+        .ok_or_else(|| format!("'{text}': write WIDTHxHEIGHT, e.g. 1920x1080"))?;
+    let side = |s: &str| {
         s.trim()
             .parse::<u32>()
-            .ok()
-            .filter(|&v| (16..=20000).contains(&v))
+            .map_err(|_| format!("'{text}': width and height are whole numbers of pixels"))
     };
-    match (parse(w), parse(h)) {
-        (Some(w), Some(h)) => Ok((w, h)),
-        _ => bail!("--size '{text}': width and height must be 16..20000 pixels"),
-    }
+    Ok((side(w)?, side(h)?))
 }
 
 pub fn run(args: SimulateArgs) -> Result<ExitCode> {
     let mut args = *args.options;
     let camera_distance = take_old_spellings(&mut args)?;
-    let camera = match &args.camera {
-        Some(path) => Camera::load(path)?,
-        None => {
-            let (w, h) = parse_size(&args.size)?;
-            let fov = args.fov.degrees();
-            if !(1.0..=170.0).contains(&fov) {
-                bail!("--fov must be between 1 and 170 degrees");
-            }
-            Camera::ideal(w, h, fov)
-        }
+    let format = ImageFormat::from_path(&args.output)?;
+    let spec = SceneSpec {
+        manifest: args.manifest.clone(),
+        page: args.page,
+        print_scale: args.print_scale,
+        target: args.family.spec()?,
+        ids: args
+            .ids
+            .as_deref()
+            .map(|list| parse_id_list(list).context("--ids"))
+            .transpose()?,
+        diameter: args.diameter,
+        layout: args.layout.map(|l| match l {
+            LayoutArg::Grid => Layout::Grid,
+            LayoutArg::Scatter => Layout::Scatter,
+        }),
+        camera: args.camera.as_deref().map(Camera::load).transpose()?,
+        size: args.size,
+        fov: args.fov,
+        camera_distance,
+        tilt: args.tilt,
+        pan: args.pan,
+        roll: args.roll,
+        background: args.background.map(|b| match b {
+            BackgroundArg::Grey => BackgroundKind::Grey,
+            BackgroundArg::Table => BackgroundKind::Table,
+            BackgroundArg::Clutter => BackgroundKind::Clutter,
+        }),
+        gradient: args.gradient,
+        gradient_angle: args.gradient_angle,
+        exposure: args.exposure,
+        dark: args.dark,
+        blur_px: args.blur,
+        motion_blur_px: args.motion_blur,
+        motion_angle: args.motion_angle,
+        noise: args.noise,
+        // A JPEG output file is itself the compression step: do it once.
+        jpeg: args.jpeg.filter(|_| format != ImageFormat::Jpeg),
+        blot: args.blot.clone(),
+        seed: args.seed,
     };
-    if !(args.gradient.is_finite() && args.gradient >= 1.0) {
-        bail!("--gradient must be a ratio of at least 1 (e.g. 3 for 3:1)");
-    }
-    if !(args.noise.is_finite() && args.noise >= 0.0) {
-        bail!("--noise must be a grey-level sigma of at least 0");
-    }
-    let mut scene = Scene::new(camera);
-    let (tilt, pan, roll) = (args.tilt.radians(), args.pan.radians(), args.roll.radians());
-    if let Some(path) = &args.manifest {
-        let manifest = Manifest::load(path)?;
-        if args.page == 0 || args.page > manifest.pages.max(1) {
-            bail!("{}: has no page {}", path.display(), args.page);
-        }
-        let [w, h] = manifest.page_size_mm;
-        if args.family.distance.is_some() {
-            bail!("--distance: the manifest names the family; the camera's distance is --camera-distance");
-        }
-        let distance = match camera_distance {
-            Some(d) => d.m(),
-            None => layout::distance_to_fill(&camera, w, h, 0.8),
-        };
-        let sheet_name = path
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let mut page = SheetPage::new(
-            manifest.clone(),
-            args.page,
-            layout::centred(distance, tilt, pan, roll),
-        )
-        .with_printed_text(&sheet_name);
-        page.print_scale = args.print_scale;
-        for &id in &args.blot {
-            let entry = manifest
-                .markers
-                .iter()
-                .find(|m| m.id == id && m.page == args.page)
-                .with_context(|| format!("--blot {id}: no marker {id} on page {}", args.page))?;
-            let marker = SheetPage::marker_of(&manifest, entry);
-            page.blots
-                .extend(layout::ring_blots(&marker, entry.x_mm, entry.y_mm, false));
-        }
-        scene.objects.push(SceneObject::Page(page));
-        scene.background = Background::Table;
-    } else {
-        let Some(ids) = &args.ids else {
-            bail!("say what to show: --manifest FILE, or --ids LIST (with --bits and --distance, or --family) for loose markers");
-        };
-        let family = args
-            .family
-            .resolve()
-            .with_context(|| args.family.describe())?;
-        let bits = family.bits();
-        let ids = parse_id_list(ids).context("--ids")?;
-        let diameter = args.diameter.mm();
-        let markers = ids
-            .iter()
-            .map(|&id| {
-                let code = family.code(id).with_context(|| {
-                    format!(
-                        "--ids: ID {id} is not in the {bits}-bit family with distance {} ({} IDs)",
-                        family.distance(),
-                        family.len()
-                    )
-                })?;
-                Ok((Marker::whycode(bits, code, diameter), id))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let distance = camera_distance.map_or(1.0, Length::m);
-        let mut loose = match args.layout {
-            Layout::Grid => {
-                layout::marker_grid(&markers, &layout::centred(distance, tilt, pan, roll))
-            }
-            Layout::Scatter => {
-                let max_tilt = if tilt != 0.0 {
-                    tilt.abs()
-                } else {
-                    40f64.to_radians()
-                };
-                layout::marker_scatter_all(&camera, &markers, distance, max_tilt, args.seed)
-                    .map_err(|problem| anyhow::anyhow!("--layout scatter: {problem}"))?
-            }
-        };
-        for &id in &args.blot {
-            let m = loose
-                .iter_mut()
-                .find(|m| m.id == id)
-                .with_context(|| format!("--blot {id}: no marker {id} in the scene"))?;
-            let blots = layout::ring_blots(&m.marker, 0.0, 0.0, true);
-            m.blots.extend(blots);
-        }
-        scene
-            .objects
-            .extend(loose.into_iter().map(SceneObject::Marker));
-        scene.background = Background::Uniform(0.45);
-    }
-    if let Some(bg) = args.background {
-        scene.background = match bg {
-            BackgroundArg::Grey => Background::Uniform(0.45),
-            BackgroundArg::Table => Background::Table,
-            BackgroundArg::Clutter => Background::Clutter { density: 1.5 },
-        };
-    }
-    scene.gradient = args.gradient;
-    scene.gradient_angle = args.gradient_angle.radians();
-    scene.exposure = match (args.exposure, args.dark) {
-        (Some(e), _) if e > 0.0 && e.is_finite() => e,
-        (Some(_), _) => bail!("--exposure must be positive"),
-        (None, true) => 0.25,
-        (None, false) => 1.0,
-    };
-    scene.focus_blur_px = args.blur;
-    if args.motion_blur > 0.0 {
-        scene.motion_blur = Some(MotionBlur {
-            length_px: args.motion_blur,
-            angle: args.motion_angle.radians(),
-        });
-    }
-    scene.noise = args.noise;
-    scene.seed = args.seed;
-    let format = whycode::image_io::ImageFormat::from_path(&args.output)?;
-    // A JPEG output file is itself the compression step: do it once.
-    scene.jpeg_quality = if format == whycode::image_io::ImageFormat::Jpeg {
-        None
-    } else {
-        args.jpeg
-    };
+    let scene = spec.build().map_err(spec_error)?;
 
     let (image, truth) = simulate::render(&scene);
     let truth_path = args
@@ -348,15 +237,15 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
     whycode::image_io::save_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
     whycode::io::write_atomic(&truth_path, truth.to_json().as_bytes())?;
     let visible = truth.markers.iter().filter(|m| m.visible).count();
-    println!(
-        "wrote {} ({}x{}) and {}: {} markers, {} wholly in view",
+    output::print(&format!(
+        "wrote {} ({}x{}) and {}: {} markers, {} wholly in view\n",
         display(&args.output),
         image.width(),
         image.height(),
         display(&truth_path),
         truth.markers.len(),
         visible
-    );
+    ))?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -369,9 +258,9 @@ fn take_old_spellings(args: &mut SimulateOptions) -> Result<Option<Length>> {
         if camera_distance.is_some() {
             bail!("--distance '{text}' and --camera-distance both give the camera's distance; keep --camera-distance");
         }
-        eprintln!(
-            "whycode: note: --distance {text} reads as the camera distance for one more release; write --camera-distance {text} (--distance is now the Hamming distance)"
-        );
+        output::note(format_args!(
+            "--distance {text} reads as the camera distance for one more release; write --camera-distance {text} (--distance is now the Hamming distance)"
+        ));
         camera_distance = Some(*length);
         args.family.distance = None;
     }
@@ -379,9 +268,9 @@ fn take_old_spellings(args: &mut SimulateOptions) -> Result<Option<Length>> {
         if args.family.distance.is_some() || args.family.family.is_some() {
             bail!("--hamming is the old name of --distance; give the family once, as --distance (or --family)");
         }
-        eprintln!(
-            "whycode: note: --hamming is now --distance; --hamming {hamming} still works for one more release"
-        );
+        output::note(format_args!(
+            "--hamming is now --distance; --hamming {hamming} still works for one more release"
+        ));
         args.family.distance = Some(DistanceArg::Hamming(hamming));
     }
     Ok(camera_distance)

@@ -1,5 +1,6 @@
 //! `whycode validate`: check photos of printed sheets against the manifest.
 
+use super::output;
 use anyhow::{Context, Result};
 use clap::ValueEnum;
 use std::path::{Path, PathBuf};
@@ -75,8 +76,8 @@ pub fn run(args: ValidateArgs) -> Result<ExitCode> {
     }
     let report = validate::summarise(&manifest, photos);
     match args.format {
-        Format::Table => print!("{}", report.to_table()),
-        Format::Json => print!("{}", report.to_json()),
+        Format::Table => output::print(&report.to_table())?,
+        Format::Json => output::print(&report.to_json())?,
     }
     Ok(if report.ok {
         ExitCode::SUCCESS

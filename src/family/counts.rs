@@ -2,7 +2,7 @@
 //! `whycode ids --counts`, Python's `family_counts` and the page's table.
 
 use super::{Family, MAX_BITS, MIN_BITS};
-use anyhow::{bail, Result};
+use crate::spec::SpecError;
 
 /// Family sizes for every bit count and distance asked for.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -18,19 +18,23 @@ pub struct CountTable {
 }
 
 impl CountTable {
-    /// Generates every family of the table. `option_prefix` is how the
-    /// caller spells its options in errors ("--" on the command line, ""
-    /// in Python).
-    pub fn new(bits: &[u32], distances: &[u32], option_prefix: &str) -> Result<CountTable> {
+    /// Generates every family of the table.
+    pub fn new(bits: &[u32], distances: &[u32]) -> Result<CountTable, SpecError> {
         for &n in bits {
             if !(MIN_BITS..=MAX_BITS).contains(&n) {
-                bail!("{option_prefix}bits: {n} is outside {MIN_BITS}..{MAX_BITS}");
+                return Err(SpecError::invalid(
+                    "bits",
+                    format!("{n} is outside {MIN_BITS}..{MAX_BITS}"),
+                ));
             }
         }
         let max_bits = bits.iter().max().copied().unwrap_or(0);
         for &d in distances {
             if d == 0 || d > max_bits {
-                bail!("{option_prefix}distance: {d} is outside 1..{max_bits} (1 to the largest bit count)");
+                return Err(SpecError::invalid(
+                    "distance",
+                    format!("{d} is outside 1..{max_bits} (1 to the largest bit count)"),
+                ));
             }
         }
         let counts = distances
@@ -39,14 +43,18 @@ impl CountTable {
                 bits.iter()
                     .map(|&n| {
                         Ok(if d <= n {
-                            Some(Family::generate(n, d)?.len())
+                            Some(
+                                Family::generate(n, d)
+                                    .map_err(|e| SpecError::of("distance", e))?
+                                    .len(),
+                            )
                         } else {
                             None
                         })
                     })
-                    .collect::<Result<Vec<_>>>()
+                    .collect::<Result<Vec<_>, SpecError>>()
             })
-            .collect::<Result<Vec<_>>>()?;
+            .collect::<Result<Vec<_>, SpecError>>()?;
         Ok(CountTable {
             bits: bits.to_vec(),
             distances: distances.to_vec(),
@@ -71,14 +79,14 @@ mod tests {
 
     #[test]
     fn the_table_leaves_out_distances_above_the_bit_count() {
-        let table = CountTable::new(&[4, 8], &[2, 5], "--").unwrap();
+        let table = CountTable::new(&[4, 8], &[2, 5]).unwrap();
         assert_eq!(table.counts[1][0], None);
         assert_eq!(table.counts[0][1], Some(16));
         let entries: Vec<_> = table.entries().collect();
         assert_eq!(entries.len(), 3);
         assert_eq!(entries[1], ((8, 2), 16));
-        assert!(CountTable::new(&[8], &[9], "--").is_err());
-        assert!(CountTable::new(&[1], &[1], "")
+        assert!(CountTable::new(&[8], &[9]).is_err());
+        assert!(CountTable::new(&[1], &[1])
             .unwrap_err()
             .to_string()
             .starts_with("bits: 1"));

@@ -10,10 +10,34 @@ use super::sheet::{chosen_markers, id_range_error, layout, SheetSpec};
 use super::template::Template;
 use super::{encode_pages, Format};
 use crate::detect::Target;
-use crate::family::{check_id_list, Family};
+use crate::family::Family;
 use crate::geometry::Marker;
-use anyhow::{bail, Result};
+use crate::spec::{limits, within, SpecError};
 use std::path::{Path, PathBuf};
+
+/// Why a print job made no files: an option's value (which front ends word
+/// in their own option names), or the rendering itself.
+#[derive(Debug, thiserror::Error)]
+pub enum PrintError {
+    /// An option's value is wrong.
+    #[error(transparent)]
+    Option(#[from] SpecError),
+    /// Laying out, encoding or reading back the pages failed.
+    #[error(transparent)]
+    Render(#[from] anyhow::Error),
+}
+
+type Result<T> = std::result::Result<T, PrintError>;
+
+/// The checks every print job makes of its options, whatever the format.
+fn check_common(format: Format, diameter_mm: f64, dpi: f64) -> Result<()> {
+    within("diameter", diameter_mm, limits::MARKER_DIAMETER_MM)?;
+    // PDF and SVG are exact at any size; only a raster has a resolution.
+    if format == Format::Png {
+        within("dpi", dpi, limits::DPI)?;
+    }
+    Ok(())
+}
 
 /// Files to write together (all or none) or hand over, in order.
 pub type Files = Vec<(PathBuf, Vec<u8>)>;
@@ -60,9 +84,6 @@ pub struct SheetJob<'a> {
     pub dpi: f64,
     /// Read every marker back from renderings before handing the pages over.
     pub self_check: bool,
-    /// How the caller spells option names in errors: "--" for the command
-    /// line and the web page (which mirrors it), "" for Python's keywords.
-    pub option_prefix: &'a str,
 }
 
 /// A printed sheet: its page files, its manifest, and what the check did.
@@ -112,16 +133,21 @@ impl MarkerJob<'_> {
     /// and what the self-check did.
     pub fn print(&self, output: &Path) -> Result<(Files, Option<CheckReport>)> {
         let format = Format::from_path(output)?;
+        check_common(format, self.diameter_mm, self.dpi)?;
         let (marker, title) = match (self.family, self.id) {
             (None, None) => (
                 Marker::whycon(self.diameter_mm),
                 "WhyCon marker".to_string(),
             ),
-            (None, Some(_)) => bail!("a legacy WhyCon marker has no ID"),
-            (Some(_), None) => bail!("--id: choose the marker's ID"),
+            (None, Some(_)) => {
+                return Err(SpecError::invalid("id", "a legacy WhyCon marker has no ID").into())
+            }
+            (Some(_), None) => {
+                return Err(SpecError::invalid("id", "choose the marker's ID").into())
+            }
             (Some(family), Some(id)) => {
                 let Some(code) = family.code(id) else {
-                    bail!("{}", id_range_error(family, id));
+                    return Err(SpecError::invalid("id", id_range_error(family, id)).into());
                 };
                 (
                     Marker::whycode(family.bits(), code, self.diameter_mm),
@@ -169,17 +195,9 @@ impl SheetJob<'_> {
     /// several SVG or PNG pages become `name-1.svg`, ...).
     pub fn print(&self, output: &Path) -> Result<PrintedSheet> {
         let format = Format::from_path(output)?;
-        if let Some(ids) = &self.ids {
-            check_id_list(ids)
-                .map_err(|err| anyhow::anyhow!("{}ids: {err}", self.option_prefix))?;
-        }
-        let (markers, family) = chosen_markers(
-            self.family,
-            self.ids.clone(),
-            self.count,
-            self.diameter_mm,
-            self.option_prefix,
-        )?;
+        check_common(format, self.diameter_mm, self.dpi)?;
+        let (markers, family) =
+            chosen_markers(self.family, self.ids.clone(), self.count, self.diameter_mm)?;
         let spec = SheetSpec {
             markers,
             template: self.template.clone(),

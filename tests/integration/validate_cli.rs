@@ -100,7 +100,8 @@ fn bad_input_is_one_line_error() {
     );
     let out = whycode(&["simulate", "--bits", "8", "--ids", "1-40", "-o", "x.png"]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("not in the 8-bit family"));
+    assert!(String::from_utf8_lossy(&out.stderr)
+        .contains("--ids: ID 17 is not in the 8-bit distance-2 family (IDs 1-16)"));
 }
 
 /// The README's own flow: the default sheet (12 markers on page 1, 4 on

@@ -6,21 +6,19 @@
 
 use std::path::Path;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use image::GrayImage;
 use serde::Deserialize;
 use wasm_bindgen::prelude::*;
-use whycode::detect::{Detector, DetectorConfig, Target};
-use whycode::family::{parse_id_list, CountTable, Family, DEFAULT_BITS, DEFAULT_DISTANCE};
+use whycode::detect::{Detector, Target};
+use whycode::family::{parse_id_list, CountTable, Family};
 use whycode::image_io;
 use whycode::manifest::Manifest;
-use whycode::render::job::{MarkerJob, SheetJob};
+use whycode::render::job::{MarkerJob, PrintError, SheetJob};
 use whycode::render::template::{builtin_names, Template};
+use whycode::spec::{cli_option, Bits, DetectSpec, SpecError, TargetSpec};
 use whycode::units::{trim_float, Length};
 use whycode::validate::{self, annotate, PhotoReport};
-
-/// PNG resolutions the CLI accepts (`--dpi`), for pages and single markers.
-const DPI_RANGE: std::ops::RangeInclusive<f64> = 10.0..=1200.0;
 
 /// Largest photo the page decodes: a phone's 50 MP still fits, and the
 /// decoded copies stay well inside a tab's memory.
@@ -31,6 +29,19 @@ const PHOTO_LIMIT: image_io::SizeLimit = image_io::SizeLimit {
 
 fn js_error(err: anyhow::Error) -> JsError {
     JsError::new(&one_line(&err))
+}
+
+/// A library spec's error in the page's words, which are the command
+/// line's (`--diameter: ...`).
+fn spec_error(err: SpecError) -> anyhow::Error {
+    anyhow::anyhow!(err.message_with(cli_option))
+}
+
+fn print_error(err: PrintError) -> anyhow::Error {
+    match err {
+        PrintError::Option(err) => spec_error(err),
+        PrintError::Render(err) => err,
+    }
 }
 
 use whycode::error::one_line;
@@ -106,7 +117,7 @@ pub fn family_table(bits: u32, distance: u32, limit: usize) -> Result<String, Js
 #[wasm_bindgen]
 pub fn counts(bits: &[u32], distances: &[u32]) -> Result<String, JsError> {
     let inner = || -> Result<String> {
-        let table = CountTable::new(bits, distances, "--")?;
+        let table = CountTable::new(bits, distances).map_err(spec_error)?;
         Ok(
             serde_json::json!({ "bits": bits, "distances": distances, "counts": table.counts })
                 .to_string(),
@@ -154,17 +165,6 @@ fn file_name(path: &Path) -> String {
         .unwrap_or_default()
 }
 
-fn check_dpi(dpi: f64) -> Result<()> {
-    if !(dpi.is_finite() && DPI_RANGE.contains(&dpi)) {
-        bail!(
-            "--dpi: {dpi} dpi is outside {} to {} dpi",
-            DPI_RANGE.start(),
-            DPI_RANGE.end()
-        );
-    }
-    Ok(())
-}
-
 fn length(option: &str, text: &str) -> Result<f64> {
     text.parse::<Length>()
         .map(Length::mm)
@@ -196,14 +196,14 @@ struct SheetOptions {
 /// What a sheet or a marker prints, from the form's kind fields as the
 /// command line resolves `--legacy`, `--bits` and `--distance`.
 fn chosen_target(legacy: bool, bits: Option<u32>, distance: Option<u32>) -> Result<Target> {
-    Ok(if legacy {
-        Target::WhyCon
-    } else {
-        Target::WhyCode(Family::generate(
-            bits.unwrap_or(DEFAULT_BITS),
-            distance.unwrap_or(DEFAULT_DISTANCE),
-        )?)
-    })
+    TargetSpec {
+        legacy,
+        bits: bits.map(Bits::Count),
+        distance,
+        ..TargetSpec::default()
+    }
+    .resolve()
+    .map_err(spec_error)
 }
 
 /// `whycode sheet`: the page files and the manifest, as the CLI writes them
@@ -217,7 +217,6 @@ fn sheet_files(options: &str) -> Result<Files> {
     let args: SheetOptions = serde_json::from_str(options).context("sheet options")?;
     let output = Path::new(&args.output);
     let dpi = args.dpi.unwrap_or(300.0);
-    check_dpi(dpi)?;
     let diameter_mm = length("--diameter", &args.diameter)?;
     let template = match &args.template_toml {
         Some(text) => Template::parse(&args.template, text)
@@ -241,9 +240,8 @@ fn sheet_files(options: &str) -> Result<Files> {
             .unwrap_or_default(),
         dpi,
         self_check: !args.no_check,
-        option_prefix: "--",
     };
-    let printed = job.print(output)?;
+    let printed = job.print(output).map_err(print_error)?;
     let mut notes = vec![match &printed.check {
         Some(report) => format!("self-check passed: {}", report.summary()),
         None => "self-check skipped: the markers were not read back".to_string(),
@@ -290,7 +288,6 @@ fn marker_files(options: &str) -> Result<Files> {
     let args: MarkerArgs = serde_json::from_str(options).context("marker options")?;
     let output = Path::new(&args.output);
     let dpi = args.dpi.unwrap_or(300.0);
-    check_dpi(dpi)?;
     let diameter_mm = length("--diameter", &args.diameter)?;
     let target = chosen_target(args.legacy, args.bits, args.distance)?;
     let margin_mm = match &args.margin {
@@ -308,7 +305,7 @@ fn marker_files(options: &str) -> Result<Files> {
         dpi,
         self_check: !args.no_check,
     };
-    let (files, check) = job.print(output)?;
+    let (files, check) = job.print(output).map_err(print_error)?;
     let notes = vec![match check {
         Some(_) => "self-check passed: the marker reads back as itself".to_string(),
         None => "self-check skipped: the marker was not read back".to_string(),
@@ -400,16 +397,23 @@ impl Live {
     #[wasm_bindgen(constructor)]
     pub fn new(bits: u32, distance: u32, legacy: bool) -> Result<Live, JsError> {
         let target = if legacy {
-            Target::WhyCon
+            TargetSpec::legacy()
         } else {
-            Target::WhyCode(generate(bits, distance).map_err(js_error)?)
+            TargetSpec {
+                bits: Some(Bits::Count(bits)),
+                distance: Some(distance),
+                ..TargetSpec::default()
+            }
         };
+        let config = DetectSpec {
+            target,
+            tracking: true,
+            ..DetectSpec::default()
+        }
+        .build()
+        .map_err(|e| js_error(spec_error(e)))?;
         Ok(Live {
-            detector: Detector::new(DetectorConfig {
-                target,
-                tracking: true,
-                ..Default::default()
-            }),
+            detector: Detector::new(config),
             grey: GrayImage::new(0, 0),
         })
     }

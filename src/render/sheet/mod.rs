@@ -8,9 +8,10 @@ use super::font::CAP_HEIGHT;
 use super::marker::{cut_circle, marker_label, LABEL_GAP_MM};
 use super::page::{Anchor, Item, Page, MM_PER_PT};
 use super::template::Template;
-use crate::family::{Family, MAX_LISTED_IDS};
+use crate::family::{check_id_list, Family, MAX_LISTED_IDS};
 use crate::geometry::Marker;
 use crate::manifest::{FamilyRef, Manifest, PrintedMarker};
+use crate::spec::SpecError;
 use crate::units::trim_float;
 use anyhow::{bail, Result};
 use footer::push_footer;
@@ -116,32 +117,41 @@ pub fn legacy_markers(count: usize, diameter_mm: f64) -> Vec<SheetMarker> {
 /// The markers a sheet prints and the family its manifest names: `count`
 /// WhyCon circles when there is no family, else the family's members `ids`
 /// (every member when none are chosen and there are few enough to print).
-/// `flag` is how the caller's users spell an option (`"--"` on the command
-/// line and in the page, `""` in Python), so errors name what they typed.
 pub fn chosen_markers(
     family: Option<&Family>,
     ids: Option<Vec<u32>>,
     count: Option<usize>,
     diameter_mm: f64,
-    flag: &str,
-) -> Result<(Vec<SheetMarker>, Option<FamilyRef>)> {
+) -> Result<(Vec<SheetMarker>, Option<FamilyRef>), SpecError> {
     let Some(family) = family else {
         let count = count.unwrap_or(0);
         if count == 0 || count > MAX_LISTED_IDS {
-            bail!("{flag}count must be between 1 and {MAX_LISTED_IDS}, got {count}");
+            return Err(SpecError::invalid(
+                "count",
+                format!("must be between 1 and {MAX_LISTED_IDS}, got {count}"),
+            ));
         }
         return Ok((legacy_markers(count, diameter_mm), None));
     };
     let (bits, distance) = (family.bits(), family.distance());
     let ids = match ids {
-        Some(ids) => ids,
-        None if family.len() > MAX_LISTED_IDS => bail!(
-            "the {bits}-bit family with distance {distance} has {} IDs, too many to print at once; choose some with {flag}ids (at most {MAX_LISTED_IDS})",
-            family.len(),
-        ),
+        Some(ids) => {
+            check_id_list(&ids).map_err(|e| SpecError::invalid("ids", e.to_string()))?;
+            ids
+        }
+        None if family.len() > MAX_LISTED_IDS => {
+            return Err(SpecError::invalid(
+                "ids",
+                format!(
+                    "the {bits}-bit family with distance {distance} has {} IDs, too many to print at once; choose some (at most {MAX_LISTED_IDS})",
+                    family.len(),
+                ),
+            ))
+        }
         None => (1..=family.len() as u32).collect(),
     };
-    let markers = family_markers(family, &ids, diameter_mm)?;
+    let markers = family_markers(family, &ids, diameter_mm)
+        .map_err(|e| SpecError::invalid("ids", e.to_string()))?;
     Ok((markers, Some(FamilyRef { bits, distance })))
 }
 
