@@ -276,6 +276,12 @@ pub fn encode_rgb_png(picture: &image::RgbImage) -> Result<Vec<u8>, image::Image
 /// extension (JPEG at `jpeg_quality`).
 #[cfg(feature = "files")]
 pub fn save_image(path: &Path, image: &GrayImage, jpeg_quality: u8) -> Result<()> {
+    crate::io::write_atomic(path, &encode_image(path, image, jpeg_quality)?)
+}
+
+/// The bytes [`save_image`] writes: `image` in the format `path`'s
+/// extension names, for writing together with other files.
+pub fn encode_image(path: &Path, image: &GrayImage, jpeg_quality: u8) -> Result<Vec<u8>> {
     use image::ImageEncoder;
     let format = ImageFormat::from_path(path)?;
     let (w, h) = image.dimensions();
@@ -306,7 +312,7 @@ pub fn save_image(path: &Path, image: &GrayImage, jpeg_quality: u8) -> Result<()
         ),
     };
     result.map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", path.display()))?;
-    crate::io::write_atomic(path, &bytes)
+    Ok(bytes)
 }
 
 #[cfg(test)]

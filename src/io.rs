@@ -1,8 +1,157 @@
 //! File output that is written whole or not at all.
+//!
+//! What is guaranteed: an output file is either its old content or its
+//! complete new content, never a mixture, a partial file or an input of
+//! the same command; a set of files one command writes together (a
+//! sheet's pages and manifest, a simulated image and its ground truth) is
+//! staged whole before any is renamed into place; staged files are synced
+//! to disk before the rename; a new file gets the permissions the umask
+//! allows and a replaced one keeps its own; and the temporary files of a
+//! run that was interrupted are removed (on SIGINT, SIGTERM and SIGHUP by
+//! the command line's handler, after `kill -9` by the next write into the
+//! same folder).
 
 use anyhow::{bail, Context, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Prefix of every temporary file this crate stages an output in.
+const TEMP_PREFIX: &str = ".whycode-";
+
+/// A temporary file of ours this old is left over from a run that was
+/// killed (staging takes milliseconds: the bytes are ready before it starts).
+const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(600);
+
+/// Temporary files staged and not yet renamed or removed, for a signal
+/// handler to clean up ([`remove_staged`]).
+static STAGED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Removes every temporary file staged and not yet committed: what a
+/// signal handler calls before the process ends, since a signal does not
+/// unwind and run the temporary files' own clean-up.
+pub fn remove_staged() {
+    let staged = STAGED.lock().unwrap_or_else(|p| p.into_inner());
+    for path in staged.iter() {
+        let _ = std::fs::remove_file(path);
+    }
+}
+
+/// A staged temporary file, listed for [`remove_staged`] while it exists.
+struct Staged {
+    tmp: Option<tempfile::NamedTempFile>,
+    path: PathBuf,
+}
+
+impl Staged {
+    fn new(tmp: tempfile::NamedTempFile) -> Staged {
+        let path = tmp.path().to_path_buf();
+        STAGED
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .push(path.clone());
+        Staged {
+            tmp: Some(tmp),
+            path,
+        }
+    }
+
+    fn file(&mut self) -> &mut std::fs::File {
+        self.tmp
+            .as_mut()
+            .expect("a staged file is present until committed")
+            .as_file_mut()
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        STAGED
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .retain(|p| *p != self.path);
+    }
+}
+
+/// Refuses outputs that are inputs of the same command (compared as the
+/// files they are, so `./fam.json`, `fam.json` and a link to it are one),
+/// or that appear twice among the outputs. Called before any work, with
+/// every path a command reads and every path it would write, derived names
+/// (the manifest beside a sheet, the ground truth beside an image)
+/// included.
+pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<()> {
+    let read: Vec<(PathBuf, &Path)> = inputs
+        .iter()
+        .filter_map(|p| std::fs::canonicalize(p).ok().map(|c| (c, *p)))
+        .collect();
+    let mut written: Vec<PathBuf> = Vec::new();
+    for &output in outputs {
+        let real = real_path(output);
+        if let Some((_, input)) = read.iter().find(|(c, _)| *c == real) {
+            bail!(
+                "{}: would overwrite {}, which this command reads; write the output elsewhere",
+                output.display(),
+                input.display()
+            );
+        }
+        if written.contains(&real) {
+            bail!(
+                "{}: two outputs of this command would land in the same file",
+                output.display()
+            );
+        }
+        written.push(real);
+    }
+    Ok(())
+}
+
+/// The file a path names once links and `.`/`..` are resolved, also for a
+/// file that does not exist yet (its folder resolved, its name kept).
+fn real_path(path: &Path) -> PathBuf {
+    let target = resolve_links(path);
+    if let Ok(real) = std::fs::canonicalize(&target) {
+        return real;
+    }
+    let dir = match target.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    match (std::fs::canonicalize(dir), target.file_name()) {
+        (Ok(dir), Some(name)) => dir.join(name),
+        _ => target,
+    }
+}
+
+/// Removes temporary files of ours in `dir` left by a run that was killed
+/// before it could clean up; only names of our own pattern, and only old
+/// ones, so a concurrent run's staging is never touched.
+fn sweep_stale(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(name) = name.to_str() else {
+            continue;
+        };
+        let ours = name
+            .strip_prefix(TEMP_PREFIX)
+            .is_some_and(|rest| rest.len() == 6 && rest.bytes().all(|b| b.is_ascii_alphanumeric()));
+        if !ours {
+            continue;
+        }
+        let stale = entry
+            .metadata()
+            .ok()
+            .filter(|m| m.is_file())
+            .and_then(|m| m.modified().ok())
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age > STALE_AFTER);
+        if stale {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
 
 /// Writes a file through a temporary file in the same folder and a rename,
 /// so that a failure never leaves a partial file under `path`.
@@ -30,7 +179,7 @@ pub fn write_atomic_with(
         Destination::Regular(target) => {
             let mut tmp = stage_beside(path, &target)?;
             {
-                let mut buffered = std::io::BufWriter::new(tmp.as_file_mut());
+                let mut buffered = std::io::BufWriter::new(tmp.file());
                 produce(&mut buffered).with_context(fail)?;
                 buffered
                     .flush()
@@ -54,9 +203,9 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
             Destination::Special(target) => in_place.push((path, target, bytes)),
             Destination::Regular(target) => {
                 let mut tmp = stage_beside(path, &target)?;
-                tmp.as_file_mut()
-                    .write_all(bytes)
-                    .and_then(|()| tmp.as_file_mut().flush())
+                let file = tmp.file();
+                file.write_all(bytes)
+                    .and_then(|()| file.flush())
                     .map_err(without_temp_path)
                     .with_context(|| format!("cannot write {}", path.display()))?;
                 staged.push((path, target, tmp));
@@ -171,7 +320,7 @@ fn folder_problem(path: &Path, dir: &Path) -> Option<anyhow::Error> {
 
 /// A temporary file in the target's folder, so that the final rename stays
 /// on one file system and is atomic.
-fn stage_beside(path: &Path, target: &Path) -> Result<tempfile::NamedTempFile> {
+fn stage_beside(path: &Path, target: &Path) -> Result<Staged> {
     let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -179,24 +328,41 @@ fn stage_beside(path: &Path, target: &Path) -> Result<tempfile::NamedTempFile> {
     if let Some(err) = folder_problem(path, dir) {
         return Err(err);
     }
-    tempfile::Builder::new()
-        .prefix(".whycode-")
-        .tempfile_in(dir)
-        .map_err(without_temp_path)
-        .with_context(|| format!("cannot write {}", path.display()))
-}
-
-fn commit(path: &Path, target: &Path, tmp: tempfile::NamedTempFile) -> Result<()> {
-    let fail = || format!("cannot write {}", path.display());
-    // Temporary files are private; the output should carry ordinary permissions.
+    sweep_stale(dir);
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(TEMP_PREFIX).rand_bytes(6);
+    // Created as an ordinary file would be, so the umask decides who may
+    // read it (tempfile's own default is private to the owner).
     #[cfg(unix)]
     {
         use std::os::unix::fs::PermissionsExt;
-        tmp.as_file()
-            .set_permissions(std::fs::Permissions::from_mode(0o644))
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder
+        .tempfile_in(dir)
+        .map_err(without_temp_path)
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(Staged::new(tmp))
+}
+
+fn commit(path: &Path, target: &Path, mut staged: Staged) -> Result<()> {
+    let fail = || format!("cannot write {}", path.display());
+    // A file replaced keeps its permissions (a shared 0666 log stays shared).
+    if let Ok(old) = std::fs::metadata(target) {
+        staged
+            .file()
+            .set_permissions(old.permissions())
             .map_err(without_temp_path)
             .with_context(fail)?;
     }
+    // On disk before the rename: after a crash the name holds the old
+    // content or the new, not an empty file.
+    staged
+        .file()
+        .sync_all()
+        .map_err(without_temp_path)
+        .with_context(fail)?;
+    let tmp = staged.tmp.take().expect("committed once");
     tmp.persist(target)
         .map_err(|e| without_temp_path(e.error))
         .with_context(fail)?;

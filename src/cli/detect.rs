@@ -206,6 +206,14 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         }
     }
     out.flush()?;
+    if let Some(dir) = &args.annotate {
+        let written = total - failures;
+        output::say(format_args!(
+            "wrote {written} annotated image{} to {}",
+            if written == 1 { "" } else { "s" },
+            dir.display()
+        ));
+    }
     if wants_note {
         if let Some(note) = check.note() {
             output::note(note);

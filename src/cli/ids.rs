@@ -76,7 +76,11 @@ pub fn run(args: IdsArgs) -> Result<ExitCode> {
         family_text(&family, format)
     };
     match &args.output {
-        Some(path) => whycode::io::write_atomic(path, text.as_bytes())?,
+        Some(path) => {
+            let inputs: Vec<&std::path::Path> = args.family.as_deref().into_iter().collect();
+            whycode::io::check_outputs(&inputs, &[path])?;
+            whycode::io::write_atomic(path, text.as_bytes())?
+        }
         None => output::print(&text)?,
     }
     Ok(ExitCode::SUCCESS)

@@ -73,6 +73,17 @@ pub fn run(args: MarkerArgs) -> Result<ExitCode> {
             "self-check skipped (--no-check): the marker was not read back before writing",
         );
     }
+    let inputs: Vec<&std::path::Path> = args.kind.family.family.as_deref().into_iter().collect();
+    let outputs: Vec<&std::path::Path> = files.iter().map(|(p, _)| p.as_path()).collect();
+    whycode::io::check_outputs(&inputs, &outputs)?;
     write_all(&files)?;
+    output::say(format_args!(
+        "wrote {}",
+        outputs
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
     Ok(ExitCode::SUCCESS)
 }

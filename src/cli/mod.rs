@@ -40,8 +40,25 @@ enum Command {
     Simulate(simulate::SimulateArgs),
 }
 
+/// An interrupted run (Ctrl-C, `kill`, a closed terminal) removes the
+/// temporary files its writes had staged before it ends: a signal does not
+/// unwind, so their own clean-up would never run.
+fn clean_up_on_signals() {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            whycode::io::remove_staged();
+            std::process::exit(128 + signal);
+        }
+    });
+}
+
 /// Parses the command line and runs the subcommand.
 pub fn main() -> ExitCode {
+    clean_up_on_signals();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(err) => return usage_error(err),

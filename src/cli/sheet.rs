@@ -1,7 +1,7 @@
 use super::args::{print_error, whole_number, DpiArg, MarkerKindArgs};
 use super::output;
 use anyhow::{Context, Result};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use whycode::family::parse_id_list;
 use whycode::render::job::SheetJob;
@@ -61,6 +61,22 @@ pub struct SheetArgs {
     output: PathBuf,
 }
 
+/// Page files beside `output` that an earlier run of the same sheet wrote
+/// and this run does not: the pages past the new count, as the manifest
+/// about to be replaced lists them (and only those: nothing is guessed
+/// from names alone).
+fn stale_pages(output: &Path, files: &[(PathBuf, Vec<u8>)]) -> Vec<PathBuf> {
+    let manifest = output.with_extension("json");
+    let Ok(old) = whycode::manifest::Manifest::load(&manifest) else {
+        return Vec::new();
+    };
+    let new: Vec<&PathBuf> = files.iter().map(|(p, _)| p).collect();
+    whycode::render::page_paths(output, old.pages as usize)
+        .into_iter()
+        .filter(|page| !new.contains(&page) && page.is_file())
+        .collect()
+}
+
 pub fn run(args: SheetArgs) -> Result<ExitCode> {
     if args.list_templates {
         let mut list = String::new();
@@ -78,6 +94,13 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
         return Ok(ExitCode::SUCCESS);
     }
     whycode::render::check_output_dir(&args.output)?;
+    let inputs: Vec<&Path> = args.kind.family.family.as_deref().into_iter().collect();
+    // Checked before the work with the names known now, and again with every
+    // page's name once the pages are counted.
+    whycode::io::check_outputs(
+        &inputs,
+        &[&args.output, &args.output.with_extension("json")],
+    )?;
     let target = args.kind.resolve()?;
     let ids = args
         .ids
@@ -108,7 +131,16 @@ pub fn run(args: SheetArgs) -> Result<ExitCode> {
     }
     let summary = printed.summary();
     let files = printed.into_files();
+    let outputs: Vec<&Path> = files.iter().map(|(p, _)| p.as_path()).collect();
+    whycode::io::check_outputs(&inputs, &outputs)?;
+    let stale = stale_pages(&args.output, &files);
     write_all(&files)?;
+    // Pages of an earlier, longer run of this sheet would read as part of
+    // the new one; the new manifest is in place, so they go.
+    for page in stale {
+        std::fs::remove_file(&page)
+            .with_context(|| format!("{}: cannot remove the stale page", page.display()))?;
+    }
     let written: Vec<String> = files.iter().map(|(p, _)| p.display().to_string()).collect();
     output::say(format_args!("{summary}: {}", written.join(", ")));
     Ok(ExitCode::SUCCESS)

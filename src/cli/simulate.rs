@@ -173,6 +173,23 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
     let mut args = *args.options;
     let camera_distance = take_old_spellings(&mut args)?;
     let format = ImageFormat::from_path(&args.output)?;
+    let truth_path = args
+        .truth
+        .clone()
+        .unwrap_or_else(|| args.output.with_extension("json"));
+    // `-o swarm.png` next to the sheet's own swarm.json is the natural thing
+    // to type, and would silently replace the record of what was printed.
+    if is_sheet_manifest(&truth_path) {
+        bail!(
+            "{}: is a sheet manifest, which the ground truth would overwrite; name the image differently or pass --truth FILE",
+            truth_path.display()
+        );
+    }
+    let inputs: Vec<&Path> = [&args.manifest, &args.family.family, &args.camera]
+        .into_iter()
+        .filter_map(|p| p.as_deref())
+        .collect();
+    whycode::io::check_outputs(&inputs, &[&args.output, &truth_path])?;
     let spec = SceneSpec {
         manifest: args.manifest.clone(),
         page: args.page,
@@ -216,26 +233,13 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
     let scene = spec.build().map_err(spec_error)?;
 
     let (image, truth) = simulate::render(&scene);
-    let truth_path = args
-        .truth
-        .clone()
-        .unwrap_or_else(|| args.output.with_extension("json"));
-    if truth_path == args.output {
-        bail!(
-            "{}: the ground truth would overwrite the image",
-            truth_path.display()
-        );
-    }
-    // `-o swarm.png` next to the sheet's own swarm.json is the natural thing
-    // to type, and would silently replace the record of what was printed.
-    if is_sheet_manifest(&truth_path) {
-        bail!(
-            "{}: is a sheet manifest, which the ground truth would overwrite; name the image differently or pass --truth FILE",
-            truth_path.display()
-        );
-    }
-    whycode::image_io::save_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
-    whycode::io::write_atomic(&truth_path, truth.to_json().as_bytes())?;
+    let image_bytes =
+        whycode::image_io::encode_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
+    // The truth goes last: a reader that finds it finds its image beside it.
+    whycode::io::write_all_atomic(&[
+        (args.output.clone(), image_bytes),
+        (truth_path.clone(), truth.to_json().into_bytes()),
+    ])?;
     let visible = truth.markers.iter().filter(|m| m.visible).count();
     output::print(&format!(
         "wrote {} ({}x{}) and {}: {} markers, {} wholly in view\n",

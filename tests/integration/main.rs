@@ -17,6 +17,7 @@ mod detect_simulated;
 mod family_props;
 mod fuzz_bounded;
 mod ids_cli;
+mod output_files;
 mod output_streams;
 mod pose_properties;
 mod pose_roundtrip;
