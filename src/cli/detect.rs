@@ -239,11 +239,13 @@ fn collect_jobs(inputs: &[PathBuf], no_tracking: bool) -> Result<Vec<Job>> {
         let mut frames: Vec<PathBuf> = std::fs::read_dir(input)
             .with_context(|| format!("{}: cannot list folder", input.display()))?
             .filter_map(|e| e.ok().map(|e| e.path()))
+            // Everything named like a frame is a frame: one that is a folder
+            // or a broken link is reported as a failed frame, not skipped
+            // without a word.
             .filter(|p| {
-                p.is_file()
-                    && p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
-                        IMAGE_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str())
-                    })
+                p.extension()
+                    .and_then(|e| e.to_str())
+                    .is_some_and(|e| IMAGE_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
             })
             .collect();
         if frames.is_empty() {

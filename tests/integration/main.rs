@@ -15,6 +15,7 @@ mod detect_roundtrip;
 mod detect_rules;
 mod detect_simulated;
 mod family_props;
+mod frame_folders;
 mod fuzz_bounded;
 mod ids_cli;
 mod output_files;
