@@ -55,8 +55,8 @@ pub const MANIFEST_VERSION: u32 = 1;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 /// What a sheet printed where: the contract between the renderer that writes it, the simulator that photographs it and the validator that checks photos of the print.
 pub struct Manifest {
-    /// Format name, always "whycode-sheet".
-    #[serde(default = "format_name")]
+    /// Format name, always "whycode-sheet" (required: a file without it
+    /// is something else that happens to have the same fields).
     pub format: String,
     #[serde(default = "version_one")]
     /// Format version, [`MANIFEST_VERSION`] when written.
@@ -105,10 +105,6 @@ pub struct PrintedMarker {
     pub y_mm: f64,
     /// Diameter of the black disc as intended, mm.
     pub diameter_mm: f64,
-}
-
-fn format_name() -> String {
-    "whycode-sheet".to_string()
 }
 
 fn version_one() -> u32 {
@@ -179,12 +175,24 @@ impl Manifest {
             ));
         }
         let mut seen = std::collections::HashSet::new();
+        let mut used_pages = std::collections::BTreeSet::new();
         for m in &self.markers {
+            used_pages.insert(m.page);
             let inside = (0.0..=w).contains(&m.x_mm) && (0.0..=h).contains(&m.y_mm);
             if !(m.diameter_mm.is_finite() && m.diameter_mm > 0.0 && inside) {
                 return Err(format!(
                     "marker ID {} on page {} has an impossible place or size",
                     m.id, m.page
+                ));
+            }
+            if !crate::spec::limits::MARKER_DIAMETER_MM.contains(m.diameter_mm) {
+                return Err(format!(
+                    "marker ID {} on page {}: diameter {}",
+                    m.id,
+                    m.page,
+                    crate::spec::limits::MARKER_DIAMETER_MM
+                        .check(m.diameter_mm)
+                        .unwrap_err()
                 ));
             }
             if m.page == 0 || m.page > self.pages {
@@ -203,6 +211,14 @@ impl Manifest {
                     m.id
                 ));
             }
+        }
+        // Every page of a sheet holds a marker: a page with none is a
+        // record that does not match what was printed.
+        if let Some(empty) = (1..=self.pages).find(|p| !used_pages.contains(p)) {
+            return Err(format!(
+                "pages is {}, but no marker is on page {empty}",
+                self.pages
+            ));
         }
         self.check_ids()?;
         self.check_overlaps()
@@ -295,6 +311,35 @@ impl Manifest {
 mod tests {
     use super::*;
 
+    #[test]
+    fn a_manifest_without_its_format_or_with_an_empty_page_or_a_dust_sized_marker_is_refused() {
+        let good = sheet();
+        let text = serde_json::to_string(&good).unwrap();
+        assert!(Manifest::from_json("m.json", &text).is_ok());
+        let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
+        value.as_object_mut().unwrap().remove("format");
+        let err = Manifest::from_json("m.json", &value.to_string()).unwrap_err();
+        assert!(err.to_string().contains("format"), "{err}");
+
+        let mut two_pages = good.clone();
+        two_pages.pages = 2;
+        let err =
+            Manifest::from_json("m.json", &serde_json::to_string(&two_pages).unwrap()).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "m.json: pages is 2, but no marker is on page 2"
+        );
+
+        let mut dust = good;
+        dust.markers[0].diameter_mm = 1e-9;
+        let err =
+            Manifest::from_json("m.json", &serde_json::to_string(&dust).unwrap()).unwrap_err();
+        assert!(
+            err.to_string().contains("is outside 0.5 to 10000 mm"),
+            "{err}"
+        );
+    }
+
     fn sheet() -> Manifest {
         let family = crate::family::Family::generate(8, 2).unwrap();
         let marker = |id, x_mm| PrintedMarker {
@@ -306,7 +351,7 @@ mod tests {
             diameter_mm: 40.0,
         };
         Manifest {
-            format: format_name(),
+            format: "whycode-sheet".to_string(),
             version: MANIFEST_VERSION,
             tool: String::new(),
             family: Some(FamilyRef {
