@@ -6,7 +6,7 @@ Reads every .pgm in DIR (sorted by name) and prints one JSON line per frame:
 streams; "ms" is the time of the detect call alone (pose included when
 --fx is given), after one untimed warm-up call on the first frame.
 
-Needs pupil-apriltags and numpy (see README, "Measuring"):
+Needs pupil-apriltags and numpy (see docs/benchmarks.md):
     python3 -m venv target/bench-venv
     target/bench-venv/bin/pip install pupil-apriltags numpy
 """

@@ -35,7 +35,7 @@
 //! the +x axis ([`RingReading::axis_point`], for the pose stage). The yaw
 //! error this leaves on close, tilted markers in a wide-angle view is
 //! bounded by `yaw_under_perspective_stays_within_stated_bounds`
-//! (tests/ring_perspective.rs).
+//! (tests/integration/ring_perspective.rs).
 
 use crate::family::{Decoded, Decoder, MatchStatus};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};

@@ -24,7 +24,7 @@ use crate::math::Ellipse;
 /// `(1 - inner_ratio²) · a² / f · sin(2·tilt)` pixels (a = outer semi-major
 /// axis in pixels, f = focal length in pixels, tilt = angle between the
 /// normal and the line of sight); `ambiguity_margin_follows_the_documented_rule_of_thumb`
-/// (tests/pose_synthetic.rs) checks it. The wrong candidate's normal is off by twice the tilt. The cue vanishes
+/// (tests/integration/pose_synthetic.rs) checks it. The wrong candidate's normal is off by twice the tilt. The cue vanishes
 /// for small tilts (where the candidates converge to one) and for
 /// markers far away (where the image is nearly affine and the two normals
 /// are mirror images about the viewing ray that no image of concentric
@@ -138,7 +138,7 @@ const CENTRE_SEPARATION_PX: f64 = 0.3;
 /// noisy tilted markers are still decided here rather than by the weaker
 /// inner-edge test. Chosen on simulated 12-bit markers at 8-60° tilt;
 /// `tilted_markers_of_8_to_16_bits_give_ids_yaw_and_pose`
-/// (tests/detect_simulated.rs) guards it.
+/// (tests/integration/detect_simulated.rs) guards it.
 const CENTRE_MARGIN: f64 = 0.2;
 
 /// How much nearer (radians) one candidate's normal must be to the normal a
