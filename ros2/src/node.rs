@@ -360,6 +360,7 @@ pub fn run(
         last_sequence: None,
         stats: Stats::default(),
     };
+    pipeline.sync_publishers();
     pipeline.describe_setup();
 
     let infos = info_sub.async_stream();
@@ -637,13 +638,34 @@ impl Pipeline {
             config.camera = self.detector.config().camera;
             self.detector.restart(config);
         }
-        if old.debug_image && !self.settings.debug_image {
-            self.debug = None;
-        }
-        if old.compat_markers && !self.settings.compat_markers {
-            self.compat = None;
-        }
+        self.sync_publishers();
         self.describe_setup();
+    }
+
+    /// The optional publishers exist while their parameter is on, so that
+    /// subscribers match before the first frame.
+    fn sync_publishers(&mut self) {
+        if !self.settings.compat_markers {
+            self.compat = None;
+        } else if self.compat.is_none() {
+            match create_publisher(&mut self.node, &self.topics.markers_compat, MARKERS_QOS) {
+                Ok(p) => self.compat = Some(p),
+                Err(e) => self.log.error(&e),
+            }
+        }
+        if !self.settings.debug_image {
+            self.debug = None;
+        } else if self.debug.is_none() {
+            let made = create_publisher(&mut self.node, &self.topics.debug_image, DEBUG_QOS)
+                .and_then(|raw| {
+                    create_publisher(&mut self.node, &self.topics.debug_compressed, DEBUG_QOS)
+                        .map(|compressed| (raw, compressed))
+                });
+            match made {
+                Ok(p) => self.debug = Some(p),
+                Err(e) => self.log.error(&e),
+            }
+        }
     }
 
     fn on_camera_info(&mut self, info: &CameraInfo) {
@@ -936,16 +958,10 @@ impl Pipeline {
 
     /// The original whycode-ros2 node's message; IDs above 127 do not fit
     /// its `int8 id` and are left out rather than wrapped to another ID.
-    fn publish_compat(&mut self, markers: &MarkerArray, poses: &[Option<whycode::Pose>]) {
-        if self.compat.is_none() {
-            match create_publisher(&mut self.node, &self.topics.markers_compat, MARKERS_QOS) {
-                Ok(p) => self.compat = Some(p),
-                Err(e) => {
-                    self.log.once(LogLevel::Error, "compat publisher", &e);
-                    return;
-                }
-            }
-        }
+    fn publish_compat(&self, markers: &MarkerArray, poses: &[Option<whycode::Pose>]) {
+        let Some(publisher) = &self.compat else {
+            return;
+        };
         let mut compat = Vec::with_capacity(markers.markers.len());
         for (m, pose) in markers.markers.iter().zip(poses) {
             let Ok(id) = i8::try_from(m.id) else {
@@ -982,34 +998,21 @@ impl Pipeline {
             header: markers.header.clone(),
             markers: compat,
         };
-        if let Some(publisher) = &self.compat {
-            if let Err(e) = publisher.publish(message) {
-                self.log.once(
-                    LogLevel::Warn,
-                    "compat publish",
-                    &format!("{}: publish failed: {e}", self.topics.markers_compat),
-                );
-            }
+        if let Err(e) = publisher.publish(message) {
+            self.log.once(
+                LogLevel::Warn,
+                "compat publish",
+                &format!("{}: publish failed: {e}", self.topics.markers_compat),
+            );
         }
     }
 
     /// The image with the detections drawn: PNG on
     /// `~/debug_image/compressed` as drawn, and rgb8 on `~/debug_image`.
-    fn publish_debug(&mut self, gray: &GrayView, detections: &[Detection], header: &Header) {
-        if self.debug.is_none() {
-            let made = create_publisher(&mut self.node, &self.topics.debug_image, DEBUG_QOS)
-                .and_then(|raw| {
-                    create_publisher(&mut self.node, &self.topics.debug_compressed, DEBUG_QOS)
-                        .map(|compressed| (raw, compressed))
-                });
-            match made {
-                Ok(p) => self.debug = Some(p),
-                Err(e) => {
-                    self.log.once(LogLevel::Error, "debug publisher", &e);
-                    return;
-                }
-            }
-        }
+    fn publish_debug(&self, gray: &GrayView, detections: &[Detection], header: &Header) {
+        let Some((raw, compressed)) = &self.debug else {
+            return;
+        };
         let owned = image::GrayImage::from_raw(gray.width(), gray.height(), gray.as_raw().to_vec())
             .expect("a whole image");
         let drawn = whycode::detect::annotate::annotated_png(&owned, detections).and_then(|png| {
@@ -1026,9 +1029,6 @@ impl Pipeline {
                 );
                 return;
             }
-        };
-        let Some((raw, compressed)) = &self.debug else {
-            return;
         };
         let (width, height) = rgb.dimensions();
         let image = Image {
