@@ -524,6 +524,26 @@ mod tests {
     }
 
     #[test]
+    fn values_as_launch_ros_writes_them_are_read() {
+        // launch_ros passes a Parameter action as `-p name:=<yaml.dump(value)>`,
+        // which ends a scalar with a document end marker and writes lists in
+        // block style.
+        assert_eq!(
+            parse_value("0.05\n...\n").unwrap(),
+            ParameterValue::Double(0.05)
+        );
+        assert_eq!(
+            parse_value("raw\n...\n").unwrap(),
+            ParameterValue::String("raw".into())
+        );
+        assert_eq!(
+            parse_value("- 1\n- 2\n").unwrap(),
+            ParameterValue::IntegerArray(vec![1, 2])
+        );
+        assert_eq!(parse_value("true").unwrap(), ParameterValue::Boolean(true));
+    }
+
+    #[test]
     fn bad_arguments_are_refused_with_a_reason() {
         for (line, needle) in [
             ("--ros-args -p bits", "NAME:=VALUE"),
@@ -662,6 +682,20 @@ whycode:
         assert!(node_matches("/**/whycode", "/a/b/whycode"));
         assert!(node_matches("/**", "/whycode"));
         assert!(!node_matches("/*/whycode", "/whycode"));
+    }
+
+    #[test]
+    fn the_shipped_params_file_is_read() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("launch/whycode.params.yaml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let params = params_from_yaml(&text, "/robot/whycode_left").unwrap();
+        let names: Vec<&str> = params.iter().map(|(n, _)| n.as_str()).collect();
+        assert!(
+            names.contains(&"tag.ids") && names.contains(&"diameter"),
+            "{names:?}"
+        );
+        let settings = crate::params::Settings::from_parameters(&params).unwrap();
+        crate::params::detector_config(&settings, None).unwrap();
     }
 
     #[test]

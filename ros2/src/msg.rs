@@ -311,9 +311,8 @@ impl CameraInfo {
             [self.k[0], self.k[4], self.k[2], self.k[5]]
         };
         let matrix = if rectified { "P" } else { "K" };
-        if !(fx > 0.0 && fy > 0.0 && fx.is_finite() && fy.is_finite())
-            || !(cx.is_finite() && cy.is_finite())
-        {
+        let finite = [fx, fy, cx, cy].iter().all(|v| v.is_finite());
+        if !(finite && fx > 0.0 && fy > 0.0) {
             return Err(format!(
                 "camera_info is not a calibration ({matrix} gives fx {fx}, fy {fy}, cx {cx}, cy {cy})"
             ));

@@ -34,11 +34,21 @@ use whycode::Camera;
 /// What the loop is told from outside: a parameter change the parameter
 /// services accepted, or to stop.
 pub enum Control {
-    /// New settings, with the detector configuration already built for
-    /// them when the detector is concerned.
-    Settings(Box<Settings>, Option<DetectorConfig>, Change),
+    /// New settings.
+    Settings(Box<Update>),
     /// Finish the frame in hand and return.
     Stop,
+}
+
+/// An accepted parameter change.
+pub struct Update {
+    /// All the settings, with the change.
+    pub settings: Settings,
+    /// The detector configuration built for them, when the change concerns
+    /// the detector.
+    pub config: Option<DetectorConfig>,
+    /// What the change touches.
+    pub change: Change,
 }
 
 /// Sends [`Control`]s to a running node.
@@ -86,7 +96,7 @@ pub fn median(values: &[f64]) -> f64 {
     let mut sorted = values.to_vec();
     sorted.sort_by(f64::total_cmp);
     let mid = sorted.len() / 2;
-    if sorted.len() % 2 == 0 {
+    if sorted.len().is_multiple_of(2) {
         0.5 * (sorted[mid - 1] + sorted[mid])
     } else {
         sorted[mid]
@@ -214,6 +224,10 @@ struct Pipeline {
 /// One frame's output.
 struct Described {
     markers: MarkerArray,
+    /// Everything the frame puts on /tf, sent as one TFMessage: today one
+    /// transform per identified marker. Boards (several markers, one pose)
+    /// and the arena frame join them here once the library finds them,
+    /// each from its own describing step next to [`Pipeline::describe`].
     transforms: Vec<TransformStamped>,
     /// Each marker's pose at its own diameter, in the markers' order.
     poses: Vec<Option<whycode::Pose>>,
@@ -445,8 +459,9 @@ pub fn run(
                         }
                     },
                     message = control.next() => match message {
-                        Some(Control::Settings(settings, config, change)) => {
-                            pipeline.on_settings(*settings, config);
+                        Some(Control::Settings(update)) => {
+                            let Update { settings, config, change } = *update;
+                            pipeline.on_settings(settings, config);
                             if change == Change::Transport
                                 && pipeline.settings.image_transport != transport
                             {
@@ -577,11 +592,11 @@ impl ParameterGate {
         self.log.info(&format!("parameter {name} set to {value:?}"));
         self.controller
             .0
-            .unbounded_send(Control::Settings(
-                Box::new(next),
+            .unbounded_send(Control::Settings(Box::new(Update {
+                settings: next,
                 config,
-                Settings::change_of(name),
-            ))
+                change: Settings::change_of(name),
+            })))
             .map_err(|_| "the node is stopping".to_string())
     }
 }

@@ -503,3 +503,51 @@ def test_bad_command_lines_exit_with_one_line(node_bin, args, needle):
 def test_help(node_bin):
     run = subprocess.run([str(node_bin), "--help"], capture_output=True, text=True, timeout=20)
     assert run.returncode == 0 and "--ros-args" in run.stdout and "image:=" in run.stdout
+
+
+def only_loopback() -> bool:
+    links = subprocess.run(["ip", "-o", "link"], capture_output=True, text=True).stdout
+    return [line.split(":")[1].strip() for line in links.splitlines()] == ["lo"]
+
+
+@pytest.mark.skipif(not only_loopback(), reason="needs a network namespace holding only lo")
+def test_traffic_stays_on_loopback(start_node, peer, scene, figures):
+    """With a second interface in the namespace (a veth pair, both ends
+    inside), nothing the node or the peer sends goes out of it: the node's
+    ROS_LOCALHOST_ONLY=1 keeps RustDDS's discovery and data on lo."""
+    import socket
+
+    subprocess.run(["ip", "link", "add", "wc0", "type", "veth", "peer", "name", "wc1"], check=True)
+    try:
+        for link, address in (("wc0", "10.213.0.1/24"), ("wc1", "10.213.0.2/24")):
+            subprocess.run(["ip", "addr", "add", address, "dev", link], check=True)
+            subprocess.run(["ip", "link", "set", link, "up", "multicast", "on"], check=True)
+        capture = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.ntohs(0x0003))
+        capture.bind(("wc0", 0))
+        capture.settimeout(0.05)
+        node = start_node(*node_args())
+        rig = P.Rig(peer).ready(scene)
+        for k in range(10):
+            assert rig.send(scene, (9950 + k, 0)).markers is not None
+        # RustDDS announces its participant every few seconds: wait for one.
+        deadline = time.monotonic() + 4.0
+        udp = []
+        while time.monotonic() < deadline:
+            try:
+                frame = capture.recv(65536)
+            except socket.timeout:
+                continue
+            # IPv4 (ethertype 0x0800) carrying UDP (protocol 17).
+            if frame[12:14] == b"\x08\x00" and frame[23] == 17:
+                udp.append(frame)
+        sockets = subprocess.run(["ss", "-uanp"], capture_output=True, text=True).stdout
+        node_sockets = [line for line in sockets.splitlines() if f"pid={node.proc.pid}," in line]
+        figures.append(
+            f"loopback only: {len(udp)} UDP packets on a second interface during 10 frames and "
+            f"4 s; the node's {len(node_sockets)} UDP sockets (ss -uanp): "
+            + ", ".join(sorted({line.split()[3] for line in node_sockets}))
+        )
+        assert udp == []
+        assert node_sockets
+    finally:
+        subprocess.run(["ip", "link", "del", "wc0"], check=False)
