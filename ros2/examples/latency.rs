@@ -16,13 +16,13 @@
 
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::qos::History;
-use ros2_client::{Context, Name, Node, NodeName, NodeOptions, QosProfile};
+use ros2_client::{Context, Node, NodeName, NodeOptions, QosProfile};
 use std::net::Ipv4Addr;
 use std::time::{Duration, Instant};
 use whycode::simulate::{self, layout, Scene, SceneObject};
 use whycode::{Camera, Detector, Marker};
 use whycode_ros2::args::RosArgs;
-use whycode_ros2::msg::{CameraInfo, Header, Image, RosType, TfMessage, Time};
+use whycode_ros2::msg::{CameraInfo, Header, Image, TfMessage, Time};
 use whycode_ros2::node::{self, median};
 use whycode_ros2::params::{self, Settings};
 
@@ -108,12 +108,7 @@ fn main() {
     }
     stopper.stop();
     let stats = running.join().expect("node thread").expect("node ran");
-    let own: Vec<f64> = stats
-        .arrival_to_tf_ms
-        .iter()
-        .zip(&stats.detect_ms)
-        .map(|(total, detect)| total - detect)
-        .collect();
+    let own = stats.own_ms();
     println!(
         "whycode_node latency, {frames} frames of 640x480 with {} markers ({answered} answered on /tf):",
         IDS.len()
@@ -198,7 +193,7 @@ impl Peer {
             .build()
             .expect("participant");
         let context = Context::from_domain_participant(participant).expect("context");
-        let mut node = context
+        let mut ros = context
             .new_node(
                 NodeName::new("/", "latency_peer").expect("name"),
                 NodeOptions::new().enable_rosout(false),
@@ -206,27 +201,13 @@ impl Peer {
             .expect("node");
         let sensor = QosProfile::subscription_default();
         let tf_qos = QosProfile::publisher_default().history(History::KeepLast { depth: 100 });
-        let topic = |node: &mut Node, name: &str, type_name, qos: &QosProfile| {
-            node.create_topic(&Name::parse(name).expect("topic"), type_name, qos)
-                .expect("topic")
-        };
-        let image_topic = topic(&mut node, "/camera/image_raw", Image::type_name(), &sensor);
-        let info_topic = topic(
-            &mut node,
-            "/camera/camera_info",
-            CameraInfo::type_name(),
-            &sensor,
-        );
-        let tf_topic = topic(&mut node, "/tf", TfMessage::type_name(), &tf_qos);
         Peer {
-            images: node
-                .create_publisher(&image_topic, None)
+            images: node::create_publisher(&mut ros, "/camera/image_raw", sensor.clone())
                 .expect("publisher"),
-            infos: node.create_publisher(&info_topic, None).expect("publisher"),
-            tf: node
-                .create_subscription(&tf_topic, None)
-                .expect("subscription"),
-            _node: node,
+            infos: node::create_publisher(&mut ros, "/camera/camera_info", sensor)
+                .expect("publisher"),
+            tf: node::create_subscription(&mut ros, "/tf", tf_qos).expect("subscription"),
+            _node: ros,
         }
     }
 

@@ -22,8 +22,17 @@ fn main() -> ExitCode {
     }
     let (controller, control) = node::control_channel();
     let stopper = controller.clone();
-    // ros2 launch ends nodes with SIGINT, then SIGTERM.
-    if let Err(e) = ctrlc::set_handler(move || stopper.stop()) {
+    // ros2 launch ends nodes with SIGINT, then SIGTERM: the first finishes
+    // the frame in hand and logs the summary, a second one ends at once.
+    let signals = std::sync::atomic::AtomicUsize::new(0);
+    let handler = move || {
+        if signals.fetch_add(1, std::sync::atomic::Ordering::SeqCst) == 0 {
+            stopper.stop();
+        } else {
+            std::process::exit(130);
+        }
+    };
+    if let Err(e) = ctrlc::set_handler(handler) {
         eprintln!("whycode_node: cannot handle signals: {e}");
         return ExitCode::FAILURE;
     }

@@ -104,14 +104,19 @@ pub fn median(values: &[f64]) -> f64 {
 }
 
 impl Stats {
-    /// One line for the log at exit.
-    pub fn summary(&self) -> String {
-        let own: Vec<f64> = self
-            .arrival_to_tf_ms
+    /// The node's own time on each frame: from its arrival to /tf
+    /// published, less the detector's time.
+    pub fn own_ms(&self) -> Vec<f64> {
+        self.arrival_to_tf_ms
             .iter()
             .zip(&self.detect_ms)
             .map(|(total, detect)| total - detect)
-            .collect();
+            .collect()
+    }
+
+    /// One line for the log at exit.
+    pub fn summary(&self) -> String {
+        let own = self.own_ms();
         format!(
             "{} frames answered, {} skipped, {} dropped for newer ones; medians: detector {:.3} ms, \
              arrival to /tf {:.3} ms, of which the node's own {:.3} ms",
@@ -481,6 +486,7 @@ pub fn run(
     Ok(pipeline.stats)
 }
 
+/// A topic of `M` by its fully qualified ROS name.
 fn create_topic<M: RosType>(
     node: &mut Node,
     topic: &str,
@@ -491,7 +497,8 @@ fn create_topic<M: RosType>(
         .map_err(|e| format!("cannot create topic {topic}: {e}"))
 }
 
-fn create_publisher<M: RosType + serde::Serialize>(
+/// A publisher of `M` on a fully qualified ROS topic name.
+pub fn create_publisher<M: RosType + serde::Serialize>(
     node: &mut Node,
     topic: &str,
     qos: QosProfile,
@@ -501,7 +508,8 @@ fn create_publisher<M: RosType + serde::Serialize>(
         .map_err(|e| format!("cannot publish {topic}: {e}"))
 }
 
-fn create_subscription<M: RosType + DeserializeOwned + 'static>(
+/// A subscription of `M` to a fully qualified ROS topic name.
+pub fn create_subscription<M: RosType + DeserializeOwned + 'static>(
     node: &mut Node,
     topic: &str,
     qos: QosProfile,

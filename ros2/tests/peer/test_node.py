@@ -7,6 +7,7 @@ to `lo`."""
 from __future__ import annotations
 
 import math
+import re
 import statistics
 import subprocess
 import time
@@ -405,9 +406,13 @@ def test_the_newest_frame_wins_over_a_queue(start_node, peer, big_scene, figures
         f"{len(answered)} answered, newest answered {answered[-1][0] - 8000 if answered else None} "
         f"of 0..{sent - 1}"
     )
-    assert 0 < len(answered) < sent / 2, answered
+    assert 0 < len(answered) < 0.75 * sent, answered
     assert answered[-1][0] >= last[0] - 2, answered
-    assert "dropped for newer ones" in node.log()
+    # The node counts the frames it never read (gaps in the writer's
+    # sequence numbers, and frames a newer one replaced before it was read).
+    match = re.search(r"(\d+) frames answered, \d+ skipped, (\d+) dropped for newer ones", node.log())
+    assert match, node.log()
+    assert int(match.group(2)) >= sent - len(answered) - 2, match.group(0)
 
 
 def test_peer_restart(start_node, domain, scene):
