@@ -36,6 +36,11 @@ impl Logger {
         *self.rosout.lock().expect("logger lock") = Some(handle);
     }
 
+    /// From now on, lines go to stderr only (the node is leaving).
+    pub fn detach_rosout(&self) {
+        *self.rosout.lock().expect("logger lock") = None;
+    }
+
     /// Logs one line.
     pub fn log(&self, level: LogLevel, message: &str) {
         if level < self.level {

@@ -335,7 +335,7 @@ pub fn run(
         .spinner()
         .map_err(|e| format!("cannot start the parameter services: {e}"))?;
     let spin_log = Arc::clone(&log);
-    std::thread::Builder::new()
+    let spinning = std::thread::Builder::new()
         .name("ros2 spinner".into())
         .spawn(move || {
             if let Err(e) = futures::executor::block_on(spinner.spin()) {
@@ -382,6 +382,33 @@ pub fn run(
     pipeline.sync_publishers();
     pipeline.describe_setup();
 
+    serve(&mut pipeline, &info_sub, &mut control)?;
+    pipeline.log.info(&pipeline.stats.summary());
+
+    // Leave the domain in order, so that other participants see every
+    // reader and writer go at once (the participant's dispose) instead of
+    // waiting for their leases to run out: the node's entities first, then
+    // the parameter services (the node's drop stops their spinner), and the
+    // participant last.
+    let stats = std::mem::take(&mut pipeline.stats);
+    let log = Arc::clone(&pipeline.log);
+    log.detach_rosout();
+    drop(info_sub);
+    drop(pipeline);
+    if spinning.join().is_err() {
+        log.error("the parameter services' thread panicked");
+    }
+    drop(context);
+    Ok(stats)
+}
+
+/// The loop: frames, calibrations and parameter changes until told to
+/// stop. The image subscription is made afresh when the transport changes.
+fn serve(
+    pipeline: &mut Pipeline,
+    info_sub: &Subscription<CameraInfo>,
+    control: &mut UnboundedReceiver<Control>,
+) -> Result<(), String> {
     let infos = info_sub.async_stream();
     futures::pin_mut!(infos);
     loop {
@@ -432,7 +459,32 @@ pub fn run(
         };
         let resubscribe = futures::executor::block_on(async {
             loop {
-                futures::select! {
+                // Biased, in this order: a parameter change the services
+                // have answered applies to every frame that comes after the
+                // answer, and a frame is read with the newest calibration.
+                futures::select_biased! {
+                    message = control.next() => match message {
+                        Some(Control::Settings(update)) => {
+                            let Update { settings, config, change } = *update;
+                            pipeline.on_settings(settings, config);
+                            if change == Change::Transport
+                                && pipeline.settings.image_transport != transport
+                            {
+                                return true;
+                            }
+                        }
+                        Some(Control::Stop) | None => return false,
+                    },
+                    info = infos.select_next_some() => match info {
+                        Ok((info, _)) => pipeline.on_camera_info(&info),
+                        Err(e) => {
+                            pipeline.log.once(
+                                LogLevel::Warn,
+                                "camera_info read",
+                                &format!("a camera_info message could not be read: {e}"),
+                            );
+                        }
+                    },
                     frame = frames.select_next_some() => match frame {
                         Ok((mut frame, mut info)) => {
                             let taken = Instant::now();
@@ -453,28 +505,6 @@ pub fn run(
                             );
                         }
                     },
-                    info = infos.select_next_some() => match info {
-                        Ok((info, _)) => pipeline.on_camera_info(&info),
-                        Err(e) => {
-                            pipeline.log.once(
-                                LogLevel::Warn,
-                                "camera_info read",
-                                &format!("a camera_info message could not be read: {e}"),
-                            );
-                        }
-                    },
-                    message = control.next() => match message {
-                        Some(Control::Settings(update)) => {
-                            let Update { settings, config, change } = *update;
-                            pipeline.on_settings(settings, config);
-                            if change == Change::Transport
-                                && pipeline.settings.image_transport != transport
-                            {
-                                return true;
-                            }
-                        }
-                        Some(Control::Stop) | None => return false,
-                    },
                 }
             }
         });
@@ -482,8 +512,7 @@ pub fn run(
             break;
         }
     }
-    pipeline.log.info(&pipeline.stats.summary());
-    Ok(pipeline.stats)
+    Ok(())
 }
 
 /// A topic of `M` by its fully qualified ROS name.

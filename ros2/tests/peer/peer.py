@@ -78,17 +78,19 @@ class Peer:
             self._readers[key] = DataReader(self.dp, self.topic(name, kind), qos=qos)
         return self._readers[key]
 
-    def wait_matched(self, entity, timeout: float = 15.0) -> None:
-        """Until a writer has a reader (or a reader a writer) on the other side."""
+    def wait_matched(self, *entities, timeout: float = 15.0, settle: float = 0.3) -> None:
+        """Until each writer has a reader (or reader a writer) on the other
+        side, and then `settle` seconds more: discovery is two-sided, and
+        the node may learn of the peer's endpoints a little after the peer
+        learns of the node's (what a writer sends to a reader it does not
+        know yet is lost)."""
         deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            if isinstance(entity, DataWriter):
-                if entity.get_publication_matched_status().current_count > 0:
-                    return
-            elif entity.get_subscription_matched_status().current_count > 0:
-                return
-            time.sleep(0.02)
-        raise TimeoutError(f"no match on {entity.topic.name} within {timeout} s")
+        for entity in entities:
+            while not matched(entity):
+                if time.monotonic() > deadline:
+                    raise TimeoutError(f"no match on {entity.topic.name} within {timeout} s")
+                time.sleep(0.02)
+        time.sleep(settle)
 
     def close(self) -> None:
         """Deletes the participant: the node sees its writers and readers go."""
@@ -118,6 +120,13 @@ class Peer:
             if time.monotonic() > deadline:
                 return None
             time.sleep(0.0002)
+
+
+def matched(entity) -> int:
+    """How many readers a writer (or writers a reader) has on the other side."""
+    if isinstance(entity, DataWriter):
+        return entity.get_publication_matched_status().current_count
+    return entity.get_subscription_matched_status().current_count
 
 
 def take_all(reader: DataReader) -> list:
@@ -186,11 +195,12 @@ class Rig:
         """Waits until the node's readers and writers are matched; with a
         scene, also gives the node its camera_info ahead of the first frame
         (the two topics are not ordered against each other)."""
-        for entity in (self.images, self.infos, self.tf_reader, self.markers_reader):
-            self.peer.wait_matched(entity, timeout)
+        self.peer.wait_matched(
+            self.images, self.infos, self.tf_reader, self.markers_reader, timeout=timeout
+        )
         if calibration is not None:
             self.infos.write(calibration.camera_info(self.frame_id))
-            time.sleep(0.1)
+            time.sleep(0.05)
         return self
 
     def send(
