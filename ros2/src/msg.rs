@@ -1,0 +1,546 @@
+//! The ROS 2 messages the node reads and writes, as serde structs whose
+//! field order is the `.msg` order: ros2-client encodes them as CDR, the
+//! layout every RMW puts on the wire. Each type names its ROS package and
+//! type ([`RosType`]), from which the DDS type name
+//! (`sensor_msgs::msg::dds_::Image_`) follows.
+//!
+//! `whycode_msgs` is ours (its `.msg` files ship in `ros2/whycode_msgs/`,
+//! for colcon); `whycode_interfaces` is the original whycode-ros2 node's,
+//! published on a compatibility topic only.
+
+use ros2_client::MessageTypeName;
+use serde::{Deserialize, Serialize};
+
+/// A message type's ROS package and name.
+pub trait RosType {
+    /// ROS package, e.g. `sensor_msgs`.
+    const PACKAGE: &'static str;
+    /// Type name within the package, e.g. `Image`.
+    const NAME: &'static str;
+
+    /// The name ros2-client turns into the DDS type name.
+    fn type_name() -> MessageTypeName {
+        MessageTypeName::new(Self::PACKAGE, Self::NAME)
+    }
+}
+
+macro_rules! ros_type {
+    ($type:ty, $package:literal, $name:literal) => {
+        impl RosType for $type {
+            const PACKAGE: &'static str = $package;
+            const NAME: &'static str = $name;
+        }
+        impl ros2_client::Message for $type {}
+    };
+}
+
+/// builtin_interfaces/Time.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Time {
+    /// Seconds.
+    pub sec: i32,
+    /// Nanoseconds within the second.
+    pub nanosec: u32,
+}
+
+/// std_msgs/Header.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    /// When the data was captured.
+    pub stamp: Time,
+    /// The coordinate frame the data is in.
+    pub frame_id: String,
+}
+
+/// sensor_msgs/Image.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Image {
+    /// Stamp and camera frame.
+    pub header: Header,
+    /// Rows.
+    pub height: u32,
+    /// Columns.
+    pub width: u32,
+    /// Pixel layout, e.g. `mono8`, `rgb8` (sensor_msgs/image_encodings).
+    pub encoding: String,
+    /// 1 when multi-byte channels are big-endian.
+    pub is_bigendian: u8,
+    /// Bytes per row.
+    pub step: u32,
+    /// `step * height` bytes. Read and written in one piece (serde_bytes):
+    /// as a plain sequence, each byte would pass through serde alone.
+    #[serde(with = "serde_bytes")]
+    pub data: Vec<u8>,
+}
+
+/// sensor_msgs/CompressedImage.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct CompressedImage {
+    /// Stamp and camera frame.
+    pub header: Header,
+    /// `jpeg`, `png`, or image_transport's `mono8; jpeg compressed mono8`.
+    pub format: String,
+    /// The encoded image.
+    #[serde(with = "serde_bytes")]
+    pub data: Vec<u8>,
+}
+
+/// sensor_msgs/RegionOfInterest.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct RegionOfInterest {
+    /// Left column of the region.
+    pub x_offset: u32,
+    /// Top row of the region.
+    pub y_offset: u32,
+    /// Rows; 0 means the full image.
+    pub height: u32,
+    /// Columns; 0 means the full image.
+    pub width: u32,
+    /// True when the region is to be rectified.
+    pub do_rectify: bool,
+}
+
+/// sensor_msgs/CameraInfo.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct CameraInfo {
+    /// Stamp and camera frame.
+    pub header: Header,
+    /// Image rows the calibration is for.
+    pub height: u32,
+    /// Image columns the calibration is for.
+    pub width: u32,
+    /// `plumb_bob`, `rational_polynomial`, `equidistant`.
+    pub distortion_model: String,
+    /// Distortion coefficients (k1, k2, p1, p2, k3, ... for plumb_bob).
+    pub d: Vec<f64>,
+    /// Intrinsic matrix, row-major: fx 0 cx; 0 fy cy; 0 0 1.
+    pub k: [f64; 9],
+    /// Rectification rotation, row-major.
+    pub r: [f64; 9],
+    /// Projection matrix of the rectified image, row-major 3x4.
+    pub p: [f64; 12],
+    /// Horizontal binning (0 or 1: none).
+    pub binning_x: u32,
+    /// Vertical binning.
+    pub binning_y: u32,
+    /// Part of the sensor the image shows.
+    pub roi: RegionOfInterest,
+}
+
+/// geometry_msgs/Vector3.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Vector3 {
+    /// x.
+    pub x: f64,
+    /// y.
+    pub y: f64,
+    /// z.
+    pub z: f64,
+}
+
+/// geometry_msgs/Point.
+pub type Point = Vector3;
+
+/// geometry_msgs/Quaternion.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Quaternion {
+    /// x.
+    pub x: f64,
+    /// y.
+    pub y: f64,
+    /// z.
+    pub z: f64,
+    /// w.
+    pub w: f64,
+}
+
+impl Default for Quaternion {
+    /// The identity, as in the message's own default.
+    fn default() -> Quaternion {
+        Quaternion {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            w: 1.0,
+        }
+    }
+}
+
+/// geometry_msgs/Pose.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Pose {
+    /// Position.
+    pub position: Point,
+    /// Orientation.
+    pub orientation: Quaternion,
+}
+
+/// geometry_msgs/Transform.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Transform {
+    /// Translation.
+    pub translation: Vector3,
+    /// Rotation.
+    pub rotation: Quaternion,
+}
+
+/// geometry_msgs/TransformStamped.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TransformStamped {
+    /// Stamp and parent frame.
+    pub header: Header,
+    /// The frame the transform leads to.
+    pub child_frame_id: String,
+    /// Child frame in the parent frame.
+    pub transform: Transform,
+}
+
+/// tf2_msgs/TFMessage.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TfMessage {
+    /// The transforms.
+    pub transforms: Vec<TransformStamped>,
+}
+
+/// whycode_msgs/Marker: one marker in one image (see ros2/README.md).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Marker {
+    /// Family ID; 0 when unknown.
+    pub id: u32,
+    /// The member's code, when the ring decoded to one.
+    pub code: u32,
+    /// False when `code` means nothing.
+    pub has_code: bool,
+    /// Bit count the ring shows; 0 when not counted.
+    pub bits: u8,
+    /// How the ring decoded: `exact`, `corrected`, `ambiguous`, `rejected`,
+    /// or empty for a legacy marker.
+    pub status: String,
+    /// Centre column, pixels (origin at the top-left pixel's centre).
+    pub u: f64,
+    /// Centre row, pixels.
+    pub v: f64,
+    /// Outer ellipse's semi-major axis, pixels.
+    pub semi_major: f64,
+    /// Outer ellipse's semi-minor axis, pixels.
+    pub semi_minor: f64,
+    /// Direction of the major axis in the image, radians, atan2(dv, du).
+    pub axis_angle: f64,
+    /// Direction of the marker's +x axis in the image, radians.
+    pub yaw: f64,
+    /// False when `yaw` means nothing (legacy marker, unreadable ring).
+    pub has_yaw: bool,
+    /// 0..1: how well the marker passed the tests.
+    pub confidence: f64,
+    /// Marker in the camera's optical frame (metres), when known.
+    pub pose: Pose,
+    /// False when `pose` means nothing (no camera_info, no size).
+    pub has_pose: bool,
+    /// Outer diameter the pose was computed for, metres; 0 without pose.
+    pub diameter: f64,
+    /// The /tf child frame published for this marker; empty when none.
+    pub frame_id: String,
+}
+
+/// whycode_msgs/MarkerArray: every marker of one image.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct MarkerArray {
+    /// The image's stamp and camera frame.
+    pub header: Header,
+    /// The markers, most confident first.
+    pub markers: Vec<Marker>,
+}
+
+/// whycode_interfaces/Marker: the original whycode-ros2 node's marker.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct CompatMarker {
+    /// ID (only 0..127 fit).
+    pub id: i8,
+    /// Size in pixels (the outer ellipse's area).
+    pub size: i32,
+    /// Centre column, pixels.
+    pub u: f32,
+    /// Centre row, pixels.
+    pub v: f32,
+    /// Rotation about the marker's normal (its image yaw), radians.
+    pub angle: f32,
+    /// Pose in the camera frame.
+    pub position: Pose,
+    /// Roll, pitch, yaw of the pose, radians.
+    pub rotation: Vector3,
+}
+
+/// whycode_interfaces/MarkerArray.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct CompatMarkerArray {
+    /// The image's stamp and camera frame.
+    pub header: Header,
+    /// The markers.
+    pub markers: Vec<CompatMarker>,
+}
+
+ros_type!(Image, "sensor_msgs", "Image");
+ros_type!(CompressedImage, "sensor_msgs", "CompressedImage");
+ros_type!(CameraInfo, "sensor_msgs", "CameraInfo");
+ros_type!(TfMessage, "tf2_msgs", "TFMessage");
+ros_type!(MarkerArray, "whycode_msgs", "MarkerArray");
+ros_type!(CompatMarkerArray, "whycode_interfaces", "MarkerArray");
+
+impl Time {
+    /// Nanoseconds since the epoch.
+    pub fn nanos(self) -> i64 {
+        i64::from(self.sec) * 1_000_000_000 + i64::from(self.nanosec)
+    }
+}
+
+impl CameraInfo {
+    /// The calibration of the images this camera_info describes: K and D
+    /// (or, for a rectified image topic, P without distortion), cropped to
+    /// its region of interest and scaled for its binning. A camera_info
+    /// that describes no calibrated camera is refused with the reason.
+    pub fn camera(&self, rectified: bool) -> Result<whycode::Camera, String> {
+        if self.width == 0 || self.height == 0 {
+            return Err(format!(
+                "camera_info has no image size ({}x{})",
+                self.width, self.height
+            ));
+        }
+        let [fx, fy, cx, cy] = if rectified {
+            [self.p[0], self.p[5], self.p[2], self.p[6]]
+        } else {
+            [self.k[0], self.k[4], self.k[2], self.k[5]]
+        };
+        let matrix = if rectified { "P" } else { "K" };
+        let finite = [fx, fy, cx, cy].iter().all(|v| v.is_finite());
+        if !(finite && fx > 0.0 && fy > 0.0) {
+            return Err(format!(
+                "camera_info is not a calibration ({matrix} gives fx {fx}, fy {fy}, cx {cx}, cy {cy})"
+            ));
+        }
+        let distortion = if rectified {
+            [0.0; 5]
+        } else {
+            self.distortion()?
+        };
+        // ROS puts the principal point in the same pixel-centre convention
+        // as OpenCV, which is the library's.
+        let mut camera = whycode::Camera {
+            fx,
+            fy,
+            cx,
+            cy,
+            distortion,
+            width: self.width,
+            height: self.height,
+        };
+        let roi = self.roi;
+        if roi.width != 0 && roi.height != 0 && (roi.width, roi.height) != (self.width, self.height)
+        {
+            if u64::from(roi.x_offset) + u64::from(roi.width) > u64::from(self.width)
+                || u64::from(roi.y_offset) + u64::from(roi.height) > u64::from(self.height)
+            {
+                return Err(format!(
+                    "camera_info's region of interest {}x{}+{}+{} lies outside its {}x{} image",
+                    roi.width, roi.height, roi.x_offset, roi.y_offset, self.width, self.height
+                ));
+            }
+            camera.cx -= f64::from(roi.x_offset);
+            camera.cy -= f64::from(roi.y_offset);
+            camera.width = roi.width;
+            camera.height = roi.height;
+        }
+        let (bx, by) = (self.binning_x.max(1), self.binning_y.max(1));
+        if bx > 1 || by > 1 {
+            camera = camera.with_resolution(camera.width / bx, camera.height / by);
+        }
+        Ok(camera)
+    }
+
+    /// plumb_bob's k1, k2, p1, p2, k3; the other models only when they
+    /// reduce to it (rational_polynomial with k4..k6 zero, or no
+    /// distortion at all).
+    fn distortion(&self) -> Result<[f64; 5], String> {
+        if self.d.iter().any(|k| !k.is_finite()) {
+            return Err("camera_info's distortion coefficients are not finite".into());
+        }
+        let mut k = [0.0; 5];
+        for (dst, src) in k.iter_mut().zip(&self.d) {
+            *dst = *src;
+        }
+        let extra = self.d.get(5..).unwrap_or(&[]);
+        let none = self.d.iter().all(|&c| c == 0.0);
+        match self.distortion_model.as_str() {
+            _ if none => Ok([0.0; 5]),
+            "plumb_bob" | "rational_polynomial" if extra.iter().all(|&c| c == 0.0) => Ok(k),
+            "rational_polynomial" => Err(
+                "camera_info's rational_polynomial model uses k4..k6, which this node does not \
+                 model (plumb_bob does: k1, k2, p1, p2, k3)"
+                    .into(),
+            ),
+            "plumb_bob" => Err(format!(
+                "camera_info's plumb_bob model has {} coefficients, not 5",
+                self.d.len()
+            )),
+            other => Err(format!(
+                "camera_info's distortion model '{other}' is not modelled (plumb_bob is)"
+            )),
+        }
+    }
+}
+
+impl From<whycode::Pose> for Pose {
+    fn from(pose: whycode::Pose) -> Pose {
+        let [x, y, z, w] = pose.quaternion;
+        Pose {
+            position: Point {
+                x: pose.position.x,
+                y: pose.position.y,
+                z: pose.position.z,
+            },
+            orientation: Quaternion { x, y, z, w },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cdr<T: Serialize>(value: &T) -> Vec<u8> {
+        use ros2_client::dds::rustdds::{no_key::SerializerAdapter, CDRSerializerAdapter};
+        CDRSerializerAdapter::<T>::to_bytes(value)
+            .expect("serialises")
+            .to_vec()
+    }
+
+    #[test]
+    fn image_data_is_a_cdr_sequence_of_octets() {
+        // Hand-written XCDR1 little-endian: the bytes a C++ node sends.
+        let image = Image {
+            header: Header {
+                stamp: Time { sec: 7, nanosec: 9 },
+                frame_id: "cam".into(),
+            },
+            height: 1,
+            width: 3,
+            encoding: "mono8".into(),
+            is_bigendian: 0,
+            step: 3,
+            data: vec![1, 2, 3],
+        };
+        let mut expected = Vec::new();
+        expected.extend(7i32.to_le_bytes());
+        expected.extend(9u32.to_le_bytes());
+        expected.extend(4u32.to_le_bytes()); // "cam\0"
+        expected.extend(b"cam\0");
+        expected.extend(1u32.to_le_bytes());
+        expected.extend(3u32.to_le_bytes());
+        expected.extend(6u32.to_le_bytes()); // "mono8\0"
+        expected.extend(b"mono8\0");
+        expected.push(0); // is_bigendian
+        expected.push(0); // padding to 4
+        expected.extend(3u32.to_le_bytes());
+        expected.extend(3u32.to_le_bytes());
+        expected.extend([1, 2, 3]);
+        assert_eq!(cdr(&image), expected);
+    }
+
+    fn info() -> CameraInfo {
+        let mut info = CameraInfo {
+            width: 640,
+            height: 480,
+            distortion_model: "plumb_bob".into(),
+            d: vec![-0.1, 0.01, 0.0, 0.0, 0.0],
+            k: [500.0, 0.0, 319.5, 0.0, 510.0, 239.5, 0.0, 0.0, 1.0],
+            ..CameraInfo::default()
+        };
+        info.p[0] = 480.0;
+        info.p[5] = 490.0;
+        info.p[2] = 320.0;
+        info.p[6] = 240.0;
+        info
+    }
+
+    #[test]
+    fn camera_info_gives_the_calibration() {
+        let camera = info().camera(false).unwrap();
+        assert_eq!(
+            (camera.fx, camera.fy, camera.cx, camera.cy),
+            (500.0, 510.0, 319.5, 239.5)
+        );
+        assert_eq!(camera.distortion, [-0.1, 0.01, 0.0, 0.0, 0.0]);
+        assert_eq!((camera.width, camera.height), (640, 480));
+        let rectified = info().camera(true).unwrap();
+        assert_eq!((rectified.fx, rectified.cx), (480.0, 320.0));
+        assert!(!rectified.has_distortion());
+    }
+
+    #[test]
+    fn regions_of_interest_and_binning_are_applied() {
+        let mut cropped = info();
+        cropped.roi = RegionOfInterest {
+            x_offset: 100,
+            y_offset: 50,
+            width: 320,
+            height: 240,
+            do_rectify: false,
+        };
+        let camera = cropped.camera(false).unwrap();
+        assert_eq!((camera.cx, camera.cy), (219.5, 189.5));
+        assert_eq!((camera.width, camera.height), (320, 240));
+        let mut binned = info();
+        binned.binning_x = 2;
+        binned.binning_y = 2;
+        let camera = binned.camera(false).unwrap();
+        assert_eq!((camera.fx, camera.cx, camera.width), (250.0, 159.5, 320));
+    }
+
+    #[test]
+    fn camera_infos_that_calibrate_nothing_are_refused() {
+        let zeros = CameraInfo::default();
+        assert!(zeros.camera(false).unwrap_err().contains("no image size"));
+        let uncalibrated = CameraInfo {
+            width: 640,
+            height: 480,
+            ..CameraInfo::default()
+        };
+        assert!(uncalibrated
+            .camera(false)
+            .unwrap_err()
+            .contains("not a calibration"));
+        let mut fisheye = info();
+        fisheye.distortion_model = "equidistant".into();
+        fisheye.d = vec![0.1, 0.0, 0.0, 0.0];
+        assert!(fisheye.camera(false).unwrap_err().contains("equidistant"));
+        let mut rational = info();
+        rational.distortion_model = "rational_polynomial".into();
+        rational.d = vec![-0.1, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        assert!(rational.camera(false).is_ok());
+        rational.d[6] = 0.2;
+        assert!(rational.camera(false).unwrap_err().contains("k4..k6"));
+        let mut outside = info();
+        outside.roi.width = 600;
+        outside.roi.height = 100;
+        outside.roi.x_offset = 100;
+        assert!(outside.camera(false).unwrap_err().contains("outside"));
+        let mut nan = info();
+        nan.k[0] = f64::NAN;
+        assert!(nan.camera(false).is_err());
+    }
+
+    #[test]
+    fn dds_type_names_follow_the_ros_convention() {
+        assert_eq!(
+            Image::type_name().dds_msg_type(),
+            "sensor_msgs::msg::dds_::Image_"
+        );
+        assert_eq!(
+            TfMessage::type_name().dds_msg_type(),
+            "tf2_msgs::msg::dds_::TFMessage_"
+        );
+        assert_eq!(
+            CompatMarkerArray::type_name().dds_msg_type(),
+            "whycode_interfaces::msg::dds_::MarkerArray_"
+        );
+    }
+}

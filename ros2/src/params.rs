@@ -1,0 +1,668 @@
+//! The node's parameters: their names, types, defaults and ranges
+//! ([`Settings`]), and the one place they become the library's
+//! [`DetectorConfig`] ([`detector_config`]).
+//!
+//! Every value is checked when it is set, from the command line or through
+//! `ros2 param set`; a refused value leaves the settings as they were.
+
+use ros2_client::ParameterValue;
+use std::borrow::Cow;
+use whycode::detect::{DetectorConfig, Target};
+use whycode::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
+use whycode::Camera;
+
+/// The node's name unless `-r __node:=` says otherwise.
+pub const DEFAULT_NODE_NAME: &str = "whycode";
+
+/// Plausible marker diameters, metres: 0.5 mm to 10 m.
+pub const DIAMETER_RANGE: std::ops::RangeInclusive<f64> = 0.0005..=10.0;
+
+/// Code length of the family, or every count read from the rings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Bits {
+    /// One family of this many bits.
+    Count(u32),
+    /// `auto`: each ring's count (4-24) read from the ring.
+    Auto,
+}
+
+/// Which image topic the node subscribes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Transport {
+    /// `image` (sensor_msgs/Image).
+    Raw,
+    /// `image/compressed` (sensor_msgs/CompressedImage).
+    Compressed,
+}
+
+/// What a parameter change touches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Change {
+    /// The detector's configuration: it starts over.
+    Detector,
+    /// The image subscription.
+    Transport,
+    /// Only what is published.
+    Output,
+}
+
+/// The node's parameters, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// `bits`: the family's code length, or `auto`.
+    pub bits: Bits,
+    /// `distance`: the family's minimum Hamming distance.
+    pub distance: u32,
+    /// `family_file`: a family file instead of `bits` and `distance`.
+    pub family_file: String,
+    /// `legacy`: WhyCon circles without IDs.
+    pub legacy: bool,
+    /// `diameter`: outer diameter of the black disc, metres; 0 when not set.
+    pub diameter: f64,
+    /// `max_markers`: at most this many markers a frame.
+    pub max_markers: u32,
+    /// `tracking`: follow markers from frame to frame.
+    pub tracking: bool,
+    /// `rectified`: the image topic is rectified (use camera_info's P, no
+    /// distortion) rather than raw (K and D).
+    pub rectified: bool,
+    /// `image_transport`: `raw` or `compressed`.
+    pub image_transport: Transport,
+    /// `camera_frame`: parent frame of the transforms; empty: the image
+    /// header's frame_id.
+    pub camera_frame: String,
+    /// `frame_prefix`: a marker's frame is this followed by its ID.
+    pub frame_prefix: String,
+    /// `tag.ids`: IDs with their own frame name or size.
+    pub tag_ids: Vec<u32>,
+    /// `tag.frames`: frame names of the first `tag.ids`.
+    pub tag_frames: Vec<String>,
+    /// `tag.sizes`: diameters, metres, of the first `tag.ids`.
+    pub tag_sizes: Vec<f64>,
+    /// `publish_tf`: publish /tf.
+    pub publish_tf: bool,
+    /// `debug_image`: publish the annotated image.
+    pub debug_image: bool,
+    /// `compat_markers`: also publish the original whycode-ros2 node's
+    /// `whycode_interfaces/MarkerArray` on `~/markers_compat`.
+    pub compat_markers: bool,
+}
+
+impl Default for Settings {
+    fn default() -> Settings {
+        Settings {
+            bits: Bits::Count(DEFAULT_BITS),
+            distance: DEFAULT_DISTANCE,
+            family_file: String::new(),
+            legacy: false,
+            diameter: 0.0,
+            max_markers: 1024,
+            tracking: true,
+            rectified: false,
+            image_transport: Transport::Raw,
+            camera_frame: String::new(),
+            frame_prefix: "whycode_".into(),
+            tag_ids: Vec::new(),
+            tag_frames: Vec::new(),
+            tag_sizes: Vec::new(),
+            publish_tf: true,
+            debug_image: false,
+            compat_markers: false,
+        }
+    }
+}
+
+/// Every parameter's name, in the order the README documents them.
+pub const NAMES: [&str; 17] = [
+    "bits",
+    "distance",
+    "family_file",
+    "legacy",
+    "diameter",
+    "max_markers",
+    "tracking",
+    "rectified",
+    "image_transport",
+    "camera_frame",
+    "frame_prefix",
+    "tag.ids",
+    "tag.frames",
+    "tag.sizes",
+    "publish_tf",
+    "debug_image",
+    "compat_markers",
+];
+
+/// Parameters the ROS client library keeps itself.
+pub const BUILT_IN: [&str; 1] = ["use_sim_time"];
+
+impl Settings {
+    /// Defaults overridden by `values` in order; the first refused value
+    /// is the error, naming the parameter.
+    pub fn from_parameters<'a>(
+        values: impl IntoIterator<Item = &'a (String, ParameterValue)>,
+    ) -> Result<Settings, String> {
+        let mut settings = Settings::default();
+        for (name, value) in values {
+            if BUILT_IN.contains(&name.as_str()) {
+                continue;
+            }
+            settings = settings.with(name, value)?;
+        }
+        Ok(settings)
+    }
+
+    /// These settings with one parameter changed, checked on its own and
+    /// against the others.
+    pub fn with(&self, name: &str, value: &ParameterValue) -> Result<Settings, String> {
+        let mut next = self.clone();
+        next.set(name, value)
+            .map_err(|e| format!("parameter {name}: {e}"))?;
+        next.check_tags()?;
+        Ok(next)
+    }
+
+    /// What changing `name` touches.
+    pub fn change_of(name: &str) -> Change {
+        match name {
+            "bits" | "distance" | "family_file" | "legacy" | "diameter" | "max_markers"
+            | "tracking" | "tag.ids" | "tag.sizes" => Change::Detector,
+            "image_transport" => Change::Transport,
+            _ => Change::Output,
+        }
+    }
+
+    fn set(&mut self, name: &str, value: &ParameterValue) -> Result<(), String> {
+        match name {
+            "bits" => {
+                self.bits = match value {
+                    ParameterValue::String(s) if s.trim().eq_ignore_ascii_case("auto") => {
+                        Bits::Auto
+                    }
+                    _ => Bits::Count(integer(value, 2..=24, "the code length, 2 to 24 or auto")?),
+                }
+            }
+            "distance" => self.distance = integer(value, 1..=24, "a Hamming distance, 1 to 24")?,
+            "family_file" => self.family_file = string(value)?,
+            "legacy" => self.legacy = boolean(value)?,
+            "diameter" => self.diameter = diameter(number(value)?, true)?,
+            "max_markers" => {
+                self.max_markers = integer(value, 1..=100_000, "a count, 1 to 100000")?
+            }
+            "tracking" => self.tracking = boolean(value)?,
+            "rectified" => self.rectified = boolean(value)?,
+            "image_transport" => {
+                self.image_transport = match string(value)?.as_str() {
+                    "raw" => Transport::Raw,
+                    "compressed" => Transport::Compressed,
+                    other => return Err(format!("'{other}' is not raw or compressed")),
+                }
+            }
+            "camera_frame" => {
+                let frame = string(value)?;
+                if !frame.is_empty() {
+                    check_frame(&frame)?;
+                }
+                self.camera_frame = frame;
+            }
+            "frame_prefix" => {
+                let prefix = string(value)?;
+                check_frame(&format!("{prefix}1"))?;
+                self.frame_prefix = prefix;
+            }
+            "tag.ids" => {
+                let ids = integers(value)?;
+                let mut checked = Vec::with_capacity(ids.len());
+                for id in ids {
+                    let id = u32::try_from(id)
+                        .ok()
+                        .filter(|&id| id > 0)
+                        .ok_or_else(|| format!("{id} is not an ID (IDs start at 1)"))?;
+                    if checked.contains(&id) {
+                        return Err(format!("ID {id} is listed twice"));
+                    }
+                    checked.push(id);
+                }
+                self.tag_ids = checked;
+            }
+            "tag.frames" => {
+                let frames = strings(value)?;
+                for (k, frame) in frames.iter().enumerate() {
+                    check_frame(frame)?;
+                    if frames[..k].contains(frame) {
+                        return Err(format!("frame '{frame}' is listed twice"));
+                    }
+                }
+                self.tag_frames = frames;
+            }
+            "tag.sizes" => {
+                self.tag_sizes = numbers(value)?
+                    .into_iter()
+                    .map(|d| diameter(d, false))
+                    .collect::<Result<_, _>>()?;
+            }
+            "publish_tf" => self.publish_tf = boolean(value)?,
+            "debug_image" => self.debug_image = boolean(value)?,
+            "compat_markers" => self.compat_markers = boolean(value)?,
+            _ => {
+                return Err(format!(
+                    "no such parameter (there are: {})",
+                    NAMES.join(", ")
+                ))
+            }
+        }
+        Ok(())
+    }
+
+    /// `tag.frames` and `tag.sizes` name the first of `tag.ids`: never more.
+    fn check_tags(&self) -> Result<(), String> {
+        for (name, count) in [
+            ("tag.frames", self.tag_frames.len()),
+            ("tag.sizes", self.tag_sizes.len()),
+        ] {
+            if count > self.tag_ids.len() {
+                return Err(format!(
+                    "parameter {name}: {count} values for {} tag.ids",
+                    self.tag_ids.len()
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// A parameter's current value, as declared to ROS.
+    pub fn value(&self, name: &str) -> Option<ParameterValue> {
+        Some(match name {
+            "bits" => match self.bits {
+                Bits::Count(n) => ParameterValue::Integer(n.into()),
+                Bits::Auto => ParameterValue::String("auto".into()),
+            },
+            "distance" => ParameterValue::Integer(self.distance.into()),
+            "family_file" => ParameterValue::String(self.family_file.clone()),
+            "legacy" => ParameterValue::Boolean(self.legacy),
+            "diameter" => ParameterValue::Double(self.diameter),
+            "max_markers" => ParameterValue::Integer(self.max_markers.into()),
+            "tracking" => ParameterValue::Boolean(self.tracking),
+            "rectified" => ParameterValue::Boolean(self.rectified),
+            "image_transport" => ParameterValue::String(
+                match self.image_transport {
+                    Transport::Raw => "raw",
+                    Transport::Compressed => "compressed",
+                }
+                .into(),
+            ),
+            "camera_frame" => ParameterValue::String(self.camera_frame.clone()),
+            "frame_prefix" => ParameterValue::String(self.frame_prefix.clone()),
+            "tag.ids" => {
+                ParameterValue::IntegerArray(self.tag_ids.iter().map(|&i| i.into()).collect())
+            }
+            "tag.frames" => ParameterValue::StringArray(self.tag_frames.clone()),
+            "tag.sizes" => ParameterValue::DoubleArray(self.tag_sizes.clone()),
+            "publish_tf" => ParameterValue::Boolean(self.publish_tf),
+            "debug_image" => ParameterValue::Boolean(self.debug_image),
+            "compat_markers" => ParameterValue::Boolean(self.compat_markers),
+            _ => return None,
+        })
+    }
+
+    /// The diameter the detector computes poses for: `diameter`, or
+    /// without it the first of `tag.sizes` (other sizes are scaled from it).
+    pub fn detector_diameter(&self) -> Option<f64> {
+        if self.diameter > 0.0 {
+            Some(self.diameter)
+        } else {
+            self.tag_sizes.first().copied()
+        }
+    }
+
+    /// The /tf frame and the diameter (metres; None: unknown, so no pose)
+    /// of the marker with `id`.
+    pub fn tag(&self, id: u32) -> (Cow<'_, str>, Option<f64>) {
+        let listed = self.tag_ids.iter().position(|&t| t == id);
+        let frame = match listed.and_then(|k| self.tag_frames.get(k)) {
+            Some(frame) => Cow::Borrowed(frame.as_str()),
+            None => Cow::Owned(format!("{}{id}", self.frame_prefix)),
+        };
+        let size = listed
+            .and_then(|k| self.tag_sizes.get(k).copied())
+            .or((self.diameter > 0.0).then_some(self.diameter));
+        (frame, size)
+    }
+}
+
+/// The detector's configuration for `settings`, with `camera` (from
+/// camera_info) for poses. The one place where the node's parameters
+/// become the library's configuration; a family that cannot be made or
+/// loaded, or listed IDs the family lacks, are refused here.
+pub fn detector_config(
+    settings: &Settings,
+    camera: Option<Camera>,
+) -> Result<DetectorConfig, String> {
+    let family_error = |e: &dyn std::fmt::Display| format!("family: {e}");
+    let target = if settings.legacy {
+        Target::WhyCon
+    } else if !settings.family_file.is_empty() {
+        let family = Family::load(std::path::Path::new(&settings.family_file))
+            .map_err(|e| format!("parameter family_file: {e}"))?;
+        Target::WhyCode(family)
+    } else {
+        match settings.bits {
+            Bits::Count(bits) => Target::WhyCode(
+                Family::generate(bits, settings.distance).map_err(|e| family_error(&e))?,
+            ),
+            Bits::Auto => {
+                // A distance no bit count accepts is refused up front.
+                Family::generate(DEFAULT_BITS.max(settings.distance), settings.distance)
+                    .map_err(|e| family_error(&e))?;
+                Target::AnyBits {
+                    distance: Some(settings.distance),
+                }
+            }
+        }
+    };
+    if let Target::WhyCode(family) = &target {
+        if let Some(id) = settings
+            .tag_ids
+            .iter()
+            .find(|&&id| family.code(id).is_none())
+        {
+            return Err(format!(
+                "parameter tag.ids: the {}-bit family of distance {} has IDs 1 to {}, not {id}",
+                family.bits(),
+                family.distance(),
+                family.len()
+            ));
+        }
+    }
+    Ok(DetectorConfig {
+        target,
+        max_markers: settings.max_markers as usize,
+        diameter_m: settings.detector_diameter(),
+        camera,
+        tracking: settings.tracking,
+        ..DetectorConfig::default()
+    })
+}
+
+fn integer(
+    value: &ParameterValue,
+    range: std::ops::RangeInclusive<u32>,
+    what: &str,
+) -> Result<u32, String> {
+    match value {
+        ParameterValue::Integer(i) => u32::try_from(*i)
+            .ok()
+            .filter(|v| range.contains(v))
+            .ok_or_else(|| format!("{i} is not {what}")),
+        other => Err(format!("{} is not {what}", shown(other))),
+    }
+}
+
+/// A number: integers are taken for doubles (`-p diameter:=1` is YAML's
+/// integer 1).
+fn number(value: &ParameterValue) -> Result<f64, String> {
+    match value {
+        ParameterValue::Double(d) => Ok(*d),
+        ParameterValue::Integer(i) => Ok(*i as f64),
+        other => Err(format!("{} is not a number", shown(other))),
+    }
+}
+
+fn boolean(value: &ParameterValue) -> Result<bool, String> {
+    match value {
+        ParameterValue::Boolean(b) => Ok(*b),
+        other => Err(format!("{} is not true or false", shown(other))),
+    }
+}
+
+fn string(value: &ParameterValue) -> Result<String, String> {
+    match value {
+        ParameterValue::String(s) => Ok(s.clone()),
+        other => Err(format!("{} is not a string", shown(other))),
+    }
+}
+
+/// A list; an empty list of any type is an empty list.
+fn is_empty_list(value: &ParameterValue) -> bool {
+    match value {
+        ParameterValue::ByteArray(v) => v.is_empty(),
+        ParameterValue::BooleanArray(v) => v.is_empty(),
+        ParameterValue::IntegerArray(v) => v.is_empty(),
+        ParameterValue::DoubleArray(v) => v.is_empty(),
+        ParameterValue::StringArray(v) => v.is_empty(),
+        _ => false,
+    }
+}
+
+fn integers(value: &ParameterValue) -> Result<Vec<i64>, String> {
+    match value {
+        ParameterValue::IntegerArray(v) => Ok(v.clone()),
+        v if is_empty_list(v) => Ok(Vec::new()),
+        other => Err(format!("{} is not a list of integers", shown(other))),
+    }
+}
+
+fn numbers(value: &ParameterValue) -> Result<Vec<f64>, String> {
+    match value {
+        ParameterValue::DoubleArray(v) => Ok(v.clone()),
+        ParameterValue::IntegerArray(v) => Ok(v.iter().map(|&i| i as f64).collect()),
+        v if is_empty_list(v) => Ok(Vec::new()),
+        other => Err(format!("{} is not a list of numbers", shown(other))),
+    }
+}
+
+fn strings(value: &ParameterValue) -> Result<Vec<String>, String> {
+    match value {
+        ParameterValue::StringArray(v) => Ok(v.clone()),
+        v if is_empty_list(v) => Ok(Vec::new()),
+        other => Err(format!("{} is not a list of strings", shown(other))),
+    }
+}
+
+/// A diameter in metres within [`DIAMETER_RANGE`] (or 0, "not set", where
+/// `zero_unsets`).
+fn diameter(metres: f64, zero_unsets: bool) -> Result<f64, String> {
+    if (zero_unsets && metres == 0.0) || DIAMETER_RANGE.contains(&metres) {
+        Ok(metres)
+    } else {
+        Err(format!(
+            "{metres} m is not a plausible marker diameter (0.0005 to 10 metres{})",
+            if zero_unsets { ", or 0: none" } else { "" }
+        ))
+    }
+}
+
+/// tf2 frame names: no leading slash, no spaces, not empty.
+fn check_frame(frame: &str) -> Result<(), String> {
+    if frame.is_empty() {
+        return Err("a frame name must not be empty".into());
+    }
+    if frame.starts_with('/') {
+        return Err(format!(
+            "frame '{frame}': tf2 frame names do not start with '/'"
+        ));
+    }
+    if let Some(bad) = frame
+        .chars()
+        .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '_' | '/' | '-' | '.')))
+    {
+        return Err(format!("frame '{frame}': '{bad}' is not allowed"));
+    }
+    Ok(())
+}
+
+/// A value as the user wrote it, for messages.
+fn shown(value: &ParameterValue) -> String {
+    match value {
+        ParameterValue::NotSet => "no value".into(),
+        ParameterValue::Boolean(b) => b.to_string(),
+        ParameterValue::Integer(i) => i.to_string(),
+        ParameterValue::Double(d) => d.to_string(),
+        ParameterValue::String(s) => format!("'{s}'"),
+        other => format!("{other:?}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn int(i: i64) -> ParameterValue {
+        ParameterValue::Integer(i)
+    }
+
+    fn text(s: &str) -> ParameterValue {
+        ParameterValue::String(s.into())
+    }
+
+    #[test]
+    fn defaults_round_trip_through_their_declared_values() {
+        let defaults = Settings::default();
+        let declared: Vec<(String, ParameterValue)> = NAMES
+            .iter()
+            .map(|n| (n.to_string(), defaults.value(n).unwrap()))
+            .collect();
+        assert_eq!(Settings::from_parameters(&declared).unwrap(), defaults);
+        assert!(defaults.value("nonsense").is_none());
+    }
+
+    #[test]
+    fn values_are_checked_and_a_refusal_names_the_parameter() {
+        let s = Settings::default();
+        for (name, value, needle) in [
+            ("bits", int(1), "2 to 24"),
+            ("bits", text("many"), "2 to 24 or auto"),
+            ("distance", int(0), "Hamming distance"),
+            ("diameter", ParameterValue::Double(-0.05), "plausible"),
+            ("diameter", ParameterValue::Double(20.0), "plausible"),
+            ("diameter", ParameterValue::Double(f64::NAN), "plausible"),
+            ("diameter", text("5cm"), "not a number"),
+            ("max_markers", int(0), "a count"),
+            ("tracking", int(1), "true or false"),
+            ("image_transport", text("theora"), "raw or compressed"),
+            ("camera_frame", text("/camera"), "do not start"),
+            ("frame_prefix", text("marker "), "' ' is not allowed"),
+            (
+                "tag.ids",
+                ParameterValue::IntegerArray(vec![3, 0]),
+                "IDs start at 1",
+            ),
+            ("tag.ids", ParameterValue::IntegerArray(vec![3, 3]), "twice"),
+            (
+                "tag.sizes",
+                ParameterValue::DoubleArray(vec![0.0]),
+                "plausible",
+            ),
+            ("tag.frames", text("a"), "list of strings"),
+            ("colour", int(1), "no such parameter"),
+        ] {
+            let err = s.with(name, &value).unwrap_err();
+            assert!(err.starts_with(&format!("parameter {name}: ")), "{err}");
+            assert!(err.contains(needle), "{name}: {err}");
+        }
+    }
+
+    #[test]
+    fn integers_stand_for_doubles_and_empty_lists_for_any_list() {
+        let s = Settings::default()
+            .with("diameter", &int(1))
+            .unwrap()
+            .with("bits", &text("AUTO"))
+            .unwrap()
+            .with("tag.ids", &ParameterValue::IntegerArray(vec![4, 9]))
+            .unwrap()
+            .with("tag.sizes", &ParameterValue::IntegerArray(vec![2]))
+            .unwrap()
+            .with("tag.frames", &ParameterValue::StringArray(vec![]))
+            .unwrap();
+        assert_eq!(s.diameter, 1.0);
+        assert_eq!(s.bits, Bits::Auto);
+        assert_eq!(s.tag_sizes, [2.0]);
+        let s = s
+            .with("tag.sizes", &ParameterValue::BooleanArray(vec![]))
+            .unwrap();
+        assert!(s.tag_sizes.is_empty());
+    }
+
+    #[test]
+    fn per_id_frames_and_sizes_fall_back_to_the_prefix_and_diameter() {
+        let s = Settings::from_parameters(&[
+            ("diameter".into(), ParameterValue::Double(0.05)),
+            ("tag.ids".into(), ParameterValue::IntegerArray(vec![3, 7])),
+            (
+                "tag.frames".into(),
+                ParameterValue::StringArray(vec!["dock".into()]),
+            ),
+            (
+                "tag.sizes".into(),
+                ParameterValue::DoubleArray(vec![0.2, 0.1]),
+            ),
+        ])
+        .unwrap();
+        assert_eq!(s.tag(3), (Cow::Borrowed("dock"), Some(0.2)));
+        assert_eq!(s.tag(7).0, "whycode_7");
+        assert_eq!(s.tag(7).1, Some(0.1));
+        assert_eq!(s.tag(5), (Cow::Owned("whycode_5".into()), Some(0.05)));
+        // Without a diameter, unlisted IDs have no size.
+        let s = s.with("diameter", &ParameterValue::Double(0.0)).unwrap();
+        assert_eq!(s.tag(5).1, None);
+        assert_eq!(s.detector_diameter(), Some(0.2));
+        // More frames than IDs is refused, and the settings stay.
+        let err = s
+            .with("tag.ids", &ParameterValue::IntegerArray(vec![]))
+            .unwrap_err();
+        assert!(err.contains("1 values for 0 tag.ids"), "{err}");
+    }
+
+    #[test]
+    fn the_detector_config_follows_the_settings() {
+        let s = Settings::default()
+            .with("bits", &int(12))
+            .unwrap()
+            .with("distance", &int(3))
+            .unwrap()
+            .with("diameter", &ParameterValue::Double(0.04))
+            .unwrap()
+            .with("max_markers", &int(5))
+            .unwrap()
+            .with("tracking", &ParameterValue::Boolean(false))
+            .unwrap();
+        let camera = Camera::ideal(640, 480, 60.0);
+        let config = detector_config(&s, Some(camera)).unwrap();
+        let family = config.target.family().unwrap();
+        assert_eq!((family.bits(), family.distance()), (12, 3));
+        assert_eq!(config.diameter_m, Some(0.04));
+        assert_eq!(config.max_markers, 5);
+        assert!(!config.tracking);
+        assert_eq!(config.camera, Some(camera));
+        let legacy = s.with("legacy", &ParameterValue::Boolean(true)).unwrap();
+        assert_eq!(
+            detector_config(&legacy, None).unwrap().target,
+            Target::WhyCon
+        );
+        let auto = s.with("bits", &text("auto")).unwrap();
+        assert_eq!(
+            detector_config(&auto, None).unwrap().target,
+            Target::AnyBits { distance: Some(3) }
+        );
+    }
+
+    #[test]
+    fn impossible_families_and_foreign_ids_are_refused() {
+        let s = Settings::default().with("bits", &int(4)).unwrap();
+        let s = s.with("distance", &int(5)).unwrap();
+        assert!(detector_config(&s, None)
+            .unwrap_err()
+            .starts_with("family: "));
+        let s = Settings::default()
+            .with("tag.ids", &ParameterValue::IntegerArray(vec![1, 5000]))
+            .unwrap();
+        let err = detector_config(&s, None).unwrap_err();
+        assert!(err.contains("not 5000"), "{err}");
+        let s = Settings::default()
+            .with("family_file", &text("/nonexistent/family.json"))
+            .unwrap();
+        let err = detector_config(&s, None).unwrap_err();
+        assert!(err.contains("/nonexistent/family.json"), "{err}");
+    }
+}
