@@ -7,24 +7,18 @@
 
 use ros2_client::ParameterValue;
 use std::borrow::Cow;
+use std::path::PathBuf;
 use whycode::detect::{DetectorConfig, Target};
-use whycode::family::{Family, DEFAULT_BITS, DEFAULT_DISTANCE};
+use whycode::family::{DEFAULT_BITS, DEFAULT_DISTANCE};
+use whycode::spec::{limits, DetectSpec, TargetSpec};
+use whycode::units::Length;
 use whycode::Camera;
 
 /// The node's name unless `-r __node:=` says otherwise.
 pub const DEFAULT_NODE_NAME: &str = "whycode";
 
-/// Plausible marker diameters, metres: 0.5 mm to 10 m.
-pub const DIAMETER_RANGE: std::ops::RangeInclusive<f64> = 0.0005..=10.0;
-
 /// Code length of the family, or every count read from the rings.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Bits {
-    /// One family of this many bits.
-    Count(u32),
-    /// `auto`: each ring's count (4-24) read from the ring.
-    Auto,
-}
+pub use whycode::spec::Bits;
 
 /// Which image topic the node subscribes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -338,29 +332,27 @@ pub fn detector_config(
     settings: &Settings,
     camera: Option<Camera>,
 ) -> Result<DetectorConfig, String> {
-    let family_error = |e: &dyn std::fmt::Display| format!("family: {e}");
-    let target = if settings.legacy {
-        Target::WhyCon
-    } else if !settings.family_file.is_empty() {
-        let family = Family::load(std::path::Path::new(&settings.family_file))
-            .map_err(|e| format!("parameter family_file: {e}"))?;
-        Target::WhyCode(family)
-    } else {
-        match settings.bits {
-            Bits::Count(bits) => Target::WhyCode(
-                Family::generate(bits, settings.distance).map_err(|e| family_error(&e))?,
-            ),
-            Bits::Auto => {
-                // A distance no bit count accepts is refused up front.
-                Family::generate(DEFAULT_BITS.max(settings.distance), settings.distance)
-                    .map_err(|e| family_error(&e))?;
-                Target::AnyBits {
-                    distance: Some(settings.distance),
-                }
-            }
-        }
+    let family_file = !settings.family_file.is_empty();
+    let names_family = !settings.legacy && !family_file;
+    let spec = DetectSpec {
+        target: TargetSpec {
+            legacy: settings.legacy,
+            bits: names_family.then_some(settings.bits),
+            distance: names_family.then_some(settings.distance),
+            family_file: family_file.then(|| PathBuf::from(&settings.family_file)),
+            ..TargetSpec::default()
+        },
+        // A pose needs both; until camera_info arrives there is none.
+        diameter: camera.and(settings.detector_diameter()).map(Length::from_m),
+        camera,
+        max_markers: Some(settings.max_markers as usize),
+        tracking: settings.tracking,
+        ..DetectSpec::default()
     };
-    if let Target::WhyCode(family) = &target {
+    let config = spec
+        .build()
+        .map_err(|e| e.message_with(|option| format!("parameter {option}")))?;
+    if let Target::WhyCode(family) = &config.target {
         if let Some(id) = settings
             .tag_ids
             .iter()
@@ -374,14 +366,7 @@ pub fn detector_config(
             ));
         }
     }
-    Ok(DetectorConfig {
-        target,
-        max_markers: settings.max_markers as usize,
-        diameter_m: settings.detector_diameter(),
-        camera,
-        tracking: settings.tracking,
-        ..DetectorConfig::default()
-    })
+    Ok(config)
 }
 
 fn integer(
@@ -459,14 +444,16 @@ fn strings(value: &ParameterValue) -> Result<Vec<String>, String> {
     }
 }
 
-/// A diameter in metres within [`DIAMETER_RANGE`] (or 0, "not set", where
-/// `zero_unsets`).
+/// A diameter in metres within the toolkit's plausible marker sizes (or
+/// 0, "not set", where `zero_unsets`).
 fn diameter(metres: f64, zero_unsets: bool) -> Result<f64, String> {
-    if (zero_unsets && metres == 0.0) || DIAMETER_RANGE.contains(&metres) {
+    if (zero_unsets && metres == 0.0) || limits::MARKER_DIAMETER_MM.contains(metres * 1000.0) {
         Ok(metres)
     } else {
         Err(format!(
-            "{metres} m is not a plausible marker diameter (0.0005 to 10 metres{})",
+            "{metres} m is not a plausible marker diameter ({} to {} metres{})",
+            limits::MARKER_DIAMETER_MM.min / 1000.0,
+            limits::MARKER_DIAMETER_MM.max / 1000.0,
             if zero_unsets { ", or 0: none" } else { "" }
         ))
     }
