@@ -8,19 +8,16 @@
 //! whole process under 3x the image size, i.e. under 2x on top of it).
 //! Run with `cargo bench --bench detect`.
 
-#[path = "../tests/integration/support/scenes.rs"]
-mod scenes;
-
 use std::sync::OnceLock;
 
 use divan::{black_box, AllocProfiler, Bencher};
 use image::GrayImage;
-use scenes::{render, scatter, Look, Pinhole};
 use whycode::camera::Camera;
 use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::math::Pcg32;
+use whycode_testkit::scenes::{camera, render, scatter, Look};
 
 #[global_allocator]
 static ALLOC: AllocProfiler = AllocProfiler::system();
@@ -33,35 +30,36 @@ fn family() -> Family {
     Family::generate(8, 2).unwrap()
 }
 
+/// The camera `big_scene` is rendered with.
+fn big_camera() -> Camera {
+    camera(5000, 5000, 5000.0)
+}
+
+/// The k-th member of `codes` (8-bit, 100 mm), cycling.
+fn member(codes: &[u32], k: usize) -> (Marker, u32) {
+    let id = k % codes.len();
+    (Marker::whycode(8, codes[id], 100.0), id as u32 + 1)
+}
+
 /// 5000x5000, 550 WhyCode markers of 60-120 px at random places and
 /// rotations, light falling 2:1 across the frame, mild blur and noise.
 fn big_scene() -> &'static GrayImage {
     static SCENE: OnceLock<GrayImage> = OnceLock::new();
     SCENE.get_or_init(|| {
         let codes = family().codes().to_vec();
-        let camera = Pinhole {
-            f: 5000.0,
-            cx: 2500.0,
-            cy: 2500.0,
-        };
+        let camera = big_camera();
         let mut rng = Pcg32::new(5000, 0);
-        let placements = scatter(
-            &mut rng,
-            &camera,
-            5000,
-            5000,
-            550,
-            (60.0, 120.0),
-            &mut |k| Marker::whycode(8, codes[k % codes.len()], 100.0),
-        );
-        assert_eq!(placements.len(), 550);
+        let markers = scatter(&mut rng, &camera, 550, (60.0, 120.0), &mut |k| {
+            member(&codes, k)
+        });
+        assert_eq!(markers.len(), 550);
         let look = Look {
             gradient_right: 0.5,
             blur: 1,
             noise: 2.0,
             ..Look::default()
         };
-        render(5000, 5000, &camera, &placements, look)
+        render(&camera, &markers, look).0
     })
 }
 
@@ -69,26 +67,17 @@ fn small_scene() -> &'static GrayImage {
     static SCENE: OnceLock<GrayImage> = OnceLock::new();
     SCENE.get_or_init(|| {
         let codes = family().codes().to_vec();
-        let camera = Pinhole {
-            f: 600.0,
-            cx: 320.0,
-            cy: 240.0,
-        };
+        let camera = camera(640, 480, 600.0);
         let mut rng = Pcg32::new(640, 0);
-        let placements = scatter(&mut rng, &camera, 640, 480, 4, (40.0, 90.0), &mut |k| {
-            Marker::whycode(8, codes[k % codes.len()], 100.0)
+        let markers = scatter(&mut rng, &camera, 4, (40.0, 90.0), &mut |k| {
+            member(&codes, k)
         });
-        render(
-            640,
-            480,
-            &camera,
-            &placements,
-            Look {
-                blur: 1,
-                noise: 2.0,
-                ..Look::default()
-            },
-        )
+        let look = Look {
+            blur: 1,
+            noise: 2.0,
+            ..Look::default()
+        };
+        render(&camera, &markers, look).0
     })
 }
 
@@ -101,18 +90,10 @@ fn config(tracking: bool, max_markers: usize) -> DetectorConfig {
     }
 }
 
-/// The camera `big_scene` is rendered with, and its markers' diameter.
+/// With `big_scene`'s camera and its markers' diameter.
 fn with_pose(config: DetectorConfig) -> DetectorConfig {
     DetectorConfig {
-        camera: Some(Camera {
-            fx: 5000.0,
-            fy: 5000.0,
-            cx: 2500.0,
-            cy: 2500.0,
-            distortion: [0.0; 5],
-            width: 5000,
-            height: 5000,
-        }),
+        camera: Some(big_camera()),
         diameter_m: Some(0.1),
         ..config
     }

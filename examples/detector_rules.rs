@@ -8,17 +8,16 @@
 use std::f64::consts::PI;
 
 use image::GrayImage;
-use nalgebra::Vector3;
 use whycode::camera::Camera;
-use whycode::detect::{legacy, Detection, Detector, DetectorConfig, Target};
+use whycode::detect::{legacy, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::math::Pcg32;
-use whycode::simulate::{self, Background, LooseMarker, Placement, Scene, SceneObject};
-
-#[path = "../tests/integration/support/desk.rs"]
-mod desk;
-use desk::desk_clutter;
+use whycode::simulate::{
+    self, nearest, Background, LooseMarker, Placement, Reach, Scene, SceneObject, Sighting,
+};
+use whycode_testkit::desk::desk_clutter;
+use whycode_testkit::tally::Counts;
 
 const DEG: f64 = PI / 180.0;
 const DIAMETER_M: f64 = 0.05;
@@ -73,8 +72,8 @@ fn main() {
         println!(
             "   {size:>4} px: detected {:5.1} %, ID {:5.1} %, wrong IDs {}",
             counts.percent(counts.detected),
-            counts.percent(counts.named),
-            counts.wrong
+            counts.percent(counts.correct_id),
+            counts.wrong_id
         );
     }
 
@@ -131,7 +130,7 @@ fn small_neighbours() -> (usize, usize, usize, usize) {
                 .iter()
                 .filter(|d| {
                     d.id != 0
-                        && nearest_truth(&truth.markers, d)
+                        && nearest(&truth.markers, (d.u, d.v), f64::INFINITY)
                             .is_some_and(|m| m.id == d.id && (m.u - d.u).hypot(m.v - d.v) < 3.0)
                 })
                 .count();
@@ -167,29 +166,21 @@ fn detector(kind: Kind) -> Option<Detector> {
     }))
 }
 
-#[derive(Default)]
-struct Counts {
-    total: usize,
-    detected: usize,
-    named: usize,
-    wrong: usize,
-}
-
-impl Counts {
-    fn percent(&self, n: usize) -> f64 {
-        100.0 * n as f64 / self.total.max(1) as f64
-    }
-}
-
 fn camera() -> Camera {
     Camera::ideal(1280, 720, 60.0)
 }
 
-/// A marker whose centre projects to (u, v), `diameter_px` across face-on.
-fn placement_at(camera: &Camera, (u, v): (f64, f64), diameter_px: f64, tilt: f64) -> Placement {
-    let z = camera.fx * DIAMETER_M / diameter_px;
-    let (x, y) = camera.undistort(u, v);
-    Placement::viewed(Vector3::new(x * z, y * z, z), tilt, 0.0, 0.0)
+/// Reports this near a marker (0.3 of its size plus a pixel) are about it.
+const NEAR: Reach = Reach {
+    of_size: 0.3,
+    px: 1.0,
+};
+
+/// Adds one frame's visible markers and what `detector` found to `counts`.
+fn count(counts: &mut Counts, seed: u64, detector: &mut Detector, scene: &Scene) {
+    let (image, truth) = simulate::render(scene);
+    let found: Vec<Sighting> = detector.detect(&image).iter().map(Sighting::from).collect();
+    counts.add_within(seed, &truth.targets(), &found, NEAR);
 }
 
 /// The scene of [`marker_scene`] with `family`'s markers, or legacy ones
@@ -216,9 +207,6 @@ fn marker_scene_of(
         let draw = rng.next_u32();
         let tilt = rng.range(0.0, 45.0) * DEG;
         let roll = rng.range(0.0, 2.0 * PI);
-        let mut placement = placement_at(&cam, (u, v), size, tilt);
-        placement.rotation *=
-            *nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), roll).matrix();
         let (marker, id) = match family {
             Some(family) => {
                 let id = 1 + draw % family.len() as u32;
@@ -230,6 +218,7 @@ fn marker_scene_of(
             }
             None => (Marker::whycon(DIAMETER_M * 1000.0), 0),
         };
+        let placement = Placement::at_pixel(&cam, &marker, (u, v), size, tilt, 0.0, roll);
         scene
             .objects
             .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
@@ -244,22 +233,10 @@ fn sized_markers(family: &Family, size: f64, frames: usize, per_frame: usize) ->
     let mut counts = Counts::default();
     let mut detector = detector(Kind::Family(family.clone())).expect("family detector");
     for f in 0..frames {
-        let mut rng = Pcg32::new(1000 + f as u64, 3);
-        let scene = marker_scene(family, size, per_frame, &mut rng, 1000 + f as u64);
-        let (image, truth) = simulate::render(&scene);
-        let found = detector.detect(&image);
-        for m in truth.markers.iter().filter(|m| m.visible) {
-            counts.total += 1;
-            let near = nearest(&found, m.u, m.v, 0.3 * m.diameter_px + 1.0);
-            if let Some(d) = near {
-                counts.detected += 1;
-                if d.id == m.id {
-                    counts.named += 1;
-                } else if d.id != 0 {
-                    counts.wrong += 1;
-                }
-            }
-        }
+        let seed = 1000 + f as u64;
+        let mut rng = Pcg32::new(seed, 3);
+        let scene = marker_scene(family, size, per_frame, &mut rng, seed);
+        count(&mut counts, seed, &mut detector, &scene);
     }
     counts
 }
@@ -273,28 +250,12 @@ fn sized_legacy_markers(size: f64, frames: usize, per_frame: usize, min_ink_px: 
         ..Default::default()
     });
     for f in 0..frames {
-        let mut rng = Pcg32::new(1000 + f as u64, 3);
-        let scene = marker_scene_of(None, size, per_frame, &mut rng, 1000 + f as u64);
-        let (image, truth) = simulate::render(&scene);
-        let found = detector.detect(&image);
-        for m in truth.markers.iter().filter(|m| m.visible) {
-            counts.total += 1;
-            counts.detected +=
-                usize::from(nearest(&found, m.u, m.v, 0.3 * m.diameter_px + 1.0).is_some());
-        }
+        let seed = 1000 + f as u64;
+        let mut rng = Pcg32::new(seed, 3);
+        let scene = marker_scene_of(None, size, per_frame, &mut rng, seed);
+        count(&mut counts, seed, &mut detector, &scene);
     }
     counts
-}
-
-fn nearest(found: &[Detection], u: f64, v: f64, reach: f64) -> Option<&Detection> {
-    found
-        .iter()
-        .filter(|d| (d.u - u).hypot(d.v - v) < reach)
-        .min_by(|a, b| {
-            (a.u - u)
-                .hypot(a.v - v)
-                .total_cmp(&(b.u - u).hypot(b.v - v))
-        })
 }
 
 /// Known IDs (and wrong ones, and ones needing correction) when markers of
@@ -311,7 +272,7 @@ fn wrong_family(printed: &Family, read: &Family) -> (usize, usize, usize, usize)
         total += truth.markers.len();
         for d in found.iter().filter(|d| d.id != 0) {
             known += 1;
-            if let Some(m) = nearest_truth(&truth.markers, d) {
+            if let Some(m) = nearest(&truth.markers, (d.u, d.v), f64::INFINITY) {
                 if m.code != d.code.unwrap_or(0) || m.bits != read.bits() {
                     wrong += 1;
                 }
@@ -322,15 +283,4 @@ fn wrong_family(printed: &Family, read: &Family) -> (usize, usize, usize, usize)
         }
     }
     (known, total, wrong, corrected)
-}
-
-fn nearest_truth<'a>(
-    markers: &'a [whycode::simulate::TrueMarker],
-    d: &Detection,
-) -> Option<&'a whycode::simulate::TrueMarker> {
-    markers.iter().min_by(|a, b| {
-        (a.u - d.u)
-            .hypot(a.v - d.v)
-            .total_cmp(&(b.u - d.u).hypot(b.v - d.v))
-    })
 }

@@ -7,10 +7,9 @@
 //! Prints how many inputs each target tried; exits 1 on a panic, a hang,
 //! detection slower than 1 s for a 2-megapixel image, or invalid JSON.
 
-#[path = "../tests/integration/support/fuzz.rs"]
-mod fuzz_support;
-
 use std::time::Duration;
+
+use whycode_testkit::fuzz as fuzz_support;
 
 fn main() -> std::process::ExitCode {
     let mut minutes = 1.0f64;

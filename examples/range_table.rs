@@ -26,7 +26,7 @@ use whycode::camera::Camera;
 use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
-use whycode::simulate::{render, Background, LooseMarker, Placement, Scene, SceneObject};
+use whycode::simulate::{nearest, render, Background, LooseMarker, Placement, Scene, SceneObject};
 use whycode::units::Length;
 
 /// The paper's marker area read as 38.17 cm² (see the comment at the top).
@@ -134,15 +134,7 @@ fn trial(
     let mut identified = true;
     for t in &truth.markers {
         let r = t.diameter_px / 2.0;
-        let hit = detections
-            .iter()
-            .filter(|d| (d.u - t.u).hypot(d.v - t.v) < 0.5 * r)
-            .min_by(|a, b| {
-                let da = (a.u - t.u).hypot(a.v - t.v);
-                let db = (b.u - t.u).hypot(b.v - t.v);
-                da.total_cmp(&db)
-            });
-        match hit {
+        match nearest(&detections, (t.u, t.v), 0.5 * r) {
             Some(d) => identified &= t.id == 0 || d.id == t.id,
             None => {
                 detected = false;

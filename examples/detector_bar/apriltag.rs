@@ -10,7 +10,8 @@ use nalgebra::{Matrix3, Vector3};
 use serde::Deserialize;
 
 use crate::rival::{run_on_frames, Rival, Setup};
-use crate::scenario::{Print, Seen};
+use whycode::simulate::Sighting;
+use whycode_testkit::scenario::Print;
 
 /// The one-line setup the bar prints when AprilTag cannot be run.
 pub const SETUP: &str =
@@ -101,7 +102,7 @@ impl Rival for AprilTag {
         &self,
         setup: &Setup,
         frames: &[&GrayImage],
-    ) -> Result<Vec<(Vec<Seen>, f64)>, String> {
+    ) -> Result<Vec<(Vec<Sighting>, f64)>, String> {
         let camera = setup.camera;
         let mut command = Command::new(&self.python);
         command.arg(&self.script);
@@ -132,7 +133,7 @@ impl Rival for AprilTag {
 /// half-integers (ours: integers; its centres come out 0.5 px off in u and
 /// v otherwise); its tag frame has y down the tag and z into it, ours y up
 /// and z out of the print.
-fn seen(tag: &TagReport) -> Seen {
+fn seen(tag: &TagReport) -> Sighting {
     let shift = |p: [f64; 2]| [p[0] - 0.5, p[1] - 0.5];
     let c = tag.corners.map(shift);
     let [u, v] = shift(tag.center);
@@ -143,7 +144,7 @@ fn seen(tag: &TagReport) -> Seen {
     let rotation = tag.rotation.map(|r| {
         Matrix3::from_fn(|i, j| r[i][j]) * Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0))
     });
-    Seen {
+    Sighting {
         u,
         v,
         id: Some(tag.id),

@@ -11,17 +11,16 @@
 //! AprilTag needs a Python with pupil-apriltags ([`apriltag::SETUP`];
 //! `APRILTAG_PYTHON` names one), the original a build of its sources
 //! (`original/build.sh`); without them their cells say "not measured".
-//! A new row is a [`Scenario`] (which markers, how many frames, the look),
-//! its counts for ours and the rivals', and a `table.row(...)`.
+//! A new row is a [`Scenario`] (which markers, how many frames, the look;
+//! `whycode_testkit::scenario`), its counts for ours and the rivals', and a
+//! `table.row(...)`.
 
 mod apriltag;
 mod measures;
 mod original;
 mod rival;
-mod scenario;
 mod speed;
 mod table;
-mod tag36h11;
 
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -30,11 +29,13 @@ use apriltag::AprilTag;
 use measures::{normal_errors, yaw_errors, NormalResult};
 use original::Original;
 use rival::Rival;
-use scenario::*;
 use table::{beats, beats_ids, cells, pct, Table};
 use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::simulate::{Background, MotionBlur};
+use whycode_testkit::scenario::{detector, Families, Scenario, Spread};
+use whycode_testkit::scenes::cast_shadow;
+use whycode_testkit::tally::Counts;
 
 /// The rivals in [`table::RIVALS`] order; `None` where one cannot be run.
 pub type Rivals<'a> = [Option<&'a dyn Rival>; 2];
@@ -57,7 +58,7 @@ fn rates(c: &Counts) -> String {
 
 /// Every rival's counts on the scenario's frames.
 fn rival_counts(scenario: &Scenario, rivals: &Rivals) -> [Option<Counts>; 2] {
-    rivals.map(|r| scenario.rival_counts(r))
+    rivals.map(|r| rival::counts(scenario, r))
 }
 
 fn main() {

@@ -4,13 +4,13 @@
 //! rivals' on the same scenes.
 
 use whycode::camera::Camera;
+use whycode::detect::Detector;
 use whycode::family::Family;
+use whycode::simulate::{match_reports, Reach, Sighting};
+use whycode_testkit::scenario::{camera, detector, Families, Frame, Scenario, Spread, DEG};
+use whycode_testkit::tally::{Counts, Errors};
 
-use crate::rival::Rival;
-use crate::scenario::{
-    detector, match_truth, wrap, Counts, Errors, Families, Frame, Scenario, Seen, Spread, Truth,
-    DEG,
-};
+use crate::rival::{self, Rival};
 
 /// Yaw errors (degrees) and the ID counts of one detector.
 #[derive(Default)]
@@ -20,12 +20,12 @@ pub struct YawResult {
 }
 
 impl YawResult {
-    fn add(&mut self, frame: &Frame, found: &[Seen]) {
-        for (t, d) in match_truth(&frame.targets, found).pairs {
+    fn add(&mut self, frame: &Frame, found: &[Sighting]) {
+        for (t, d) in match_reports(&frame.targets, found, Reach::default()).pairs {
             let Some(d) = d else { continue };
             let (m, d) = (&frame.targets[t], &found[d]);
             if let (true, Some(yaw)) = (d.id == Some(m.id), d.yaw) {
-                self.errors.add(wrap(yaw - m.yaw) / DEG, (frame.seed, t));
+                self.errors.add(m.yaw_error(yaw) / DEG, (frame.seed, t));
             }
         }
     }
@@ -56,24 +56,48 @@ pub fn yaw_errors(
             seed0 + 1000 * b as u64,
         );
         let mut det = detector(Some(&family), &scenario.camera(), false);
-        let mut counts = std::mem::take(&mut ours.counts);
-        scenario.run(&mut det, &mut counts, |frame, found| ours.add(frame, found));
-        ours.counts = counts;
-        for (rival, slot) in rivals.iter().zip(theirs.iter_mut()) {
-            let (Some(rival), Some(result)) = (rival, slot.as_mut()) else {
-                continue;
-            };
-            let mut counts = std::mem::take(&mut result.counts);
-            let run =
-                scenario.run_rival(*rival, &mut counts, |frame, found| result.add(frame, found));
-            result.counts = counts;
-            if let Err(e) = run {
-                eprintln!("{} failed: {e}", rival.name());
-                *slot = None;
-            }
-        }
+        let results = (&mut ours, theirs.as_mut_slice());
+        run_all(
+            &scenario,
+            &mut det,
+            results,
+            rivals,
+            |r| &mut r.counts,
+            |r, frame, found| r.add(frame, found),
+        );
     }
     (ours, theirs)
+}
+
+/// Adds `scenario`'s frames as read by ours (`det`) to `ours`, and as read
+/// by each rival to its slot in `theirs` (a rival that fails drops out):
+/// `add` scores one frame's reports into a result, whose `Counts`
+/// `counts` picks.
+fn run_all<R>(
+    scenario: &Scenario,
+    det: &mut Detector,
+    (ours, theirs): (&mut R, &mut [Option<R>]),
+    rivals: &[Option<&dyn Rival>],
+    counts: fn(&mut R) -> &mut Counts,
+    add: impl Fn(&mut R, &Frame, &[Sighting]),
+) {
+    let mut tally = std::mem::take(counts(ours));
+    scenario.run(det, &mut tally, |frame, found| add(ours, frame, found));
+    *counts(ours) = tally;
+    for (rival, slot) in rivals.iter().zip(theirs.iter_mut()) {
+        let (Some(rival), Some(result)) = (rival, slot.as_mut()) else {
+            continue;
+        };
+        let mut tally = std::mem::take(counts(result));
+        let run = rival::run(scenario, *rival, &mut tally, |frame, found| {
+            add(result, frame, found)
+        });
+        *counts(result) = tally;
+        if let Err(e) = run {
+            eprintln!("{} failed: {e}", rival.name());
+            *slot = None;
+        }
+    }
 }
 
 /// Row 2: angle between the estimated and the true normal, in degrees,
@@ -95,33 +119,26 @@ pub struct NormalResult {
     pub counts: Counts,
 }
 
-/// View angle of a true target: between its normal and the direction to
-/// the camera, degrees.
-fn view_angle(m: &Truth) -> f64 {
-    let to_camera = -m.position.normalize();
-    m.normal().dot(&to_camera).clamp(-1.0, 1.0).acos() / DEG
-}
-
 impl NormalResult {
-    fn add(&mut self, cam: &Camera, wrong_deg: f64, frame: &Frame, found: &[Seen]) {
+    fn add(&mut self, cam: &Camera, wrong_deg: f64, frame: &Frame, found: &[Sighting]) {
         let (seed, truth) = (frame.seed, &frame.targets);
         if self.bands.is_empty() {
             self.bands = vec![Errors::default(); 9];
         }
-        for (t, d) in match_truth(truth, found).pairs {
+        for (t, d) in match_reports(truth, found, Reach::default()).pairs {
             let Some(d) = d.map(|d| &found[d]) else {
                 continue;
             };
             let m = &truth[t];
-            self.centre.add((d.u - m.u).hypot(d.v - m.v), (seed, t));
-            if let Some((pu, pv)) = d.position.and_then(|p| cam.project(&p)) {
-                self.pose_centre.add((pu - m.u).hypot(pv - m.v), (seed, t));
+            self.centre.add(m.centre_error((d.u, d.v)), (seed, t));
+            if let Some(p) = d.position.and_then(|p| cam.project(&p)) {
+                self.pose_centre.add(m.centre_error(p), (seed, t));
             }
             let Some(n) = d.normal else {
                 continue;
             };
-            let angle = n.normalize().dot(&m.normal()).clamp(-1.0, 1.0).acos() / DEG;
-            let band = ((view_angle(m) / 10.0) as usize).min(self.bands.len() - 1);
+            let angle = m.normal_error(&n) / DEG;
+            let band = ((m.view_angle() / DEG / 10.0) as usize).min(self.bands.len() - 1);
             self.bands[band].add(angle, (seed, t));
             self.all.add(angle, (seed, t));
             if angle > wrong_deg {
@@ -131,8 +148,7 @@ impl NormalResult {
             if let (Some(rotation), true) = (d.rotation, d.id == Some(m.id)) {
                 // Rotation about the normal: the estimated +x axis against
                 // the true one, both projected onto the true target plane.
-                let x_est = m.rotation.transpose() * rotation.column(0).into_owned();
-                self.pose_roll.add(x_est.y.atan2(x_est.x) / DEG, (seed, t));
+                self.pose_roll.add(m.roll_error(&rotation) / DEG, (seed, t));
             }
         }
     }
@@ -166,7 +182,7 @@ pub fn normal_errors(
     seed0: u64,
     rivals: &[Option<&dyn Rival>],
 ) -> (NormalResult, Vec<Option<NormalResult>>) {
-    let cam = crate::scenario::camera(800, 600);
+    let cam = camera(800, 600);
     // One detector for every tilt: its adaptive state carries over.
     let mut det = detector(Some(family), &cam, false);
     let mut ours = NormalResult::default();
@@ -182,25 +198,15 @@ pub fn normal_errors(
             frames_per_tilt,
             seed0 + 1000 * k as u64,
         );
-        let mut counts = std::mem::take(&mut ours.counts);
-        scenario.run(&mut det, &mut counts, |frame, found| {
-            ours.add(&cam, wrong_deg, frame, found)
-        });
-        ours.counts = counts;
-        for (rival, slot) in rivals.iter().zip(theirs.iter_mut()) {
-            let (Some(rival), Some(result)) = (rival, slot.as_mut()) else {
-                continue;
-            };
-            let mut counts = std::mem::take(&mut result.counts);
-            let run = scenario.run_rival(*rival, &mut counts, |frame, found| {
-                result.add(&cam, wrong_deg, frame, found)
-            });
-            result.counts = counts;
-            if let Err(e) = run {
-                eprintln!("{} failed: {e}", rival.name());
-                *slot = None;
-            }
-        }
+        let results = (&mut ours, theirs.as_mut_slice());
+        run_all(
+            &scenario,
+            &mut det,
+            results,
+            rivals,
+            |r| &mut r.counts,
+            |r, frame, found| r.add(&cam, wrong_deg, frame, found),
+        );
     }
     ours.finish();
     for result in theirs.iter_mut().flatten() {

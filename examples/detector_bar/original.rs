@@ -17,7 +17,8 @@ use nalgebra::Vector3;
 use serde::Deserialize;
 
 use crate::rival::{parse_reports, write_frames, Rival, Setup};
-use crate::scenario::{Print, Seen};
+use whycode::simulate::Sighting;
+use whycode_testkit::scenario::Print;
 
 pub struct Original {
     program: PathBuf,
@@ -106,7 +107,7 @@ impl Rival for Original {
         &self,
         setup: &Setup,
         frames: &[&GrayImage],
-    ) -> Result<Vec<(Vec<Seen>, f64)>, String> {
+    ) -> Result<Vec<(Vec<Sighting>, f64)>, String> {
         let camera = setup.camera;
         let dir = write_frames(frames)?;
         let mut args = vec![
@@ -199,9 +200,9 @@ impl Original {
 /// normal points away from the camera, ours towards it; its position is
 /// in the ROS body frame (x forward, y left, z up); it gives no in-plane
 /// axes, so no full rotation.
-fn seen(m: &MarkerReport) -> Seen {
+fn seen(m: &MarkerReport) -> Sighting {
     let n = Vector3::from(m.n);
-    Seen {
+    Sighting {
         u: m.u,
         v: m.v,
         id: u32::try_from(m.id).ok().filter(|&id| id != 0),

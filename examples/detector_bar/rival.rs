@@ -1,8 +1,8 @@
 //! Detectors the bar compares ours with, each run as a separate program
 //! (AprilTag through Python, the original WhyCode as a C++ build) on the
 //! scenario's frames written as PGM into a temporary folder. Each prints a
-//! JSON line per frame; its reports become [`Seen`]s scored by the same
-//! code as ours.
+//! JSON line per frame; its reports become [`Sighting`]s scored by the
+//! same code as ours.
 
 use std::io::Write;
 use std::path::Path;
@@ -11,8 +11,9 @@ use std::process::Command;
 use image::GrayImage;
 use serde::de::DeserializeOwned;
 use whycode::camera::Camera;
-
-use crate::scenario::{Print, Seen};
+use whycode::simulate::Sighting;
+use whycode_testkit::scenario::{Frame, Print, Scenario, DIAMETER_M};
+use whycode_testkit::tally::Counts;
 
 /// What a rival is told about the frames besides the pixels.
 pub struct Setup<'a> {
@@ -36,8 +37,54 @@ pub trait Rival {
         false
     }
     /// Each frame's reports and the detector's time for it, ms.
-    fn detect(&self, setup: &Setup, frames: &[&GrayImage])
-        -> Result<Vec<(Vec<Seen>, f64)>, String>;
+    fn detect(
+        &self,
+        setup: &Setup,
+        frames: &[&GrayImage],
+    ) -> Result<Vec<(Vec<Sighting>, f64)>, String>;
+}
+
+/// The scenario's frames read by `rival` (all at once: one process per
+/// scenario), with its own markers printed in ours' places if it has any;
+/// like `Scenario::run`, and gives its time per frame, ms.
+pub fn run(
+    scenario: &Scenario,
+    rival: &dyn Rival,
+    counts: &mut Counts,
+    mut visit: impl FnMut(&Frame, &[Sighting]),
+) -> Result<Vec<f64>, String> {
+    let frames: Vec<Frame> = (0..scenario.frames)
+        .map(|f| scenario.frame(f, rival.print()))
+        .collect();
+    let images: Vec<&GrayImage> = frames.iter().map(|f| &f.image).collect();
+    let setup = Setup {
+        camera: &scenario.camera(),
+        size_m: DIAMETER_M,
+        family: scenario.family.map(|f| (f.bits(), f.distance())),
+        targets: scenario.spread.count,
+    };
+    let results = rival.detect(&setup, &images)?;
+    let mut times = Vec::with_capacity(frames.len());
+    for (frame, (found, ms)) in frames.iter().zip(results) {
+        counts.add(frame.seed, &frame.targets, &found);
+        visit(frame, &found);
+        times.push(ms);
+    }
+    Ok(times)
+}
+
+/// A rival's counts on the scenario's frames; `None` when it cannot be run
+/// (the reason was said once, at the start).
+pub fn counts(scenario: &Scenario, rival: Option<&dyn Rival>) -> Option<Counts> {
+    let rival = rival?;
+    let mut counts = Counts::default();
+    match run(scenario, rival, &mut counts, |_, _| {}) {
+        Ok(_) => Some(counts),
+        Err(e) => {
+            eprintln!("{} failed: {e}", rival.name());
+            None
+        }
+    }
 }
 
 /// Writes `frames` into a temporary folder as `000000.pgm`, ... (the

@@ -4,12 +4,19 @@
 
 use std::time::Instant;
 
+use image::GrayImage;
+use whycode::camera::Camera;
 use whycode::detect::{Detector, DetectorConfig};
+use whycode::family::Family;
 use whycode::math::Pcg32;
-use whycode::simulate::{self, Background};
+use whycode::simulate::{self, Background, Sighting};
+use whycode_testkit::scenario::{
+    camera, detector, scene, spread_markers, Families, Print, Scenario, Spread, DEG, DIAMETER_M,
+};
+use whycode_testkit::tag36h11::with_tags;
+use whycode_testkit::tally::Counts;
 
-use crate::rival::Setup;
-use crate::scenario::*;
+use crate::rival::{self, Setup};
 use crate::table::{median, Cells, Table};
 use crate::Rivals;
 
@@ -47,7 +54,7 @@ fn versus(scenario: &Scenario, runs: usize, rivals: &Rivals, ours_ms: (f64, f64)
         };
         let mut times = Vec::new();
         for _ in 0..runs {
-            match scenario.run_rival(rival, &mut Counts::default(), |_, _| {}) {
+            match rival::run(scenario, rival, &mut Counts::default(), |_, _| {}) {
                 Ok(t) => times.extend(t),
                 Err(e) => {
                     eprintln!("{} failed: {e}", rival.name());
@@ -61,6 +68,30 @@ fn versus(scenario: &Scenario, runs: usize, rivals: &Rivals, ours_ms: (f64, f64)
             faster(theirs, ours_ms)
         ))
     })
+}
+
+/// Median ms of `runs` tracked frames of `image` after [`SETTLE_FRAMES`],
+/// ours for `family` told at most `max_markers`; and how many the last
+/// frame found.
+fn tracked(
+    family: Option<&Family>,
+    cam: &Camera,
+    image: &GrayImage,
+    max_markers: usize,
+    runs: usize,
+) -> (f64, usize) {
+    let mut tracker = Detector::new(DetectorConfig {
+        max_markers,
+        ..detector(family, cam, true).config().clone()
+    });
+    for _ in 0..SETTLE_FRAMES {
+        tracker.detect(image);
+    }
+    let mut n = 0;
+    let times: Vec<f64> = (0..runs)
+        .map(|_| time_ms(|| n = tracker.detect(image).len()))
+        .collect();
+    (median(times), n)
 }
 
 pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Rivals) {
@@ -112,7 +143,11 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Ri
     let cam = table_top.camera();
     let mut counts = Counts::default();
     let mut det: Detector = detector(Some(&fam8), &cam, false);
-    let seen: Vec<Seen> = det.detect(&frame.image).iter().map(Seen::from).collect();
+    let seen: Vec<Sighting> = det
+        .detect(&frame.image)
+        .iter()
+        .map(Sighting::from)
+        .collect();
     counts.add(frame.seed, &frame.targets, &seen);
     let n = if quick { 50 } else { 300 };
     let untracked = median(
@@ -122,23 +157,10 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Ri
     );
     // Tracked as a stream would be, and told the frame's marker count as
     // the original is (then no band of rows is searched for newcomers).
-    let tracked = |max_markers: usize| {
-        let mut tracker = Detector::new(DetectorConfig {
-            max_markers,
-            ..detector(Some(&fam8), &cam, true).config().clone()
-        });
-        for _ in 0..SETTLE_FRAMES {
-            tracker.detect(&frame.image);
-        }
-        median(
-            (0..n)
-                .map(|_| time_ms(|| drop(tracker.detect(&frame.image))))
-                .collect(),
-        )
-    };
+    let track = |max_markers| tracked(Some(&fam8), &cam, &frame.image, max_markers, n).0;
     let (tracked_ms, told_ms) = (
-        tracked(DetectorConfig::default().max_markers),
-        tracked(table_top.spread.count),
+        track(DetectorConfig::default().max_markers),
+        track(table_top.spread.count),
     );
     table.row(
         "8b 640x480 table, 4 markers, 8-bit, pose",
@@ -187,7 +209,7 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Ri
         let t = Instant::now();
         let (image, truth) = simulate::render(&s);
         let render_s = t.elapsed().as_secs_f64();
-        let targets = Truth::of(&truth);
+        let targets = truth.targets();
         let mut counts = Counts::default();
         let mut first = Vec::new();
         for _ in 0..runs {
@@ -195,26 +217,13 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Ri
             let mut found = Vec::new();
             first.push(time_ms(|| found = det.detect(&image)));
             if counts.frames == 0 {
-                let seen: Vec<Seen> = found.iter().map(Seen::from).collect();
+                let seen: Vec<Sighting> = found.iter().map(Sighting::from).collect();
                 counts.add(900_001, &targets, &seen);
             }
         }
-        let tracked = |max_markers: usize| {
-            let mut tracker = Detector::new(DetectorConfig {
-                max_markers,
-                ..detector(family, &cam, true).config().clone()
-            });
-            for _ in 0..SETTLE_FRAMES {
-                tracker.detect(&image);
-            }
-            let mut n = 0;
-            let times: Vec<f64> = (0..runs)
-                .map(|_| time_ms(|| n = tracker.detect(&image).len()))
-                .collect();
-            (median(times), n)
-        };
-        let (tracked_ms, tracked_n) = tracked(DetectorConfig::default().max_markers);
-        let (known_ms, known_n) = tracked(550);
+        let track = |max_markers| tracked(family, &cam, &image, max_markers, runs);
+        let (tracked_ms, tracked_n) = track(DetectorConfig::default().max_markers);
+        let (known_ms, known_n) = track(550);
         let first_ms = median(first);
         // Each rival once, on the first scene (with tags in our markers'
         // places for AprilTag: 25 megapixels take it seconds).
@@ -235,7 +244,7 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Ri
                 Ok(mut r) => {
                     let (seen, ms) = r.remove(0);
                     let mut c = Counts::default();
-                    c.add(900_001, &Truth::of(&truth), &seen);
+                    c.add(900_001, &truth.targets(), &seen);
                     Some(format!(
                         "{ms:.0} ms, found {}/{}, {} IDs right (ours {})",
                         c.detected,

@@ -3,7 +3,7 @@
 //! figure as quoted in issue 9 where it could not be run), and whether ours
 //! passes (meets the item's target and is no worse than any rival).
 
-use crate::scenario::Counts;
+use whycode_testkit::tally::Counts;
 
 /// The rivals' columns, in this order.
 pub const RIVALS: [&str; 2] = ["AprilTag", "original WhyCode"];

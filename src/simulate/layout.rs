@@ -1,11 +1,81 @@
-//! Ready-made arrangements: a sheet page in front of the camera, loose
-//! markers in a grid or scattered, a blot over a marker's ring.
+//! Ready-made arrangements: a marker at a pixel, a sheet page in front of
+//! the camera, loose markers in a grid or scattered, a blot over a marker's
+//! ring.
 
 use super::{Blot, LooseMarker, Placement};
 use crate::camera::Camera;
 use crate::geometry::{sector_width, Marker, MarkerKind, RING_SAMPLE_RATIO};
 use crate::math::Pcg32;
-use nalgebra::Vector3;
+use nalgebra::{Matrix2, Rotation3, Unit, Vector3};
+
+impl Placement {
+    /// "This marker at this pixel, this many pixels across": the placement
+    /// whose centre projects to the pixel (u, v) of `camera` (through its
+    /// lens distortion), at the depth where `marker`, face-on (parallel to
+    /// the image plane), is `diameter_px` across at its widest there; then
+    /// turned by tilt, pan and roll as in [`Placement::viewed`].
+    ///
+    /// With distortion the size holds to first order: the lens's largest
+    /// local stretch at (u, v) scales the depth.
+    pub fn at_pixel(
+        camera: &Camera,
+        marker: &Marker,
+        (u, v): (f64, f64),
+        diameter_px: f64,
+        tilt: f64,
+        pan: f64,
+        roll: f64,
+    ) -> Placement {
+        let (x, y) = camera.undistort(u, v);
+        let z = pixels_per_unit(camera, x, y) * (marker.diameter_mm / 1000.0) / diameter_px;
+        Placement::viewed(Vector3::new(x * z, y * z, z), tilt, pan, roll)
+    }
+
+    /// Turned by `tilt` radians about the line through its origin parallel
+    /// to the image plane along `axis` (a direction in the camera's x-y
+    /// plane: x right, y down; any length).
+    pub fn tilted(self, tilt: f64, axis: Vector3<f64>) -> Placement {
+        let turn = Rotation3::from_axis_angle(&Unit::new_normalize(axis), tilt);
+        Placement::new(self.position, turn.matrix() * self.rotation)
+    }
+
+    /// A face-on placement (see [`Placement::at_pixel`]) turned to face its
+    /// own line of sight instead of the optical axis, then tilted by `view`
+    /// radians about an axis across that line: so `view` is the angle
+    /// between the object's normal and the direction to the camera. `axis`
+    /// is the tilt axis as it would lie for an object on the optical axis
+    /// (a direction in the camera's x-y plane; any length). Off the optical
+    /// axis a turn about the camera's axes ([`Placement::viewed`]) adds up
+    /// to half the field of view to the view angle; this does not.
+    pub fn tilted_from_sight(self, view: f64, axis: Vector3<f64>) -> Placement {
+        let to_ray = Rotation3::rotation_between(&Vector3::z(), &self.position)
+            .unwrap_or_else(Rotation3::identity);
+        let tilt = Rotation3::from_axis_angle(&Unit::new_normalize(to_ray * axis), view);
+        Placement::new(
+            self.position,
+            tilt.matrix() * to_ray.matrix() * self.rotation,
+        )
+    }
+}
+
+/// The lens's largest stretch at the ideal normalised point (x, y): pixels
+/// per unit of the normalised image plane, along the direction stretched
+/// most. Without distortion that is the larger focal length.
+fn pixels_per_unit(camera: &Camera, x: f64, y: f64) -> f64 {
+    if !camera.has_distortion() {
+        return camera.fx.max(camera.fy);
+    }
+    let h = 1e-6;
+    let at = |dx: f64, dy: f64| camera.distort_normalized(x + dx, y + dy);
+    let (right, left, down, up) = (at(h, 0.0), at(-h, 0.0), at(0.0, h), at(0.0, -h));
+    let jacobian = Matrix2::new(
+        right.0 - left.0,
+        down.0 - up.0,
+        right.1 - left.1,
+        down.1 - up.1,
+    ) / (2.0 * h);
+    jacobian.singular_values().max()
+}
 
 /// Distance (metres) at which an object `width_mm` × `height_mm` seen
 /// face-on fills `fill` (e.g. 0.8) of the frame in its tighter direction.

@@ -20,10 +20,14 @@
 mod background;
 mod effects;
 pub mod layout;
+mod matching;
 mod raster;
 mod square;
 mod truth;
 
+pub use matching::{
+    match_reports, nearest, IdRead, Located, Matching, Reach, Sighting, TrueTarget,
+};
 pub use square::{PrintedSquare, TrueSquare};
 pub use truth::{GroundTruth, TrueMarker, TruePage};
 

@@ -90,6 +90,13 @@ pub struct TruePage {
 }
 
 impl GroundTruth {
+    /// The truth of `scene` without rendering it (what [`super::render`]
+    /// returns beside the image): cheap, for choosing or checking a scene's
+    /// markers before drawing it.
+    pub fn of(scene: &Scene) -> GroundTruth {
+        ground_truth(scene)
+    }
+
     /// The truth as pretty-printed JSON, as `whycode simulate` writes it.
     pub fn to_json(&self) -> String {
         let mut s = serde_json::to_string_pretty(self).expect("ground truth serialises");

@@ -1,10 +1,11 @@
 //! `whycode detect` as a user runs it: the real binary on rendered images.
 
-use crate::support::{angle_diff, marker_photo, stderr, stdout, whycode};
+use crate::support::{marker_photo, stderr, stdout, whycode};
 use std::path::{Path, PathBuf};
 use std::process::Output;
 use whycode::family::Family;
 use whycode::geometry::Marker;
+use whycode::math::angle::angle_between;
 
 /// A 90 px marker of the 8-bit d = 2 family, ID `id`, turned by `roll`;
 /// returns the file and the true (u, v, yaw).
@@ -70,7 +71,7 @@ fn json_prints_one_object_per_image_with_the_documented_fields() {
     assert_eq!(m["id"], 5, "{m}");
     assert_eq!(m["code"], Family::generate(8, 2).unwrap().code(5).unwrap());
     assert!(
-        angle_diff(m["yaw"].as_f64().unwrap(), yaw) < 0.5f64.to_radians(),
+        angle_between(m["yaw"].as_f64().unwrap(), yaw) < 0.5f64.to_radians(),
         "{m} vs {yaw}"
     );
     assert!(m["confidence"].as_f64().unwrap() > 0.5);

@@ -1,13 +1,15 @@
-//! Round trips: markers drawn from `geometry::Marker` through a pinhole
-//! camera, then detected. Thresholds are stated next to each assertion.
+//! Round trips: markers drawn from `geometry::Marker` through a camera
+//! without distortion, then detected and matched with the simulator's
+//! truth. Thresholds are stated next to each assertion.
 
-use crate::support::scenes::{match_detections, render, scatter, Look, Pinhole, Placement};
 use crate::support::Pcg32;
-use crate::support::{angle_diff, axis_angle_diff};
 use whycode::detect::{legacy, Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::{Marker, WHYCON_WHITE_RATIO};
+use whycode::math::angle::{angle_between, normalize_axis_angle};
 use whycode::math::Ellipse;
+use whycode::simulate::{match_reports, nearest, GroundTruth, LooseMarker, Reach, TrueTarget};
+use whycode_testkit::scenes::{self, camera, marker_at, render, scatter, Look};
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 
@@ -15,36 +17,42 @@ fn legacy() -> Detector {
     Detector::new(DetectorConfig::default())
 }
 
-/// The exact image ellipse of the marker's outer circle.
-fn true_outline(camera: &Pinhole, p: &Placement) -> Ellipse {
-    let r = p.marker.outer_radius();
-    let points: Vec<(f64, f64)> = (0..90)
-        .map(|k| {
-            let t = k as f64 * 4.0 * DEG;
-            let q = p.rotation * nalgebra::Vector3::new(r * t.cos(), r * t.sin(), 0.0) + p.position;
-            camera.project(q)
-        })
-        .collect();
-    let (u, v) = p.centre(camera);
-    Ellipse::fit_near(&points, (u, v), 50.0).unwrap()
+/// The exact image ellipse of a marker's outer circle.
+fn outline(truth: &GroundTruth, k: usize) -> Ellipse {
+    truth.markers[k]
+        .ellipse
+        .expect("the marker faces the camera")
 }
 
-/// Every placement found once, nothing else found; returns the matches.
-fn all_found<'a>(
-    camera: &Pinhole,
-    placements: &[Placement],
-    found: &'a [Detection],
-) -> Vec<&'a Detection> {
-    let matched = match_detections(camera, placements, found, 5.0);
-    let missing: Vec<_> = placements
-        .iter()
-        .zip(&matched)
-        .filter(|(_, m)| m.is_none())
-        .map(|(p, _)| p.centre(camera))
+/// A WhyCon marker 100 mm across (ID 0) at a pixel, face-on.
+fn whycon_at(camera: &whycode::Camera, (u, v): (f64, f64), diameter_px: f64) -> LooseMarker {
+    marker_at(
+        camera,
+        (Marker::whycon(100.0), 0),
+        (u, v),
+        diameter_px,
+        0.0,
+        (0.0, 0.0),
+    )
+}
+
+/// Every target (all in view) found once within 5 px, nothing else
+/// found; returns each target's detection.
+fn all_found<'a>(targets: &[TrueTarget], found: &'a [Detection]) -> Vec<&'a Detection> {
+    assert!(targets.iter().all(|t| t.visible), "a marker out of view");
+    let matched = match_reports(targets, found, Reach::pixels(5.0));
+    let missing: Vec<_> = matched
+        .missed()
+        .into_iter()
+        .map(|t| (targets[t].u, targets[t].v))
         .collect();
     assert!(missing.is_empty(), "missed markers at {missing:?}");
-    assert_eq!(found.len(), placements.len(), "extra detections: {found:?}");
-    matched.into_iter().map(Option::unwrap).collect()
+    assert_eq!(found.len(), targets.len(), "extra detections: {found:?}");
+    matched
+        .pairs
+        .into_iter()
+        .map(|(_, d)| &found[d.expect("found")])
+        .collect()
 }
 
 /// Legacy settings without the size floor, for markers smaller than the
@@ -59,36 +67,24 @@ fn legacy_without_floor() -> Detector {
 #[test]
 fn face_on_legacy_markers_from_10_px_up_are_found_with_sub_pixel_centres() {
     // Below the size floor (12.4 px face-on) only when asked for.
-    let camera = Pinhole {
-        f: 3000.0,
-        cx: 600.0,
-        cy: 400.0,
-    };
+    let camera = camera(1200, 800, 3000.0);
     let sizes = [
         10.0, 11.0, 12.0, 14.0, 16.0, 20.0, 30.0, 45.0, 70.0, 110.0, 180.0,
     ];
     let mut rng = Pcg32::new(7, 0);
-    let mut placements = Vec::new();
+    let mut markers = Vec::new();
     let mut x = 20.0;
     for (k, &d) in sizes.iter().enumerate() {
         let y = if k % 2 == 0 { 200.0 } else { 550.0 } + rng.range(-0.5, 0.5);
         x += d * 0.7 + 12.0;
-        placements.push(Placement::at(
-            &camera,
-            Marker::whycon(100.0),
-            (x + rng.range(-0.5, 0.5), y),
-            d,
-            0.0,
-            0.0,
-            0.0,
-        ));
+        markers.push(whycon_at(&camera, (x + rng.range(-0.5, 0.5), y), d));
         x += d * 0.7;
     }
-    let image = render(1200, 800, &camera, &placements, Look::default());
+    let (image, truth) = render(&camera, &markers, Look::default());
     let found = legacy_without_floor().detect(&image);
-    let matched = all_found(&camera, &placements, &found);
-    for (p, d) in placements.iter().zip(matched) {
-        let truth = true_outline(&camera, p);
+    let matched = all_found(&truth.targets(), &found);
+    for (k, d) in matched.into_iter().enumerate() {
+        let truth = outline(&truth, k);
         let centre_error = (d.u - truth.u).hypot(d.v - truth.v);
         let size_error = (d.axes[0] - truth.semi_major)
             .abs()
@@ -117,63 +113,58 @@ fn legacy_markers_from_the_originals_size_floor_up_are_all_found_and_smaller_one
     // across face-on, more when tilted). Every marker above it is found,
     // face-on or tilted, sharp or blurred; those below are reported only
     // flagged unreadable on request, or when the floor is lowered.
-    let camera = Pinhole {
-        f: 2000.0,
-        cx: 600.0,
-        cy: 400.0,
-    };
-    let ink = |p: &Placement| {
-        let outline = true_outline(&camera, p);
-        outline.area() * (1.0 - WHYCON_WHITE_RATIO * WHYCON_WHITE_RATIO)
-    };
+    let camera = camera(1200, 800, 2000.0);
     let mut rng = Pcg32::new(31, 0);
     for (blur, noise) in [(0, 2.0), (1, 3.0)] {
-        let (mut above, mut below) = (Vec::new(), Vec::new());
-        for k in 0..60 {
-            let (u, v) = (
-                60.0 + (k % 12) as f64 * 95.0,
-                80.0 + (k / 12) as f64 * 150.0,
-            );
-            let diameter = rng.range(10.0, 18.0);
-            let tilt = rng.range(0.0, 35.0) * DEG;
-            let axis = rng.range(0.0, 180.0) * DEG;
-            let p = Placement::at(
-                &camera,
-                Marker::whycon(100.0),
-                (u, v),
-                diameter,
-                0.0,
-                tilt,
-                axis,
-            );
-            // Clear of the floor by the outline's measuring error.
-            match ink(&p) {
-                a if a >= 1.04 * legacy::MIN_INK_PX => above.push(p),
-                a if a <= 0.96 * legacy::MIN_INK_PX => below.push(p),
-                _ => {}
-            }
-        }
-        assert!(above.len() >= 20 && below.len() >= 15);
+        let candidates: Vec<LooseMarker> = (0..60)
+            .map(|k| {
+                let (u, v) = (
+                    60.0 + (k % 12) as f64 * 95.0,
+                    80.0 + (k / 12) as f64 * 150.0,
+                );
+                let diameter = rng.range(10.0, 18.0);
+                let tilt = rng.range(0.0, 35.0) * DEG;
+                let axis = rng.range(0.0, 180.0) * DEG;
+                let marker = (Marker::whycon(100.0), 0);
+                marker_at(&camera, marker, (u, v), diameter, 0.0, (tilt, axis))
+            })
+            .collect();
         let look = Look {
             blur,
             noise,
             ..Look::default()
         };
-        let all: Vec<Placement> = above.iter().chain(&below).cloned().collect();
-        let image = render(1200, 800, &camera, &all, look);
+        let outlines = GroundTruth::of(&scenes::scene(&camera, &candidates, look));
+        let (mut above, mut below) = (Vec::new(), Vec::new());
+        for (k, marker) in candidates.into_iter().enumerate() {
+            let ink =
+                outline(&outlines, k).area() * (1.0 - WHYCON_WHITE_RATIO * WHYCON_WHITE_RATIO);
+            // Clear of the floor by the outline's measuring error.
+            match ink {
+                a if a >= 1.04 * legacy::MIN_INK_PX => above.push(marker),
+                a if a <= 0.96 * legacy::MIN_INK_PX => below.push(marker),
+                _ => {}
+            }
+        }
+        assert!(above.len() >= 20 && below.len() >= 15);
+        let all: Vec<LooseMarker> = above.iter().chain(&below).cloned().collect();
+        let (image, truth) = render(&camera, &all, look);
+        let targets = truth.targets();
+        let (above, below) = targets.split_at(above.len());
         let found = legacy().detect(&image);
-        all_found(&camera, &above, &found);
+        all_found(above, &found);
         // What the detector sees below the floor (most of it, sharp; a
         // few, blurred) it shows when asked, flagged.
         let unfloored = legacy_without_floor().detect(&image);
-        let seen = match_detections(&camera, &below, &unfloored, 5.0);
+        let seen = match_reports(below, &unfloored, Reach::pixels(5.0)).pairs;
         let mut shown = Detector::new(DetectorConfig {
             report_unreadable: true,
             ..DetectorConfig::default()
         });
         let shown = shown.detect(&image);
-        let flagged = match_detections(&camera, &below, &shown, 5.0);
-        for (seen, flagged) in seen.iter().zip(&flagged) {
+        let flagged = match_reports(below, &shown, Reach::pixels(5.0)).pairs;
+        for (&(_, seen), &(_, flagged)) in seen.iter().zip(&flagged) {
+            let (seen, flagged) = (seen.map(|k| &unfloored[k]), flagged.map(|k| &shown[k]));
             if seen.is_some() {
                 assert!(
                     flagged.is_some_and(|d| d.unreadable),
@@ -181,42 +172,32 @@ fn legacy_markers_from_the_originals_size_floor_up_are_all_found_and_smaller_one
                 );
             }
         }
-        assert!(blur > 0 || seen.iter().all(Option::is_some));
+        assert!(blur > 0 || seen.iter().all(|(_, d)| d.is_some()));
     }
 }
 
 #[test]
 fn tilted_markers_up_to_60_degrees_keep_their_outline() {
-    let camera = Pinhole {
-        f: 1500.0,
-        cx: 640.0,
-        cy: 480.0,
-    };
-    let mut placements = Vec::new();
+    let camera = camera(1280, 960, 1500.0);
+    let mut markers = Vec::new();
     for (k, tilt) in [0.0, 15.0, 30.0, 45.0, 55.0, 60.0].iter().enumerate() {
         for (j, axis) in [0.0, 50.0, 110.0].iter().enumerate() {
             let (u, v) = (140.0 + 200.0 * k as f64, 200.0 + 280.0 * j as f64);
-            placements.push(Placement::at(
-                &camera,
-                Marker::whycon(100.0),
-                (u, v),
-                110.0,
-                0.3,
-                tilt * DEG,
-                axis * DEG,
-            ));
+            let marker = (Marker::whycon(100.0), 0);
+            let tilt = (tilt * DEG, axis * DEG);
+            markers.push(marker_at(&camera, marker, (u, v), 110.0, 0.3, tilt));
         }
     }
-    let image = render(1280, 960, &camera, &placements, Look::default());
+    let (image, truth) = render(&camera, &markers, Look::default());
     let found = legacy().detect(&image);
-    let matched = all_found(&camera, &placements, &found);
-    for (p, d) in placements.iter().zip(matched) {
-        let truth = true_outline(&camera, p);
+    let matched = all_found(&truth.targets(), &found);
+    for (k, d) in matched.into_iter().enumerate() {
+        let truth = outline(&truth, k);
         let centre_error = (d.u - truth.u).hypot(d.v - truth.v);
         let size_error = (d.axes[0] - truth.semi_major)
             .abs()
             .max((d.axes[1] - truth.semi_minor).abs());
-        let angle_error = axis_angle_diff(d.angle, truth.angle);
+        let angle_error = normalize_axis_angle(d.angle - truth.angle).abs();
         eprintln!(
             "axes {:.1}/{:.1}: centre {centre_error:.3} px, axes {size_error:.3} px, angle {:.2}°",
             truth.semi_major,
@@ -240,18 +221,14 @@ fn scattered_scene(
     count: usize,
     diameters: (f64, f64),
     look: Look,
-) -> (Pinhole, Vec<Placement>, image::GrayImage) {
-    let camera = Pinhole {
-        f: 2000.0,
-        cx: 600.0,
-        cy: 400.0,
-    };
+) -> (image::GrayImage, GroundTruth) {
+    let camera = camera(1200, 800, 2000.0);
     let mut rng = Pcg32::new(seed, 0);
-    let placements = scatter(&mut rng, &camera, 1200, 800, count, diameters, &mut |_| {
-        Marker::whycon(100.0)
+    let markers = scatter(&mut rng, &camera, count, diameters, &mut |_| {
+        (Marker::whycon(100.0), 0)
     });
-    let image = render(1200, 800, &camera, &placements, look);
-    (camera, placements, image)
+    assert_eq!(markers.len(), count);
+    render(&camera, &markers, look)
 }
 
 #[test]
@@ -260,9 +237,9 @@ fn a_3_to_1_light_gradient_loses_no_marker() {
         gradient_right: 1.0 / 3.0,
         ..Look::default()
     };
-    let (camera, placements, image) = scattered_scene(11, 30, (30.0, 90.0), look);
+    let (image, truth) = scattered_scene(11, 30, (30.0, 90.0), look);
     let found = legacy().detect(&image);
-    all_found(&camera, &placements, &found);
+    all_found(&truth.targets(), &found);
 }
 
 #[test]
@@ -274,9 +251,9 @@ fn a_dark_low_contrast_noisy_frame_still_shows_every_marker() {
         noise: 1.5,
         ..Look::default()
     };
-    let (camera, placements, image) = scattered_scene(12, 25, (25.0, 90.0), look);
+    let (image, truth) = scattered_scene(12, 25, (25.0, 90.0), look);
     let found = legacy().detect(&image);
-    all_found(&camera, &placements, &found);
+    all_found(&truth.targets(), &found);
 }
 
 #[test]
@@ -286,11 +263,11 @@ fn blur_and_noise_keep_markers_and_centres() {
         noise: 5.0,
         ..Look::default()
     };
-    let (camera, placements, image) = scattered_scene(13, 25, (30.0, 90.0), look);
+    let (image, truth) = scattered_scene(13, 25, (30.0, 90.0), look);
     let found = legacy().detect(&image);
-    let matched = all_found(&camera, &placements, &found);
-    for (p, d) in placements.iter().zip(matched) {
-        let truth = true_outline(&camera, p);
+    let matched = all_found(&truth.targets(), &found);
+    for (k, d) in matched.into_iter().enumerate() {
+        let truth = outline(&truth, k);
         let centre_error = (d.u - truth.u).hypot(d.v - truth.v);
         // Blur moves no symmetric edge; noise costs a little precision.
         assert!(centre_error < 0.15, "centre error {centre_error}");
@@ -301,25 +278,23 @@ fn blur_and_noise_keep_markers_and_centres() {
 fn whycode_markers_pass_the_disc_tests() {
     let family = Family::generate(8, 2).unwrap();
     let codes = family.codes().to_vec();
-    let camera = Pinhole {
-        f: 2000.0,
-        cx: 600.0,
-        cy: 400.0,
-    };
+    let camera = camera(1200, 800, 2000.0);
     let mut rng = Pcg32::new(21, 0);
-    let placements = scatter(&mut rng, &camera, 1200, 800, 16, (40.0, 110.0), &mut |k| {
-        Marker::whycode(8, codes[k % codes.len()], 100.0)
+    let markers = scatter(&mut rng, &camera, 16, (40.0, 110.0), &mut |k| {
+        let id = k % codes.len();
+        (Marker::whycode(8, codes[id], 100.0), id as u32 + 1)
     });
-    let image = render(1200, 800, &camera, &placements, Look::default());
+    assert_eq!(markers.len(), 16);
+    let (image, truth) = render(&camera, &markers, Look::default());
     let mut detector = Detector::new(DetectorConfig {
         target: Target::WhyCode(family),
         ..DetectorConfig::default()
     });
     let found = detector.detect(&image);
-    all_found(&camera, &placements, &found);
+    all_found(&truth.targets(), &found);
     // WhyCode keeps WhyCon's disc (paper section 5): legacy settings see
     // every WhyCode marker as a circle too.
-    all_found(&camera, &placements, &legacy().detect(&image));
+    all_found(&truth.targets(), &legacy().detect(&image));
 }
 
 #[test]
@@ -381,79 +356,58 @@ fn clutter_without_markers_gives_no_detection() {
 
 #[test]
 fn tracking_follows_moving_markers_frame_after_frame() {
-    let camera = Pinhole {
-        f: 2000.0,
-        cx: 400.0,
-        cy: 300.0,
-    };
+    let camera = camera(800, 600, 2000.0);
     let mut detector = Detector::new(DetectorConfig {
         tracking: true,
         ..DetectorConfig::default()
     });
     for frame in 0..8 {
         let shift = 6.0 * frame as f64;
-        let placements: Vec<Placement> = (0..6)
+        let markers: Vec<LooseMarker> = (0..6)
             .map(|k| {
                 let (u, v) = (
                     100.0 + 110.0 * k as f64 + shift * 0.5,
                     150.0 + 30.0 * (k % 3) as f64 + shift,
                 );
-                Placement::at(&camera, Marker::whycon(100.0), (u, v), 60.0, 0.0, 0.0, 0.0)
+                whycon_at(&camera, (u, v), 60.0)
             })
             .collect();
-        let image = render(800, 600, &camera, &placements, Look::default());
+        let (image, truth) = render(&camera, &markers, Look::default());
         let found = detector.detect(&image);
-        all_found(&camera, &placements, &found);
+        all_found(&truth.targets(), &found);
     }
 }
 
 #[test]
 fn tracking_finds_newcomers_and_agrees_with_fresh_detection() {
-    let camera = Pinhole {
-        f: 2000.0,
-        cx: 400.0,
-        cy: 300.0,
-    };
+    let camera = camera(800, 600, 2000.0);
     let mut tracked = Detector::new(DetectorConfig {
         tracking: true,
         ..DetectorConfig::default()
     });
     for frame in 0..14 {
-        let mut placements: Vec<Placement> = (0..4)
+        let mut markers: Vec<LooseMarker> = (0..4)
             .map(|k| {
                 let (u, v) = (
                     120.0 + 150.0 * k as f64 + 2.0 * frame as f64,
                     150.0 + 1.5 * frame as f64,
                 );
-                Placement::at(&camera, Marker::whycon(100.0), (u, v), 70.0, 0.0, 0.0, 0.0)
+                whycon_at(&camera, (u, v), 70.0)
             })
             .collect();
         if frame >= 4 {
-            placements.push(Placement::at(
-                &camera,
-                Marker::whycon(100.0),
-                (400.0, 450.0),
-                60.0,
-                0.0,
-                0.0,
-                0.0,
-            ));
+            markers.push(whycon_at(&camera, (400.0, 450.0), 60.0));
         }
-        let image = render(
-            800,
-            600,
-            &camera,
-            &placements,
-            Look {
-                noise: 2.0,
-                ..Look::default()
-            },
-        );
+        let look = Look {
+            noise: 2.0,
+            ..Look::default()
+        };
+        let (image, _) = render(&camera, &markers, look);
         let found = tracked.detect(&image);
         let fresh = legacy().detect(&image);
         // The newcomer must be found within the 8 discovery bands.
         if !(4..12).contains(&frame) {
-            assert_eq!(found.len(), placements.len(), "frame {frame}");
+            assert_eq!(found.len(), markers.len(), "frame {frame}");
         }
         for d in &found {
             let f = fresh
@@ -479,10 +433,10 @@ fn tracking_finds_newcomers_and_agrees_with_fresh_detection() {
 #[test]
 fn tracked_whycode_markers_keep_ids_and_yaw_while_turning() {
     let family = Family::generate(8, 2).unwrap();
-    let camera = Pinhole {
-        f: 2000.0,
-        cx: 400.0,
+    // 800x400, the principal point 100 px below the centre.
+    let camera = whycode::Camera {
         cy: 300.0,
+        ..camera(800, 400, 2000.0)
     };
     let config = DetectorConfig {
         target: Target::WhyCode(family.clone()),
@@ -493,40 +447,28 @@ fn tracked_whycode_markers_keep_ids_and_yaw_while_turning() {
         ..config.clone()
     });
     for frame in 0..10 {
-        let placements: Vec<Placement> = (0..6)
+        let markers: Vec<LooseMarker> = (0..6)
             .map(|k| {
                 let (u, v) = (
                     100.0 + 120.0 * k as f64 + 1.5 * frame as f64,
                     200.0 + 60.0 * (k % 2) as f64,
                 );
                 let psi = (k as f64 * 40.0 + 4.0 * frame as f64) * DEG;
-                let code = family.code(k as u32 + 3).unwrap();
-                Placement::at(
-                    &camera,
-                    Marker::whycode(8, code, 100.0),
-                    (u, v),
-                    80.0,
-                    psi,
-                    0.0,
-                    0.0,
-                )
+                let id = k as u32 + 3;
+                let marker = (Marker::whycode(8, family.code(id).unwrap(), 100.0), id);
+                marker_at(&camera, marker, (u, v), 80.0, psi, (0.0, 0.0))
             })
             .collect();
-        let image = render(
-            800,
-            400,
-            &camera,
-            &placements,
-            Look {
-                noise: 2.0,
-                ..Look::default()
-            },
-        );
+        let look = Look {
+            noise: 2.0,
+            ..Look::default()
+        };
+        let (image, truth) = render(&camera, &markers, look);
         let found = tracked.detect(&image);
-        let matched = all_found(&camera, &placements, &found);
-        for (k, (p, d)) in placements.iter().zip(matched).enumerate() {
+        let matched = all_found(&truth.targets(), &found);
+        for (k, (m, d)) in truth.markers.iter().zip(matched).enumerate() {
             assert_eq!(d.id, k as u32 + 3, "frame {frame}");
-            let yaw_error = angle_diff(d.yaw.unwrap(), p.yaw(&camera));
+            let yaw_error = angle_between(d.yaw.unwrap(), m.yaw);
             // Followed or read afresh, the yaw stays within 0.5°.
             assert!(
                 yaw_error < 0.5 * DEG,
@@ -538,24 +480,12 @@ fn tracked_whycode_markers_keep_ids_and_yaw_while_turning() {
 }
 
 /// A tracking detector and a fresh one for 10 cm markers of `family` seen
-/// through `camera` (an ideal pinhole of `size` pixels), both with pose:
-/// the tracked path is judged against what a fresh look makes of each frame.
-fn tracked_and_fresh_with_pose(
-    family: &Family,
-    camera: &Pinhole,
-    (width, height): (u32, u32),
-) -> (Detector, Detector) {
+/// through `camera`, both with pose: the tracked path is judged against
+/// what a fresh look makes of each frame.
+fn tracked_and_fresh_with_pose(family: &Family, camera: &whycode::Camera) -> (Detector, Detector) {
     let config = DetectorConfig {
         target: Target::WhyCode(family.clone()),
-        camera: Some(whycode::Camera {
-            fx: camera.f,
-            fy: camera.f,
-            cx: camera.cx,
-            cy: camera.cy,
-            distortion: [0.0; 5],
-            width,
-            height,
-        }),
+        camera: Some(*camera),
         diameter_m: Some(0.1),
         ..DetectorConfig::default()
     };
@@ -573,14 +503,10 @@ fn tracked_and_fresh_with_pose(
 #[test]
 fn tracked_markers_with_pose_keep_ids_yaw_and_normal_while_turning() {
     let family = Family::generate(12, 2).unwrap();
-    let camera = Pinhole {
-        f: 1500.0,
-        cx: 400.0,
-        cy: 300.0,
-    };
-    let (mut tracked, mut fresh) = tracked_and_fresh_with_pose(&family, &camera, (800, 600));
+    let camera = camera(800, 600, 1500.0);
+    let (mut tracked, mut fresh) = tracked_and_fresh_with_pose(&family, &camera);
     for frame in 0..8 {
-        let placements: Vec<Placement> = (0..6)
+        let markers: Vec<LooseMarker> = (0..6)
             .map(|k| {
                 let (u, v) = (
                     110.0 + 115.0 * k as f64 + 1.5 * frame as f64,
@@ -588,47 +514,32 @@ fn tracked_markers_with_pose_keep_ids_yaw_and_normal_while_turning() {
                 );
                 let psi = (k as f64 * 50.0 + 3.0 * frame as f64) * DEG;
                 let tilt = (20.0 + 3.0 * k as f64 + 0.5 * frame as f64) * DEG;
-                let code = family.code(k as u32 + 5).unwrap();
-                Placement::at(
-                    &camera,
-                    Marker::whycode(12, code, 100.0),
-                    (u, v),
-                    90.0,
-                    psi,
-                    tilt,
-                    k as f64 * 60.0 * DEG,
-                )
+                let id = k as u32 + 5;
+                let marker = (Marker::whycode(12, family.code(id).unwrap(), 100.0), id);
+                let tilt = (tilt, k as f64 * 60.0 * DEG);
+                marker_at(&camera, marker, (u, v), 90.0, psi, tilt)
             })
             .collect();
-        let image = render(
-            800,
-            600,
-            &camera,
-            &placements,
-            Look {
-                noise: 2.0,
-                ..Look::default()
-            },
-        );
+        let look = Look {
+            noise: 2.0,
+            ..Look::default()
+        };
+        let (image, truth) = render(&camera, &markers, look);
         let found = tracked.detect(&image);
         let again = fresh.detect(&image);
-        let matched = all_found(&camera, &placements, &found);
-        let matched_fresh = all_found(&camera, &placements, &again);
-        for (k, ((p, d), f)) in placements
-            .iter()
-            .zip(matched)
-            .zip(matched_fresh)
-            .enumerate()
-        {
+        let targets = truth.targets();
+        let matched = all_found(&targets, &found);
+        let matched_fresh = all_found(&targets, &again);
+        for (k, ((m, d), f)) in targets.iter().zip(matched).zip(matched_fresh).enumerate() {
             assert_eq!(d.id, k as u32 + 5, "frame {frame}");
-            let yaw_error = angle_diff(d.yaw.unwrap(), p.yaw(&camera));
+            let yaw_error = angle_between(d.yaw.unwrap(), m.yaw);
             assert!(
                 yaw_error < 0.3 * DEG,
                 "frame {frame}: yaw off by {}°",
                 yaw_error / DEG
             );
             let normal = |d: &Detection| d.pose.as_ref().unwrap().rotation.column(2).into_owned();
-            let truth = p.rotation.column(2).into_owned();
+            let truth = m.normal();
             let (tracked_error, fresh_error) = (normal(d).angle(&truth), normal(f).angle(&truth));
             assert!(
                 tracked_error < fresh_error + 0.5 * DEG,
@@ -648,15 +559,11 @@ fn tracked_markers_with_pose_keep_ids_yaw_and_normal_while_turning() {
 #[test]
 fn followed_face_on_markers_keep_the_fresh_normal_and_centre() {
     let family = Family::generate(8, 2).unwrap();
-    let camera = Pinhole {
-        f: 1500.0,
-        cx: 400.0,
-        cy: 300.0,
-    };
-    let (mut tracked, mut fresh) = tracked_and_fresh_with_pose(&family, &camera, (800, 600));
+    let camera = camera(800, 600, 1500.0);
+    let (mut tracked, mut fresh) = tracked_and_fresh_with_pose(&family, &camera);
     for frame in 0..10 {
         let f = frame as f64;
-        let placements: Vec<Placement> = (0..6)
+        let markers: Vec<LooseMarker> = (0..6)
             .map(|k| {
                 let (u, v) = (
                     130.0 + 270.0 * (k % 3) as f64 + 0.4 * f,
@@ -665,35 +572,27 @@ fn followed_face_on_markers_keep_the_fresh_normal_and_centre() {
                 // From 3° one way to 3° the other over the frames, or
                 // still face-on.
                 let tilt = if k < 3 { (3.0 - 0.6 * f) * DEG } else { 0.0 };
-                Placement::at(
-                    &camera,
-                    Marker::whycode(8, family.code(k as u32 + 1).unwrap(), 100.0),
-                    (u, v),
-                    100.0,
-                    (k as f64 * 40.0 + 2.0 * f) * DEG,
-                    tilt,
-                    k as f64 * 70.0 * DEG,
-                )
+                let id = k as u32 + 1;
+                let marker = (Marker::whycode(8, family.code(id).unwrap(), 100.0), id);
+                let roll = (k as f64 * 40.0 + 2.0 * f) * DEG;
+                let tilt = (tilt, k as f64 * 70.0 * DEG);
+                marker_at(&camera, marker, (u, v), 100.0, roll, tilt)
             })
             .collect();
-        let image = render(
-            800,
-            600,
-            &camera,
-            &placements,
-            Look {
-                noise: 2.0,
-                blur: 1,
-                ..Look::default()
-            },
-        );
+        let look = Look {
+            noise: 2.0,
+            blur: 1,
+            ..Look::default()
+        };
+        let (image, truth) = render(&camera, &markers, look);
         let found = tracked.detect(&image);
         let again = fresh.detect(&image);
-        let matched = all_found(&camera, &placements, &found);
-        let matched_fresh = all_found(&camera, &placements, &again);
-        for ((p, d), g) in placements.iter().zip(matched).zip(matched_fresh) {
+        let targets = truth.targets();
+        let matched = all_found(&targets, &found);
+        let matched_fresh = all_found(&targets, &again);
+        for ((m, d), g) in targets.iter().zip(matched).zip(matched_fresh) {
             let normal = |d: &Detection| d.pose.as_ref().unwrap().rotation.column(2).into_owned();
-            let truth = p.rotation.column(2).into_owned();
+            let truth = m.normal();
             let (tracked_error, fresh_error) = (normal(d).angle(&truth), normal(g).angle(&truth));
             assert!(
                 tracked_error < 1.0 * DEG && tracked_error < fresh_error + 0.3 * DEG,
@@ -701,8 +600,7 @@ fn followed_face_on_markers_keep_the_fresh_normal_and_centre() {
                 tracked_error / DEG,
                 fresh_error / DEG
             );
-            let (u, v) = p.centre(&camera);
-            let (centre, fresh_centre) = ((d.u - u).hypot(d.v - v), (g.u - u).hypot(g.v - v));
+            let (centre, fresh_centre) = (m.centre_error((d.u, d.v)), m.centre_error((g.u, g.v)));
             assert!(
                 centre < 0.1 && centre < fresh_centre + 0.03,
                 "frame {frame}: centre off by {centre} px tracked, {fresh_centre} px fresh"
@@ -719,40 +617,30 @@ fn followed_face_on_markers_keep_the_fresh_normal_and_centre() {
 #[test]
 fn an_unsure_pose_pick_does_not_outlive_its_recheck() {
     let family = Family::generate(12, 2).unwrap();
-    let camera = Pinhole {
-        f: 1500.0,
-        cx: 640.0,
-        cy: 360.0,
-    };
-    let (mut tracked, mut fresh) = tracked_and_fresh_with_pose(&family, &camera, (1280, 720));
+    let camera = camera(1280, 720, 1500.0);
+    let (mut tracked, mut fresh) = tracked_and_fresh_with_pose(&family, &camera);
     let (mut fresh_right_since, mut worst_lag) = (None, 0);
     for frame in 11..20 {
         let f = frame as f64;
-        let placement = Placement::at(
+        let marker = marker_at(
             &camera,
-            Marker::whycode(12, family.code(16).unwrap(), 100.0),
+            (Marker::whycode(12, family.code(16).unwrap(), 100.0), 16),
             (1150.0 + 5.0 * f, 510.0 - 2.5 * f),
             110.0,
             (550.0 + 5.0 * f) * DEG,
-            (60.0 + 0.1 * f) * DEG,
-            660.0 * DEG,
+            ((60.0 + 0.1 * f) * DEG, 660.0 * DEG),
         );
-        let image = render(
-            1280,
-            720,
-            &camera,
-            std::slice::from_ref(&placement),
-            Look {
-                noise: 3.0,
-                blur: 2,
-                ..Look::default()
-            },
-        );
-        let (u, v) = placement.centre(&camera);
+        let look = Look {
+            noise: 3.0,
+            blur: 2,
+            ..Look::default()
+        };
+        let (image, truth) = render(&camera, std::slice::from_ref(&marker), look);
+        let m = &truth.targets()[0];
         let normal_error = |found: &[Detection]| {
-            let d = found.iter().find(|d| (d.u - u).hypot(d.v - v) < 5.0)?;
+            let d = nearest(found, (m.u, m.v), 5.0)?;
             let normal = d.pose.as_ref()?.rotation.column(2).into_owned();
-            Some(normal.angle(&placement.rotation.column(2).into_owned()) / DEG)
+            Some(normal.angle(&m.normal()) / DEG)
         };
         let (Some(t), Some(g)) = (
             normal_error(&tracked.detect(&image)),
@@ -783,11 +671,7 @@ fn an_unsure_pose_pick_does_not_outlive_its_recheck() {
 #[test]
 fn followed_rings_of_another_or_no_family_keep_their_bit_count_and_code() {
     let family = Family::generate(12, 2).unwrap();
-    let camera = Pinhole {
-        f: 2000.0,
-        cx: 400.0,
-        cy: 300.0,
-    };
+    let camera = camera(800, 600, 2000.0);
     for target in [
         Target::AnyBits { distance: None },
         Target::WhyCode(Family::generate(8, 2).unwrap()),
@@ -802,27 +686,21 @@ fn followed_rings_of_another_or_no_family_keep_their_bit_count_and_code() {
         });
         let mut fresh = Detector::new(config);
         for frame in 0..6 {
-            let placements: Vec<Placement> = (0..5)
+            let markers: Vec<LooseMarker> = (0..5)
                 .map(|k| {
                     let (u, v) = (130.0 + 135.0 * k as f64 + frame as f64, 300.0);
                     let psi = (k as f64 * 70.0 + 2.0 * frame as f64) * DEG;
-                    let code = family.code(k as u32 + 1).unwrap();
-                    Placement::at(
-                        &camera,
-                        Marker::whycode(12, code, 100.0),
-                        (u, v),
-                        100.0,
-                        psi,
-                        0.0,
-                        0.0,
-                    )
+                    let id = k as u32 + 1;
+                    let marker = (Marker::whycode(12, family.code(id).unwrap(), 100.0), id);
+                    marker_at(&camera, marker, (u, v), 100.0, psi, (0.0, 0.0))
                 })
                 .collect();
-            let image = render(800, 600, &camera, &placements, Look::default());
+            let (image, truth) = render(&camera, &markers, Look::default());
             let found = tracked.detect(&image);
             let again = fresh.detect(&image);
-            let matched = all_found(&camera, &placements, &found);
-            let matched_fresh = all_found(&camera, &placements, &again);
+            let targets = truth.targets();
+            let matched = all_found(&targets, &found);
+            let matched_fresh = all_found(&targets, &again);
             for (d, f) in matched.iter().zip(matched_fresh) {
                 assert_eq!(d.bits, Some(12), "frame {frame}: {d:?}");
                 assert_eq!((d.id, d.code), (0, f.code), "frame {frame}: {d:?}");
@@ -838,11 +716,7 @@ fn followed_rings_of_another_or_no_family_keep_their_bit_count_and_code() {
 #[test]
 fn the_id_filter_outvotes_a_single_misread() {
     let family = Family::generate(8, 2).unwrap();
-    let camera = Pinhole {
-        f: 2000.0,
-        cx: 300.0,
-        cy: 200.0,
-    };
+    let camera = camera(600, 400, 2000.0);
     let config = DetectorConfig {
         target: Target::WhyCode(family.clone()),
         ..DetectorConfig::default()
@@ -853,26 +727,20 @@ fn the_id_filter_outvotes_a_single_misread() {
     });
     for frame in 0..9 {
         let id = if frame == 6 { 9 } else { 4 };
-        let marker = Marker::whycode(8, family.code(id).unwrap(), 100.0);
-        let placement = Placement::at(
+        let marker = (Marker::whycode(8, family.code(id).unwrap(), 100.0), id);
+        let marker = marker_at(
             &camera,
             marker,
             (300.0 + frame as f64, 200.0),
             90.0,
             0.2,
-            0.0,
-            0.0,
+            (0.0, 0.0),
         );
-        let image = render(
-            600,
-            400,
-            &camera,
-            &[placement],
-            Look {
-                noise: 2.0,
-                ..Look::default()
-            },
-        );
+        let look = Look {
+            noise: 2.0,
+            ..Look::default()
+        };
+        let (image, _) = render(&camera, &[marker], look);
         let fresh = Detector::new(config.clone()).detect(&image);
         assert_eq!(fresh[0].id, id, "a fresh detector reads what is drawn");
         let found = tracked.detect(&image);
@@ -898,45 +766,30 @@ fn the_id_filter_outvotes_a_single_misread() {
 #[test]
 fn small_whycode_markers_read_right_or_unknown() {
     let family = Family::generate(8, 2).unwrap();
-    let camera = Pinhole {
-        f: 2000.0,
-        cx: 300.0,
-        cy: 100.0,
-    };
+    let camera = camera(600, 200, 2000.0);
     let sizes = [10.0, 12.0, 14.0, 16.0, 18.0, 20.0, 24.0, 28.0, 32.0, 40.0];
-    let placements: Vec<Placement> = sizes
+    let markers: Vec<LooseMarker> = sizes
         .iter()
         .enumerate()
         .map(|(k, &d)| {
-            let code = family.code(k as u32 + 2).unwrap();
-            Placement::at(
-                &camera,
-                Marker::whycode(8, code, 100.0),
-                (30.0 + 55.0 * k as f64, 100.0),
-                d,
-                0.3 * k as f64,
-                0.0,
-                0.0,
-            )
+            let id = k as u32 + 2;
+            let marker = (Marker::whycode(8, family.code(id).unwrap(), 100.0), id);
+            let (u, v) = (30.0 + 55.0 * k as f64, 100.0);
+            marker_at(&camera, marker, (u, v), d, 0.3 * k as f64, (0.0, 0.0))
         })
         .collect();
-    let image = render(
-        600,
-        200,
-        &camera,
-        &placements,
-        Look {
-            blur: 0,
-            noise: 1.0,
-            ..Look::default()
-        },
-    );
+    let look = Look {
+        blur: 0,
+        noise: 1.0,
+        ..Look::default()
+    };
+    let (image, truth) = render(&camera, &markers, look);
     let config = DetectorConfig {
         target: Target::WhyCode(family),
         ..DetectorConfig::default()
     };
     let found = Detector::new(config).detect(&image);
-    let matched = all_found(&camera, &placements, &found);
+    let matched = all_found(&truth.targets(), &found);
     let mut read = Vec::new();
     for (k, d) in matched.iter().enumerate() {
         assert!(

@@ -5,34 +5,22 @@
 
 use std::f64::consts::PI;
 
-use crate::support;
-use nalgebra::Vector3;
 use whycode::camera::Camera;
 use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::{necklace, Family};
 use whycode::geometry::Marker;
+use whycode::math::angle::wrap_angle;
 use whycode::math::Pcg32;
 use whycode::simulate::{
-    render, Background, GroundTruth, LooseMarker, Placement, Scene, SceneObject,
+    nearest, render, Background, GroundTruth, LooseMarker, Placement, Scene, SceneObject,
 };
+use whycode_testkit::desk;
+use whycode_testkit::scenes::cast_shadow;
 
 const DIAMETER_M: f64 = 0.05;
 
 fn camera() -> Camera {
     Camera::ideal(640, 480, 60.0)
-}
-
-/// A marker centred on (u, v), `diameter_px` across face-on, tilted.
-fn placement(
-    cam: &Camera,
-    (u, v): (f64, f64),
-    diameter_px: f64,
-    tilt: f64,
-    roll: f64,
-) -> Placement {
-    let z = cam.fx * DIAMETER_M / diameter_px;
-    let (x, y) = cam.undistort(u, v);
-    Placement::viewed(Vector3::new(x * z, y * z, z), tilt, 0.0, roll)
 }
 
 /// One frame of markers: (bits, code, id) each, on a grid.
@@ -52,7 +40,7 @@ fn frame(
         let tilt = rng.range(0.0, 40.0) * PI / 180.0;
         let roll = rng.range(0.0, 2.0 * PI);
         let marker = Marker::whycode(bits, code, DIAMETER_M * 1000.0);
-        let p = placement(&cam, (u, v), diameter_px, tilt, roll);
+        let p = Placement::at_pixel(&cam, &marker, (u, v), diameter_px, tilt, 0.0, roll);
         scene
             .objects
             .push(SceneObject::Marker(LooseMarker::new(marker, id, p)));
@@ -71,10 +59,6 @@ fn with_family(family: &Family) -> Detector {
         target: Target::WhyCode(family.clone()),
         ..Default::default()
     })
-}
-
-fn nearest(found: &[Detection], u: f64, v: f64, reach: f64) -> Option<&Detection> {
-    found.iter().find(|d| (d.u - u).hypot(d.v - v) < reach)
 }
 
 #[test]
@@ -103,12 +87,11 @@ fn a_dark_disc_with_a_light_middle_is_reported_only_on_request_and_marked() {
     // A legacy WhyCon marker is exactly such a disc: no code ring.
     let cam = camera();
     let mut scene = Scene::new(cam);
-    let p = placement(&cam, (320.0, 240.0), 80.0, 0.3, 0.0);
-    scene.objects.push(SceneObject::Marker(LooseMarker::new(
-        Marker::whycon(DIAMETER_M * 1000.0),
-        0,
-        p,
-    )));
+    let marker = Marker::whycon(DIAMETER_M * 1000.0);
+    let p = Placement::at_pixel(&cam, &marker, (320.0, 240.0), 80.0, 0.3, 0.0, 0.0);
+    scene
+        .objects
+        .push(SceneObject::Marker(LooseMarker::new(marker, 0, p)));
     let (image, _) = render(&scene);
     let family = Family::generate(8, 2).unwrap();
     assert!(with_family(&family).detect(&image).is_empty());
@@ -144,7 +127,7 @@ fn no_family_of_another_bit_count_names_a_marker() {
         // Its own family names them (so the images are readable).
         let own = with_family(printed).detect(&image);
         for m in &truth.markers {
-            let d = nearest(&own, m.u, m.v, 5.0);
+            let d = nearest(&own, (m.u, m.v), 5.0);
             assert_eq!(
                 d.map(|d| d.id),
                 Some(m.id),
@@ -180,12 +163,12 @@ fn a_ring_showing_a_coarser_count_names_no_member_of_a_long_family() {
     let eighteen = Family::generate(18, 2).unwrap();
     let cam = camera();
     let mut scene = Scene::new(cam);
-    let code = sixteen.code(4).unwrap();
-    scene.objects.push(SceneObject::Marker(LooseMarker::new(
-        Marker::whycode(16, code, DIAMETER_M * 1000.0),
-        4,
-        placement(&cam, (80.0, 240.0), 40.0, 34.455 * PI / 180.0, 1.057),
-    )));
+    let marker = Marker::whycode(16, sixteen.code(4).unwrap(), DIAMETER_M * 1000.0);
+    let tilt = 34.455 * PI / 180.0;
+    let p = Placement::at_pixel(&cam, &marker, (80.0, 240.0), 40.0, tilt, 0.0, 1.057);
+    scene
+        .objects
+        .push(SceneObject::Marker(LooseMarker::new(marker, 4, p)));
     scene.noise = 2.0;
     scene.seed = 2;
     let (image, _) = render(&scene);
@@ -212,11 +195,12 @@ fn a_small_ring_of_a_neighbouring_count_names_no_member() {
     {
         let printed = Family::generate(bits, 2).unwrap();
         let mut scene = Scene::new(cam);
-        scene.objects.push(SceneObject::Marker(LooseMarker::new(
-            Marker::whycode(bits, printed.code(id).unwrap(), DIAMETER_M * 1000.0),
-            id,
-            placement(&cam, (80.0, 400.0), 16.0, tilt * PI / 180.0, roll),
-        )));
+        let marker = Marker::whycode(bits, printed.code(id).unwrap(), DIAMETER_M * 1000.0);
+        let tilt = tilt * PI / 180.0;
+        let p = Placement::at_pixel(&cam, &marker, (80.0, 400.0), 16.0, tilt, 0.0, roll);
+        scene
+            .objects
+            .push(SceneObject::Marker(LooseMarker::new(marker, id, p)));
         scene.noise = 2.0;
         scene.seed = seed;
         let (image, _) = render(&scene);
@@ -247,7 +231,7 @@ fn auto_mode_names_the_bit_count_of_every_marker_in_a_mixed_frame() {
     .detect(&image);
     assert_eq!(found.len(), truth.markers.len(), "{found:?}");
     for m in &truth.markers {
-        let d = nearest(&found, m.u, m.v, 5.0).expect("found");
+        let d = nearest(&found, (m.u, m.v), 5.0).expect("found");
         assert_eq!(d.bits, Some(m.bits), "{d:?}");
         assert_eq!(
             d.code,
@@ -263,7 +247,7 @@ fn auto_mode_names_the_bit_count_of_every_marker_in_a_mixed_frame() {
     })
     .detect(&image);
     for m in &truth.markers {
-        let d = nearest(&named, m.u, m.v, 5.0).expect("found");
+        let d = nearest(&named, (m.u, m.v), 5.0).expect("found");
         assert_eq!((d.bits, d.id), (Some(m.bits), m.id), "{d:?}");
         assert!(d.yaw.is_some(), "{d:?}");
     }
@@ -293,7 +277,7 @@ fn small_marker_rates(diameter_px: f64, frames: u64) -> (f64, f64) {
         );
         for m in &truth.markers {
             total += 1;
-            let Some(d) = nearest(&found, m.u, m.v, 0.3 * diameter_px + 1.0) else {
+            let Some(d) = nearest(&found, (m.u, m.v), 0.3 * diameter_px + 1.0) else {
                 continue;
             };
             found_n += 1;
@@ -307,7 +291,7 @@ fn small_marker_rates(diameter_px: f64, frames: u64) -> (f64, f64) {
                 // An 8-bit ring turns by 22.5 degrees a bit; the yaw comes
                 // from the same comparison that named the ID.
                 let yaw = d.yaw.expect("a named marker has a yaw");
-                let error = (yaw - m.yaw + PI).rem_euclid(2.0 * PI) - PI;
+                let error = wrap_angle(yaw - m.yaw);
                 assert!(
                     error.abs() < 15.0 * PI / 180.0,
                     "{diameter_px} px: yaw off by {:.1} deg",
@@ -349,7 +333,7 @@ fn eight_bit_ids_are_read_at_12_px_and_never_wrong() {
         let found = with_family(&family).detect(&image);
         for m in &truth.markers {
             total += 1;
-            if let Some(d) = nearest(&found, m.u, m.v, 3.0) {
+            if let Some(d) = nearest(&found, (m.u, m.v), 3.0) {
                 assert!(
                     d.id == 0 || d.id == m.id,
                     "wrong ID at 12 px: {d:?} for {}",
@@ -364,7 +348,7 @@ fn eight_bit_ids_are_read_at_12_px_and_never_wrong() {
 
 /// The desk frames' reports: (8-bit family, auto bits, legacy) detectors.
 fn desk_reports(seed: u64) -> [Vec<Detection>; 3] {
-    let image = support::desk::desk_clutter(seed);
+    let image = desk::desk_clutter(seed);
     let family = Family::generate(8, 2).unwrap();
     [
         with_family(&family).detect(&image),
@@ -411,7 +395,7 @@ fn markers_on_desk(
     seed: u64,
 ) -> (image::GrayImage, Vec<(f64, f64, f64, u32)>) {
     let cam = Camera::ideal(1280, 720, 60.0);
-    let mut image = support::desk::desk_clutter(seed);
+    let mut image = desk::desk_clutter(seed);
     let mut scene = Scene::new(cam);
     let mut rng = Pcg32::new(seed, 11);
     let cols = 8;
@@ -421,7 +405,7 @@ fn markers_on_desk(
         let tilt = rng.range(0.0, 30.0) * PI / 180.0;
         let roll = rng.range(0.0, 2.0 * PI);
         let (marker, id) = kind(k);
-        let p = placement(&cam, (u, v), diameter, tilt, roll);
+        let p = Placement::at_pixel(&cam, &marker, (u, v), diameter, tilt, 0.0, roll);
         scene
             .objects
             .push(SceneObject::Marker(LooseMarker::new(marker, id, p)));
@@ -466,7 +450,7 @@ fn markers_on_desk_clutter_are_all_reported() {
         );
         let found = with_family(&family).detect(&image);
         for &(u, v, diameter, id) in &placed {
-            let d = nearest(&found, u, v, 0.3 * diameter + 1.0);
+            let d = nearest(&found, (u, v), 0.3 * diameter + 1.0);
             assert!(
                 d.is_some_and(|d| d.id == id || d.id == 0),
                 "seed {seed}: {diameter:.0} px marker {id} at ({u:.0}, {v:.0}): {d:?}"
@@ -480,23 +464,10 @@ fn markers_on_desk_clutter_are_all_reported() {
         let found = detector(DetectorConfig::default()).detect(&image);
         for &(u, v, diameter, _) in &placed {
             assert!(
-                nearest(&found, u, v, 0.3 * diameter + 1.0).is_some(),
+                nearest(&found, (u, v), 0.3 * diameter + 1.0).is_some(),
                 "seed {seed}: legacy {diameter:.0} px marker at ({u:.0}, {v:.0})"
             );
         }
-    }
-}
-
-/// Darkens `image` to `factor` of its light beyond the line through
-/// `(u0, v0)` at `angle` (a soft edge `soft` pixels wide): a cast shadow.
-fn cast_shadow(image: &mut image::GrayImage, (u0, v0): (f64, f64), angle: f64, factor: f64) {
-    let (s, c) = angle.sin_cos();
-    let soft = 12.0;
-    for (x, y, p) in image.enumerate_pixels_mut() {
-        let d = -(f64::from(x) - u0) * s + (f64::from(y) - v0) * c;
-        let t = (d / soft + 0.5).clamp(0.0, 1.0);
-        let light = 1.0 - (1.0 - factor) * t;
-        p.0[0] = (f64::from(p.0[0]) * light).round().clamp(0.0, 255.0) as u8;
     }
 }
 
@@ -518,9 +489,9 @@ fn a_shadow_edge_across_the_ring_keeps_the_id() {
         // The edge crosses the ring on one side of the centre or the other.
         let offset = rng.range(-0.3, 0.3) * m.diameter_px / 2.0;
         let through = (m.u - offset * angle.sin(), m.v + offset * angle.cos());
-        cast_shadow(&mut image, through, angle, 0.3);
+        cast_shadow(&mut image, through, angle, 0.3, 12.0);
         let found = with_family(&family).detect(&image);
-        let d = nearest(&found, m.u, m.v, 5.0);
+        let d = nearest(&found, (m.u, m.v), 5.0);
         assert!(
             d.is_some_and(|d| d.id == id),
             "case {case}: marker {id}, shadow at {offset:.1} px, {:.0}°: {found:?}",
@@ -544,8 +515,8 @@ fn bold_letters_of_whycon_proportions_are_mostly_no_legacy_marker() {
     for (k, size_pt) in [12.0, 14.0, 16.0, 18.0, 20.0, 22.0].into_iter().enumerate() {
         for (j, weight) in [1.9, 2.0, 2.1, 2.2, 2.3, 2.4, 2.5].into_iter().enumerate() {
             let mut scene = Scene::new(cam);
-            let p = placement(&cam, (900.0, 360.0), 40.0, 0.0, 0.0);
             let marker = Marker::whycon(DIAMETER_M * 1000.0);
+            let p = Placement::at_pixel(&cam, &marker, (900.0, 360.0), 40.0, 0.0, 0.0, 0.0);
             scene
                 .objects
                 .push(SceneObject::Marker(LooseMarker::new(marker, 0, p)));
@@ -553,17 +524,10 @@ fn bold_letters_of_whycon_proportions_are_mostly_no_legacy_marker() {
             scene.noise = 2.0;
             scene.seed = (10 * k + j) as u64;
             let (mut image, _) = render(&scene);
-            support::desk::stroke_letters(
-                &mut image,
-                "o o o",
-                (100.0, 400.0),
-                size_pt,
-                weight,
-                30.0,
-            );
+            desk::stroke_letters(&mut image, "o o o", (100.0, 400.0), size_pt, weight, 30.0);
             let found = detector(DetectorConfig::default()).detect(&image);
             assert!(
-                nearest(&found, 900.0, 360.0, 3.0).is_some(),
+                nearest(&found, (900.0, 360.0), 3.0).is_some(),
                 "{size_pt} pt, weight {weight}: {found:?}"
             );
             letters += found.len() - 1;

@@ -3,16 +3,16 @@
 //! uneven light, clutter. Correct IDs, centre, yaw and pose errors, each
 //! with its threshold stated at the assertion.
 
-use crate::support::angle_diff;
-
 use nalgebra::Vector3;
 use whycode::camera::Camera;
 use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
+use whycode::math::angle::angle_between;
 use whycode::simulate::{
-    self, layout, Background, GroundTruth, LooseMarker, Placement, Scene, SceneObject,
+    self, layout, nearest, Background, GroundTruth, LooseMarker, Placement, Scene, SceneObject,
 };
+use whycode_testkit::scenes::cast_shadow;
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 const DIAMETER_M: f64 = 0.1;
@@ -68,9 +68,7 @@ fn compare(truth: &GroundTruth, found: &[Detection]) -> Errors {
         unknown: 0,
     };
     for m in truth.markers.iter().filter(|m| m.visible) {
-        let d = found
-            .iter()
-            .find(|d| (d.u - m.u).hypot(d.v - m.v) < m.diameter_px / 4.0)
+        let d = nearest(found, (m.u, m.v), m.diameter_px / 4.0)
             .unwrap_or_else(|| panic!("marker {} at {:.1},{:.1} not found", m.id, m.u, m.v));
         e.centre_px = e.centre_px.max((d.u - m.u).hypot(d.v - m.v));
         if d.id == 0 {
@@ -81,7 +79,7 @@ fn compare(truth: &GroundTruth, found: &[Detection]) -> Errors {
             e.wrong_ids += 1;
             continue;
         }
-        e.yaw = e.yaw.max(angle_diff(d.yaw.unwrap(), m.yaw));
+        e.yaw = e.yaw.max(angle_between(d.yaw.unwrap(), m.yaw));
         if let Some(pose) = &d.pose {
             let normal = pose.rotation.column(2);
             let true_normal = Vector3::from(m.normal);
@@ -288,20 +286,6 @@ fn dark_noisy_uneven_still_image_is_read_in_one_call() {
     assert_eq!(found.len(), 12, "false detections");
 }
 
-/// Paper darkened to `factor` of its light beyond the line v = `v0`
-/// turned by `angle`, over a soft edge of `soft` px: a cast shadow, which
-/// the simulator's smooth light cannot draw.
-fn cast_shadow(image: &mut image::GrayImage, v0: f64, angle: f64, factor: f64, soft: f64) {
-    let (s, c) = angle.sin_cos();
-    let u0 = f64::from(image.width()) / 2.0;
-    for (x, y, p) in image.enumerate_pixels_mut() {
-        let d = -(f64::from(x) - u0) * s + (f64::from(y) - v0) * c;
-        let t = (d / soft + 0.5).clamp(0.0, 1.0);
-        let light = 1.0 - (1.0 - factor) * t;
-        p.0[0] = (f64::from(p.0[0]) * light).round() as u8;
-    }
-}
-
 /// A shadow's edge across the middle row of markers (some cut through
 /// their centres), under a 5:1 light gradient: the shaded part of each
 /// white disc falls below the mid-level of lit paper and ink. Most markers
@@ -319,14 +303,14 @@ fn a_cast_shadow_across_markers_under_a_steep_gradient_keeps_them() {
         scene.exposure = 1.1;
         scene.noise = 1.5;
         let (mut image, truth) = simulate::render(&scene);
-        cast_shadow(&mut image, v0, angle, factor, 12.0);
+        // Beyond the line through the middle column's (u, v0).
+        let through = (f64::from(image.width()) / 2.0, v0);
+        cast_shadow(&mut image, through, angle, factor, 12.0);
         let found = detector(&family, camera).detect(&image);
         assert!(found.len() <= 12, "no false detection");
         for m in &truth.markers {
             markers += 1;
-            let near = found
-                .iter()
-                .find(|d| (d.u - m.u).hypot(d.v - m.v) < m.diameter_px / 4.0);
+            let near = nearest(&found, (m.u, m.v), m.diameter_px / 4.0);
             match near.map(|d| d.id) {
                 Some(id) if id == m.id => found_ids += 1,
                 Some(0) | None => {}
@@ -358,13 +342,14 @@ fn steep_views_up_to_70_degrees_are_found_and_named() {
                 600.0 * ((k / 3) as f64 + 0.5) / 3.0,
             );
             let diameter_px = rng.range(65.0, 95.0);
-            let z = camera.fx * DIAMETER_M / diameter_px;
-            let (x, y) = camera.undistort(u, v);
             let (tilt, axis) = (rng.range(55.0, 70.0) * DEG, rng.range(0.0, 6.3));
             let id = 1 + rng.next_u32() % family.len() as u32;
             let marker = Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
-            let placement = Placement::viewed(
-                Vector3::new(x * z, y * z, z),
+            let placement = Placement::at_pixel(
+                &camera,
+                &marker,
+                (u, v),
+                diameter_px,
                 tilt * axis.cos(),
                 tilt * axis.sin(),
                 rng.range(0.0, 6.3),
@@ -382,9 +367,7 @@ fn steep_views_up_to_70_degrees_are_found_and_named() {
                 continue;
             }
             seen += 1;
-            let d = found
-                .iter()
-                .find(|d| (d.u - m.u).hypot(d.v - m.v) < m.diameter_px / 4.0);
+            let d = nearest(&found, (m.u, m.v), m.diameter_px / 4.0);
             let id = d.map(|d| d.id);
             assert!(
                 id.is_none_or(|id| id == 0 || id == m.id),
@@ -434,12 +417,13 @@ fn motion_blur_is_read_through_and_never_gives_a_wrong_id() {
                     480.0 * ((k / 2) as f64 + 0.5) / 2.0 + rng.range(-30.0, 30.0),
                 );
                 let diameter_px = rng.range(76.0, 84.0);
-                let z = camera.fx * DIAMETER_M / diameter_px;
-                let (x, y) = camera.undistort(u, v);
                 let id = 1 + rng.next_u32() % family.len() as u32;
                 let marker = Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
-                let placement = Placement::viewed(
-                    Vector3::new(x * z, y * z, z),
+                let placement = Placement::at_pixel(
+                    &camera,
+                    &marker,
+                    (u, v),
+                    diameter_px,
                     rng.range(-15.0, 15.0) * DEG,
                     rng.range(-15.0, 15.0) * DEG,
                     rng.range(0.0, 6.3),
@@ -452,15 +436,7 @@ fn motion_blur_is_read_through_and_never_gives_a_wrong_id() {
             let (image, truth) = simulate::render(&scene);
             let found = detector(&family, camera).detect(&image);
             for d in found.iter().filter(|d| d.id != 0) {
-                let m = truth
-                    .markers
-                    .iter()
-                    .min_by(|a, b| {
-                        let da = (a.u - d.u).hypot(a.v - d.v);
-                        let db = (b.u - d.u).hypot(b.v - d.v);
-                        da.total_cmp(&db)
-                    })
-                    .unwrap();
+                let m = nearest(&truth.markers, (d.u, d.v), f64::INFINITY).unwrap();
                 if m.id == d.id {
                     right += 1;
                 } else {
@@ -494,28 +470,19 @@ fn motion_blur_is_read_through_and_never_gives_a_wrong_id() {
 fn a_large_marker_cut_by_the_image_edge_is_not_taken_for_floor() {
     let family = Family::generate(8, 2).unwrap();
     let camera = Camera::ideal(1280, 720, 60.0);
-    let at = |u: f64, v: f64, diameter_px: f64| {
-        let z = camera.fx * DIAMETER_M / diameter_px;
-        let (x, y) = camera.undistort(u, v);
-        Placement::viewed(Vector3::new(x * z, y * z, z), 0.0, 0.0, 0.0)
+    let at = |id: u32, (u, v): (f64, f64), diameter_px: f64| {
+        let marker = Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
+        let placement = Placement::at_pixel(&camera, &marker, (u, v), diameter_px, 0.0, 0.0, 0.0);
+        SceneObject::Marker(LooseMarker::new(marker, id, placement))
     };
-    let marker = |id: u32| Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
     for (diameter_px, cut) in [(300.0, 0.0), (400.0, 0.05), (500.0, 0.1), (400.0, 0.25)] {
         let mut scene = Scene::new(camera);
         for k in 0..3u32 {
-            let placement = at(60.0, 100.0 + 120.0 * f64::from(k), 40.0);
-            scene.objects.push(SceneObject::Marker(LooseMarker::new(
-                marker(2 + k),
-                2 + k,
-                placement,
-            )));
+            let v = 100.0 + 120.0 * f64::from(k);
+            scene.objects.push(at(2 + k, (60.0, v), 40.0));
         }
         let u = 1279.5 - diameter_px / 2.0 + cut * diameter_px;
-        scene.objects.push(SceneObject::Marker(LooseMarker::new(
-            marker(5),
-            5,
-            at(u, 360.0, diameter_px),
-        )));
+        scene.objects.push(at(5, (u, 360.0), diameter_px));
         scene.background = Background::Uniform(0.45);
         scene.noise = 2.0;
         let (image, _) = simulate::render(&scene);
@@ -545,27 +512,22 @@ fn a_large_marker_cut_by_the_image_edge_is_not_taken_for_floor() {
     }
 }
 
-/// A marker at the pixel (u, v), `diameter_px` across were it face-on,
-/// seen at exactly `view` radians from face-on (its normal against its own
-/// line of sight), tilted about the axis at `axis` radians across that line.
+/// A marker of `family` (ID `id`) at the pixel (u, v), `diameter_px`
+/// across were it face-on, seen at exactly `view` radians from face-on (its
+/// normal against its own line of sight), tilted about the axis at `axis`
+/// radians across that line.
 fn viewed_at(
     camera: &Camera,
+    (family, id): (&Family, u32),
     (u, v): (f64, f64),
     diameter_px: f64,
-    view: f64,
-    axis: f64,
+    (view, axis): (f64, f64),
     roll: f64,
-) -> Placement {
-    let z = camera.fx * DIAMETER_M / diameter_px;
-    let (x, y) = camera.undistort(u, v);
-    let face_on = Placement::viewed(Vector3::new(x * z, y * z, z), 0.0, 0.0, roll);
-    let to_ray = nalgebra::Rotation3::rotation_between(&Vector3::z(), &face_on.position).unwrap();
-    let across = to_ray * Vector3::new(axis.cos(), axis.sin(), 0.0);
-    let tilt = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(across), view);
-    Placement::new(
-        face_on.position,
-        tilt.matrix() * to_ray.matrix() * face_on.rotation,
-    )
+) -> SceneObject {
+    let marker = Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
+    let placement = Placement::at_pixel(camera, &marker, (u, v), diameter_px, 0.0, 0.0, roll)
+        .tilted_from_sight(view, Vector3::new(axis.cos(), axis.sin(), 0.0));
+    SceneObject::Marker(LooseMarker::new(marker, id, placement))
 }
 
 /// 8-bit markers 60-90 px across seen at exactly 70° from face-on, tilted
@@ -590,27 +552,23 @@ fn markers_seen_at_70_degrees_are_all_found_and_named() {
             );
             // Every eighth of a turn, and a random offset within it.
             let axis = (frame * 9 + k) as f64 * std::f64::consts::FRAC_PI_4 + rng.range(0.0, 0.3);
-            let placement = viewed_at(
-                &camera,
-                (u, v),
-                rng.range(60.0, 90.0),
-                70.0 * DEG,
-                axis,
-                rng.range(0.0, 6.3),
-            );
+            let (diameter_px, roll) = (rng.range(60.0, 90.0), rng.range(0.0, 6.3));
             let id = 1 + rng.next_u32() % family.len() as u32;
-            let marker = Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
-            scene
-                .objects
-                .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+            let view = (70.0 * DEG, axis);
+            scene.objects.push(viewed_at(
+                &camera,
+                (&family, id),
+                (u, v),
+                diameter_px,
+                view,
+                roll,
+            ));
         }
         let (image, truth) = simulate::render(&scene);
         let found = detector(&family, camera).detect(&image);
         for m in truth.markers.iter().filter(|m| m.visible) {
             seen += 1;
-            let d = found
-                .iter()
-                .find(|d| (d.u - m.u).hypot(d.v - m.v) < m.diameter_px / 4.0);
+            let d = nearest(&found, (m.u, m.v), m.diameter_px / 4.0);
             assert_eq!(
                 d.map(|d| d.id),
                 Some(m.id),
@@ -643,26 +601,22 @@ fn face_on_normals_are_within_a_degree() {
                 600.0 * ((k / 3) as f64 + 0.5) / 3.0 + rng.range(-30.0, 30.0),
             );
             let view = rng.range(0.0, 10.0) * DEG;
-            let placement = viewed_at(
-                &camera,
-                (u, v),
-                rng.range(80.0, 120.0),
-                view,
-                rng.range(0.0, 6.3),
-                rng.range(0.0, 6.3),
-            );
+            let diameter_px = rng.range(80.0, 120.0);
+            let (axis, roll) = (rng.range(0.0, 6.3), rng.range(0.0, 6.3));
             let id = 1 + rng.next_u32() % family.len() as u32;
-            let marker = Marker::whycode(8, family.code(id).unwrap(), DIAMETER_M * 1000.0);
-            scene
-                .objects
-                .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+            scene.objects.push(viewed_at(
+                &camera,
+                (&family, id),
+                (u, v),
+                diameter_px,
+                (view, axis),
+                roll,
+            ));
         }
         let (image, truth) = simulate::render(&scene);
         let found = detector(&family, camera).detect(&image);
         for m in &truth.markers {
-            let d = found
-                .iter()
-                .find(|d| (d.u - m.u).hypot(d.v - m.v) < m.diameter_px / 4.0)
+            let d = nearest(&found, (m.u, m.v), m.diameter_px / 4.0)
                 .unwrap_or_else(|| panic!("frame {frame}: marker {} not found", m.id));
             let pose = d.pose.expect("a pose with camera and diameter");
             let error = pose.normal().angle(&Vector3::from(m.normal)) / DEG;

@@ -1,8 +1,8 @@
-//! The fuzz harness's bounded run (see `support/fuzz.rs`): about 40
+//! The fuzz harness's bounded run (`whycode_testkit::fuzz`): about 40
 //! seconds spread over all targets; `cargo run --release --example fuzz --
 //! --minutes N` runs it for longer.
 
-use crate::support::fuzz as fuzz_support;
+use whycode_testkit::fuzz as fuzz_support;
 
 use std::time::Duration;
 

@@ -9,7 +9,7 @@
 //! marker's own plane (mean under 0.15°), image yaw within 1°, and the +x
 //! rim point within 1 % of the radius of its true projection.
 
-use crate::support::angle_diff;
+use whycode::math::angle::angle_between;
 
 use nalgebra::Vector3;
 use whycode::camera::Camera;
@@ -76,7 +76,7 @@ fn yaw_under_perspective_stays_within_stated_bounds() {
                 continue;
             }
             assert_eq!(reading.id, id, "case {k}/{r}: {reading:?}");
-            let yaw_err = angle_diff(reading.yaw.unwrap(), t.yaw).to_degrees();
+            let yaw_err = angle_between(reading.yaw.unwrap(), t.yaw).to_degrees();
             let axis_true = camera.project(&placement.to_camera_mm(30.0, 0.0)).unwrap();
             let (ax, ay) = reading.axis_point.unwrap();
             let axis_err = (ax - axis_true.0).hypot(ay - axis_true.1) / ellipse.semi_major;

@@ -4,11 +4,12 @@
 //! they are checked; the printed figures are the measured ones.
 
 use crate::support::ring_view::*;
-use crate::support::{angle_diff, Pcg32};
+use crate::support::Pcg32;
 use whycode::detect::idfilter::IdFilter;
 use whycode::detect::ring::RingReader;
 use whycode::family::necklace::{is_periodic, mask, rotr};
 use whycode::family::{Decoder, Family, MatchStatus};
+use whycode::math::angle::angle_between;
 
 /// Sets the viewing conditions of the k-th view.
 type Adjust = dyn Fn(&mut View, u32);
@@ -57,7 +58,7 @@ fn sweep(family: &Family, diameter: f64, count: u32, adjust: impl Fn(&mut View, 
             let yaw = reading.yaw.expect("a known ID comes with a yaw");
             stats
                 .yaw_errors_deg
-                .push(angle_diff(yaw, rendered.yaw).to_degrees());
+                .push(angle_between(yaw, rendered.yaw).to_degrees());
         }
     }
     stats
@@ -249,7 +250,7 @@ fn a_blotted_bit_is_filled_only_when_the_distance_allows() {
             let d = reading.decoded.unwrap();
             assert!(d.distance <= 1);
             assert!(reading.confidence < 0.9);
-            assert!(angle_diff(reading.yaw.unwrap(), rendered.yaw) < 0.5f64.to_radians());
+            assert!(angle_between(reading.yaw.unwrap(), rendered.yaw) < 0.5f64.to_radians());
         } else {
             assert_eq!(reading.id, 0);
         }
@@ -295,7 +296,7 @@ fn rotation_convention_matches_the_decoder() {
         let rendered = render(&View::new(10, code, 80.0, psi));
         let reading = reader.read(&rendered.image, &rendered.ellipse, BLACK, WHITE);
         assert_eq!(reading.id, 7);
-        assert!(angle_diff(reading.yaw.unwrap(), -psi) < 0.1f64.to_radians());
+        assert!(angle_between(reading.yaw.unwrap(), -psi) < 0.1f64.to_radians());
         let word = reading.word.unwrap();
         let decoded = reading.decoded.unwrap();
         assert_eq!(rotr(code, 10, decoded.rotation), word);

@@ -1,22 +1,17 @@
-//! Shared by every integration test: running the real binary, angle
-//! differences, and the scenes the tests draw (`scenes` for the detector,
-//! `ring_view` for ring reading, `sheets` for validation), plus the stored
-//! reference files of `tests/data/`.
+//! Shared by the integration tests: running the real binary, one marker's
+//! photo, the scenes the tests draw (`ring_view` for ring reading, `sheets`
+//! for validation), plus the stored reference files of `tests/data/`. What
+//! the examples and benches share too (scenes, desk clutter, the fuzz
+//! harness) is in the `whycode-testkit` crate.
 #![allow(dead_code)]
 
-pub mod desk;
-pub mod fuzz;
 pub mod reference;
 pub mod ring_view;
-pub mod scenes;
 pub mod sheets;
-
-use std::f64::consts::TAU;
 
 use std::path::Path;
 use std::process::{Command, Output};
 
-use nalgebra::Vector3;
 use whycode::camera::Camera;
 use whycode::geometry::Marker;
 /// The library's seeded generator, so test scenes draw like the simulator.
@@ -91,27 +86,6 @@ pub fn stderr(out: &Output) -> String {
     String::from_utf8(out.stderr.clone()).expect("stderr is UTF-8")
 }
 
-/// Difference `a - b` wrapped into (-π, π].
-pub fn wrap_angle(d: f64) -> f64 {
-    let w = d.rem_euclid(TAU);
-    if w > TAU / 2.0 {
-        w - TAU
-    } else {
-        w
-    }
-}
-
-/// Smallest unsigned difference between two angles, radians (0..=π).
-pub fn angle_diff(a: f64, b: f64) -> f64 {
-    wrap_angle(a - b).abs()
-}
-
-/// Smallest difference between two axis directions (angles modulo π).
-pub fn axis_angle_diff(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(TAU / 2.0);
-    d.min(TAU / 2.0 - d)
-}
-
 /// A face-on photo of one marker, `diameter_px` across, turned by `roll`
 /// about the line of sight, its centre a fraction of a pixel off the image
 /// centre, with a light focus blur; and the simulator's truth about it.
@@ -123,9 +97,8 @@ pub fn marker_photo(
 ) -> (image::GrayImage, TrueMarker) {
     let side = (diameter_px * 1.8).ceil() as u32 + 12;
     let camera = Camera::ideal(side, side, 60.0);
-    let z = camera.fx * marker.diameter_mm / 1000.0 / diameter_px;
-    let (x, y) = camera.undistort(camera.cx + 0.37, camera.cy + 0.21);
-    let placement = Placement::viewed(Vector3::new(x * z, y * z, z), 0.0, 0.0, roll);
+    let centre = (camera.cx + 0.37, camera.cy + 0.21);
+    let placement = Placement::at_pixel(&camera, &marker, centre, diameter_px, 0.0, 0.0, roll);
     let mut scene = Scene::new(camera);
     scene
         .objects

@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use image::GrayImage;
-use nalgebra::{Rotation3, Unit, Vector3};
+use nalgebra::Vector3;
 use whycode::camera::Camera;
 use whycode::geometry::Marker;
 use whycode::math::Ellipse;
@@ -74,19 +74,23 @@ pub fn render(view: &View) -> Rendered {
 pub fn render_marker(view: &View, marker: &Marker) -> Rendered {
     let side = (view.diameter * 1.6 + 2.0 * view.motion_blur + 12.0).ceil() as u32;
     let camera = Camera::ideal(side, side, 5.0);
-    // The marker's millimetres are pixels here: it is `diameter` px across.
-    let z = camera.fx * marker.diameter_mm / 1000.0 / view.diameter;
-    let (x, y) = camera.undistort(
+    let centre = (
         f64::from(side / 2) + view.offset.0,
         f64::from(side / 2) + view.offset.1,
     );
     // Foreshortening by cos(tilt) along the visual direction
     // `tilt_direction` (y up): a turn about the in-plane axis across it.
     let (sa, ca) = view.tilt_direction.sin_cos();
-    let axis = Unit::new_normalize(Vector3::new(sa, ca, 0.0));
-    let tilt = *Rotation3::from_axis_angle(&axis, view.tilt).matrix();
-    let upright = Placement::viewed(Vector3::zeros(), 0.0, 0.0, view.rotation);
-    let placement = Placement::new(Vector3::new(x * z, y * z, z), tilt * upright.rotation);
+    let placement = Placement::at_pixel(
+        &camera,
+        marker,
+        centre,
+        view.diameter,
+        0.0,
+        0.0,
+        view.rotation,
+    )
+    .tilted(view.tilt, Vector3::new(sa, ca, 0.0));
     let mut scene = Scene::new(camera);
     scene.background = Background::Uniform(WHITE / 255.0);
     scene.paper_reflectance = WHITE / 255.0;

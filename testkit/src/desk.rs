@@ -2,9 +2,8 @@
 //! simulator's clutter (filled and hollow circles, ellipses, rectangles,
 //! lines) plus what a desk adds: printed text in several weights, hollow
 //! circles of every hole ratio but WhyCon's, dark blobs with an off-centre
-//! hole, and washers whose light middle has marker proportions. Shared by
-//! the integration tests and `examples/detector_rules.rs` (which includes
-//! this file by path), so the figures and the tests see the same scenes.
+//! hole, and washers whose light middle has marker proportions. The
+//! integration tests and `examples/detector_rules` see the same scenes.
 
 use std::f64::consts::PI;
 
@@ -71,56 +70,26 @@ pub fn desk_clutter(seed: u64) -> GrayImage {
         let light = rng.range(150.0, 230.0);
         let squash = rng.range(0.6, 1.0);
         let angle = rng.range(0.0, PI);
-        match rng.next_u32() % 3 {
+        let hole = match rng.next_u32() % 3 {
             0 => {
                 // Hollow circle, any hole but WhyCon's.
                 let mut hole = rng.range(0.25, 0.9);
                 if (hole - 0.41).abs() < 0.05 {
                     hole += 0.1;
                 }
-                ring(
-                    &mut image,
-                    (cx, cy),
-                    r,
-                    squash,
-                    angle,
-                    (hole, 0.0, 0.0),
-                    ink,
-                    light,
-                );
+                (hole, 0.0, 0.0)
             }
             1 => {
                 // Blob with an off-centre hole.
                 let hole = rng.range(0.3, 0.7);
                 let offset = rng.range(0.08, 0.3);
                 let dir = rng.range(0.0, 2.0 * PI);
-                let hole_centre = (offset * dir.cos(), offset * dir.sin());
-                ring(
-                    &mut image,
-                    (cx, cy),
-                    r,
-                    squash,
-                    angle,
-                    (hole, hole_centre.0, hole_centre.1),
-                    ink,
-                    light,
-                );
+                (hole, offset * dir.cos(), offset * dir.sin())
             }
-            _ => {
-                // Washer: light middle at a marker-like ratio.
-                let hole = rng.range(0.45, 0.65);
-                ring(
-                    &mut image,
-                    (cx, cy),
-                    r,
-                    squash,
-                    angle,
-                    (hole, 0.0, 0.0),
-                    ink,
-                    light,
-                );
-            }
-        }
+            // Washer: light middle at a marker-like ratio.
+            _ => (rng.range(0.45, 0.65), 0.0, 0.0),
+        };
+        ring(&mut image, (cx, cy), r, squash, angle, hole, ink, light);
     }
     image
 }

@@ -9,14 +9,11 @@
 //! Shared by the bounded run in the test suite (`tests/integration/fuzz_bounded.rs`)
 //! and the long run (`cargo run --release --example fuzz -- --minutes N`).
 
-#![allow(dead_code)]
-
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 use std::io::Cursor;
 use std::panic::{catch_unwind, AssertUnwindSafe};
-use std::path::Path;
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 use whycode::camera::Camera;
@@ -55,7 +52,7 @@ pub struct TargetSummary {
 
 type FuzzTarget = fn(&mut Fuzzer, &mut TestRunner) -> Result<bool, String>;
 
-pub const TARGETS: [(&str, FuzzTarget); 6] = [
+const TARGETS: [(&str, FuzzTarget); 6] = [
     ("image files", Fuzzer::image_file),
     ("random images", Fuzzer::random_image),
     ("family files", Fuzzer::family_file),
@@ -301,7 +298,7 @@ fn check_detections(detections: &[Detection]) -> Result<(), String> {
 }
 
 /// State of one target's worker: seeds, reusable detectors, what it is on.
-pub struct Fuzzer {
+struct Fuzzer {
     dir: tempfile::TempDir,
     detector: Detector,
     detect_limit: Option<Duration>,
@@ -352,14 +349,12 @@ impl Fuzzer {
             legacy: false,
         })
         .unwrap();
-        let template_seeds = ["a3", "a4", "letter"]
-            .iter()
-            .map(|n| {
-                let path =
-                    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("templates/{n}.toml"));
-                std::fs::read(path).unwrap()
-            })
-            .collect();
+        let template_seeds = [
+            include_bytes!("../../templates/a3.toml").to_vec(),
+            include_bytes!("../../templates/a4.toml").to_vec(),
+            include_bytes!("../../templates/letter.toml").to_vec(),
+        ]
+        .to_vec();
         Fuzzer {
             dir: tempfile::tempdir().unwrap(),
             detector: Detector::new(DetectorConfig {

@@ -1,0 +1,23 @@
+//! What whycode's integration tests, examples and benchmarks share, in one
+//! place (a dev-dependency of the whycode package, built once against the
+//! library they test). The library itself holds what a user of the
+//! simulator needs too: placing a marker at a pixel
+//! (`simulate::Placement::at_pixel`) and scoring detections against the
+//! ground truth (`simulate::match_reports`). This kit holds the rest:
+//!
+//! - [`scenes`]: markers at pixels of a plain camera on white paper, for
+//!   round trips and benchmarks;
+//! - [`scenario`]: seeded series of frames with a row's look, as the
+//!   detector bar measures them, and [`tally`]: what a detector made of
+//!   them ([`tally::Counts`], [`tally::Errors`]);
+//! - [`tag36h11`]: AprilTags printed in the markers' places;
+//! - [`desk`]: desk clutter without markers, for the phantom rules;
+//! - [`fuzz`]: the fuzz harness (the test suite's bounded run and
+//!   `examples/fuzz`'s long one).
+
+pub mod desk;
+pub mod fuzz;
+pub mod scenario;
+pub mod scenes;
+pub mod tag36h11;
+pub mod tally;

@@ -1,0 +1,324 @@
+//! Seeded series of simulated frames, as the detector bar measures them: a
+//! [`Scenario`] spreads markers over a distortion-free 60° camera view,
+//! then applies a row's light, background and effects; each [`Frame`]
+//! comes with its true targets, and [`Scenario::run`] tallies what a
+//! detector made of them ([`Counts`]).
+//!
+//! Every frame is seeded (`seed0 + frame`); a figure can be reproduced
+//! from the scenario, the seed and the target index printed with it.
+
+use std::collections::HashMap;
+use std::f64::consts::PI;
+
+use image::GrayImage;
+use nalgebra::Vector3;
+use whycode::camera::Camera;
+use whycode::detect::{Detector, DetectorConfig, Target};
+use whycode::family::Family;
+use whycode::geometry::Marker;
+use whycode::math::Pcg32;
+use whycode::simulate::{self, LooseMarker, Placement, Scene, SceneObject, Sighting, TrueTarget};
+
+use crate::tag36h11::with_tags;
+use crate::tally::Counts;
+
+/// One degree in radians.
+pub const DEG: f64 = PI / 180.0;
+
+/// Printed marker diameter of every scenario's markers, metres.
+pub const DIAMETER_M: f64 = 0.05;
+
+/// Families by (bits, distance), generated once.
+#[derive(Default)]
+pub struct Families(HashMap<(u32, u32), Family>);
+
+impl Families {
+    /// The family of `bits`-bit codes at least `distance` apart.
+    pub fn get(&mut self, bits: u32, distance: u32) -> Family {
+        self.0
+            .entry((bits, distance))
+            .or_insert_with(|| Family::generate(bits, distance).expect("family parameters valid"))
+            .clone()
+    }
+}
+
+/// A distortion-free camera with a 60° horizontal field of view.
+pub fn camera(width: u32, height: u32) -> Camera {
+    Camera::ideal(width, height, 60.0)
+}
+
+/// How markers are spread over a frame.
+#[derive(Debug, Clone, Copy)]
+pub struct Spread {
+    /// Markers per frame.
+    pub count: usize,
+    /// Smallest and largest face-on diameter, pixels.
+    pub diameter_px: (f64, f64),
+    /// Largest tilt and pan, radians (each drawn uniformly in ±max).
+    pub max_tilt: f64,
+    /// Exact tilt of every marker about a random in-plane axis, radians;
+    /// overrides `max_tilt` when set.
+    pub fixed_tilt: Option<f64>,
+    /// `fixed_tilt` is the angle between the marker's normal and its own
+    /// line of sight (its view angle), not a turn about the camera's axes
+    /// (which off the optical axis adds up to half the field of view).
+    pub against_view: bool,
+}
+
+impl Spread {
+    /// `count` markers of `diameter_px`, tilt and pan each drawn within
+    /// ±`max_tilt_deg`.
+    pub fn tilted(count: usize, diameter_px: (f64, f64), max_tilt_deg: f64) -> Spread {
+        Spread {
+            count,
+            diameter_px,
+            max_tilt: max_tilt_deg * DEG,
+            fixed_tilt: None,
+            against_view: false,
+        }
+    }
+
+    /// `count` markers of `diameter_px`, each tilted by exactly `tilt_deg`
+    /// about a random in-plane axis.
+    pub fn fixed_tilt(count: usize, diameter_px: (f64, f64), tilt_deg: f64) -> Spread {
+        Spread {
+            count,
+            diameter_px,
+            max_tilt: 0.0,
+            fixed_tilt: Some(tilt_deg * DEG),
+            against_view: false,
+        }
+    }
+
+    /// `count` markers of `diameter_px`, each seen at exactly `view_deg`
+    /// from face-on (normal against the line of sight to its centre),
+    /// tilted about a random axis.
+    pub fn fixed_view(count: usize, diameter_px: (f64, f64), view_deg: f64) -> Spread {
+        Spread {
+            against_view: true,
+            ..Spread::fixed_tilt(count, diameter_px, view_deg)
+        }
+    }
+}
+
+/// Markers on a jittered grid over the frame, none overlapping, each with
+/// a random in-plane rotation and a random member of `family` (legacy
+/// WhyCon markers without a family).
+pub fn spread_markers(
+    camera: &Camera,
+    family: Option<&Family>,
+    spread: Spread,
+    rng: &mut Pcg32,
+) -> Vec<SceneObject> {
+    let (w, h) = (f64::from(camera.width), f64::from(camera.height));
+    let cols = ((spread.count as f64 * w / h).sqrt().ceil() as usize).max(1);
+    let rows = spread.count.div_ceil(cols);
+    let (cell_w, cell_h) = (w / cols as f64, h / rows as f64);
+    // The card is 1.5 R around the centre: keep 0.8 D (plus a pixel) free.
+    let reach = 0.8 * spread.diameter_px.1 + 2.0;
+    let mut out = Vec::with_capacity(spread.count);
+    for k in 0..spread.count {
+        let (col, row) = ((k % cols) as f64, (k / cols) as f64);
+        let jitter_u = (cell_w / 2.0 - reach).max(0.0);
+        let jitter_v = (cell_h / 2.0 - reach).max(0.0);
+        let u = (col + 0.5) * cell_w + rng.range(-jitter_u, jitter_u.max(1e-9));
+        let v = (row + 0.5) * cell_h + rng.range(-jitter_v, jitter_v.max(1e-9));
+        let d = rng.range(
+            spread.diameter_px.0,
+            spread.diameter_px.1.max(spread.diameter_px.0 + 1e-9),
+        );
+        let roll = rng.range(0.0, 2.0 * PI);
+        let (tilt, pan) = match spread.fixed_tilt {
+            Some(t) => {
+                let axis = rng.range(0.0, 2.0 * PI);
+                (t * axis.cos(), t * axis.sin())
+            }
+            None => (
+                rng.range(-spread.max_tilt, spread.max_tilt.max(1e-12)),
+                rng.range(-spread.max_tilt, spread.max_tilt.max(1e-12)),
+            ),
+        };
+        let (marker, id) = match family {
+            Some(f) => {
+                let id = 1 + rng.next_u32() % f.len() as u32;
+                let code = f.code(id).expect("id within the family");
+                (Marker::whycode(f.bits(), code, DIAMETER_M * 1000.0), id)
+            }
+            None => (Marker::whycon(DIAMETER_M * 1000.0), 0),
+        };
+        let placement = if spread.against_view {
+            // The same draws, the turn measured from the line of sight
+            // instead of from the optical axis.
+            let turn = tilt.hypot(pan);
+            let axis = Vector3::new(tilt, -pan, 0.0) / turn.max(1e-12);
+            Placement::at_pixel(camera, &marker, (u, v), d, 0.0, 0.0, roll)
+                .tilted_from_sight(turn, axis)
+        } else {
+            Placement::at_pixel(camera, &marker, (u, v), d, tilt, pan, roll)
+        };
+        out.push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+    }
+    out
+}
+
+/// A scene with the simulator's defaults and these objects.
+pub fn scene(camera: &Camera, objects: Vec<SceneObject>, seed: u64) -> Scene {
+    let mut s = Scene::new(*camera);
+    s.objects = objects;
+    s.seed = seed;
+    s
+}
+
+/// A detector for `family` (legacy without) of [`DIAMETER_M`] markers,
+/// with pose.
+pub fn detector(family: Option<&Family>, camera: &Camera, tracking: bool) -> Detector {
+    Detector::new(DetectorConfig {
+        target: family.map_or(Target::WhyCon, |f| Target::WhyCode(f.clone())),
+        camera: Some(*camera),
+        diameter_m: Some(DIAMETER_M),
+        tracking,
+        ..DetectorConfig::default()
+    })
+}
+
+/// One frame of a scenario: its seed, the image and the true targets.
+pub struct Frame {
+    /// The frame's seed.
+    pub seed: u64,
+    /// The picture.
+    pub image: GrayImage,
+    /// Its markers, then its printed squares.
+    pub targets: Vec<TrueTarget>,
+}
+
+/// Which targets a frame shows: our markers, or tag36h11 AprilTags of the
+/// same printed footprint in their places.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Print {
+    /// WhyCode (or WhyCon) markers.
+    WhyCode,
+    /// AprilTags in the markers' places ([`crate::tag36h11::tag_for`]).
+    AprilTag,
+}
+
+type Look<'a> = dyn Fn(&mut Scene, &mut Pcg32, usize) + 'a;
+type AfterRender<'a> = dyn Fn(&mut GrayImage, &mut Pcg32) + 'a;
+
+/// A seeded series of frames: markers of `family` (legacy WhyCon without)
+/// spread as `spread` over a distortion-free 60° camera, then the row's
+/// look. Frame `f` draws everything from `Pcg32::new(seed0 + f, 1)`: first
+/// the markers, then whatever [`Scenario::look`] and
+/// [`Scenario::after_render`] draw, in that order; so the AprilTag frame
+/// of the same `f` differs only in what is printed.
+pub struct Scenario<'a> {
+    /// Image size, pixels.
+    pub size: (u32, u32),
+    /// The markers' family; `None`: legacy WhyCon.
+    pub family: Option<&'a Family>,
+    /// How markers are spread over each frame.
+    pub spread: Spread,
+    /// How many frames.
+    pub frames: usize,
+    /// The first frame's seed.
+    pub seed0: u64,
+    look: Box<Look<'a>>,
+    after_render: Option<Box<AfterRender<'a>>>,
+}
+
+impl<'a> Scenario<'a> {
+    /// `frames` frames of 800x600 with the simulator's default look.
+    pub fn new(family: Option<&'a Family>, spread: Spread, frames: usize, seed0: u64) -> Self {
+        Scenario {
+            size: (800, 600),
+            family,
+            spread,
+            frames,
+            seed0,
+            look: Box::new(|_, _, _| {}),
+            after_render: None,
+        }
+    }
+
+    /// Frames of `width` x `height`.
+    pub fn size(mut self, width: u32, height: u32) -> Self {
+        self.size = (width, height);
+        self
+    }
+
+    /// Sets the scene's background, light and effects; gets the frame's
+    /// generator and the frame number.
+    pub fn look(mut self, look: impl Fn(&mut Scene, &mut Pcg32, usize) + 'a) -> Self {
+        self.look = Box::new(look);
+        self
+    }
+
+    /// Changes the rendered image (what the simulator cannot draw itself).
+    pub fn after_render(mut self, change: impl Fn(&mut GrayImage, &mut Pcg32) + 'a) -> Self {
+        self.after_render = Some(Box::new(change));
+        self
+    }
+
+    /// The scenario's camera.
+    pub fn camera(&self) -> Camera {
+        camera(self.size.0, self.size.1)
+    }
+
+    /// Frame `f`, printed as `print`.
+    pub fn frame(&self, f: usize, print: Print) -> Frame {
+        let seed = self.seed0 + f as u64;
+        let cam = self.camera();
+        let mut rng = Pcg32::new(seed, 1);
+        let mut s = scene(
+            &cam,
+            spread_markers(&cam, self.family, self.spread, &mut rng),
+            seed,
+        );
+        (self.look)(&mut s, &mut rng, f);
+        if print == Print::AprilTag {
+            with_tags(&mut s);
+        }
+        let (mut image, truth) = simulate::render(&s);
+        if let Some(change) = &self.after_render {
+            change(&mut image, &mut rng);
+        }
+        Frame {
+            seed,
+            image,
+            targets: truth.targets(),
+        }
+    }
+
+    /// Detects every frame with `detector` (whose adaptive state carries
+    /// over, as in a video), adds to `counts` and shows each frame and its
+    /// reports to `visit`.
+    pub fn run(
+        &self,
+        detector: &mut Detector,
+        counts: &mut Counts,
+        mut visit: impl FnMut(&Frame, &[Sighting]),
+    ) {
+        for f in 0..self.frames {
+            let frame = self.frame(f, Print::WhyCode);
+            let found: Vec<Sighting> = detector
+                .detect(&frame.image)
+                .iter()
+                .map(Sighting::from)
+                .collect();
+            counts.add(frame.seed, &frame.targets, &found);
+            visit(&frame, &found);
+        }
+    }
+
+    /// [`Scenario::run`] with a fresh detector (with pose, no tracking).
+    pub fn counts_with(&self, visit: impl FnMut(&Frame, &[Sighting])) -> Counts {
+        let mut det = detector(self.family, &self.camera(), false);
+        let mut counts = Counts::default();
+        self.run(&mut det, &mut counts, visit);
+        counts
+    }
+
+    /// [`Scenario::counts_with`] without looking at the frames.
+    pub fn counts(&self) -> Counts {
+        self.counts_with(|_, _| {})
+    }
+}
