@@ -3,7 +3,7 @@
 
 import json
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any, Callable, Literal
 
 import numpy as np
 import pytest
@@ -117,7 +117,7 @@ def test_pose_matches_the_cli(tmp_path: Path, cli: Callable[..., Any],
 
 
 @pytest.mark.parametrize("layout", ["grid", "scatter"])
-def test_every_loose_layout_matches_the_cli(layout: str, tmp_path: Path,
+def test_every_loose_layout_matches_the_cli(layout: Literal["grid", "scatter"], tmp_path: Path,
                                             cli: Callable[..., Any]) -> None:
     image, truth = whycode.simulate(ids=range(1, 9), layout=layout, size=(640, 480),
                                     camera_distance="0.9m", tilt=15, seed=4)
