@@ -10,6 +10,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
+# The namespace needs `unshare` (util-linux) and `ip` (iproute2).
+if ! command -v ip >/dev/null 2>&1 || ! command -v unshare >/dev/null 2>&1; then
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq iproute2 util-linux >/dev/null
+fi
+
 PYTHON=${PYTHON:-python3}
 TARGET=${CARGO_TARGET_DIR:-$PWD/target}
 VENV=${WHYCODE_ROS2_VENV:-$TARGET/ros2-venv}
