@@ -57,7 +57,7 @@ impl From<anyhow::Error> for Error {
 /// here (`camera_distance: ...`); a file that could not be read is an
 /// `OSError`, anything else a `ValueError`.
 pub(crate) fn spec_error(err: whycode::spec::SpecError) -> Error {
-    let message = err.message_with(str::to_string);
+    let message = whycode::error::shorten_words(&err.message_with(str::to_string));
     if err.is_io() {
         Error::Os(message)
     } else {

@@ -168,7 +168,35 @@ impl Camera {
     }
 }
 
+/// Deeper than any calibration file nests; a hostile file nested 100,000
+/// deep took the YAML parser 42 s to refuse.
+const MAX_NESTING: usize = 32;
+
+/// How deeply `text` nests, by flow brackets and by block indentation
+/// (each `- ` opening a sequence entry on a line counts one level).
+fn nesting(text: &str) -> usize {
+    let (mut depth, mut deepest) = (0usize, 0usize);
+    for line in text.lines() {
+        let indent = line.len() - line.trim_start_matches([' ', '-']).len();
+        deepest = deepest.max(indent / 2 + line.trim_start().matches("- ").count());
+        for c in line.chars() {
+            match c {
+                '[' | '{' | '<' => {
+                    depth += 1;
+                    deepest = deepest.max(depth);
+                }
+                ']' | '}' | '>' => depth = depth.saturating_sub(1),
+                _ => {}
+            }
+        }
+    }
+    deepest
+}
+
 fn parse_calibration(text: &str) -> Result<Camera> {
+    if nesting(text) > MAX_NESTING {
+        bail!("nested more than {MAX_NESTING} levels deep: not a camera calibration");
+    }
     let doc = if text.trim_start().starts_with("<?xml") || text.contains("<opencv_storage>") {
         opencv_xml_to_value(text)?
     } else {
@@ -620,6 +648,20 @@ cam0:
         assert_eq!((cam.width, cam.height), (800, 600));
         assert_eq!(cam.distortion, [-0.1, 0.01, 0.0, 0.0, 0.0]);
         assert_eq!((cam.fx, cam.cx), (700.0, 399.5));
+    }
+
+    #[test]
+    fn deeply_nested_text_is_refused_before_parsing() {
+        for text in [
+            "[".repeat(100_000),
+            "- ".repeat(100_000),
+            (0..1000)
+                .map(|k| format!("{}a{k}:\n", " ".repeat(2 * k)))
+                .collect(),
+        ] {
+            let err = Camera::parse(&text).unwrap_err().to_string();
+            assert!(err.contains("nested more than"), "{err}");
+        }
     }
 
     #[test]
