@@ -116,12 +116,7 @@ pub(crate) fn gaussian_blur(image: &[f32], width: usize, height: usize, sigma: f
     if sigma > EXACT_BLUR_MAX_SIGMA {
         return box_gaussian(image, width, height, sigma);
     }
-    let radius = (3.0 * sigma).ceil() as isize;
-    let mut kernel: Vec<f32> = (-radius..=radius)
-        .map(|k| (-(k * k) as f64 / (2.0 * sigma * sigma)).exp() as f32)
-        .collect();
-    let total: f32 = kernel.iter().sum();
-    kernel.iter_mut().for_each(|k| *k /= total);
+    let (kernel, radius) = gaussian_kernel(sigma);
 
     let mut horizontal = vec![0f32; image.len()];
     horizontal
@@ -156,6 +151,17 @@ pub(crate) fn gaussian_blur(image: &[f32], width: usize, height: usize, sigma: f
             }
         });
     out
+}
+
+/// The normalised Gaussian kernel out to three sigma, and its radius.
+fn gaussian_kernel(sigma: f64) -> (Vec<f32>, isize) {
+    let radius = (3.0 * sigma).ceil() as isize;
+    let mut kernel: Vec<f32> = (-radius..=radius)
+        .map(|k| (-(k * k) as f64 / (2.0 * sigma * sigma)).exp() as f32)
+        .collect();
+    let total: f32 = kernel.iter().sum();
+    kernel.iter_mut().for_each(|k| *k /= total);
+    (kernel, radius)
 }
 
 /// Three box blurs per axis whose summed variance is sigma² (the box sizes
@@ -261,21 +267,16 @@ mod tests {
         let sigma = 17.0;
         let boxes = box_gaussian(&image, w, h, sigma);
         // The exact kernel at the same sigma, skipping the switch.
-        let radius = (3.0 * sigma).ceil() as isize;
-        let kernel: Vec<f64> = (-radius..=radius)
-            .map(|k| (-(k * k) as f64 / (2.0 * sigma * sigma)).exp())
-            .collect();
-        let total: f64 = kernel.iter().sum();
+        let (kernel, radius) = gaussian_kernel(sigma);
         for x in 150..250 {
             let exact: f64 = kernel
                 .iter()
                 .enumerate()
                 .map(|(k, weight)| {
                     let at = (x as isize + k as isize - radius).clamp(0, w as isize - 1);
-                    weight * f64::from(image[at as usize])
+                    f64::from(weight * image[at as usize])
                 })
-                .sum::<f64>()
-                / total;
+                .sum();
             assert!(
                 (f64::from(boxes[w + x]) - exact).abs() < 1.0,
                 "x {x}: {} vs {exact}",
