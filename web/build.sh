@@ -39,6 +39,7 @@ if ! command -v wasm-bindgen >/dev/null 2>&1 || [ "$(wasm-bindgen --version | aw
             CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16 CARGO_PROFILE_RELEASE_OPT_LEVEL=1 \
             cargo install wasm-bindgen-cli --version "$version" --root "$tools" "$@"
     }
+    echo "web/build.sh: trying the CLI's locked dependency set first; should one of them have been yanked since, cargo prints an error and the install is retried unlocked" >&2
     install --locked || install
     rm -rf "$tools/build"
 fi

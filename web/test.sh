@@ -19,13 +19,17 @@ if [ ${#missing[@]} -gt 0 ]; then
     apt-get update -qq
     apt-get install -y -qq "${missing[@]}" >/dev/null
 fi
-if ! python3 -c "import playwright" 2>/dev/null; then
-    python3 -m pip install --quiet --disable-pip-version-check "playwright==1.65.2"
+# Playwright lives in a virtual environment of its own under the target
+# directory, never in the system Python.
+venv="$target_dir/web-venv"
+if ! "$venv/bin/python" -c "import playwright" 2>/dev/null; then
+    python3 -m venv "$venv"
+    "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "playwright==1.65.2"
 fi
 
 # The binding crate is not a default member, so the workspace lint skips it.
 cargo clippy -p whycode-web --all-targets -- -D warnings
 "$here/build.sh"
 cargo build --release --bin whycode
-python3 "$here/test_web.py" --dist "$here/dist" --whycode "$target_dir/release/whycode" \
+"$venv/bin/python" "$here/test_web.py" --dist "$here/dist" --whycode "$target_dir/release/whycode" \
     --out "${WEB_TEST_OUT:-$target_dir/web-test}" "$@"
