@@ -638,9 +638,11 @@ mod tests {
     fn impossible_families_and_foreign_ids_are_refused() {
         let s = Settings::default().with("bits", &int(4)).unwrap();
         let s = s.with("distance", &int(5)).unwrap();
-        assert!(detector_config(&s, None)
-            .unwrap_err()
-            .starts_with("family: "));
+        let err = detector_config(&s, None).unwrap_err();
+        assert_eq!(
+            err,
+            "parameter distance: distance must be between 1 and the bit count 4, got 5"
+        );
         let s = Settings::default()
             .with("tag.ids", &ParameterValue::IntegerArray(vec![1, 5000]))
             .unwrap();
