@@ -349,9 +349,13 @@ pub fn detector_config(
         tracking: settings.tracking,
         ..DetectSpec::default()
     };
-    let config = spec
+    let mut config = spec
         .build()
         .map_err(|e| e.message_with(|option| format!("parameter {option}")))?;
+    // The camera comes later, from camera_info (the node fits it to each
+    // frame); the diameter, checked against the same range when it was set,
+    // waits in the configuration until then.
+    config.diameter_m = settings.detector_diameter();
     if let Target::WhyCode(family) = &config.target {
         if let Some(id) = settings
             .tag_ids

@@ -34,6 +34,7 @@ mod sheet_output;
 mod sheet_self_check;
 mod simulate_detect;
 mod simulate_scene;
+mod spec_cli;
 mod validate_cli;
 mod validate_matching;
 mod validate_photos;

@@ -497,7 +497,7 @@ other_node:
     "args, needle",
     [
         (["--ros-args", "-p", "diameter:=-3"], "parameter diameter: -3 m is not a plausible"),
-        (["--ros-args", "-p", "bits:=4", "-p", "distance:=9"], "family:"),
+        (["--ros-args", "-p", "bits:=4", "-p", "distance:=9"], "parameter distance:"),
         (["--ros-args", "-p", "tag.ids:=[1, 1]"], "parameter tag.ids: ID 1 is listed twice"),
         (["--ros-args", "--params-file", "/nonexistent.yaml"], "/nonexistent.yaml"),
         (["--ros-args", "-r", "__node:=2fast"], "node name '2fast'"),
