@@ -6,11 +6,11 @@ use image::{ImageBuffer, Luma};
 use nalgebra::Vector3;
 use std::ops::Deref;
 
-use super::manchester::{self, RingEvidence};
-use super::ring_model::SmallRing;
+use super::ring::manchester::{self, RingEvidence};
+use super::ring::model::{self as ring_model, SmallRing};
 use super::segment::Gray;
 use super::track::{Fitted, PoseMemory};
-use super::{ellipse, legacy, rectify, ring_model, Candidate, Detection, Detector};
+use super::{ellipse, legacy, rectify, Candidate, Detection, Detector};
 use crate::camera::Camera;
 use crate::family::{Family, MatchStatus};
 use crate::geometry::{sector_is_black, sector_width, Design, WHYCODE_WHITE_RATIO};

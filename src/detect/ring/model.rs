@@ -14,7 +14,7 @@
 //! length L smears sectors into their neighbours, so no sample reads one
 //! sector, but the members rendered through a segment of the length and
 //! direction the outline's edge spread shows
-//! ([`super::ellipse::linear_blur`]) still tell them apart.
+//! ([`crate::detect::ellipse::linear_blur`]) still tell them apart.
 //!
 //! Each pixel's model value is linear in the 2n half-sector colours, so the
 //! pixel sums that the least-squares comparison needs are formed once per
@@ -26,7 +26,7 @@ use std::ops::Deref;
 
 use image::{ImageBuffer, Luma};
 
-use super::ellipse::LinearBlur;
+use crate::detect::ellipse::LinearBlur;
 use crate::family::{necklace, Family};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
 use crate::math::angle;
@@ -150,7 +150,7 @@ pub fn neighbour_count_fits_better<C: Deref<Target = [u8]>>(
 }
 
 /// Reads a ring smeared by the motion blur `blur` (measured on the outline,
-/// see [`super::ellipse::linear_blur`]): the same comparison with every member
+/// see [`crate::detect::ellipse::linear_blur`]): the same comparison with every member
 /// rendered through segments of about the measured length. Large rings
 /// are compared on a subset of their pixels (the smear, not the pixel,
 /// sets the scale of what the model can tell apart).
