@@ -6,8 +6,8 @@ use image::{ImageBuffer, Luma};
 use nalgebra::Vector3;
 use std::ops::Deref;
 
-use super::ring::manchester::{self, RingEvidence};
-use super::ring::model::{self as ring_model, SmallRing};
+use super::ring::manchester::RingEvidence;
+use super::ring::{self, RingVerdict};
 use super::segment::Gray;
 use super::track::{Fitted, PoseMemory};
 use super::{ellipse, legacy, rectify, Candidate, Detection, Detector};
@@ -116,7 +116,6 @@ impl Detector {
             d.yaw = Some(yaw);
             d.confidence = t.confidence;
         } else if self.config.target.design() == Design::WhyCode {
-            let family_bits = self.config.target.family().map(Family::bits);
             let settled = c
                 .track
                 .is_some_and(|i| self.tracks[i].id != 0 && self.tracks[i].id_streak >= 3);
@@ -124,151 +123,20 @@ impl Detector {
             // first: passing that surely spares testing every other count
             // (each frame's cost on rings of another family, or without one).
             let remembered = c.track.and_then(|i| self.tracks[i].bits);
-            let evidence = ring_evidence(image, &outer, c, family_bits, remembered);
-            let in_shade = matches!(evidence, RingEvidence::Manchester(r) if r.in_shade);
-            // Rings whose sectors are a pixel or two wide: compare with the
-            // rendered members instead (also the ring test when too small
-            // for the sector test).
-            let small = match (self.config.target.family(), evidence) {
-                (Some(family), RingEvidence::TooSmall) => {
-                    ring_model::read_small_ring(image, &outer, family).map(|ring| {
-                        let refuted = ring.id != 0
-                            && ring_model::neighbour_count_fits_better(
-                                image, &outer, family, &ring,
-                            );
-                        SmallRing {
-                            id: if refuted { 0 } else { ring.id },
-                            yaw: ring.yaw.filter(|_| !refuted),
-                            ..ring
-                        }
-                    })
-                }
-                _ => None,
-            };
-            let reader = match evidence {
-                RingEvidence::Manchester(ring) => {
-                    d.bits = Some(ring.bits);
-                    if Some(ring.bits) == family_bits {
-                        self.reader.as_ref()
-                    } else {
-                        // Not this family's ring (or no family given): the
-                        // code is what the ring says, the ID only from a
-                        // family of the ring's own bit count.
-                        d.code = Some(ring.code);
-                        d.confidence *= ring.fit;
-                        self.auto_reader(ring.bits)
-                    }
-                }
-                RingEvidence::Absent => {
-                    // A settled track whose ring blurs is still the marker.
-                    d.unreadable = !settled;
-                    None
-                }
-                // Auto mode cannot name the bit count of a ring too small
-                // to count its sectors: no evidence it is a marker.
-                RingEvidence::TooSmall if family_bits.is_none() => {
-                    d.unreadable = !settled;
-                    None
-                }
-                RingEvidence::TooSmall => self.reader.as_ref(),
-            };
-            let reader = match small {
-                Some(ring) if !ring.structured => {
-                    // The rendered model ignores perspective, which a steep
-                    // view of a large marker cannot: there it names no ID
-                    // but refutes nothing either.
-                    let steep = outer.semi_major > 2.0 * outer.semi_minor
-                        && outer.semi_major > ring_model::MAX_AFFINE_SEMI_MAJOR;
-                    d.unreadable = !settled && !steep;
-                    None
-                }
-                Some(ring) if ring.id != 0 => {
-                    d.id = ring.id;
-                    d.code = Some(ring.code);
-                    d.status = Some(MatchStatus::Exact);
-                    d.yaw = ring.yaw;
-                    d.confidence = (1.0 - 1.0 / ring.margin).clamp(0.0, 1.0);
-                    None
-                }
-                Some(_) => None,
-                None => reader,
-            };
-            if let Some(reader) = reader {
-                let mut reading = if in_shade {
-                    reader.read_in_shade(image, &outer, c.black, c.white)
-                } else {
-                    reader.read(image, &outer, c.black, c.white)
-                };
-                if !in_shade && reading.id == 0 {
-                    // A shadow's edge across a ring whose structure still
-                    // shows may hide a bit's edge in the shade. Read as
-                    // under even light, only a clean, exact member counts:
-                    // evening also flattens a motion blur's smear.
-                    let shaded = reader.read_in_shade(image, &outer, c.black, c.white);
-                    let clean = shaded.erasures == 0
-                        && shaded
-                            .decoded
-                            .is_some_and(|x| x.status == MatchStatus::Exact);
-                    if shaded.id != 0 && clean {
-                        reading = shaded;
-                    }
-                }
-                // A ring the structure test could not look at (cut by the
-                // image border, say) that reads as no code at all is no
-                // evidence of a marker either.
-                if evidence == RingEvidence::TooSmall && reading.decoded.is_none() {
-                    d.unreadable = !settled;
-                }
-                d.id = reading.id;
-                d.code = reading
-                    .decoded
-                    .filter(|x| x.is_member())
-                    .map(|x| x.code)
-                    .or(d.code);
-                d.status = reading.decoded.map(|x| x.status);
-                d.yaw = reading.yaw;
-                d.confidence = reading.confidence;
-                axis_point = reading.axis_point;
-                centre_estimate = reading.centre_estimate;
-            }
-            if let (Some(bits), RingEvidence::TooSmall, true) = (family_bits, evidence, d.id != 0) {
-                // Too fine to test for the family's count, the ring may
-                // still show a coarser count's structure: then the member
-                // read is not what was printed (a 16-bit ring 43 px across
-                // matched a member of an 18-bit family, dense as long
-                // families are). Only the ID goes: the candidate was judged
-                // a marker or not as before.
-                if let Some(ring) = coarser_ring(image, &outer, c, bits) {
-                    d.id = 0;
-                    d.bits = Some(ring.bits);
-                    d.code = Some(ring.code);
-                    d.status = None;
-                    d.confidence *= ring.fit;
-                    // The yaw, rim point and centre were the member's.
-                    d.yaw = None;
-                    axis_point = None;
-                    centre_estimate = None;
-                }
-            }
-            let family_ring = match evidence {
-                RingEvidence::Manchester(ring) => Some(ring.bits) == family_bits,
-                RingEvidence::Absent => true,
-                RingEvidence::TooSmall => false,
-            };
-            // A clean exact reading needs no second opinion; any other ring
-            // the outline shows smeared by motion is compared with the members
-            // rendered through that smear.
-            let clean = d.id != 0 && d.status == Some(MatchStatus::Exact) && d.confidence >= 0.5;
-            if family_ring && !clean {
-                if let Some(ring) = self.read_blurred(image, gray, &outer) {
-                    if !Self::apply_blurred_reading(&mut d, ring) {
-                        // The reader's rim point and centre belong to a
-                        // reading that no longer stands.
-                        axis_point = None;
-                        centre_estimate = None;
-                    }
-                }
-            }
+            let verdict = self
+                .rings
+                .identify(image, gray, c, d.confidence, remembered);
+            let read = *verdict.read();
+            d.id = read.id;
+            d.code = read.code;
+            d.status = read.status;
+            d.yaw = read.yaw;
+            d.confidence = read.confidence;
+            d.bits = read.bits;
+            // A settled track whose ring blurs is still the marker.
+            d.unreadable = !settled && matches!(verdict, RingVerdict::NotAMarker(_));
+            axis_point = read.axis_point;
+            centre_estimate = read.centre_estimate;
         } else {
             // A marker followed for a while stays one when its inside blurs,
             // so its inside need not be looked at (the ray test costs more
@@ -286,7 +154,7 @@ impl Detector {
                         legacy::white_disc_mass(gray, &c.outer, paper)
                     }
                     (Some(legacy::Inside::WhyCodeRing), Some(_)) => matches!(
-                        ring_evidence(image, &outer, c, None, None),
+                        ring::evidence(image, c, None, None),
                         RingEvidence::Manchester(_)
                     ),
                     _ => false,
@@ -388,59 +256,6 @@ impl Detector {
     /// candidates afresh this frame.
     fn recheck(&self, index: usize) -> bool {
         (self.tracks[index].hits as usize + index) % RECHECK_FRAMES == 0
-    }
-
-    /// The ring read through the motion blur its outline shows, when the
-    /// blur is long enough to smear the sectors the reader samples.
-    fn read_blurred<C: Deref<Target = [u8]>>(
-        &self,
-        image: &ImageBuffer<Luma<u8>, C>,
-        gray: Gray<'_>,
-        outer: &Ellipse,
-    ) -> Option<ring_model::SmallRing> {
-        let family = self.config.target.family()?;
-        let blur = ellipse::linear_blur(gray, outer)?;
-        // Below this the sector reader's central samples stay clear of
-        // the neighbouring sectors.
-        if blur.length < ellipse::MIN_MOTION_BLUR_PX {
-            return None;
-        }
-        ring_model::read_blurred_ring(image, outer, family, &blur)
-    }
-
-    /// Combines the sector reader's verdict with the blurred model's: the
-    /// model vouches for the ring (a marker even when the sector test saw
-    /// no Manchester structure) and names the ID the reader could not; when
-    /// the two name different members, or the reader needed correcting
-    /// where the model sees two members alike, no ID is named. True when
-    /// the reader's reading stands as it was.
-    fn apply_blurred_reading(d: &mut Detection, ring: ring_model::SmallRing) -> bool {
-        if !ring.structured {
-            return true;
-        }
-        d.unreadable = false;
-        let agrees = match (d.id, ring.id) {
-            (0, 0) => return true,
-            (read, 0) => read != 0 && d.status == Some(MatchStatus::Exact),
-            (read, modelled) => read == modelled,
-        };
-        if agrees {
-            return true;
-        }
-        if d.id == 0 {
-            d.id = ring.id;
-            d.code = Some(ring.code);
-            d.status = Some(MatchStatus::Exact);
-            d.yaw = ring.yaw;
-            d.confidence = (1.0 - 1.0 / ring.margin).clamp(0.0, 1.0);
-        } else {
-            d.id = 0;
-            d.code = None;
-            d.status = None;
-            d.yaw = None;
-            d.confidence = 0.0;
-        }
-        false
     }
 
     /// Tracked markers report what the ID filter believes after this
@@ -754,78 +569,6 @@ fn rough_atan2(y: f64, x: f64) -> f64 {
         r = -r;
     }
     r
-}
-
-/// The Manchester structure of a count at least two below `bits` that a
-/// ring too small to test for `bits` shows (a neighbouring count may pass
-/// for the ring's own when its sectors are this fine; see
-/// [`manchester::examine`]). Counts of 8 bits and more: on so small a ring
-/// the lobes of a blurred finer code pass for a short one (8-bit markers
-/// 10 px across lost a sixth of their IDs to 4- to 6-bit readings).
-fn coarser_ring<C: Deref<Target = [u8]>>(
-    image: &ImageBuffer<Luma<u8>, C>,
-    outer: &Ellipse,
-    c: &Candidate,
-    bits: u32,
-) -> Option<manchester::RingStructure> {
-    let coarser =
-        manchester::BITS.filter(|&n| n >= 8 && n + 2 <= bits && manchester::testable(outer, n));
-    match manchester::examine(image, outer, c.black, c.white, coarser, false) {
-        RingEvidence::Manchester(ring) => Some(ring),
-        _ => None,
-    }
-}
-
-/// Least sector width (pixels, see [`manchester::sector_pixels`]) at which
-/// a ring read without a family is believed.
-const AUTO_MIN_SECTOR_PX: f64 = 2.0;
-
-/// What the candidate's ring shows: the bit count its track showed last
-/// and the family's are tried first (the common case), then every other
-/// count, so that a ring of another family is told apart from no ring at
-/// all.
-fn ring_evidence<C: Deref<Target = [u8]>>(
-    image: &ImageBuffer<Luma<u8>, C>,
-    outer: &Ellipse,
-    c: &Candidate,
-    family_bits: Option<u32>,
-    remembered: Option<u32>,
-) -> RingEvidence {
-    match family_bits {
-        Some(bits) if !manchester::testable(outer, bits) => RingEvidence::TooSmall,
-        Some(bits) => {
-            let first = remembered.filter(|&n| n != bits && manchester::testable(outer, n));
-            // Counts too long to test on this ring are no evidence against
-            // the family's.
-            let others = manchester::BITS
-                .filter(|&n| n != bits && Some(n) != first && manchester::testable(outer, n));
-            manchester::examine(
-                image,
-                outer,
-                c.black,
-                c.white,
-                first.into_iter().chain(std::iter::once(bits)).chain(others),
-                first.is_none(),
-            )
-        }
-        // Without a family nothing but the structure test vouches for the
-        // ring, and on a ring of a few pixels the lobes of a letter or of
-        // an off-centre hole pass for a short code: only counts whose
-        // sectors are wide enough to show their own edges are tried.
-        None => {
-            let wide = |n: u32| manchester::sector_pixels(outer, n) >= AUTO_MIN_SECTOR_PX;
-            let first = remembered.filter(|&n| manchester::BITS.contains(&n) && wide(n));
-            let counts = manchester::BITS.filter(|&n| wide(n) && Some(n) != first);
-            manchester::examine(
-                image,
-                outer,
-                c.black,
-                c.white,
-                first.into_iter().chain(counts),
-                false,
-            )
-        }
-    }
 }
 
 #[cfg(test)]

@@ -42,14 +42,11 @@ pub(crate) mod segment;
 pub(crate) mod threshold;
 pub(crate) mod track;
 
-use std::collections::BTreeMap;
-
 use crate::camera::Camera;
-use crate::family::{Decoder, Family, MatchStatus};
+use crate::family::{Family, MatchStatus};
 use crate::geometry::Design;
 use crate::math::Ellipse;
 use crate::pose::Pose;
-use ring::RingReader;
 use segment::{Filler, Gray, Labels};
 use threshold::{ThresholdMap, ThresholdSearch};
 use track::{Adaptive, Track};
@@ -182,7 +179,7 @@ pub struct Detection {
 #[derive(Debug, Clone)]
 pub struct Detector {
     config: DetectorConfig,
-    reader: Option<RingReader>,
+    rings: ring::Rings,
     labels: Labels,
     filler: Filler,
     edge_scratch: Vec<(f64, f64)>,
@@ -194,8 +191,6 @@ pub struct Detector {
     /// A follow of this frame fell back to the flood fill.
     follow_filled: bool,
     tracks: Vec<Track>,
-    /// Readers for rings of each bit count, in auto mode with a distance.
-    auto_readers: BTreeMap<u32, Option<RingReader>>,
     /// How this detector's markers decoded so far.
     check: family_check::FamilyCheck,
     search: ThresholdSearch,
@@ -240,18 +235,14 @@ const DISCOVERY_BANDS: u64 = 8;
 impl Detector {
     /// A detector with no state yet; the first frame is scanned whole.
     pub fn new(config: DetectorConfig) -> Detector {
-        let reader = config
-            .target
-            .family()
-            .map(|family| RingReader::new(Some(Decoder::new(family))));
         let white = config.target.design().white_fraction();
         let check = family_check::FamilyCheck::new(config.target.family().map(Family::bits));
         Detector {
             ratio: Adaptive::new(white, config.ratio_tolerance),
             roundness: Adaptive::new(0.0, config.roundness_tolerance),
             area: Adaptive::new(0.0, config.area_tolerance),
+            rings: ring::Rings::new(&config.target),
             config,
-            reader,
             labels: Labels::default(),
             filler: Filler::default(),
             edge_scratch: Vec::new(),
@@ -261,7 +252,6 @@ impl Detector {
             occupied: Vec::new(),
             follow_filled: false,
             tracks: Vec::new(),
-            auto_readers: BTreeMap::new(),
             check,
             search: ThresholdSearch::default(),
             frame: 0,
@@ -293,23 +283,6 @@ impl Detector {
     /// [`family_check::FamilyCheck::note`] for a warning to show).
     pub fn family_check(&self) -> &family_check::FamilyCheck {
         &self.check
-    }
-
-    /// The reader for rings of `bits` bits in auto mode with a distance
-    /// (families are generated on first use); None without.
-    fn auto_reader(&mut self, bits: u32) -> Option<&RingReader> {
-        let Target::AnyBits {
-            distance: Some(distance),
-        } = self.config.target
-        else {
-            return None;
-        };
-        let reader = self.auto_readers.entry(bits).or_insert_with(|| {
-            Family::generate(bits, distance)
-                .ok()
-                .map(|family| RingReader::new(Some(Decoder::new(&family))))
-        });
-        reader.as_ref()
     }
 
     /// Forgets tracks and adapted tolerances.
