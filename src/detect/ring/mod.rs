@@ -81,7 +81,7 @@ pub(super) struct RingRead {
 
 impl RingRead {
     /// Nothing read yet, with the confidence the candidate's outline earned.
-    fn nothing(confidence: f64) -> RingRead {
+    pub(super) fn nothing(confidence: f64) -> RingRead {
         RingRead {
             id: 0,
             code: None,
@@ -261,7 +261,8 @@ impl Rings {
         // A clean exact reading needs no second opinion; any other ring the
         // outline shows smeared by motion is compared with the members
         // rendered through that smear.
-        let clean = read.id != 0 && read.status == Some(MatchStatus::Exact) && read.confidence >= 0.5;
+        let clean =
+            read.id != 0 && read.status == Some(MatchStatus::Exact) && read.confidence >= 0.5;
         if family_ring && !clean {
             if let Some(blurred) = self.read_blurred(image, gray, &c.outer) {
                 if let Some(judged) = with_blurred_model(read, &blurred) {

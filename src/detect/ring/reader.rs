@@ -154,7 +154,6 @@ pub struct RingReader {
     min_pixels_per_sector: f64,
 }
 
-
 impl RingReader {
     /// A reader that decodes rings with `decoder`, or only measures them without one.
     pub fn new(decoder: Option<Decoder>) -> RingReader {
