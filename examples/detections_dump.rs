@@ -13,7 +13,8 @@
 //! small to sample, steep views and families of the wrong bit count.
 //!
 //! `detections_dump [group ...]` prints only the named groups (see
-//! `GROUPS`), e.g. a short run under callgrind.
+//! `GROUPS`), e.g. a short run under callgrind; with `--timings`, each
+//! group's stage timings (summed over its frames) go to stderr.
 
 use std::f64::consts::PI;
 use std::path::Path;
@@ -21,7 +22,7 @@ use std::path::Path;
 use image::GrayImage;
 use nalgebra::Vector3;
 use whycode::camera::Camera;
-use whycode::detect::{Detector, DetectorConfig, Target};
+use whycode::detect::{Detector, DetectorConfig, StageTimings, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::math::Pcg32;
@@ -35,11 +36,21 @@ const GROUPS: [&str; 12] = [
     "steep", "wrong",
 ];
 
+thread_local! {
+    /// With `--timings`: the stage timings of the group being run.
+    static TIMINGS: std::cell::RefCell<Option<StageTimings>> = const { std::cell::RefCell::new(None) };
+}
+
 fn main() {
-    let wanted: Vec<String> = std::env::args().skip(1).collect();
+    let (flags, wanted): (Vec<String>, Vec<String>) =
+        std::env::args().skip(1).partition(|a| a.starts_with("--"));
+    let timings = flags.iter().any(|f| f == "--timings");
     let run = |group: &str| wanted.is_empty() || wanted.iter().any(|w| w == group);
     for group in GROUPS {
         if run(group) {
+            if timings {
+                TIMINGS.with(|t| *t.borrow_mut() = Some(StageTimings::default()));
+            }
             println!("== {group}");
             match group {
                 "photos" => photos(),
@@ -55,6 +66,9 @@ fn main() {
                 "steep" => steep(),
                 "wrong" => wrong(),
                 _ => unreachable!(),
+            }
+            if let Some(sum) = TIMINGS.with(|t| t.borrow_mut().take()) {
+                eprintln!("== {group}\n{sum}");
             }
         }
     }
@@ -81,9 +95,13 @@ fn with_pose(config: DetectorConfig, camera: &Camera) -> DetectorConfig {
 
 /// Runs a fresh detector over the frames in order and prints what it finds.
 fn dump(name: &str, config: DetectorConfig, frames: &[GrayImage]) {
-    let mut detector = Detector::new(config);
+    let timings = TIMINGS.with(|t| t.borrow().is_some());
+    let mut detector = Detector::new(DetectorConfig { timings, ..config });
     for (k, frame) in frames.iter().enumerate() {
         let found = detector.detect(frame);
+        if let Some(laps) = detector.last_timings() {
+            TIMINGS.with(|t| *t.borrow_mut().as_mut().expect("timed group") += &laps);
+        }
         println!("{name} frame {k}: {} found", found.len());
         for d in &found {
             println!("  {d:?}");

@@ -10,7 +10,7 @@ use image::{ImageBuffer, Luma};
 use super::ring::{RingRead, RingVerdict};
 use super::segment::Gray;
 use super::tracking::track::PoseMemory;
-use super::{legacy, Candidate, Detection, Detector};
+use super::{legacy, Candidate, Detection, Detector, Stage};
 use crate::geometry::Design;
 
 impl Detector {
@@ -55,7 +55,9 @@ impl Detector {
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed.is_some());
         }
+        self.stopwatch.lap(Stage::Describe);
         let memory = self.measure_pose(gray, c, &mut d, &read, followed.and_then(|f| f.posed));
+        self.stopwatch.lap(Stage::Pose);
         (d, memory)
     }
 }

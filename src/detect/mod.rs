@@ -37,8 +37,10 @@ pub mod ring;
 mod scan;
 pub(crate) mod segment;
 pub(crate) mod threshold;
+mod timings;
 mod tracking;
 
+pub use timings::{Stage, StageTimings};
 pub use tracking::idfilter;
 
 use crate::camera::Camera;
@@ -48,6 +50,7 @@ use crate::math::Ellipse;
 use crate::pose::Pose;
 use segment::{Filler, Gray, Labels};
 use threshold::ThresholdSearch;
+use timings::Stopwatch;
 use tracking::track::{Adaptive, PoseMemory, Track};
 
 /// What to look for and how strictly.
@@ -81,6 +84,10 @@ pub struct DetectorConfig {
     /// proportions is a marker to any test (legacy markers carry no ring
     /// to tell them apart). Smaller ones are `unreadable`.
     pub legacy_min_ink_px: f64,
+    /// Measure how long each stage of every frame takes, for
+    /// [`Detector::last_timings`]. Off, the detector reads no clock (nor
+    /// does it on wasm32-unknown-unknown, which has none).
+    pub timings: bool,
 }
 
 impl Default for DetectorConfig {
@@ -97,6 +104,7 @@ impl Default for DetectorConfig {
             ratio_tolerance: 0.5,
             report_unreadable: false,
             legacy_min_ink_px: legacy::MIN_INK_PX,
+            timings: false,
         }
     }
 }
@@ -197,6 +205,9 @@ pub struct Detector {
     roundness: Adaptive,
     area: Adaptive,
     frame: u64,
+    stopwatch: Stopwatch,
+    /// The last frame's stage timings, with `config.timings`.
+    timings: Option<StageTimings>,
 }
 
 /// A disc that passed every test.
@@ -252,6 +263,8 @@ impl Detector {
             check,
             search: ThresholdSearch::default(),
             frame: 0,
+            stopwatch: Stopwatch::default(),
+            timings: None,
         }
     }
 
@@ -282,6 +295,13 @@ impl Detector {
         &self.check
     }
 
+    /// How long each stage of the last frame took, with
+    /// [`DetectorConfig::timings`] on; None with it off, before the first
+    /// frame, and on targets without a clock (wasm32-unknown-unknown).
+    pub fn last_timings(&self) -> Option<StageTimings> {
+        self.timings
+    }
+
     /// Forgets tracks and adapted tolerances.
     pub fn reset(&mut self) {
         self.restart(self.config.clone());
@@ -308,7 +328,9 @@ impl Detector {
         &mut self,
         image: &image::ImageBuffer<image::Luma<u8>, C>,
     ) -> Vec<Detection> {
-        let Some(gray) = self.begin_frame(image) else {
+        self.stopwatch.start(self.config.timings);
+        let Some(gray) = self.timed(Stage::Prepare, |d| d.begin_frame(image)) else {
+            self.timings = self.stopwatch.stop();
             return Vec::new();
         };
         let mut finds = Finds::default();
@@ -318,23 +340,37 @@ impl Detector {
         let followed = finds.candidates.len();
         let every_track_followed =
             self.config.tracking && followed > 0 && followed == self.tracks.len();
-        self.mark_followed(&finds.candidates, gray.width, gray.height);
+        self.timed(Stage::Follow, |d| {
+            d.mark_followed(&finds.candidates, gray.width, gray.height)
+        });
         let found = &mut finds.candidates;
         if every_track_followed {
-            self.scan_band(gray, found);
+            self.timed(Stage::Scan, |d| d.scan_band(gray, found));
         } else {
-            let map = self.scan_frame(gray, found);
-            self.look_in_shade(gray, &map, found);
-            self.global_fallback(gray, &map, found);
+            let map = self.timed(Stage::Scan, |d| d.scan_frame(gray, found));
+            self.timed(Stage::Shade, |d| d.look_in_shade(gray, &map, found));
+            self.timed(Stage::Fallback, |d| d.global_fallback(gray, &map, found));
         }
         drop_seen_again(found, followed, self.config.max_markers);
         self.describe_new(image, gray, &mut finds);
-        if !self.config.report_unreadable {
-            // Round things without a code ring are not markers (and get no
-            // track either).
-            finds.drop_unreadable();
-        }
-        self.end_frame(finds)
+        let detections = self.timed(Stage::Finish, |d| {
+            if !d.config.report_unreadable {
+                // Round things without a code ring are not markers (and get
+                // no track either).
+                finds.drop_unreadable();
+            }
+            d.end_frame(finds)
+        });
+        self.timings = self.stopwatch.stop();
+        detections
+    }
+
+    /// Runs one step of a frame, its time charged to `stage` with the
+    /// timings on.
+    fn timed<R>(&mut self, stage: Stage, step: impl FnOnce(&mut Self) -> R) -> R {
+        let result = step(self);
+        self.stopwatch.lap(stage);
+        result
     }
 
     /// Sets up the buffers for a frame, and the frame's pixels as the scan

@@ -7,7 +7,7 @@ use std::f64::consts::PI;
 
 use super::segment::{below_mask, below_word, word_thresholds, Fill, Gray, Stats};
 use super::threshold::{self, ThresholdMap};
-use super::{ellipse, Candidate, Detector, SCAN_CHUNK};
+use super::{ellipse, Candidate, Detector, Stage, SCAN_CHUNK};
 use crate::geometry::Design;
 
 /// Slack of the concentricity test, in outer radii: WhyCode's white region
@@ -28,6 +28,7 @@ impl Detector {
         found: &mut Vec<Candidate>,
     ) -> ThresholdMap {
         let map = ThresholdMap::adaptive(gray.pixels, gray.width, gray.height);
+        self.stopwatch.lap(Stage::Threshold);
         self.scan(gray, &map, 0..gray.height, &[], found);
         map
     }

@@ -21,7 +21,7 @@ use super::pose::Posed;
 use super::ring::RingRead;
 use super::segment::Gray;
 use super::threshold::ThresholdMap;
-use super::{preload_disc, rectify, Candidate, Detection, Detector, Finds, SCAN_CHUNK};
+use super::{preload_disc, rectify, Candidate, Detection, Detector, Finds, Stage, SCAN_CHUNK};
 use crate::family::{Family, MatchStatus};
 use track::{PoseMemory, Track};
 
@@ -63,7 +63,9 @@ impl Detector {
                 let (u, v) = next.predicted();
                 preload_disc(gray, u, v, next.a + follow::edge_window(next.a) + 1.0);
             }
-            if let Some(mut c) = self.follow(gray, index) {
+            let followed = self.follow(gray, index);
+            self.stopwatch.lap(Stage::Follow);
+            if let Some(mut c) = followed {
                 c.track = Some(index);
                 let (d, memory) = self.describe(image, gray, &c);
                 finds.detections.push(d);
@@ -99,6 +101,7 @@ impl Detector {
         let reach = self.tracks.iter().map(|t| 2.0 * t.a).fold(0.0, f64::max) as usize + SCAN_CHUNK;
         let map_rows = rows.start.saturating_sub(reach)..(rows.end + reach).min(height);
         let map = ThresholdMap::adaptive_rows(gray.pixels, width, height, map_rows);
+        self.stopwatch.lap(Stage::Threshold);
         self.scan(gray, &map, rows, &[], found);
     }
 
