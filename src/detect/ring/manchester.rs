@@ -537,3 +537,62 @@ fn correlations(profile: &Profile, models: &[Vec<f64>; 3]) -> [f64; 3] {
         }
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_images::{draw, INK, PAPER};
+    use super::*;
+    use crate::geometry::Marker;
+
+    const BLACK: f64 = INK as f64;
+    const WHITE: f64 = PAPER as f64;
+
+    #[test]
+    fn a_drawn_ring_shows_its_own_count_and_code_among_all() {
+        for (bits, code) in [(6, 0b001011), (8, 0b0110_1011), (12, 0b0000_1101_0111)] {
+            let marker = Marker::whycode(bits, code, 50.0);
+            let (image, outline) = draw(&marker, 60.0, 72, (36.2, 35.9), 0.7);
+            let expected = std::iter::once(bits).chain(BITS.filter(|&n| n != bits));
+            let RingEvidence::Manchester(ring) =
+                examine(&image, &outline, BLACK, WHITE, expected, true)
+            else {
+                panic!("{bits} bits: no Manchester ring");
+            };
+            assert_eq!(
+                (ring.bits, ring.code),
+                (bits, necklace::min_rotation(code, bits).0)
+            );
+            assert!(ring.fit >= SURE_FIT && !ring.in_shade, "{ring:?}");
+            // Tested for twice its count, or without its own, it is no ring.
+            let others = BITS.filter(|&n| n != bits);
+            match examine(&image, &outline, BLACK, WHITE, others, false) {
+                RingEvidence::Manchester(other) => assert!(other.bits != bits, "{other:?}"),
+                RingEvidence::Absent | RingEvidence::TooSmall => {}
+            }
+            assert!(!matches!(
+                examine(&image, &outline, BLACK, WHITE, [2 * bits], false),
+                RingEvidence::Manchester(_)
+            ));
+        }
+    }
+
+    #[test]
+    fn a_washer_shows_no_ring_unless_a_count_tried_was_too_fine_to_test() {
+        let (image, outline) = draw(&Marker::whycon(50.0), 32.0, 40, (20.0, 20.0), 0.0);
+        assert!(testable(&outline, 8) && !testable(&outline, 24));
+        assert_eq!(
+            examine(&image, &outline, BLACK, WHITE, [8, 12], false),
+            RingEvidence::Absent
+        );
+        // Sectors of 24 bits would be under MIN_TESTABLE_PIXELS here: no
+        // evidence either way for that count.
+        assert_eq!(
+            examine(&image, &outline, BLACK, WHITE, [8, 24], false),
+            RingEvidence::TooSmall
+        );
+        assert_eq!(
+            examine(&image, &outline, BLACK, WHITE, [24], false),
+            RingEvidence::TooSmall
+        );
+    }
+}

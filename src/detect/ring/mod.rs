@@ -10,6 +10,10 @@
 //! sample sector by sector, and [`model`] compares rings too small or too
 //! smeared for that with every member rendered as the camera would see it.
 
+#[cfg(test)]
+#[macro_use]
+mod test_images;
+
 pub mod manchester;
 pub mod model;
 mod profile;

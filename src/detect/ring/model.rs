@@ -508,3 +508,47 @@ fn residual_of_two(pixels: &[(f64, f64, f64)], u: &[f64], v: &[f64]) -> f64 {
     let gamma = (syv * suu - syu * suv) / det;
     syy - beta * syu - gamma * syv
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_images::{angle_between, draw};
+    use super::*;
+    use crate::geometry::Marker;
+
+    #[test]
+    fn a_ring_too_small_to_sample_is_named_by_the_members_rendered() {
+        let family = Family::generate(8, 2).unwrap();
+        for (id, turn) in [(2, 0.3), (7, 2.0)] {
+            let code = family.code(id).unwrap();
+            let (image, outline) = draw(
+                &Marker::whycode(8, code, 50.0),
+                14.0,
+                24,
+                (12.3, 11.8),
+                turn,
+            );
+            let ring = read_small_ring(&image, &outline, &family).unwrap();
+            assert!(ring.structured, "{ring:?}");
+            assert_eq!((ring.id, ring.code), (id, code), "{ring:?}");
+            let yaw = ring.yaw.unwrap();
+            assert!(
+                angle_between(yaw, -turn) < 10f64.to_radians(),
+                "{yaw} {turn}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_disc_without_a_code_ring_is_no_small_ring() {
+        let family = Family::generate(8, 2).unwrap();
+        let (image, outline) = draw(&Marker::whycon(50.0), 14.0, 24, (12.0, 12.0), 0.0);
+        let ring = read_small_ring(&image, &outline, &family).unwrap();
+        assert!(
+            !ring.structured && ring.structure_ratio > MAX_STRUCTURE_RATIO,
+            "{ring:?}"
+        );
+        // The comparison needs the whole disc inside the image.
+        let cut = ImageEllipse { u: 3.0, ..outline };
+        assert_eq!(read_small_ring(&image, &cut, &family), None);
+    }
+}

@@ -564,3 +564,157 @@ pub(super) fn evened_light(profile: &[f64], paper: &[f64], bits: u32) -> Option<
             .collect(),
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A profile of 2n·`per_sector` samples: `levels[k]` over sector k.
+    fn stepped(levels: &[f64], per_sector: usize) -> Vec<f64> {
+        levels
+            .iter()
+            .flat_map(|&level| std::iter::repeat(level).take(per_sector))
+            .collect()
+    }
+
+    #[test]
+    fn the_gradient_goes_round_the_ring() {
+        let gradient: Vec<f64> = gradient(&[0.0, 0.0, 10.0, 10.0, 4.0]).collect();
+        assert_eq!(gradient, [0.0, 10.0, 0.0, 6.0, 4.0]);
+    }
+
+    #[test]
+    fn both_sums_put_the_boundaries_between_the_samples_they_fall_between() {
+        // Two bits, four samples a sector: edges between samples 3 and 4, 7
+        // and 8, ... that is at 3.5/16 of a turn, 7π/16 within a sector.
+        let profile = stepped(&[0.0, 1.0, 0.0, 1.0], 4);
+        let phase = boundary_phase(&profile, 2, 4);
+        assert!((phase - 7.0 * PI / 16.0).abs() < 1e-12, "{phase}");
+        let gradient: Vec<f64> = gradient(&profile).collect();
+        let total = gradient.iter().sum();
+        let [(walked, coherence)] = boundary_phases(&gradient, total, &[2])[..] else {
+            panic!("one count, one phase");
+        };
+        assert!((walked - phase).abs() < 1e-12, "{walked} {phase}");
+        assert!((coherence - 1.0).abs() < 1e-12, "{coherence}");
+        // Three bits' boundaries fall a third of a sector off every other
+        // edge: their phasors cancel.
+        let [_, (_, three)] = boundary_phases(&gradient, total, &[2, 3])[..] else {
+            panic!("two counts, two phases");
+        };
+        assert!(three < 1e-9, "{three}");
+    }
+
+    #[test]
+    fn half_sectors_are_read_in_their_middles_and_bits_from_their_halves() {
+        // Ten samples a sector: the middle 60 % lies within each sector.
+        let profile = stepped(&[200.0, 50.0, 60.0, 190.0], 10);
+        assert_eq!(
+            half_sector_means(&profile, 2, 0.0),
+            [200.0, 50.0, 60.0, 190.0]
+        );
+        // Started a sector on, the first half-sector is the second.
+        assert_eq!(
+            half_sector_means(&profile, 2, PI / 2.0),
+            [50.0, 60.0, 190.0, 200.0]
+        );
+        assert_eq!(
+            bit_differences(&[200.0, 50.0, 60.0, 190.0]),
+            [150.0, -130.0]
+        );
+    }
+
+    #[test]
+    fn a_profile_samples_the_image_bilinearly_along_the_ellipse() {
+        let image = gray_image!(
+            0, 0, 0, 0, 200, 200, 200, 200;
+            0, 0, 0, 0, 200, 200, 200, 200;
+            0, 0, 0, 0, 200, 200, 200, 200;
+            0, 0, 0, 0, 200, 200, 200, 200;
+            0, 0, 0, 0, 200, 200, 200, 200;
+            0, 0, 0, 0, 200, 200, 200, 200;
+            0, 0, 0, 0, 200, 200, 200, 200;
+            0, 0, 0, 0, 200, 200, 200, 200);
+        let circle = Ellipse {
+            u: 3.5,
+            v: 3.5,
+            semi_major: 2.0,
+            semi_minor: 2.0,
+            angle: 0.0,
+        };
+        let frame = EllipseFrame::new(&circle);
+        // Right, up (image v down), left, down: on the white side, on the
+        // edge between the columns 3 and 4, on the black side, the edge.
+        let profile = sample_profile(&image, &frame, &[1.0], 4).unwrap();
+        let expected = [200.0, 100.0, 0.0, 100.0];
+        for (got, want) in profile.iter().zip(expected) {
+            assert!((got - want).abs() < 1e-9, "{profile:?}");
+        }
+        // A ring reaching past the image is not sampled.
+        assert_eq!(sample_profile(&image, &frame, &[2.0], 4), None);
+    }
+
+    #[test]
+    fn a_frame_runs_visually_counter_clockwise_and_keeps_its_centre() {
+        let tilted = Ellipse {
+            u: 40.0,
+            v: 30.0,
+            semi_major: 20.0,
+            semi_minor: 10.0,
+            angle: 0.0,
+        };
+        let frame = EllipseFrame::new(&tilted);
+        let close = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).hypot(a.1 - b.1) < 1e-9;
+        assert!(close(frame.point(0.0, 1.0), (60.0, 30.0)));
+        // A quarter turn on: up the image, along the minor axis.
+        assert!(close(frame.point(PI / 2.0, 1.0), (40.0, 20.0)));
+        assert!(close(frame.point(PI / 2.0, 0.5), (40.0, 25.0)));
+        // With the marker's centre seen off the ellipse's (perspective),
+        // the rectified centre maps back onto it.
+        let seen = (43.0, 29.0);
+        let rectified = EllipseFrame::with_projected_centre(&tilted, seen).unwrap();
+        assert!(close(rectified.point(0.0, 0.0), seen));
+        // Outside the ellipse's middle no rectification fits.
+        assert!(EllipseFrame::with_projected_centre(&tilted, (55.0, 30.0)).is_none());
+    }
+
+    #[test]
+    fn the_radial_edges_of_a_face_on_ring_meet_at_its_centre() {
+        use super::super::test_images::{draw, INK, PAPER};
+        use crate::geometry::Marker;
+        let marker = Marker::whycode(8, 0b0110_1011, 50.0);
+        let (image, outline) = draw(&marker, 60.0, 80, (40.3, 39.6), 0.4);
+        let frame = EllipseFrame::new(&outline);
+        let mid = 0.5 * f64::from(u16::from(INK) + u16::from(PAPER));
+        let profile = sample_profile(&image, &frame, &sample_radii(), 16 * 16).unwrap();
+        let phase = boundary_phase(&profile, 8, 16);
+        let centre = refined_centre(&image, &frame, phase, 8, mid).unwrap();
+        assert!((centre.0 - 40.3).hypot(centre.1 - 39.6) < 0.1, "{centre:?}");
+    }
+
+    #[test]
+    fn a_shaded_ring_reads_as_under_even_light_only_when_its_paper_is_shaded() {
+        // Four bits, eight samples a half-sector, white and black in turn;
+        // the middle half of the ring lies in a shadow of half the light.
+        let lit = stepped(&[200.0, 40.0, 200.0, 40.0, 200.0, 40.0, 200.0, 40.0], 8);
+        let light = |j: usize| if (16..48).contains(&j) { 0.5 } else { 1.0 };
+        let shaded: Vec<f64> = lit.iter().enumerate().map(|(j, p)| p * light(j)).collect();
+        let paper: Vec<f64> = (0..64).map(|j| 220.0 * light(j)).collect();
+        let even = evened_light(&shaded, &paper, 4).unwrap();
+        // Every white sample back to the brightest white; the black ones
+        // stay well below the middle grey (next to a shadow's edge a black
+        // sample's light is the white across it, and it reads darker or
+        // lighter than the rest).
+        for (j, (got, was)) in even.iter().zip(&lit).enumerate() {
+            if *was == 200.0 {
+                assert!((got - 200.0).abs() < 1e-9, "{j}: {even:?}");
+            } else {
+                assert!(*got <= 80.0 + 1e-9, "{j}: {even:?}");
+            }
+        }
+        // Paper lit all round: a dark blot on the ring, not a shadow.
+        assert_eq!(evened_light(&shaded, &[220.0; 64], 4), None);
+        // Even light: nothing to even.
+        assert_eq!(evened_light(&lit, &paper, 4), None);
+    }
+}

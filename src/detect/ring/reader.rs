@@ -498,3 +498,62 @@ fn median(mut values: Vec<f64>) -> f64 {
 fn logistic(x: f64) -> f64 {
     1.0 / (1.0 + (-x).exp())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_images::{angle_between, draw, INK, PAPER};
+    use super::*;
+    use crate::family::Family;
+    use crate::geometry::Marker;
+
+    const BLACK: f64 = INK as f64;
+    const WHITE: f64 = PAPER as f64;
+
+    #[test]
+    fn a_drawn_ring_reads_as_its_member_with_its_turn() {
+        let family = Family::generate(8, 2).unwrap();
+        let reader = RingReader::new(Some(Decoder::new(&family)));
+        for (id, turn) in [(1, 0.0), (5, 1.0), (9, -2.5)] {
+            let code = family.code(id).unwrap();
+            let marker = Marker::whycode(8, code, 50.0);
+            let (image, outline) = draw(&marker, 48.0, 64, (31.7, 32.2), turn);
+            let reading = reader.read(&image, &outline, BLACK, WHITE);
+            assert_eq!(reading.id, id, "{reading:?}");
+            assert_eq!(reading.erasures, 0);
+            assert_eq!(reading.decoded.map(|d| d.status), Some(MatchStatus::Exact));
+            // The +x axis points along image angle -turn.
+            let yaw = reading.yaw.unwrap();
+            assert!(
+                angle_between(yaw, -turn) < 0.5f64.to_radians(),
+                "{id}: {yaw} {turn}"
+            );
+            // Read as under even light, an evenly lit ring reads the same.
+            assert_eq!(
+                reader.read_in_shade(&image, &outline, BLACK, WHITE),
+                reading
+            );
+        }
+    }
+
+    #[test]
+    fn a_ring_without_sectors_or_too_fine_to_sample_names_nothing() {
+        let family = Family::generate(8, 2).unwrap();
+        let reader = RingReader::new(Some(Decoder::new(&family)));
+        // A WhyCon disc: the ring's band is black all round.
+        let (image, outline) = draw(&Marker::whycon(50.0), 48.0, 64, (32.0, 32.0), 0.0);
+        let reading = reader.read(&image, &outline, BLACK, WHITE);
+        assert_eq!((reading.id, reading.decoded), (0, None), "{reading:?}");
+        // Sectors under MIN_PIXELS_PER_SECTOR wide are not read at all.
+        let code = family.code(3).unwrap();
+        let (image, outline) = draw(&Marker::whycode(8, code, 50.0), 9.0, 16, (8.0, 8.0), 0.0);
+        let reading = reader.read(&image, &outline, BLACK, WHITE);
+        assert!(reading.pixels_per_sector < MIN_PIXELS_PER_SECTOR);
+        assert_eq!((reading.word, reading.projected_centre), (None, None));
+        // Without a decoder (legacy markers) nothing is read.
+        let (image, outline) = draw(&Marker::whycode(8, code, 50.0), 48.0, 64, (32.0, 32.0), 0.0);
+        assert_eq!(
+            RingReader::new(None).read(&image, &outline, BLACK, WHITE),
+            RingReading::unreadable(0.0)
+        );
+    }
+}
