@@ -435,7 +435,11 @@ fn sequence(cam: &Camera, families: &[&Family], frames: usize, seed: u64) -> Vec
                 .iter()
                 .enumerate()
                 // Marker 1 is gone for frames 4-6; marker 5 arrives at frame 3.
-                .filter(|(k, _)| !(*k == 1 && (4..7).contains(&f)) && !(*k == 5 && f < 3))
+                .filter(|(k, _)| {
+                    let away = *k == 1 && (4..7).contains(&f);
+                    let not_yet = *k == 5 && f < 3;
+                    !(away || not_yet)
+                })
                 .map(|(_, s)| *s)
                 .collect();
             let mut s = scene(cam, &shown, seed + f as u64);

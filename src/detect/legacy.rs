@@ -321,7 +321,7 @@ const MASS_SAMPLES: f64 = 28.0;
 /// True when the light inside the black disc adds up to a white disc of a
 /// printed WhyCon marker: of its area, and shaped as the outline.
 ///
-/// Each pixel within [`MASS_REACH`] of the outline counts for its share of
+/// Each pixel within `MASS_REACH` of the outline counts for its share of
 /// the way from the annulus's ink to the margin's `paper`. Blur spreads the
 /// white disc's light but keeps its sum, so the area is a printed ratio at
 /// every size (the radius where an edge crosses halfway shrinks on a small,

@@ -1,6 +1,7 @@
 //! Reading a candidate's code ring: is there a WhyCode ring, of how many
-//! bits, and which member does it carry? [`Rings::identify`] answers with a
-//! [`RingVerdict`].
+//! bits, and which member does it carry? `Rings::identify` answers with a
+//! `RingVerdict`: a member, a ring of another bit count, a marker whose ID
+//! cannot be told, or no marker.
 //!
 //! One file per way of looking at a ring, all reading through the shared
 //! profile primitives of `profile.rs` (the ellipse's parametrisation, the

@@ -190,7 +190,7 @@ impl RingReader {
     /// As [`RingReader::read`], for a ring that a cast shadow's edge
     /// crosses (the structure test found it so,
     /// [`super::manchester::RingStructure::in_shade`]): the ring's profile
-    /// is read as under even light ([`evened_light`]).
+    /// is read as under even light (`profile::evened_light`).
     pub fn read_in_shade<C: Deref<Target = [u8]>>(
         &self,
         image: &ImageBuffer<Luma<u8>, C>,
