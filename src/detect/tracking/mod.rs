@@ -137,6 +137,9 @@ impl Detector {
                 status: track.status,
                 yaw: Some(yaw),
                 confidence: track.confidence,
+                // The count its ring showed when it was read: following the
+                // code's edges confirms it.
+                bits: track.bits,
                 ..RingRead::nothing(0.0)
             },
             posed: followed.map(|f| f.posed),
@@ -256,6 +259,35 @@ impl Detector {
             self.ratio.learn(c.ratio);
             self.roundness.learn(c.roundness);
             self.area.learn(c.area_error);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::detect::{Detector, DetectorConfig, Target};
+    use crate::family::Family;
+    use crate::geometry::Marker;
+    use crate::simulate::{self, LooseMarker, Placement, Scene, SceneObject};
+
+    #[test]
+    fn a_followed_marker_keeps_reporting_the_count_its_ring_showed() {
+        let family = Family::generate(8, 2).unwrap();
+        let mut scene = Scene::new(crate::camera::Camera::ideal(320, 240, 60.0));
+        let marker = Marker::whycode(8, family.code(5).unwrap(), 50.0);
+        let placement = Placement::viewed(nalgebra::Vector3::new(0.02, 0.0, 0.4), 0.3, 0.0, 1.0);
+        scene.objects = vec![SceneObject::Marker(LooseMarker::new(marker, 5, placement))];
+        let (image, _) = simulate::render(&scene);
+        let mut detector = Detector::new(DetectorConfig {
+            target: Target::WhyCode(family),
+            tracking: true,
+            ..DetectorConfig::default()
+        });
+        // From the fourth frame on its code is followed, not read.
+        for frame in 0..6 {
+            let found = detector.detect(&image);
+            let seen: Vec<_> = found.iter().map(|d| (d.id, d.bits)).collect();
+            assert_eq!(seen, [(5, Some(8))], "frame {frame}");
         }
     }
 }
