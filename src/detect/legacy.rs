@@ -13,8 +13,13 @@
 //! original's own size floor no test can tell a bold 'o' of WhyCon's
 //! proportions from a marker, and none is reported.
 
-use super::ellipse;
+use std::ops::Deref;
+
+use image::{ImageBuffer, Luma};
+
+use super::ring::{self, manchester::RingEvidence};
 use super::segment::Gray;
+use super::{ellipse, Candidate};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO, WHYCON_WHITE_RATIO};
 use crate::math::Ellipse;
 
@@ -24,6 +29,31 @@ use crate::math::Ellipse;
 /// about 15 px across at the ROS node's `minSize` of 30). At 100 pixels a
 /// face-on marker is 12.4 px across.
 pub const MIN_INK_PX: f64 = 100.0;
+
+/// Whether candidate `c` shows a legacy marker's structure: ink enough
+/// (`min_ink_px`, see [`enough_ink`]), a white margin round it, and inside
+/// a white disc of WhyCon's (with the light of a printed one) or the parts
+/// of a WhyCode ring that shows its Manchester structure.
+pub(super) fn is_marker<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    gray: Gray<'_>,
+    c: &Candidate,
+    min_ink_px: f64,
+) -> bool {
+    if !enough_ink(&c.outer, min_ink_px) {
+        return false;
+    }
+    let inside = concentric_white_disc(gray, &c.outer, c.black, c.white);
+    let paper = inside.and_then(|_| white_margin(gray, &c.outer, c.black, c.white));
+    match (inside, paper) {
+        (Some(Inside::WhyConDisc), Some(paper)) => white_disc_mass(gray, &c.outer, paper),
+        (Some(Inside::WhyCodeRing), Some(_)) => matches!(
+            ring::evidence(image, c, None, None),
+            RingEvidence::Manchester(_)
+        ),
+        _ => false,
+    }
+}
 
 /// True when the black ring inside `outer` (the black disc less WhyCon's
 /// white one) covers at least `min_ink_px` pixels.
@@ -291,7 +321,7 @@ const MASS_SAMPLES: f64 = 28.0;
 /// True when the light inside the black disc adds up to a white disc of a
 /// printed WhyCon marker: of its area, and shaped as the outline.
 ///
-/// Each pixel within [`MASS_REACH`] of the outline counts for its share of
+/// Each pixel within `MASS_REACH` of the outline counts for its share of
 /// the way from the annulus's ink to the margin's `paper`. Blur spreads the
 /// white disc's light but keeps its sum, so the area is a printed ratio at
 /// every size (the radius where an edge crosses halfway shrinks on a small,

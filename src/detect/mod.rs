@@ -12,49 +12,46 @@
 //! the rectified ring (`rectify.rs`).
 //!
 //! With tracking on, each known marker is first followed where it should
-//! be (last position plus velocity) by its edges along a few dozen scan
-//! lines, and, once its ID is settled, its yaw from the known code's
-//! edges (on the rectified ring, once, when a pose is wanted; a ring of
-//! another family, or read without one, is tested for the bit count it
-//! showed last first); only if that fails does the flood fill run, and
-//! only if a marker is lost is the whole frame scanned (else one band of
-//! rows per frame looks for newcomers). IDs of tracked markers go through a Bayesian
-//! filter ([`idfilter`], paper 5.1); the test tolerances adapt slowly to
-//! what is measured (paper 4.2).
+//! be, and only the markers lost, or newcomers in one band of rows, are
+//! looked for by the scan (`tracking/`).
 //!
-//! This file holds the types and the per-frame flow ([`Detector::detect`]);
-//! `scan.rs` the scan and candidate tests, `describe.rs` what a candidate
-//! reads as (ID, yaw, pose: the choice between the two pose candidates is
-//! [`crate::pose`]'s), `follow.rs` the following of tracked markers.
+//! One file per stage: this one holds the types and the per-frame flow
+//! ([`Detector::detect`]: follow tracks, scan, look in shade, global
+//! fallback, describe, drop unreadable); `threshold.rs` the local
+//! threshold map, `segment.rs` the flood fills, `scan.rs` the scans and the
+//! candidate tests, [`ellipse`] the sub-pixel outline, `describe.rs` what a
+//! candidate is, from [`ring`] (the code ring's verdict) or [`legacy`];
+//! `pose.rs` its pose (the geometry is [`crate::pose`]'s) and `rectify.rs`
+//! the yaw on the rectified ring; `tracking/` the following of known
+//! markers across frames and their ID filter ([`idfilter`]).
 
 pub mod annotate;
 mod describe;
 pub mod ellipse;
 pub mod family_check;
-mod follow;
-pub mod idfilter;
 pub mod legacy;
-pub mod manchester;
+mod pose;
 pub(crate) mod rectify;
 pub mod report;
 pub mod ring;
-pub mod ring_model;
 mod scan;
 pub(crate) mod segment;
 pub(crate) mod threshold;
-pub(crate) mod track;
+mod timings;
+mod tracking;
 
-use std::collections::BTreeMap;
+pub use timings::{Stage, StageTimings};
+pub use tracking::idfilter;
 
 use crate::camera::Camera;
-use crate::family::{Decoder, Family, MatchStatus};
+use crate::family::{Family, MatchStatus};
 use crate::geometry::Design;
 use crate::math::Ellipse;
 use crate::pose::Pose;
-use ring::RingReader;
 use segment::{Filler, Gray, Labels};
-use threshold::{ThresholdMap, ThresholdSearch};
-use track::{Adaptive, Track};
+use threshold::ThresholdSearch;
+use timings::Stopwatch;
+use tracking::track::{Adaptive, PoseMemory, Track};
 
 /// What to look for and how strictly.
 #[derive(Debug, Clone)]
@@ -87,6 +84,10 @@ pub struct DetectorConfig {
     /// proportions is a marker to any test (legacy markers carry no ring
     /// to tell them apart). Smaller ones are `unreadable`.
     pub legacy_min_ink_px: f64,
+    /// Measure how long each stage of every frame takes, for
+    /// [`Detector::last_timings`]. Off, the detector reads no clock (nor
+    /// does it on wasm32-unknown-unknown, which has none).
+    pub timings: bool,
 }
 
 impl Default for DetectorConfig {
@@ -103,6 +104,7 @@ impl Default for DetectorConfig {
             ratio_tolerance: 0.5,
             report_unreadable: false,
             legacy_min_ink_px: legacy::MIN_INK_PX,
+            timings: false,
         }
     }
 }
@@ -184,7 +186,7 @@ pub struct Detection {
 #[derive(Debug, Clone)]
 pub struct Detector {
     config: DetectorConfig,
-    reader: Option<RingReader>,
+    rings: ring::Rings,
     labels: Labels,
     filler: Filler,
     edge_scratch: Vec<(f64, f64)>,
@@ -196,8 +198,6 @@ pub struct Detector {
     /// A follow of this frame fell back to the flood fill.
     follow_filled: bool,
     tracks: Vec<Track>,
-    /// Readers for rings of each bit count, in auto mode with a distance.
-    auto_readers: BTreeMap<u32, Option<RingReader>>,
     /// How this detector's markers decoded so far.
     check: family_check::FamilyCheck,
     search: ThresholdSearch,
@@ -205,6 +205,9 @@ pub struct Detector {
     roundness: Adaptive,
     area: Adaptive,
     frame: u64,
+    stopwatch: Stopwatch,
+    /// The last frame's stage timings, with `config.timings`.
+    timings: Option<StageTimings>,
 }
 
 /// A disc that passed every test.
@@ -236,24 +239,18 @@ impl Candidate {
 const SCAN_CHUNK: usize = 16;
 // The scan's tiles are the threshold map's (seed masks come from the map).
 const _: () = assert!(SCAN_CHUNK == 1 << threshold::TILE_SHIFT);
-/// A tracked frame looks for new markers in one of this many row bands.
-const DISCOVERY_BANDS: u64 = 8;
 
 impl Detector {
     /// A detector with no state yet; the first frame is scanned whole.
     pub fn new(config: DetectorConfig) -> Detector {
-        let reader = config
-            .target
-            .family()
-            .map(|family| RingReader::new(Some(Decoder::new(family))));
         let white = config.target.design().white_fraction();
         let check = family_check::FamilyCheck::new(config.target.family().map(Family::bits));
         Detector {
             ratio: Adaptive::new(white, config.ratio_tolerance),
             roundness: Adaptive::new(0.0, config.roundness_tolerance),
             area: Adaptive::new(0.0, config.area_tolerance),
+            rings: ring::Rings::new(&config.target),
             config,
-            reader,
             labels: Labels::default(),
             filler: Filler::default(),
             edge_scratch: Vec::new(),
@@ -263,10 +260,11 @@ impl Detector {
             occupied: Vec::new(),
             follow_filled: false,
             tracks: Vec::new(),
-            auto_readers: BTreeMap::new(),
             check,
             search: ThresholdSearch::default(),
             frame: 0,
+            stopwatch: Stopwatch::default(),
+            timings: None,
         }
     }
 
@@ -297,21 +295,11 @@ impl Detector {
         &self.check
     }
 
-    /// The reader for rings of `bits` bits in auto mode with a distance
-    /// (families are generated on first use); None without.
-    fn auto_reader(&mut self, bits: u32) -> Option<&RingReader> {
-        let Target::AnyBits {
-            distance: Some(distance),
-        } = self.config.target
-        else {
-            return None;
-        };
-        let reader = self.auto_readers.entry(bits).or_insert_with(|| {
-            Family::generate(bits, distance)
-                .ok()
-                .map(|family| RingReader::new(Some(Decoder::new(&family))))
-        });
-        reader.as_ref()
+    /// How long each stage of the last frame took, with
+    /// [`DetectorConfig::timings`] on; None with it off, before the first
+    /// frame, and on targets without a clock (wasm32-unknown-unknown).
+    pub fn last_timings(&self) -> Option<StageTimings> {
+        self.timings
     }
 
     /// Forgets tracks and adapted tolerances.
@@ -340,185 +328,146 @@ impl Detector {
         &mut self,
         image: &image::ImageBuffer<image::Luma<u8>, C>,
     ) -> Vec<Detection> {
+        self.stopwatch.start(self.config.timings);
+        let Some(gray) = self.timed(Stage::Prepare, |d| d.begin_frame(image)) else {
+            self.timings = self.stopwatch.stop();
+            return Vec::new();
+        };
+        let mut finds = Finds::default();
+        if self.config.tracking {
+            self.follow_tracks(image, gray, &mut finds);
+        }
+        let followed = finds.candidates.len();
+        let every_track_followed =
+            self.config.tracking && followed > 0 && followed == self.tracks.len();
+        self.timed(Stage::Follow, |d| {
+            d.mark_followed(&finds.candidates, gray.width, gray.height)
+        });
+        let found = &mut finds.candidates;
+        if every_track_followed {
+            self.timed(Stage::Scan, |d| d.scan_band(gray, found));
+        } else {
+            let map = self.timed(Stage::Scan, |d| d.scan_frame(gray, found));
+            self.timed(Stage::Shade, |d| d.look_in_shade(gray, &map, found));
+            self.timed(Stage::Fallback, |d| d.global_fallback(gray, &map, found));
+        }
+        drop_seen_again(found, followed, self.config.max_markers);
+        self.describe_new(image, gray, &mut finds);
+        let detections = self.timed(Stage::Finish, |d| {
+            if !d.config.report_unreadable {
+                // Round things without a code ring are not markers (and get
+                // no track either).
+                finds.drop_unreadable();
+            }
+            d.end_frame(finds)
+        });
+        self.timings = self.stopwatch.stop();
+        detections
+    }
+
+    /// Runs one step of a frame, its time charged to `stage` with the
+    /// timings on.
+    fn timed<R>(&mut self, stage: Stage, step: impl FnOnce(&mut Self) -> R) -> R {
+        let result = step(self);
+        self.stopwatch.lap(stage);
+        result
+    }
+
+    /// Sets up the buffers for a frame, and the frame's pixels as the scan
+    /// reads them: None (and the tracks dropped) for a frame too small to
+    /// hold a marker.
+    fn begin_frame<'a, C: std::ops::Deref<Target = [u8]>>(
+        &mut self,
+        image: &'a image::ImageBuffer<image::Luma<u8>, C>,
+    ) -> Option<Gray<'a>> {
         let (width, height) = (image.width() as usize, image.height() as usize);
         if width < 3 || height < 3 {
             self.tracks.clear();
-            return Vec::new();
+            return None;
         }
-        let gray = Gray {
+        self.frame += 1;
+        self.labels.begin(width, height);
+        self.follow_filled = false;
+        Some(Gray {
             pixels: image.as_raw(),
             width,
             height,
-        };
-        self.frame += 1;
-        self.labels.begin(width, height);
-        let limit = self.config.max_markers;
-        let mut found: Vec<Candidate> = Vec::new();
-        let tracking = self.config.tracking;
-        self.follow_filled = false;
-        // A followed marker is described as soon as it is found, while its
-        // pixels are still in the cache from following it (on a large
-        // frame they would have left it by the time every other marker is
-        // followed, and be fetched a second time).
-        let mut detections: Vec<Detection> = Vec::new();
-        let mut settled_normals = Vec::new();
-        if tracking {
-            for index in 0..self.tracks.len() {
-                if found.len() >= limit {
-                    break;
-                }
-                if let Some(next) = self.tracks.get(index + 1) {
-                    // The edge search reaches a window past the outline.
-                    let (u, v) = next.predicted();
-                    preload_disc(gray, u, v, next.a + follow::edge_window(next.a) + 1.0);
-                }
-                if let Some(mut c) = self.follow(gray, index) {
-                    c.track = Some(index);
-                    let (d, settled) = self.describe(image, gray, &c);
-                    detections.push(d);
-                    settled_normals.push(settled);
-                    found.push(c);
-                }
-            }
-        }
-        let all_followed = found.len() == self.tracks.len();
-        let followed = found.len();
-        self.mark_followed(&found, width, height);
-        if self.follow_filled {
-            // A follow that fell back to the flood fill labelled the
-            // pixels it reached with its own threshold, whether or not it
-            // found its marker; the scan would skip a marker it missed as
-            // already visited. Markers that were followed are kept out of
-            // the scan by the occupied tiles and the duplicate test below.
-            self.labels.begin(width, height);
-        }
-        if tracking && all_followed && followed > 0 {
-            if found.len() < limit {
-                // Every known marker is back: look for new ones in one band
-                // of rows per frame, so a tracked frame stays cheap and a
-                // newcomer is found within DISCOVERY_BANDS frames.
-                let band = (self.frame % DISCOVERY_BANDS) as usize;
-                let rows = height * band / DISCOVERY_BANDS as usize
-                    ..height * (band + 1) / DISCOVERY_BANDS as usize;
-                // The map reaches past the band by the largest marker's
-                // diameter, so a newcomer straddling the band's edge lies
-                // wholly within it (a dark fill stops where the map does).
-                let reach =
-                    self.tracks.iter().map(|t| 2.0 * t.a).fold(0.0, f64::max) as usize + SCAN_CHUNK;
-                let map_rows = rows.start.saturating_sub(reach)..(rows.end + reach).min(height);
-                let map = ThresholdMap::adaptive_rows(gray.pixels, width, height, map_rows);
-                self.scan(gray, &map, rows, &[], &mut found);
-            }
-        } else {
-            let map = ThresholdMap::adaptive(gray.pixels, width, height);
-            self.scan(gray, &map, 0..height, &[], &mut found);
-            let shaded = map
-                .shaded_rows()
-                .filter(|_| self.config.target.family().is_some());
-            if let Some(rows) = shaded {
-                // A cast shadow's edge: shaded paper fell below the
-                // mid-level threshold. Look again there with thresholds
-                // that keep the paper's ratio to the ink. Only where a
-                // family's ring test stands between grey clutter (which
-                // looks shaded too) and a report.
-                let ratio_map =
-                    ThresholdMap::adaptive_ratio(gray.pixels, width, height, rows.clone(), &map);
-                self.labels.begin(width, height);
-                let mut again = Vec::new();
-                self.scan_tiles(
-                    gray,
-                    &ratio_map,
-                    rows,
-                    map.near_shaded(),
-                    &found,
-                    &mut again,
-                );
-                merge_new(&mut found, again, limit);
-            }
-            if found.is_empty() {
-                // The local map found nothing (noise above the markers'
-                // contrast, say): a few levels of the reference's global
-                // threshold walk. Under a light gradient no one level suits
-                // the whole frame, so what each finds is pooled, and the
-                // level that found most is tried first next time.
-                // Only where the local map was blind (see
-                // `ThresholdMap::blind_tiles`) can a level find what it
-                // missed; a level that cuts no blind tile is not scanned.
-                let histogram = threshold::sampled_histogram(gray.pixels, width);
-                let blind = map.blind_tiles(width, height);
-                let mut best = 0;
-                let mut seeds = Vec::new();
-                for t in self.search.levels_after_miss(&histogram) {
-                    seeds.clear();
-                    seeds.extend(blind.iter().map(|&(lo, hi)| lo < t && t <= hi));
-                    if !seeds.contains(&true) {
-                        continue;
-                    }
-                    self.labels.begin(width, height);
-                    let mut level = Vec::new();
-                    self.scan_tiles(
-                        gray,
-                        &ThresholdMap::constant(t),
-                        0..height,
-                        &seeds,
-                        &[],
-                        &mut level,
-                    );
-                    if level.len() > best {
-                        best = level.len();
-                        self.search.hit(t);
-                    }
-                    merge_new(&mut found, level, limit);
-                }
-            } else {
-                self.search.reset();
-            }
-        }
-        // A marker followed by its edges left no labels; should the scan
-        // have met it again, keep the followed one.
-        let (old, new) = found.split_at(followed);
-        let fresh: Vec<Candidate> = new
-            .iter()
-            .filter(|c| {
-                !old.iter().any(|o| {
-                    (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.semi_minor
-                })
-            })
-            .cloned()
-            .collect();
-        found.truncate(followed);
-        found.extend(fresh);
-        found.truncate(limit);
-        for (k, c) in found.iter().enumerate().skip(followed) {
-            if let Some(next) = found.get(k + 1) {
+        })
+    }
+
+    /// Describes the candidates the scans found (followed markers were
+    /// described as they were found).
+    fn describe_new<C: std::ops::Deref<Target = [u8]>>(
+        &mut self,
+        image: &image::ImageBuffer<image::Luma<u8>, C>,
+        gray: Gray<'_>,
+        finds: &mut Finds,
+    ) {
+        for k in finds.detections.len()..finds.candidates.len() {
+            if let Some(next) = finds.candidates.get(k + 1) {
                 preload_disc(gray, next.outer.u, next.outer.v, next.reach());
             }
-            let (d, settled) = self.describe(image, gray, c);
-            detections.push(d);
-            settled_normals.push(settled);
+            let (d, memory) = self.describe(image, gray, &finds.candidates[k]);
+            finds.detections.push(d);
+            finds.memories.push(memory);
         }
-        if !self.config.report_unreadable {
-            // Round things without a code ring are not markers (and get no
-            // track either).
-            let keep: Vec<bool> = detections.iter().map(|d| !d.unreadable).collect();
-            let mut k = 0;
-            found.retain(|_| (keep[k], k += 1).0);
-            let mut k = 0;
-            settled_normals.retain(|_| (keep[k], k += 1).0);
-            detections.retain(|d| !d.unreadable);
-        }
-        if tracking {
-            self.update_tracks(&found, &detections, &settled_normals);
-            for c in found.iter().filter(|c| c.tested) {
-                self.ratio.learn(c.ratio);
-                self.roundness.learn(c.roundness);
-                self.area.learn(c.area_error);
-            }
+    }
+
+    /// The frame's detections in reading order, the tracks and tolerances
+    /// updated from them.
+    fn end_frame(&mut self, finds: Finds) -> Vec<Detection> {
+        let Finds {
+            candidates,
+            mut detections,
+            memories,
+        } = finds;
+        if self.config.tracking {
+            self.update_tracks(&candidates, &detections, &memories);
+            self.learn_tolerances(&candidates);
         }
         detections.sort_by(|a, b| a.v.total_cmp(&b.v).then(a.u.total_cmp(&b.u)));
         self.check.observe(&detections);
         detections
     }
+}
+
+/// A frame's markers so far: the candidates found, and what the first of
+/// them were described as, with what their poses tell their tracks.
+#[derive(Debug, Default)]
+struct Finds {
+    candidates: Vec<Candidate>,
+    detections: Vec<Detection>,
+    memories: Vec<PoseMemory>,
+}
+
+impl Finds {
+    /// Drops the described candidates that are not markers.
+    fn drop_unreadable(&mut self) {
+        let keep: Vec<bool> = self.detections.iter().map(|d| !d.unreadable).collect();
+        let mut k = 0;
+        self.candidates.retain(|_| (keep[k], k += 1).0);
+        let mut k = 0;
+        self.memories.retain(|_| (keep[k], k += 1).0);
+        self.detections.retain(|d| !d.unreadable);
+    }
+}
+
+/// Drops the candidates after the first `followed` that one of those
+/// followed ones found again (a marker followed by its edges left no
+/// labels for the scan to skip), and any past `limit`.
+fn drop_seen_again(found: &mut Vec<Candidate>, followed: usize, limit: usize) {
+    let (old, new) = found.split_at(followed);
+    let fresh: Vec<Candidate> = new
+        .iter()
+        .filter(|c| {
+            !old.iter()
+                .any(|o| (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.semi_minor)
+        })
+        .cloned()
+        .collect();
+    found.truncate(followed);
+    found.extend(fresh);
+    found.truncate(limit);
 }
 
 /// Brings the pixels of the square around a marker (centre, half side) on
@@ -527,18 +476,4 @@ impl Detector {
 /// last read.
 fn preload_disc(gray: Gray<'_>, u: f64, v: f64, reach: f64) {
     gray.preload(u - reach..u + reach + 1.0, v - reach..v + reach + 1.0);
-}
-
-/// Adds the candidates of another look that are not already found (no
-/// found centre within their semi-minor axis), up to `limit`.
-fn merge_new(found: &mut Vec<Candidate>, more: Vec<Candidate>, limit: usize) {
-    for c in more {
-        if found.len() < limit
-            && !found
-                .iter()
-                .any(|o| (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.semi_minor)
-        {
-            found.push(c);
-        }
-    }
 }

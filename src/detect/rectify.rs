@@ -55,7 +55,7 @@ pub fn refine_rotation(
         }
         profile.push(sum / radii.len() as f64);
     }
-    let phi = edge_phase(&profile, bits, code, per_sector, 1.0)?;
+    let phi = code_edge_offset(&profile, bits, code, per_sector, 1.0)?;
     // The edges sit at angle φ in the current frame: +x turns by φ.
     let (s, c) = phi.sin_cos();
     let new_x = x * c + y * s;
@@ -111,7 +111,7 @@ fn unit_circle(n: usize) -> &'static [(f64, f64)] {
 /// marker angles from the current +x axis, relative to where the code puts
 /// them: the median offset (radians), or None when fewer than
 /// `min_found` of the edges are found or the sectors show no contrast.
-fn edge_phase(
+fn code_edge_offset(
     profile: &[f64],
     bits: u32,
     code: u32,
@@ -219,7 +219,7 @@ pub fn follow_ring(
         profile.push(sum / scales.len() as f64);
         (st, ct) = (st * step_cos + ct * step_sin, ct * step_cos - st * step_sin);
     }
-    let phi = edge_phase(&profile, bits, code, FOLLOW_SAMPLES_PER_SECTOR, 1.0)?;
+    let phi = code_edge_offset(&profile, bits, code, FOLLOW_SAMPLES_PER_SECTOR, 1.0)?;
     if phi.abs() > w / 2.0 {
         return None;
     }

@@ -6,8 +6,8 @@
 use std::f64::consts::PI;
 
 use super::segment::{below_mask, below_word, word_thresholds, Fill, Gray, Stats};
-use super::threshold::ThresholdMap;
-use super::{ellipse, Candidate, Detector, SCAN_CHUNK};
+use super::threshold::{self, ThresholdMap};
+use super::{ellipse, Candidate, Detector, Stage, SCAN_CHUNK};
 use crate::geometry::Design;
 
 /// Slack of the concentricity test, in outer radii: WhyCode's white region
@@ -20,6 +20,90 @@ fn concentricity_tolerance(design: Design) -> f64 {
 }
 
 impl Detector {
+    /// Scans the whole frame with thresholds from the local map, which it
+    /// returns for the looks after it.
+    pub(super) fn scan_frame(
+        &mut self,
+        gray: Gray<'_>,
+        found: &mut Vec<Candidate>,
+    ) -> ThresholdMap {
+        let map = ThresholdMap::adaptive(gray.pixels, gray.width, gray.height);
+        self.stopwatch.lap(Stage::Threshold);
+        self.scan(gray, &map, 0..gray.height, &[], found);
+        map
+    }
+
+    /// A second look at the rows where the scan's `map` saw a cast
+    /// shadow's edge: shaded paper fell below the mid-level threshold.
+    /// There thresholds that keep the paper's ratio to the ink find what
+    /// the first look missed. Only where a family's ring test stands
+    /// between grey clutter (which looks shaded too) and a report.
+    pub(super) fn look_in_shade(
+        &mut self,
+        gray: Gray<'_>,
+        map: &ThresholdMap,
+        found: &mut Vec<Candidate>,
+    ) {
+        let shaded = map
+            .shaded_rows()
+            .filter(|_| self.config.target.family().is_some());
+        let Some(rows) = shaded else {
+            return;
+        };
+        let (width, height) = (gray.width, gray.height);
+        let ratio_map = ThresholdMap::adaptive_ratio(gray.pixels, width, height, rows.clone(), map);
+        self.labels.begin(width, height);
+        let mut again = Vec::new();
+        self.scan_tiles(gray, &ratio_map, rows, map.near_shaded(), found, &mut again);
+        merge_new(found, again, self.config.max_markers);
+    }
+
+    /// When the local map found nothing (noise above the markers'
+    /// contrast, say): a few levels of the reference's global threshold
+    /// walk. Under a light gradient no one level suits the whole frame, so
+    /// what each finds is pooled, and the level that found most is tried
+    /// first next time. Only where the local map was blind (see
+    /// `ThresholdMap::blind_tiles`) can a level find what it missed; a
+    /// level that cuts no blind tile is not scanned.
+    pub(super) fn global_fallback(
+        &mut self,
+        gray: Gray<'_>,
+        map: &ThresholdMap,
+        found: &mut Vec<Candidate>,
+    ) {
+        if !found.is_empty() {
+            self.search.reset();
+            return;
+        }
+        let (width, height) = (gray.width, gray.height);
+        let histogram = threshold::sampled_histogram(gray.pixels, width);
+        let blind = map.blind_tiles(width, height);
+        let mut best = 0;
+        let mut seeds = Vec::new();
+        for t in self.search.levels_after_miss(&histogram) {
+            seeds.clear();
+            seeds.extend(blind.iter().map(|&(lo, hi)| lo < t && t <= hi));
+            if !seeds.contains(&true) {
+                continue;
+            }
+            self.labels.begin(width, height);
+            let mut level = Vec::new();
+            self.scan_tiles(
+                gray,
+                &ThresholdMap::constant(t),
+                0..height,
+                &seeds,
+                &[],
+                &mut level,
+            );
+            if level.len() > best {
+                best = level.len();
+                self.search.hit(t);
+            }
+            merge_new(found, level, self.config.max_markers);
+        }
+    }
+
     /// Marks the tiles that markers followed this frame cover, so that the
     /// scan does not flood-fill them again.
     pub(super) fn mark_followed(&mut self, found: &[Candidate], width: usize, height: usize) {
@@ -376,5 +460,19 @@ impl Detector {
             }
         }
         None
+    }
+}
+
+/// Adds the candidates of another look that are not already found (no
+/// found centre within their semi-minor axis), up to `limit`.
+fn merge_new(found: &mut Vec<Candidate>, more: Vec<Candidate>, limit: usize) {
+    for c in more {
+        if found.len() < limit
+            && !found
+                .iter()
+                .any(|o| (o.outer.u - c.outer.u).hypot(o.outer.v - c.outer.v) < o.outer.semi_minor)
+        {
+            found.push(c);
+        }
     }
 }

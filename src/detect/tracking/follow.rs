@@ -1,11 +1,11 @@
-//! Following tracked markers from frame to frame: where each should be now,
-//! found by its edges (or, failing that, by a flood fill from its predicted
-//! centre), and the tracks updated from what the frame showed.
+//! Following a tracked marker from frame to frame: where it should be
+//! now, found by its edges (or, failing that, by a flood fill from its
+//! predicted centre).
 
-use super::segment::Gray;
-use super::threshold::ThresholdMap;
-use super::track::{PoseMemory, Track};
-use super::{ellipse, Candidate, Detection, Detector};
+use super::track::Track;
+use crate::detect::segment::Gray;
+use crate::detect::threshold::ThresholdMap;
+use crate::detect::{ellipse, Candidate, Detector};
 use crate::math::Ellipse;
 
 /// How far past its predicted outline a tracked marker's edge is looked
@@ -111,60 +111,5 @@ impl Detector {
             tested: false,
             track: None,
         })
-    }
-
-    pub(super) fn update_tracks(
-        &mut self,
-        found: &[Candidate],
-        detections: &[Detection],
-        poses: &[PoseMemory],
-    ) {
-        let mut next: Vec<Track> = Vec::with_capacity(found.len());
-        let mut taken = vec![false; self.tracks.len()];
-        for c in found {
-            if let Some(i) = c.track {
-                taken[i] = true;
-            }
-        }
-        for ((c, d), pose) in found.iter().zip(detections).zip(poses) {
-            let threshold = ((c.black + c.white) / 2.0).round().clamp(1.0, 255.0) as u8;
-            let (u, v, a, b) = (c.outer.u, c.outer.v, c.outer.semi_major, c.outer.semi_minor);
-            let index = c.track.or_else(|| {
-                let i =
-                    (0..self.tracks.len()).find(|&i| !taken[i] && self.tracks[i].matches(u, v))?;
-                taken[i] = true;
-                Some(i)
-            });
-            match index {
-                Some(i) => {
-                    let mut t = self.tracks[i].clone();
-                    if c.track.is_none() {
-                        // Found again by the scan rather than followed: its
-                        // reading has not been filtered yet.
-                        if let Some(family) = self.config.target.family() {
-                            t.observe_reading(family.len(), d);
-                        }
-                    }
-                    t.update(u, v, a, b, threshold);
-                    t.observe_appearance(c.outer.angle, c.black, c.white);
-                    t.observe_identity(d);
-                    t.normal = pose.settled_normal.or(t.normal);
-                    t.fitted = pose.fitted;
-                    next.push(t);
-                }
-                None => {
-                    let mut t = Track::new(u, v, a, b, threshold);
-                    t.observe_appearance(c.outer.angle, c.black, c.white);
-                    if let Some(family) = self.config.target.family() {
-                        t.observe_reading(family.len(), d);
-                    }
-                    t.observe_identity(d);
-                    t.normal = pose.settled_normal;
-                    t.fitted = pose.fitted;
-                    next.push(t);
-                }
-            }
-        }
-        self.tracks = next;
     }
 }

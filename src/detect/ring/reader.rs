@@ -37,14 +37,18 @@
 //! bounded by `yaw_under_perspective_stays_within_stated_bounds`
 //! (tests/integration/ring_perspective.rs).
 
-use crate::family::{Decoded, Decoder, MatchStatus};
-use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
-use image::{ImageBuffer, Luma};
+use std::f64::consts::PI;
 use std::ops::Deref;
 
-use crate::math::sample::{Border, Plane};
-use crate::math::{angle, Ellipse};
-use std::f64::consts::PI;
+use image::{ImageBuffer, Luma};
+
+use super::profile::{
+    bit_differences, boundary_phase, evened_light, half_sector_means, paper_profile,
+    refined_centre, sample_profile, sample_radii, EllipseFrame,
+};
+use crate::family::{Decoded, Decoder, MatchStatus};
+use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
+use crate::math::Ellipse;
 
 /// Rings whose sectors are narrower than this many pixels (at the sample
 /// radius, along the ellipse's minor axis) are not read: below it the
@@ -150,13 +154,6 @@ pub struct RingReader {
     min_pixels_per_sector: f64,
 }
 
-/// Radii (relative to R) averaged for each angular sample: the middle two
-/// thirds of the ring 0.343..0.6, away from the white discs on both sides.
-pub(super) fn sample_radii() -> [f64; 5] {
-    let width = WHYCODE_WHITE_RATIO - RING_INNER_RATIO;
-    [1.0, 2.0, 3.0, 4.0, 5.0].map(|k| RING_INNER_RATIO + width * k / 6.0)
-}
-
 impl RingReader {
     /// A reader that decodes rings with `decoder`, or only measures them without one.
     pub fn new(decoder: Option<Decoder>) -> RingReader {
@@ -193,7 +190,7 @@ impl RingReader {
     /// As [`RingReader::read`], for a ring that a cast shadow's edge
     /// crosses (the structure test found it so,
     /// [`super::manchester::RingStructure::in_shade`]): the ring's profile
-    /// is read as under even light ([`evened_light`]).
+    /// is read as under even light (`profile::evened_light`).
     pub fn read_in_shade<C: Deref<Target = [u8]>>(
         &self,
         image: &ImageBuffer<Luma<u8>, C>,
@@ -253,7 +250,7 @@ impl RingReader {
         let Some(mut profile) = sample_profile(image, &frame, radii, count) else {
             return RingReading::unreadable(pixels_per_sector);
         };
-        let mut phase = edge_phase(&profile, bits, per_sector);
+        let mut phase = boundary_phase(&profile, bits, per_sector);
 
         // Under perspective the ring is neither centred on the outer ellipse
         // nor evenly spaced in its parameter. Locate the projected marker
@@ -282,7 +279,7 @@ impl RingReader {
                 break;
             };
             profile = resampled;
-            phase = edge_phase(&profile, bits, per_sector);
+            phase = boundary_phase(&profile, bits, per_sector);
             frame = rectified;
             threshold = 0.1;
         }
@@ -502,478 +499,61 @@ fn logistic(x: f64) -> f64 {
     1.0 / (1.0 + (-x).exp())
 }
 
-/// Where marker angle t (up to the unknown in-plane rotation) and radius
-/// ρ·R land in the image. The outer ellipse alone fixes the map only up to
-/// perspective; with the projection `p` of the marker centre it is exact:
-/// the polar of `p` with respect to the ellipse is the image of the line at
-/// infinity, and the homography sending it back to infinity leaves an
-/// ellipse that is an affine image of the circle, centred on the image of
-/// `p`. Without an estimate of `p` (p = ellipse centre) this is the plain
-/// affine parametrisation. With image v pointing down, the minor-axis
-/// direction is the major one turned by -90°, which makes t run visually
-/// counter-clockwise.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct EllipseFrame {
-    /// Ellipse centre and scale (the semi-major axis) of the normalised
-    /// coordinates the homography works in.
-    centre: (f64, f64),
-    scale: f64,
-    /// The homography y -> y / (1 - m·y) back to normalised image coordinates.
-    m: (f64, f64),
-    /// The rectified ellipse: centre and (scaled) axis vectors.
-    rectified_centre: (f64, f64),
-    major: (f64, f64),
-    minor: (f64, f64),
-    /// Projection of the marker centre, pixels.
-    projected_centre: (f64, f64),
-}
+#[cfg(test)]
+mod tests {
+    use super::super::test_images::{angle_between, draw, INK, PAPER};
+    use super::*;
+    use crate::family::Family;
+    use crate::geometry::Marker;
 
-impl EllipseFrame {
-    pub(super) fn new(e: &Ellipse) -> EllipseFrame {
-        let (s, c) = e.angle.sin_cos();
-        let k = e.semi_minor / e.semi_major;
-        EllipseFrame {
-            centre: (e.u, e.v),
-            scale: e.semi_major,
-            m: (0.0, 0.0),
-            rectified_centre: (0.0, 0.0),
-            major: (c, s),
-            minor: (s * k, -c * k),
-            projected_centre: (e.u, e.v),
-        }
-    }
+    const BLACK: f64 = INK as f64;
+    const WHITE: f64 = PAPER as f64;
 
-    /// The frame in which `p` is the projection of the marker centre;
-    /// `None` when that is inconsistent with the ellipse (p outside it, or
-    /// a degenerate rectification).
-    pub(super) fn with_projected_centre(e: &Ellipse, p: (f64, f64)) -> Option<EllipseFrame> {
-        let a = e.semi_major;
-        let (s, c) = e.angle.sin_cos();
-        let q = 1.0 / (e.semi_minor / a).powi(2);
-        // Normalised conic x^T M x = 1, M = R diag(1, q) R^T.
-        let mm = [
-            [c * c + q * s * s, c * s * (1.0 - q)],
-            [c * s * (1.0 - q), s * s + q * c * c],
-        ];
-        let pn = ((p.0 - e.u) / a, (p.1 - e.v) / a);
-        if pn.0 * (mm[0][0] * pn.0 + mm[0][1] * pn.1) + pn.1 * (mm[1][0] * pn.0 + mm[1][1] * pn.1)
-            >= 0.25
-        {
-            return None;
-        }
-        // Polar line of p: (M p, -1) ~ (-M p, 1) =: (m, 1).
-        let m = (
-            -(mm[0][0] * pn.0 + mm[0][1] * pn.1),
-            -(mm[1][0] * pn.0 + mm[1][1] * pn.1),
-        );
-        // Conic in rectified coordinates: C' = H^-T C H^-1 with
-        // H^-1 = [[1,0,0],[0,1,0],[-m1,-m2,1]], C = [[M,0],[0,-1]].
-        let c3 = [
-            [mm[0][0], mm[0][1], 0.0],
-            [mm[1][0], mm[1][1], 0.0],
-            [0.0, 0.0, -1.0],
-        ];
-        let hinv = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [-m.0, -m.1, 1.0]];
-        let mut tmp = [[0.0; 3]; 3];
-        let mut cr = [[0.0; 3]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                tmp[i][j] = (0..3).map(|k| c3[i][k] * hinv[k][j]).sum();
-            }
-        }
-        for i in 0..3 {
-            for j in 0..3 {
-                cr[i][j] = (0..3).map(|k| hinv[k][i] * tmp[k][j]).sum();
-            }
-        }
-        let (a11, a12, a22) = (cr[0][0], cr[0][1], cr[1][1]);
-        let det = a11 * a22 - a12 * a12;
-        if det.is_nan() || det <= 1e-12 || a11 <= 0.0 {
-            return None;
-        }
-        let g = (cr[0][2], cr[1][2]);
-        let centre = (
-            -(a22 * g.0 - a12 * g.1) / det,
-            -(-a12 * g.0 + a11 * g.1) / det,
-        );
-        let level = -(cr[2][2] + g.0 * centre.0 + g.1 * centre.1);
-        if level.is_nan() || level <= 0.0 {
-            return None;
-        }
-        // Axes of (x-c)^T A (x-c) = level.
-        let mean = 0.5 * (a11 + a22);
-        let root = (0.25 * (a11 - a22).powi(2) + a12 * a12).sqrt();
-        let (small, large) = (mean - root, mean + root);
-        if small <= 0.0 {
-            return None;
-        }
-        let angle = 0.5 * (-2.0 * a12).atan2(a22 - a11);
-        let (major_len, minor_len) = ((level / small).sqrt(), (level / large).sqrt());
-        let (s2, c2) = angle.sin_cos();
-        let frame = EllipseFrame {
-            centre: (e.u, e.v),
-            scale: a,
-            m,
-            rectified_centre: centre,
-            major: (c2 * major_len, s2 * major_len),
-            minor: (s2 * minor_len, -c2 * minor_len),
-            projected_centre: p,
-        };
-        // The rectified centre must map back onto p, and the marker must
-        // stay on the near side of the vanishing line.
-        let back = frame.point(0.0, 0.0);
-        let near = (0..16).all(|k| {
-            let (sn, cs) = (f64::from(k) * PI / 8.0).sin_cos();
-            let y = (
-                centre.0 + cs * frame.major.0 + sn * frame.minor.0,
-                centre.1 + cs * frame.major.1 + sn * frame.minor.1,
+    #[test]
+    fn a_drawn_ring_reads_as_its_member_with_its_turn() {
+        let family = Family::generate(8, 2).unwrap();
+        let reader = RingReader::new(Some(Decoder::new(&family)));
+        for (id, turn) in [(1, 0.0), (5, 1.0), (9, -2.5)] {
+            let code = family.code(id).unwrap();
+            let marker = Marker::whycode(8, code, 50.0);
+            let (image, outline) = draw(&marker, 48.0, 64, (31.7, 32.2), turn);
+            let reading = reader.read(&image, &outline, BLACK, WHITE);
+            assert_eq!(reading.id, id, "{reading:?}");
+            assert_eq!(reading.erasures, 0);
+            assert_eq!(reading.decoded.map(|d| d.status), Some(MatchStatus::Exact));
+            // The +x axis points along image angle -turn.
+            let yaw = reading.yaw.unwrap();
+            assert!(
+                angle_between(yaw, -turn) < 0.5f64.to_radians(),
+                "{id}: {yaw} {turn}"
             );
-            1.0 - m.0 * y.0 - m.1 * y.1 > 0.2
-        });
-        ((back.0 - p.0).hypot(back.1 - p.1) < 0.01 * a && near).then_some(frame)
-    }
-
-    /// Image point of the rectified unit-circle coordinates `d`.
-    fn unit_point(&self, d: (f64, f64)) -> (f64, f64) {
-        let y0 = self.rectified_centre.0 + d.0 * self.major.0 + d.1 * self.minor.0;
-        let y1 = self.rectified_centre.1 + d.0 * self.major.1 + d.1 * self.minor.1;
-        let w = 1.0 - self.m.0 * y0 - self.m.1 * y1;
-        (
-            self.centre.0 + self.scale * y0 / w,
-            self.centre.1 + self.scale * y1 / w,
-        )
-    }
-
-    /// Direction of parameter `t` in rectified coordinates (for [`Self::at`]).
-    fn direction(&self, t: f64) -> (f64, f64) {
-        let (s, c) = t.sin_cos();
-        self.direction_of(s, c)
-    }
-
-    /// [`Self::direction`] of the parameter whose sine and cosine are given.
-    fn direction_of(&self, s: f64, c: f64) -> (f64, f64) {
-        (
-            c * self.major.0 + s * self.minor.0,
-            c * self.major.1 + s * self.minor.1,
-        )
-    }
-
-    /// Image point at radius `rho`·R along a rectified `direction`.
-    #[inline]
-    fn at(&self, direction: (f64, f64), rho: f64) -> (f64, f64) {
-        // Without a perspective term the divisor below is exactly 1: the
-        // same point without two divisions (the ring tests' samples).
-        if self.m == (0.0, 0.0) {
-            return self.at_affine(direction, rho);
-        }
-        let y0 = self.rectified_centre.0 + rho * direction.0;
-        let y1 = self.rectified_centre.1 + rho * direction.1;
-        let w = 1.0 - self.m.0 * y0 - self.m.1 * y1;
-        (
-            self.centre.0 + self.scale * y0 / w,
-            self.centre.1 + self.scale * y1 / w,
-        )
-    }
-
-    /// [`Self::at`] of a frame without perspective (`m` zero).
-    #[inline]
-    fn at_affine(&self, direction: (f64, f64), rho: f64) -> (f64, f64) {
-        let y0 = self.rectified_centre.0 + rho * direction.0;
-        let y1 = self.rectified_centre.1 + rho * direction.1;
-        (
-            self.centre.0 + self.scale * y0,
-            self.centre.1 + self.scale * y1,
-        )
-    }
-
-    /// Image point of parameter `t` on the concentric circle of radius `rho`·R.
-    fn point(&self, t: f64, rho: f64) -> (f64, f64) {
-        let (s, c) = t.sin_cos();
-        let y0 = self.rectified_centre.0 + rho * (c * self.major.0 + s * self.minor.0);
-        let y1 = self.rectified_centre.1 + rho * (c * self.major.1 + s * self.minor.1);
-        let w = 1.0 - self.m.0 * y0 - self.m.1 * y1;
-        (
-            self.centre.0 + self.scale * y0 / w,
-            self.centre.1 + self.scale * y1 / w,
-        )
-    }
-}
-
-/// Mean grey level over the given radii at `count` equally spaced
-/// parameters; `None` when the ring leaves the image.
-pub(super) fn sample_profile<C: Deref<Target = [u8]>>(
-    image: &ImageBuffer<Luma<u8>, C>,
-    frame: &EllipseFrame,
-    radii: &[f64],
-    count: usize,
-) -> Option<Vec<f64>> {
-    let plane = Plane::new(
-        image.as_raw(),
-        image.width() as usize,
-        image.height() as usize,
-    );
-    let mut profile = Vec::with_capacity(count);
-    // Walk the parameter by a fixed rotation instead of a sine per sample.
-    let (step_sin, step_cos) = (2.0 * PI / count as f64).sin_cos();
-    let (mut s, mut c) = (0.0f64, 1.0f64);
-    for _ in 0..count {
-        let direction = frame.direction_of(s, c);
-        (s, c) = (s * step_cos + c * step_sin, c * step_cos - s * step_sin);
-        let mut sum = 0.0;
-        for &rho in radii {
-            let (x, y) = frame.at(direction, rho);
-            sum += plane.at(x, y, Border::Interior)?;
-        }
-        profile.push(sum / radii.len() as f64);
-    }
-    Some(profile)
-}
-
-/// A better estimate of the projected marker centre (pixels), from where
-/// rays through the middle of each half-sector cross from white to black:
-/// at 0.343 R in black sectors, at 0.6 R in white ones. In the frame's
-/// rectified unit-circle coordinates, if the true centre sits at D, the
-/// circle of radius ρ appears shifted by (1 - ρ²)·D (to first order, the
-/// way perspective shifts concentric circles), so it is crossed at
-/// ρ + (1 - ρ²)·D·u(t); a scale and a constant term absorb ellipse size
-/// errors and blur. `None` when the rays do not show the ring's structure.
-pub(super) fn refined_centre<C: Deref<Target = [u8]>>(
-    image: &ImageBuffer<Luma<u8>, C>,
-    frame: &EllipseFrame,
-    phase: f64,
-    bits: u32,
-    mid_level: f64,
-) -> Option<(f64, f64)> {
-    let plane = Plane::new(
-        image.as_raw(),
-        image.width() as usize,
-        image.height() as usize,
-    );
-    let sector = PI / f64::from(bits);
-    let major = frame.scale * frame.major.0.hypot(frame.major.1);
-    let step = 0.5 / major.max(1.0);
-    let (start, end) = (0.3, 0.75);
-    // Normal equations of e = (1-ρ²)(Dx cos t + Dy sin t) + s·ρ + b.
-    let mut ata = [[0.0f64; 4]; 4];
-    let mut atb = [0.0f64; 4];
-    let mut used = [0usize; 2];
-    for k in 0..2 * bits {
-        {
-            let offset = 0.5;
-            let t = phase + (f64::from(k) + offset) * sector;
-            let direction = frame.direction(t);
-            let at = |rho: f64| {
-                let (x, y) = frame.at(direction, rho);
-                plane.at(x, y, Border::Interior)
-            };
-            let mut previous = at(start)?;
-            if previous <= mid_level {
-                continue;
-            }
-            let mut rho = start;
-            let mut crossing = None;
-            while rho < end {
-                let next_rho = rho + step;
-                let next = at(next_rho)?;
-                if next < mid_level {
-                    let f = (previous - mid_level) / (previous - next);
-                    crossing = Some(rho + f * step);
-                    break;
-                }
-                previous = next;
-                rho = next_rho;
-            }
-            let Some(rho_c) = crossing else { continue };
-            let middle = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
-            let (expected, class) = if rho_c < middle {
-                (RING_INNER_RATIO, 0)
-            } else {
-                (WHYCODE_WHITE_RATIO, 1)
-            };
-            used[class] += 1;
-            let k1 = 1.0 - expected * expected;
-            let row = [k1 * t.cos(), k1 * t.sin(), expected, 1.0];
-            let e = rho_c - expected;
-            for i in 0..4 {
-                for j in 0..4 {
-                    ata[i][j] += row[i] * row[j];
-                }
-                atb[i] += row[i] * e;
-            }
+            // Read as under even light, an evenly lit ring reads the same.
+            assert_eq!(
+                reader.read_in_shade(&image, &outline, BLACK, WHITE),
+                reading
+            );
         }
     }
-    if used[0] < 2 || used[1] < 2 {
-        return None;
+
+    #[test]
+    fn a_ring_without_sectors_or_too_fine_to_sample_names_nothing() {
+        let family = Family::generate(8, 2).unwrap();
+        let reader = RingReader::new(Some(Decoder::new(&family)));
+        // A WhyCon disc: the ring's band is black all round.
+        let (image, outline) = draw(&Marker::whycon(50.0), 48.0, 64, (32.0, 32.0), 0.0);
+        let reading = reader.read(&image, &outline, BLACK, WHITE);
+        assert_eq!((reading.id, reading.decoded), (0, None), "{reading:?}");
+        // Sectors under MIN_PIXELS_PER_SECTOR wide are not read at all.
+        let code = family.code(3).unwrap();
+        let (image, outline) = draw(&Marker::whycode(8, code, 50.0), 9.0, 16, (8.0, 8.0), 0.0);
+        let reading = reader.read(&image, &outline, BLACK, WHITE);
+        assert!(reading.pixels_per_sector < MIN_PIXELS_PER_SECTOR);
+        assert_eq!((reading.word, reading.projected_centre), (None, None));
+        // Without a decoder (legacy markers) nothing is read.
+        let (image, outline) = draw(&Marker::whycode(8, code, 50.0), 48.0, 64, (32.0, 32.0), 0.0);
+        assert_eq!(
+            RingReader::new(None).read(&image, &outline, BLACK, WHITE),
+            RingReading::unreadable(0.0)
+        );
     }
-    let solution = solve4(ata, atb)?;
-    let (ux, uy) = (solution[0], solution[1]);
-    let centre = frame.unit_point((ux, uy));
-    (centre.0.is_finite() && centre.1.is_finite()).then_some(centre)
-}
-
-/// Solves a 4x4 linear system by Gaussian elimination with pivoting.
-fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
-    for col in 0..4 {
-        let pivot = (col..4).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[pivot][col].abs() < 1e-12 {
-            return None;
-        }
-        a.swap(col, pivot);
-        b.swap(col, pivot);
-        let pivot_row = a[col];
-        for row in col + 1..4 {
-            let f = a[row][col] / pivot_row[col];
-            for (x, p) in a[row].iter_mut().zip(pivot_row).skip(col) {
-                *x -= f * p;
-            }
-            b[row] -= f * b[col];
-        }
-    }
-    let mut x = [0.0; 4];
-    for row in (0..4).rev() {
-        let sum: f64 = (row + 1..4).map(|k| a[row][k] * x[k]).sum();
-        x[row] = (b[row] - sum) / a[row][row];
-    }
-    Some(x)
-}
-
-/// Parameter (radians, in [0, one sector)) of the ring's sector boundaries:
-/// the phase of the 2n-th harmonic of the gradient magnitude. Each edge
-/// contributes a phasor at its own position, so the estimate moves
-/// continuously with the marker and is not tied to the sample grid.
-fn edge_phase(profile: &[f64], bits: u32, per_sector: usize) -> f64 {
-    let count = profile.len();
-    // 2n·t at the midpoint between samples j and j+1 repeats every sector.
-    let phasors: Vec<(f64, f64)> = (0..per_sector)
-        .map(|j| (2.0 * PI * (j as f64 + 0.5) / per_sector as f64).sin_cos())
-        .collect();
-    let (mut re, mut im) = (0.0, 0.0);
-    for j in 0..count {
-        let g = (profile[(j + 1) % count] - profile[j]).abs();
-        let (sin, cos) = phasors[j % per_sector];
-        re += g * cos;
-        im -= g * sin;
-    }
-    let sector = PI / f64::from(bits);
-    let phase = -im.atan2(re) / f64::from(2 * bits);
-    phase.rem_euclid(sector)
-}
-
-/// Mean grey level of the central part of each of the 2n half-bit sectors,
-/// the first one starting at parameter `start`.
-pub(super) fn half_sector_means(profile: &[f64], bits: u32, start: f64) -> Vec<f64> {
-    let count = profile.len() as f64;
-    let sector = PI / f64::from(bits);
-    // The central 60 % of each sector, away from blurred edges.
-    const POINTS: [f64; 7] = [0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8];
-    (0..2 * bits)
-        .map(|k| {
-            let sum: f64 = POINTS
-                .iter()
-                .map(|f| {
-                    let t = start + (f64::from(k) + f) * sector;
-                    let x = wrap_samples(t / (2.0 * PI) * count, count);
-                    // x ≥ 0 (or NaN, which reads as sample 0 and stays NaN).
-                    let j = angle::floor_to_int(x);
-                    let frac = x - j as f64;
-                    let len = profile.len();
-                    let j = if (j as usize) < len {
-                        j as usize
-                    } else {
-                        j as usize % len
-                    };
-                    let next = if j + 1 == len { 0 } else { j + 1 };
-                    profile[j] * (1.0 - frac) + profile[next] * frac
-                })
-                .sum();
-            sum / POINTS.len() as f64
-        })
-        .collect()
-}
-
-/// `x.rem_euclid(count)` (bit for bit) without the library's `fmod` for
-/// the parameters within the profile's turn or the next, where the ring
-/// tests ask for all but a few: a turn off is an exact subtraction there.
-#[inline]
-fn wrap_samples(x: f64, count: f64) -> f64 {
-    if (0.0..count).contains(&x) {
-        x
-    } else if (count..2.0 * count).contains(&x) {
-        x - count
-    } else {
-        x.rem_euclid(count)
-    }
-}
-
-/// First half minus second half of every bit: positive means white then
-/// black, a 1 bit.
-pub(super) fn bit_differences(halves: &[f64]) -> Vec<f64> {
-    halves.chunks_exact(2).map(|h| h[0] - h[1]).collect()
-}
-
-/// Least ratio of the brightest to the dimmest light along the ring at
-/// which a cast shadow's edge is taken to cross it.
-const SHADED_LIGHT_RATIO: f64 = 1.5;
-
-/// Most the dimmest paper round a shaded ring may keep of the brightest:
-/// a light gradient across one marker stays well above it.
-const SHADED_PAPER_RATIO: f64 = 0.6;
-
-/// Where the paper round the marker is sampled for its light, in outer
-/// radii: clear of the black disc's blurred edge.
-const PAPER_RADII: [f64; 2] = [1.2, 1.3];
-
-/// The light on the paper just outside the marker, at the same `count`
-/// parameters as [`sample_profile`]'s; `None` where it leaves the image.
-pub(super) fn paper_profile<C: Deref<Target = [u8]>>(
-    image: &ImageBuffer<Luma<u8>, C>,
-    frame: &EllipseFrame,
-    count: usize,
-) -> Option<Vec<f64>> {
-    sample_profile(image, frame, &PAPER_RADII, count)
-}
-
-/// The ring's profile (`bits` bits, samples evenly spaced round it) as
-/// under even light, when a cast shadow's edge crosses the ring: the
-/// profile steps down with the light, which hides the bits' edges in the
-/// shade. Every window of three half-sectors of a Manchester ring holds a
-/// white one, so the profile's running maximum over that window follows
-/// the light; divided by it (and scaled back to the brightest), the ring
-/// reads as under even light. None where the light varies less than
-/// [`SHADED_LIGHT_RATIO`] round the ring (a gentle gradient, or a washer or
-/// a letter, whose light middle is no ring of sectors), and where `paper`
-/// (the light just outside the marker, [`paper_profile`]) is not shaded.
-pub(crate) fn evened_light(profile: &[f64], paper: &[f64], bits: u32) -> Option<Vec<f64>> {
-    // Shade falls on the paper round the marker too; an ink blot over
-    // the ring (a run of three or more dark half-sectors, whose "light"
-    // is the ink itself) leaves it lit, and evening the blot would read
-    // noise as the bits beneath it.
-    let (paper_dim, paper_bright) = paper
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(lo, hi), &l| (lo.min(l), hi.max(l)));
-    if paper_dim > SHADED_PAPER_RATIO * paper_bright {
-        return None;
-    }
-    let count = profile.len();
-    let half = ((0.75 * count as f64 / f64::from(2 * bits)).ceil() as usize).min(count / 2);
-    let light: Vec<f64> = (0..count)
-        .map(|j| {
-            (0..=2 * half)
-                .map(|k| profile[(j + count + k - half) % count])
-                .fold(f64::MIN, f64::max)
-        })
-        .collect();
-    let (dimmest, brightest) = light
-        .iter()
-        .fold((f64::MAX, f64::MIN), |(lo, hi), &l| (lo.min(l), hi.max(l)));
-    if dimmest <= 0.0 || brightest < SHADED_LIGHT_RATIO * dimmest {
-        return None;
-    }
-    Some(
-        profile
-            .iter()
-            .zip(&light)
-            .map(|(p, l)| p * brightest / l)
-            .collect(),
-    )
 }

@@ -29,9 +29,9 @@ use std::ops::Deref;
 
 use image::{ImageBuffer, Luma};
 
-use super::ring::{
-    bit_differences, evened_light, half_sector_means, paper_profile, refined_centre,
-    sample_profile, sample_radii, EllipseFrame,
+use super::profile::{
+    bit_differences, boundary_phases, evened_light, gradient, half_sector_means, paper_profile,
+    refined_centre, sample_profile, sample_radii, EllipseFrame,
 };
 use crate::family::necklace;
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
@@ -97,7 +97,7 @@ pub struct RingStructure {
     pub weakest_bit: f64,
     /// The ring passed only read as under even light (a cast shadow's edge
     /// crosses it): its bits are to be read so too
-    /// ([`super::ring::RingReader::read_in_shade`]).
+    /// ([`super::RingReader::read_in_shade`]).
     pub in_shade: bool,
 }
 
@@ -165,7 +165,7 @@ pub fn examine<C: Deref<Target = [u8]>>(
     let mut model = Model::new(pixels_per_sample, count);
     let mut test_profile = |profile: &[f64], counts: &[u32]| -> Vec<Tested> {
         let ring = Profile::new(profile);
-        boundary_phases(&ring, counts)
+        boundary_phases(&ring.gradient, ring.gradient_total, counts)
             .into_iter()
             .zip(counts)
             .map(|(boundaries, &n)| test_bits(&ring, n, boundaries, contrast, &mut model))
@@ -303,9 +303,7 @@ struct Profile<'a> {
 impl Profile<'_> {
     fn new(samples: &[f64]) -> Profile<'_> {
         let count = samples.len();
-        let gradient: Vec<f64> = (0..count)
-            .map(|j| (samples[(j + 1) % count] - samples[j]).abs())
-            .collect();
+        let gradient: Vec<f64> = gradient(samples).collect();
         let gradient_total = gradient.iter().sum();
         let mean = samples.iter().sum::<f64>() / count as f64;
         let mut spread = 0.0;
@@ -399,57 +397,6 @@ fn pairing(
         weakest_bit,
         in_shade: false,
     })
-}
-
-/// Parameter (radians, within one sector) of the sector boundaries: the
-/// phase of the 2n-th harmonic of the gradient magnitude, where every edge
-/// of a Manchester ring sits; and how much of the gradient that harmonic
-/// holds (1 when every edge sits on an n-bit boundary). For every count in
-/// `counts`.
-fn boundary_phases(profile: &Profile, counts: &[u32]) -> Vec<(f64, f64)> {
-    // Each count's sum is a chain of dependent steps a sample long; four
-    // counts walked side by side keep the processor busy between the
-    // steps of one (each lane's arithmetic as it would be alone).
-    const LANES: usize = 4;
-    let gradient = &profile.gradient;
-    let count = gradient.len() as f64;
-    let mut out = Vec::with_capacity(counts.len());
-    for group in counts.chunks(LANES) {
-        // Short groups fill up with their last count, read and dropped.
-        let harmonic: [f64; LANES] =
-            std::array::from_fn(|i| f64::from(2 * group[i.min(group.len() - 1)]));
-        let (mut re, mut im) = ([0.0; LANES], [0.0; LANES]);
-        // exp(i·h·t) at t = 2π(j + 0.5)/count (the gradient between
-        // samples j and j+1), advanced by one rotation per sample instead
-        // of a sine and a cosine each.
-        let step = harmonic.map(|h| (h * 2.0 * PI / count).sin_cos());
-        let (mut s, mut c): ([f64; LANES], [f64; LANES]) = {
-            let first = harmonic.map(|h| (h * PI / count).sin_cos());
-            (first.map(|x| x.0), first.map(|x| x.1))
-        };
-        for g in gradient {
-            for i in 0..LANES {
-                re[i] += g * c[i];
-                im[i] -= g * s[i];
-                let (step_sin, step_cos) = step[i];
-                (s[i], c[i]) = (
-                    s[i] * step_cos + c[i] * step_sin,
-                    c[i] * step_cos - s[i] * step_sin,
-                );
-            }
-        }
-        for (i, &bits) in group.iter().enumerate() {
-            let phase = -im[i].atan2(re[i]) / harmonic[i];
-            let total = profile.gradient_total;
-            let coherence = if total > 0.0 {
-                re[i].hypot(im[i]) / total
-            } else {
-                0.0
-            };
-            out.push((phase.rem_euclid(PI / f64::from(bits)), coherence));
-        }
-    }
-    out
 }
 
 /// Gaussian widths (pixels) the Manchester model is blurred by.
@@ -589,4 +536,63 @@ fn correlations(profile: &Profile, models: &[Vec<f64>; 3]) -> [f64; 3] {
             ab[i] / (aa * bb[i]).sqrt()
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_images::{draw, INK, PAPER};
+    use super::*;
+    use crate::geometry::Marker;
+
+    const BLACK: f64 = INK as f64;
+    const WHITE: f64 = PAPER as f64;
+
+    #[test]
+    fn a_drawn_ring_shows_its_own_count_and_code_among_all() {
+        for (bits, code) in [(6, 0b001011), (8, 0b0110_1011), (12, 0b0000_1101_0111)] {
+            let marker = Marker::whycode(bits, code, 50.0);
+            let (image, outline) = draw(&marker, 60.0, 72, (36.2, 35.9), 0.7);
+            let expected = std::iter::once(bits).chain(BITS.filter(|&n| n != bits));
+            let RingEvidence::Manchester(ring) =
+                examine(&image, &outline, BLACK, WHITE, expected, true)
+            else {
+                panic!("{bits} bits: no Manchester ring");
+            };
+            assert_eq!(
+                (ring.bits, ring.code),
+                (bits, necklace::min_rotation(code, bits).0)
+            );
+            assert!(ring.fit >= SURE_FIT && !ring.in_shade, "{ring:?}");
+            // Tested for twice its count, or without its own, it is no ring.
+            let others = BITS.filter(|&n| n != bits);
+            match examine(&image, &outline, BLACK, WHITE, others, false) {
+                RingEvidence::Manchester(other) => assert!(other.bits != bits, "{other:?}"),
+                RingEvidence::Absent | RingEvidence::TooSmall => {}
+            }
+            assert!(!matches!(
+                examine(&image, &outline, BLACK, WHITE, [2 * bits], false),
+                RingEvidence::Manchester(_)
+            ));
+        }
+    }
+
+    #[test]
+    fn a_washer_shows_no_ring_unless_a_count_tried_was_too_fine_to_test() {
+        let (image, outline) = draw(&Marker::whycon(50.0), 32.0, 40, (20.0, 20.0), 0.0);
+        assert!(testable(&outline, 8) && !testable(&outline, 24));
+        assert_eq!(
+            examine(&image, &outline, BLACK, WHITE, [8, 12], false),
+            RingEvidence::Absent
+        );
+        // Sectors of 24 bits would be under MIN_TESTABLE_PIXELS here: no
+        // evidence either way for that count.
+        assert_eq!(
+            examine(&image, &outline, BLACK, WHITE, [8, 24], false),
+            RingEvidence::TooSmall
+        );
+        assert_eq!(
+            examine(&image, &outline, BLACK, WHITE, [24], false),
+            RingEvidence::TooSmall
+        );
+    }
 }

@@ -125,7 +125,7 @@ impl Track {
     pub fn observe_reading(
         &mut self,
         members: usize,
-        d: &super::Detection,
+        d: &crate::detect::Detection,
     ) -> super::idfilter::IdEstimate {
         let filter = self
             .ids
@@ -139,7 +139,7 @@ impl Track {
     }
 
     /// Remembers what the ring said this frame.
-    pub fn observe_identity(&mut self, d: &super::Detection) {
+    pub fn observe_identity(&mut self, d: &crate::detect::Detection) {
         if d.id != 0 && d.id == self.id {
             self.id_streak += 1;
         } else {

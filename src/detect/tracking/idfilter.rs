@@ -17,7 +17,7 @@
 //! The posterior is mixed with a little of the prior at every step so that
 //! a track can still change its mind (a tracker mix-up) in a few frames.
 
-use super::ring::RingReading;
+use crate::detect::ring::RingReading;
 use crate::family::MatchStatus;
 
 /// How many IDs a misread typically confuses a marker with.

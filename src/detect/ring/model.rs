@@ -14,7 +14,7 @@
 //! length L smears sectors into their neighbours, so no sample reads one
 //! sector, but the members rendered through a segment of the length and
 //! direction the outline's edge spread shows
-//! ([`super::ellipse::linear_blur`]) still tell them apart.
+//! ([`crate::detect::ellipse::linear_blur`]) still tell them apart.
 //!
 //! Each pixel's model value is linear in the 2n half-sector colours, so the
 //! pixel sums that the least-squares comparison needs are formed once per
@@ -26,7 +26,7 @@ use std::ops::Deref;
 
 use image::{ImageBuffer, Luma};
 
-use super::ellipse::LinearBlur;
+use crate::detect::ellipse::LinearBlur;
 use crate::family::{necklace, Family};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
 use crate::math::angle;
@@ -150,7 +150,7 @@ pub fn neighbour_count_fits_better<C: Deref<Target = [u8]>>(
 }
 
 /// Reads a ring smeared by the motion blur `blur` (measured on the outline,
-/// see [`super::ellipse::linear_blur`]): the same comparison with every member
+/// see [`crate::detect::ellipse::linear_blur`]): the same comparison with every member
 /// rendered through segments of about the measured length. Large rings
 /// are compared on a subset of their pixels (the smear, not the pixel,
 /// sets the scale of what the model can tell apart).
@@ -507,4 +507,48 @@ fn residual_of_two(pixels: &[(f64, f64, f64)], u: &[f64], v: &[f64]) -> f64 {
     let beta = (syu * svv - syv * suv) / det;
     let gamma = (syv * suu - syu * suv) / det;
     syy - beta * syu - gamma * syv
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_images::{angle_between, draw};
+    use super::*;
+    use crate::geometry::Marker;
+
+    #[test]
+    fn a_ring_too_small_to_sample_is_named_by_the_members_rendered() {
+        let family = Family::generate(8, 2).unwrap();
+        for (id, turn) in [(2, 0.3), (7, 2.0)] {
+            let code = family.code(id).unwrap();
+            let (image, outline) = draw(
+                &Marker::whycode(8, code, 50.0),
+                14.0,
+                24,
+                (12.3, 11.8),
+                turn,
+            );
+            let ring = read_small_ring(&image, &outline, &family).unwrap();
+            assert!(ring.structured, "{ring:?}");
+            assert_eq!((ring.id, ring.code), (id, code), "{ring:?}");
+            let yaw = ring.yaw.unwrap();
+            assert!(
+                angle_between(yaw, -turn) < 10f64.to_radians(),
+                "{yaw} {turn}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_disc_without_a_code_ring_is_no_small_ring() {
+        let family = Family::generate(8, 2).unwrap();
+        let (image, outline) = draw(&Marker::whycon(50.0), 14.0, 24, (12.0, 12.0), 0.0);
+        let ring = read_small_ring(&image, &outline, &family).unwrap();
+        assert!(
+            !ring.structured && ring.structure_ratio > MAX_STRUCTURE_RATIO,
+            "{ring:?}"
+        );
+        // The comparison needs the whole disc inside the image.
+        let cut = ImageEllipse { u: 3.0, ..outline };
+        assert_eq!(read_small_ring(&image, &cut, &family), None);
+    }
 }

@@ -1,0 +1,293 @@
+//! Tracking across frames (paper 4.1-4.2): each known marker is first
+//! followed where it should be (last position plus velocity) by its edges
+//! along a few dozen scan lines (`follow.rs`), and described at once,
+//! while its pixels are in the cache; once its ID is settled, its yaw comes
+//! from the known code's edges (on the rectified ring, once, when a pose is
+//! wanted). Only if following fails does the flood fill run, and only if a
+//! marker is lost is the whole frame scanned (else one band of rows per
+//! frame looks for newcomers). IDs of tracked markers go through a
+//! Bayesian filter ([`idfilter`], paper 5.1); the test tolerances adapt
+//! slowly to what is measured (paper 4.2, `track.rs`).
+
+mod follow;
+pub mod idfilter;
+pub(super) mod track;
+
+use std::ops::Deref;
+
+use image::{ImageBuffer, Luma};
+
+use super::pose::Posed;
+use super::ring::RingRead;
+use super::segment::Gray;
+use super::threshold::ThresholdMap;
+use super::{preload_disc, rectify, Candidate, Detection, Detector, Finds, Stage, SCAN_CHUNK};
+use crate::family::{Family, MatchStatus};
+use track::{PoseMemory, Track};
+
+/// A tracked frame looks for new markers in one of this many row bands.
+const DISCOVERY_BANDS: u64 = 8;
+
+/// Frames in a row a marker's ID must have been read the same before its
+/// known code is followed instead of read.
+const SETTLED_STREAK: u32 = 3;
+
+/// A followed marker's identity from its track, its yaw from the known
+/// code's edges.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct FollowedCode {
+    /// What the track read, the yaw measured this frame.
+    pub(super) read: RingRead,
+    /// The pose, its rotation measured on the code's edges, with a camera
+    /// and a diameter.
+    pub(super) posed: Option<Posed>,
+}
+
+impl Detector {
+    /// Follows every tracked marker where it should be now, describing
+    /// each as soon as it is found: while its pixels are still in the cache
+    /// from following it (on a large frame they would have left it by the
+    /// time every other marker is followed, and be fetched a second time).
+    pub(super) fn follow_tracks<C: Deref<Target = [u8]>>(
+        &mut self,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        finds: &mut Finds,
+    ) {
+        for index in 0..self.tracks.len() {
+            if finds.candidates.len() >= self.config.max_markers {
+                break;
+            }
+            if let Some(next) = self.tracks.get(index + 1) {
+                // The edge search reaches a window past the outline.
+                let (u, v) = next.predicted();
+                preload_disc(gray, u, v, next.a + follow::edge_window(next.a) + 1.0);
+            }
+            let followed = self.follow(gray, index);
+            self.stopwatch.lap(Stage::Follow);
+            if let Some(mut c) = followed {
+                c.track = Some(index);
+                let (d, memory) = self.describe(image, gray, &c);
+                finds.detections.push(d);
+                finds.memories.push(memory);
+                finds.candidates.push(c);
+            }
+        }
+        if self.follow_filled {
+            // A follow that fell back to the flood fill labelled the
+            // pixels it reached with its own threshold, whether or not it
+            // found its marker; the scan would skip a marker it missed as
+            // already visited. Markers that were followed are kept out of
+            // the scan by the occupied tiles (`Detector::mark_followed`)
+            // and the duplicate test after it.
+            self.labels.begin(gray.width, gray.height);
+        }
+    }
+
+    /// Looks for markers new to a frame whose every known marker is back:
+    /// in one band of rows per frame, so a tracked frame stays cheap and a
+    /// newcomer is found within [`DISCOVERY_BANDS`] frames.
+    pub(super) fn scan_band(&mut self, gray: Gray<'_>, found: &mut Vec<Candidate>) {
+        if found.len() >= self.config.max_markers {
+            return;
+        }
+        let (width, height) = (gray.width, gray.height);
+        let band = (self.frame % DISCOVERY_BANDS) as usize;
+        let rows = height * band / DISCOVERY_BANDS as usize
+            ..height * (band + 1) / DISCOVERY_BANDS as usize;
+        // The map reaches past the band by the largest marker's diameter,
+        // so a newcomer straddling the band's edge lies wholly within it (a
+        // dark fill stops where the map does).
+        let reach = self.tracks.iter().map(|t| 2.0 * t.a).fold(0.0, f64::max) as usize + SCAN_CHUNK;
+        let map_rows = rows.start.saturating_sub(reach)..(rows.end + reach).min(height);
+        let map = ThresholdMap::adaptive_rows(gray.pixels, width, height, map_rows);
+        self.stopwatch.lap(Stage::Threshold);
+        self.scan(gray, &map, rows, &[], found);
+    }
+
+    /// A followed marker whose ID its track has read the same several
+    /// times: its known code's edges give the yaw at a fraction of a full
+    /// read, and confirm the code on the way. With a pose to give, the
+    /// code's edges are measured once, on the rectified ring that gives
+    /// the rotation; without, along the image ellipse. None when the track
+    /// has not settled, or the code's edges do not show (then the ring is
+    /// read).
+    pub(super) fn follow_code(
+        &mut self,
+        gray: Gray<'_>,
+        c: &Candidate,
+        index: usize,
+    ) -> Option<FollowedCode> {
+        let track = &self.tracks[index];
+        if track.id_streak < SETTLED_STREAK {
+            return None;
+        }
+        let bits = self.config.target.family().map(Family::bits)?;
+        let (code, previous_yaw) = (track.code?, track.yaw?);
+        let followed = self.follow_pose(gray, c, index, bits, code, previous_yaw);
+        let yaw = match &followed {
+            Some(followed) => followed.yaw,
+            None => rectify::follow_ring(gray, &c.outer, bits, code, previous_yaw)?,
+        };
+        let track = &self.tracks[index];
+        Some(FollowedCode {
+            read: RingRead {
+                id: track.id,
+                code: track.code,
+                status: track.status,
+                yaw: Some(yaw),
+                confidence: track.confidence,
+                // The count its ring showed when it was read: following the
+                // code's edges confirms it.
+                bits: track.bits,
+                ..RingRead::nothing(0.0)
+            },
+            posed: followed.map(|f| f.posed),
+        })
+    }
+
+    /// Whether track `index` has settled on an ID: a marker whose ring
+    /// blurs is still the marker.
+    pub(super) fn settled(&self, index: usize) -> bool {
+        let track = &self.tracks[index];
+        track.id != 0 && track.id_streak >= SETTLED_STREAK
+    }
+
+    /// Tracked markers report what the ID filter believes after this
+    /// frame's reading, not the single reading: one misread (motion blur,
+    /// a glint) does not change a marker's ID, and a marker whose readings
+    /// disagree is "unknown" until they settle.
+    pub(super) fn filter_identity(
+        &mut self,
+        gray: Gray<'_>,
+        c: &Candidate,
+        index: usize,
+        d: &mut Detection,
+        followed: bool,
+    ) {
+        let Some(family) = self.config.target.family() else {
+            return;
+        };
+        let track = &mut self.tracks[index];
+        let previous_yaw = track.yaw;
+        let estimate = track.observe_reading(family.len(), d);
+        if followed || estimate.id == d.id {
+            if estimate.id != 0 {
+                d.confidence = estimate.probability;
+            }
+            return;
+        }
+        // This frame's reading, if it named something, contradicts the
+        // belief that is reported instead.
+        let contradicted = d.id != 0 || d.status == Some(MatchStatus::Rejected);
+        d.confidence = if contradicted && estimate.id != 0 {
+            idfilter::IdFilter::contradicted(estimate, d.confidence)
+        } else {
+            estimate.probability
+        };
+        d.id = estimate.id;
+        d.code = family.code(estimate.id);
+        // The reading's yaw belongs to the code it read; the believed code's
+        // edges give the yaw instead.
+        d.yaw = match (d.code, previous_yaw) {
+            (Some(code), Some(yaw)) => {
+                rectify::follow_ring(gray, &c.outer, family.bits(), code, yaw)
+            }
+            _ => None,
+        };
+    }
+
+    pub(super) fn update_tracks(
+        &mut self,
+        found: &[Candidate],
+        detections: &[Detection],
+        poses: &[PoseMemory],
+    ) {
+        let mut next: Vec<Track> = Vec::with_capacity(found.len());
+        let mut taken = vec![false; self.tracks.len()];
+        for c in found {
+            if let Some(i) = c.track {
+                taken[i] = true;
+            }
+        }
+        for ((c, d), pose) in found.iter().zip(detections).zip(poses) {
+            let threshold = ((c.black + c.white) / 2.0).round().clamp(1.0, 255.0) as u8;
+            let (u, v, a, b) = (c.outer.u, c.outer.v, c.outer.semi_major, c.outer.semi_minor);
+            let index = c.track.or_else(|| {
+                let i =
+                    (0..self.tracks.len()).find(|&i| !taken[i] && self.tracks[i].matches(u, v))?;
+                taken[i] = true;
+                Some(i)
+            });
+            match index {
+                Some(i) => {
+                    let mut t = self.tracks[i].clone();
+                    if c.track.is_none() {
+                        // Found again by the scan rather than followed: its
+                        // reading has not been filtered yet.
+                        if let Some(family) = self.config.target.family() {
+                            t.observe_reading(family.len(), d);
+                        }
+                    }
+                    t.update(u, v, a, b, threshold);
+                    t.observe_appearance(c.outer.angle, c.black, c.white);
+                    t.observe_identity(d);
+                    t.normal = pose.settled_normal.or(t.normal);
+                    t.fitted = pose.fitted;
+                    next.push(t);
+                }
+                None => {
+                    let mut t = Track::new(u, v, a, b, threshold);
+                    t.observe_appearance(c.outer.angle, c.black, c.white);
+                    if let Some(family) = self.config.target.family() {
+                        t.observe_reading(family.len(), d);
+                    }
+                    t.observe_identity(d);
+                    t.normal = pose.settled_normal;
+                    t.fitted = pose.fitted;
+                    next.push(t);
+                }
+            }
+        }
+        self.tracks = next;
+    }
+
+    /// The test tolerances follow what the candidates that passed the
+    /// tests measured (not those followed by their edges).
+    pub(super) fn learn_tolerances(&mut self, found: &[Candidate]) {
+        for c in found.iter().filter(|c| c.tested) {
+            self.ratio.learn(c.ratio);
+            self.roundness.learn(c.roundness);
+            self.area.learn(c.area_error);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::detect::{Detector, DetectorConfig, Target};
+    use crate::family::Family;
+    use crate::geometry::Marker;
+    use crate::simulate::{self, LooseMarker, Placement, Scene, SceneObject};
+
+    #[test]
+    fn a_followed_marker_keeps_reporting_the_count_its_ring_showed() {
+        let family = Family::generate(8, 2).unwrap();
+        let mut scene = Scene::new(crate::camera::Camera::ideal(320, 240, 60.0));
+        let marker = Marker::whycode(8, family.code(5).unwrap(), 50.0);
+        let placement = Placement::viewed(nalgebra::Vector3::new(0.02, 0.0, 0.4), 0.3, 0.0, 1.0);
+        scene.objects = vec![SceneObject::Marker(LooseMarker::new(marker, 5, placement))];
+        let (image, _) = simulate::render(&scene);
+        let mut detector = Detector::new(DetectorConfig {
+            target: Target::WhyCode(family),
+            tracking: true,
+            ..DetectorConfig::default()
+        });
+        // From the fourth frame on its code is followed, not read.
+        for frame in 0..6 {
+            let found = detector.detect(&image);
+            let seen: Vec<_> = found.iter().map(|d| (d.id, d.bits)).collect();
+            assert_eq!(seen, [(5, Some(8))], "frame {frame}");
+        }
+    }
+}
