@@ -18,6 +18,9 @@ pub struct FrameReport {
     pub elapsed_ms: f64,
     /// What was found, in the detector's order.
     pub markers: Vec<Detection>,
+    /// How long each stage of the detector took on this frame, when asked
+    /// for ([`DetectorConfig::timings`](super::DetectorConfig::timings)).
+    pub timings: Option<super::timings::StageTimings>,
 }
 
 /// The CSV header line (without its newline); [`FrameReport::to_csv_rows`]
@@ -38,6 +41,8 @@ struct FrameRecord<'a> {
     height: u32,
     elapsed_ms: f64,
     markers: Vec<MarkerRecord>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    timings: Option<&'a super::timings::StageTimings>,
 }
 
 #[derive(serde::Serialize)]
@@ -61,7 +66,8 @@ struct MarkerRecord {
 impl FrameReport {
     /// One JSON object on one line (no newline): image, width, height,
     /// elapsed_ms and the markers with id, code, u, v, yaw, axes,
-    /// confidence, position, rotation and quaternion.
+    /// confidence, position, rotation and quaternion; then the stage
+    /// timings, when measured.
     pub fn to_json(&self) -> String {
         let markers = self
             .markers
@@ -100,6 +106,7 @@ impl FrameReport {
             height: self.height,
             elapsed_ms: round(self.elapsed_ms, 3),
             markers,
+            timings: self.timings.as_ref(),
         };
         serde_json::to_string(&record).expect("plain records serialise")
     }
@@ -242,6 +249,7 @@ mod tests {
             height: 480,
             elapsed_ms: 1.23456,
             markers,
+            timings: None,
         }
     }
 

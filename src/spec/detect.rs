@@ -27,6 +27,9 @@ pub struct DetectSpec {
     /// Smallest black ring of a legacy marker worth reporting, pixels
     /// (legacy only; default the original WhyCon's 100).
     pub min_ink: Option<f64>,
+    /// Time each stage of every frame (read with
+    /// [`Detector::last_timings`](crate::Detector::last_timings)).
+    pub timings: bool,
 }
 
 impl DetectSpec {
@@ -55,6 +58,7 @@ impl DetectSpec {
             camera: self.camera,
             tracking: self.tracking,
             report_unreadable: self.unreadable,
+            timings: self.timings,
             ..DetectorConfig::default()
         };
         if let Some(n) = self.max_markers {
