@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{FileKind, LoadError, LoadProblem, WriteError};
-use image::GrayImage;
+use image::{GrayImage, ImageBuffer};
 
 /// Largest image side accepted by [`load_gray`].
 pub const MAX_SIDE: u32 = 30_000;
@@ -68,13 +68,13 @@ fn image_error(path: &Path, problem: LoadProblem) -> LoadError {
 /// decoding.
 pub fn load_gray(path: &Path) -> Result<GrayImage, LoadError> {
     let open = || std::fs::File::open(path).map(std::io::BufReader::new);
-    let (decoded, format) = decode(path, open, SizeLimit::FILES)?;
+    let (gray, format) = decode(path, open, SizeLimit::FILES)?;
     if format == image::ImageFormat::Jpeg {
         // Only now the whole file: the decoder has already read it once.
         let bytes = std::fs::read(path).map_err(|e| image_error(path, LoadProblem::Read(e)))?;
         check_jpeg_complete(path, &bytes)?;
     }
-    Ok(to_gray(decoded))
+    Ok(gray)
 }
 
 /// [`load_gray`] for a file's contents already in memory (an upload in the
@@ -83,20 +83,24 @@ pub fn load_gray(path: &Path) -> Result<GrayImage, LoadError> {
 /// the caller can hold.
 pub fn decode_gray(name: &Path, bytes: &[u8], limit: SizeLimit) -> Result<GrayImage, LoadError> {
     let open = || Ok(std::io::Cursor::new(bytes));
-    let (decoded, format) = decode(name, open, limit)?;
+    let (gray, format) = decode(name, open, limit)?;
     if format == image::ImageFormat::Jpeg {
         check_jpeg_complete(name, bytes)?;
     }
-    Ok(to_gray(decoded))
+    Ok(gray)
 }
 
+/// PNGs of more pixels than this are turned grey a row at a time: whole, a
+/// 20000 x 20000 RGBA16 file (3 MB on disk) took 3.9 GB to decode.
+const ROW_BY_ROW_PNG_PIXELS: u64 = 16_000_000;
+
 /// Decodes what `open` reads (opened twice: once for the header, once for
-/// the pixels), after checking the header's size against `limit`.
+/// the pixels) to grey, after checking the header's size against `limit`.
 fn decode<R: std::io::BufRead + std::io::Seek>(
     path: &Path,
     open: impl Fn() -> std::io::Result<R>,
     limit: SizeLimit,
-) -> Result<(image::DynamicImage, image::ImageFormat), LoadError> {
+) -> Result<(GrayImage, image::ImageFormat), LoadError> {
     let io = |e| image_error(path, LoadProblem::Read(e));
     let decode = |e| image_error(path, LoadProblem::Decode(e));
     let reader = || -> Result<_, LoadError> {
@@ -128,6 +132,16 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
             },
         ));
     }
+    if format == image::ImageFormat::Png
+        && u64::from(width) * u64::from(height) > ROW_BY_ROW_PNG_PIXELS
+    {
+        let source = open().map_err(io)?;
+        let rows = png_rows_to_gray(source)
+            .map_err(|problem| image_error(path, LoadProblem::Invalid(problem)))?;
+        if let Some(gray) = rows {
+            return Ok((gray, format));
+        }
+    }
     let mut reader = reader()?;
     let mut limits = image::Limits::no_limits();
     limits.max_image_width = Some(limit.max_side);
@@ -135,7 +149,74 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
     // 16-bit RGBA, the widest pixels any of the decoders produces.
     limits.max_alloc = Some(limit.max_pixels.saturating_mul(8));
     reader.limits(limits);
-    Ok((reader.decode().map_err(decode)?, format))
+    Ok((to_gray(reader.decode().map_err(decode)?), format))
+}
+
+/// A PNG turned grey a row at a time, each row converted exactly as
+/// [`to_gray`] converts a whole decoded image (the same `image` crate
+/// conversions, on one row), so only the grey result is ever whole (and,
+/// for 16-bit files, its 16-bit grey before the stretch). `None` for an
+/// interlaced file, whose rows come in passes: it is decoded whole.
+fn png_rows_to_gray<R: std::io::BufRead + std::io::Seek>(
+    source: R,
+) -> Result<Option<GrayImage>, String> {
+    let damaged = |e: png::DecodingError| format!("damaged PNG: {e}");
+    use image::DynamicImage as Dyn;
+    let mut decoder = png::Decoder::new(source);
+    // Palette and low-bit grey to 8 bits, transparency to alpha: what the
+    // `image` crate's own PNG decoder asks for.
+    decoder.set_transformations(png::Transformations::EXPAND);
+    let mut reader = decoder.read_info().map_err(damaged)?;
+    if reader.info().interlaced {
+        return Ok(None);
+    }
+    let (width, height) = (reader.info().width, reader.info().height);
+    let (colour, depth) = reader.output_color_type();
+    let channels = colour.samples();
+    let row_of = |raw: Vec<u8>| -> Option<Dyn> {
+        Some(match channels {
+            1 => Dyn::ImageLuma8(ImageBuffer::from_raw(width, 1, raw)?),
+            2 => Dyn::ImageLumaA8(ImageBuffer::from_raw(width, 1, raw)?),
+            3 => Dyn::ImageRgb8(ImageBuffer::from_raw(width, 1, raw)?),
+            _ => Dyn::ImageRgba8(ImageBuffer::from_raw(width, 1, raw)?),
+        })
+    };
+    let wide_row_of = |raw: Vec<u16>| -> Option<Dyn> {
+        Some(match channels {
+            1 => Dyn::ImageLuma16(ImageBuffer::from_raw(width, 1, raw)?),
+            2 => Dyn::ImageLumaA16(ImageBuffer::from_raw(width, 1, raw)?),
+            3 => Dyn::ImageRgb16(ImageBuffer::from_raw(width, 1, raw)?),
+            _ => Dyn::ImageRgba16(ImageBuffer::from_raw(width, 1, raw)?),
+        })
+    };
+    let malformed = || "a PNG row of another length than its header gives".to_string();
+    let pixels = width as usize * height as usize;
+    if depth == png::BitDepth::Sixteen {
+        let mut wide: Vec<u16> = Vec::with_capacity(pixels);
+        while let Some(row) = reader.next_row().map_err(damaged)? {
+            let raw = row
+                .data()
+                .chunks_exact(2)
+                .map(|b| u16::from_be_bytes([b[0], b[1]]))
+                .collect();
+            wide.extend(
+                wide_row_of(raw)
+                    .ok_or_else(malformed)?
+                    .into_luma16()
+                    .into_raw(),
+            );
+        }
+        let wide = ImageBuffer::from_raw(width, height, wide).ok_or_else(malformed)?;
+        return Ok(Some(stretched_to_8_bits(wide)));
+    }
+    let mut grey: Vec<u8> = Vec::with_capacity(pixels);
+    while let Some(row) = reader.next_row().map_err(damaged)? {
+        let row = row_of(row.data().to_vec()).ok_or_else(malformed)?;
+        grey.extend(row.into_luma8().into_raw());
+    }
+    Ok(Some(
+        GrayImage::from_raw(width, height, grey).ok_or_else(malformed)?,
+    ))
 }
 
 /// 8-bit grey of decoded pixels: 8-bit grey as it is, colour by the `image`
@@ -313,6 +394,66 @@ mod tests {
             )
             .unwrap();
         bytes
+    }
+
+    /// Every PNG colour type and depth, encoded with `png` directly.
+    fn png_of(colour: png::ColorType, depth: png::BitDepth, palette: bool) -> Vec<u8> {
+        let (w, h) = (37u32, 11u32);
+        let samples = match colour {
+            png::ColorType::Grayscale | png::ColorType::Indexed => 1,
+            png::ColorType::GrayscaleAlpha => 2,
+            png::ColorType::Rgb => 3,
+            png::ColorType::Rgba => 4,
+        };
+        let bits = depth as usize;
+        let row_bytes = (w as usize * samples * bits).div_ceil(8);
+        let data: Vec<u8> = (0..row_bytes * h as usize)
+            .map(|k| ((k * 37 + k / 7) % 251) as u8)
+            .collect();
+        let mut bytes = Vec::new();
+        {
+            let mut encoder = png::Encoder::new(&mut bytes, w, h);
+            encoder.set_color(colour);
+            encoder.set_depth(depth);
+            if palette {
+                encoder.set_palette(
+                    (0..=255u8)
+                        .flat_map(|i| [i, 255 - i, i / 2])
+                        .collect::<Vec<_>>(),
+                );
+                encoder.set_trns(vec![200u8; 16]);
+            }
+            let mut writer = encoder.write_header().unwrap();
+            writer.write_image_data(&data).unwrap();
+        }
+        bytes
+    }
+
+    #[test]
+    fn png_rows_turn_grey_exactly_as_the_whole_image_does() {
+        use png::{BitDepth as D, ColorType as C};
+        let cases = [
+            (C::Grayscale, D::One, false),
+            (C::Grayscale, D::Four, false),
+            (C::Grayscale, D::Eight, false),
+            (C::Grayscale, D::Sixteen, false),
+            (C::GrayscaleAlpha, D::Eight, false),
+            (C::GrayscaleAlpha, D::Sixteen, false),
+            (C::Rgb, D::Eight, false),
+            (C::Rgb, D::Sixteen, false),
+            (C::Rgba, D::Eight, false),
+            (C::Rgba, D::Sixteen, false),
+            (C::Indexed, D::Eight, true),
+            (C::Indexed, D::Two, true),
+        ];
+        for (colour, depth, palette) in cases {
+            let bytes = png_of(colour, depth, palette);
+            let whole = to_gray(image::load_from_memory(&bytes).unwrap());
+            let rows = png_rows_to_gray(std::io::Cursor::new(&bytes))
+                .unwrap()
+                .unwrap();
+            assert_eq!(rows, whole, "{colour:?} {depth:?}");
+        }
     }
 
     #[test]

@@ -74,7 +74,7 @@ fn main() {
                 .filter_map(|n| n.trim().parse().ok())
                 .collect()
         });
-    let run = |section: u32| only.as_ref().map_or(true, |o| o.contains(&section));
+    let run = |section: u32| only.as_ref().is_none_or(|o| o.contains(&section));
     let started = Instant::now();
 
     let apriltag = AprilTag::find()

@@ -225,6 +225,13 @@ impl PyMarker {
     fn id(&self) -> u32 {
         self.detection.id
     }
+    /// With `tracking=True`, the marker's track number: the same in every
+    /// frame while it is followed (legacy circles, all ID 0, are told apart
+    /// by it); None without tracking.
+    #[getter]
+    fn track(&self) -> Option<u32> {
+        self.detection.track
+    }
     /// The code as read, None for legacy markers or an unread ring.
     #[getter]
     fn code(&self) -> Option<u32> {

@@ -163,9 +163,11 @@ def test_markers_carry_what_opencv_users_draw_and_solve_with() -> None:
         d = m.as_dict()
         assert m.bits == d["bits"] == 8
         assert -np.pi <= m.angle <= np.pi
-        assert m.rvec is not None and m.tvec is not None and m.rotation is not None
-        assert np.allclose(rodrigues(m.rvec), m.rotation, atol=1e-9)
-        assert np.array_equal(m.tvec, m.position)
+        rvec, tvec, rotation, position = m.rvec, m.tvec, m.rotation, m.position
+        assert rvec is not None and tvec is not None
+        assert rotation is not None and position is not None
+        assert np.allclose(rodrigues(rvec), rotation, atol=1e-9)
+        assert np.array_equal(tvec, position)
     assert [m.rvec for m in whycode.Detector().detect(image)] == [None] * 3
 
 
@@ -184,3 +186,17 @@ def test_draw_returns_bgr_over_the_colours_given() -> None:
     assert np.array_equal(whycode.draw(bgr, []), bgr)
     # The known-ID outline is green in BGR order: (60, 200, 40) somewhere.
     assert np.any(np.all(over == [60, 200, 40], axis=2))
+
+
+def test_tracked_markers_keep_their_track_numbers() -> None:
+    detector = whycode.Detector(tracking=True)
+    numbers = []
+    for seed in (1, 1, 1):
+        image, _ = whycode.simulate(ids=range(1, 4), size=(320, 240), camera_distance=0.5,
+                                    seed=seed)
+        found = sorted(detector.detect(image), key=lambda m: m.id)
+        numbers.append([m.track for m in found])
+        assert [m.as_dict()["track"] for m in found] == numbers[-1]
+    assert numbers[0] == numbers[1] == numbers[2]
+    assert len(set(numbers[0])) == 3 and None not in numbers[0]
+    assert all(m.track is None for m in whycode.Detector().detect(image))

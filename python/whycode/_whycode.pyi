@@ -144,6 +144,9 @@ class Marker:
         """Direction of the outer ellipse's major axis, radians."""
     @property
     def bits(self) -> Optional[int]: ...
+    @property
+    def track(self) -> Optional[int]:
+        """With tracking, the marker's track number (the same while it is followed)."""
     def as_dict(self) -> dict[str, Any]:
         """The object ``whycode detect --format json`` prints for this marker."""
 

@@ -78,5 +78,6 @@ fn detection(c: &Candidate, read: &RingRead, unreadable: bool) -> Detection {
         pose: None,
         bits: read.bits,
         unreadable,
+        track: None,
     }
 }

@@ -94,7 +94,7 @@ pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>)
             let (p, q) = (profile[j], profile[j + 1]);
             if p < mid && q >= mid {
                 let s = s0 + step * (j as f64 + (mid - p) / (q - p));
-                if best.map_or(true, |b| (s - r).abs() < (b - r).abs()) {
+                if best.is_none_or(|b| (s - r).abs() < (b - r).abs()) {
                     best = Some(s);
                 }
             }
@@ -458,7 +458,7 @@ pub fn scanline_edge_points(
                 let mut crossing: Option<usize> = None;
                 for j in 0..n - 1 {
                     if profile[j] < level && profile[j + 1] >= level {
-                        let better = crossing.map_or(true, |b| {
+                        let better = crossing.is_none_or(|b| {
                             (j as f64 - expected).abs() < (b as f64 - expected).abs()
                         });
                         if better {
@@ -656,7 +656,7 @@ pub fn linear_blur(image: Gray<'_>, outer: &Ellipse) -> Option<LinearBlur> {
         let slope = (n * sxy - sx * sy) / det;
         let offset = (sy - slope * sx) / n;
         let residual = syy - offset * sy - slope * sxy;
-        if best.map_or(true, |b| residual < b.0) {
+        if best.is_none_or(|b| residual < b.0) {
             best = Some((residual, theta, offset, slope));
         }
     }

@@ -179,6 +179,10 @@ pub struct Detection {
     /// A round candidate whose ring shows no Manchester code structure:
     /// reported only with [`DetectorConfig::report_unreadable`].
     pub unreadable: bool,
+    /// With tracking, the marker's track: the same number in every frame
+    /// while it is followed, so markers of one ID (legacy circles are all
+    /// ID 0) can be told apart. Numbers start at 1 and are not reused.
+    pub track: Option<u32>,
 }
 
 /// The detector: configuration, tracking state and reusable buffers.
@@ -198,6 +202,8 @@ pub struct Detector {
     /// A follow of this frame fell back to the flood fill.
     follow_filled: bool,
     tracks: Vec<Track>,
+    /// The number the next new track gets.
+    next_track: u32,
     /// The configured camera fitted to this frame's size (rescaled for the
     /// same sensor at another resolution); None without a camera, or for a
     /// frame of another aspect ratio, which then gets no pose rather than a
@@ -265,6 +271,7 @@ impl Detector {
             occupied: Vec::new(),
             follow_filled: false,
             tracks: Vec::new(),
+            next_track: 1,
             frame_camera: None,
             check,
             search: ThresholdSearch::default(),
@@ -434,7 +441,7 @@ impl Detector {
             memories,
         } = finds;
         if self.config.tracking {
-            self.update_tracks(&candidates, &detections, &memories);
+            self.update_tracks(&candidates, &mut detections, &memories);
             self.learn_tolerances(&candidates);
         }
         detections.sort_by(|a, b| a.v.total_cmp(&b.v).then(a.u.total_cmp(&b.u)));

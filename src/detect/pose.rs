@@ -85,7 +85,7 @@ impl Detector {
             centre_estimate: ring.centre_estimate,
             settled_normal: c.track.and_then(|i| self.tracks[i].normal),
             previous: c.track.and_then(|i| self.tracks[i].fitted),
-            recheck: c.track.map_or(true, |i| self.recheck(i)),
+            recheck: c.track.is_none_or(|i| self.recheck(i)),
             bits: d.bits.or(family_bits),
             code: d.code,
         };
@@ -164,7 +164,7 @@ impl Detector {
     /// Whether track `index` makes its unsure pick between the pose
     /// candidates afresh this frame.
     fn recheck(&self, index: usize) -> bool {
-        (self.tracks[index].hits as usize + index) % RECHECK_FRAMES == 0
+        (self.tracks[index].hits as usize + index).is_multiple_of(RECHECK_FRAMES)
     }
 
     /// Position and normal from the outer edge, the two-fold ambiguity
@@ -282,7 +282,7 @@ impl Detector {
                 let wanted = |p: (f64, f64)| {
                     sides
                         .as_ref()
-                        .map_or(true, |s| s.shows_edge(p, radius, edge_on_black))
+                        .is_none_or(|s| s.shows_edge(p, radius, edge_on_black))
                 };
                 ellipse::concentric_edge_points(
                     gray,
@@ -403,7 +403,7 @@ impl RingSides {
         let arc_m = radius_m * into.min(width - into);
         let clear = arc_m > 2.0 * self.pixel_m;
         clear
-            && self.code.map_or(true, |code| {
+            && self.code.is_none_or(|code| {
                 let k = angle::wrap_index(index, 2 * i64::from(self.bits)) as u32;
                 sector_is_black(self.bits, code, k) == on_black
             })

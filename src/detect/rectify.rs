@@ -166,7 +166,7 @@ fn code_edge_offset(
             };
             if crosses {
                 let position = j as f64 + (mid - p) / (q - p) - centre as f64;
-                if best.map_or(true, |b: f64| position.abs() < b.abs()) {
+                if best.is_none_or(|b: f64| position.abs() < b.abs()) {
                     best = Some(position);
                 }
             }

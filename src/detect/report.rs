@@ -48,6 +48,9 @@ struct FrameRecord<'a> {
 #[derive(serde::Serialize)]
 struct MarkerRecord {
     id: u32,
+    /// With tracking, the marker's track number.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    track: Option<u32>,
     code: Option<u32>,
     /// The ring's bit count as read from the ring.
     bits: Option<u32>,
@@ -76,6 +79,7 @@ impl FrameReport {
                 let pose = m.pose.as_ref();
                 MarkerRecord {
                     id: m.id,
+                    track: m.track,
                     code: m.code,
                     bits: m.bits,
                     unreadable: m.unreadable,
@@ -267,6 +271,7 @@ mod tests {
             pose: None,
             bits: (id > 0).then_some(8),
             unreadable: false,
+            track: None,
         }
     }
 

@@ -51,11 +51,11 @@ pub fn is_periodic(word: u32, bits: u32) -> bool {
     let mut m = bits;
     let mut p = 2;
     while p * p <= m {
-        if m % p == 0 {
+        if m.is_multiple_of(p) {
             if rotl(word, bits, bits / p) == word {
                 return true;
             }
-            while m % p == 0 {
+            while m.is_multiple_of(p) {
                 m /= p;
             }
         }

@@ -122,7 +122,7 @@ fn closest_pair_by_pairs(
     for (i, &a) in codes.iter().enumerate() {
         for (j, &b) in codes.iter().enumerate().skip(i + 1) {
             let d = cyclic_distance(a, b, bits);
-            if d <= upper && best.map_or(true, |(_, _, e)| d < e) {
+            if d <= upper && best.is_none_or(|(_, _, e)| d < e) {
                 best = Some((i, j, d));
                 if d <= lower {
                     return best;

@@ -238,7 +238,7 @@ impl Clutter {
                 1 => {
                     // A ring whose hole is clearly not a marker's 0.6 (or
                     // WhyCon's 0.41) of the outer radius.
-                    let hole = if rng.next_u32() % 2 == 0 {
+                    let hole = if rng.next_u32().is_multiple_of(2) {
                         rng.range(0.12, 0.3)
                     } else {
                         rng.range(0.75, 0.92)

@@ -170,7 +170,7 @@ fn box_gaussian(image: &[f32], width: usize, height: usize, sigma: f64) -> Vec<f
     const PASSES: f64 = 3.0;
     let ideal = (12.0 * sigma * sigma / PASSES + 1.0).sqrt();
     let mut lower = ideal.floor() as usize;
-    if lower % 2 == 0 {
+    if lower.is_multiple_of(2) {
         lower -= 1;
     }
     let l = lower as f64;

@@ -375,7 +375,7 @@ fn find_edge(
 ) -> Result<EdgeLine, String> {
     // Base point on the nominal border at along-side coordinate s, and the
     // outward normal.
-    let (length, across) = if side % 2 == 0 { (w, h) } else { (h, w) };
+    let (length, across) = if side.is_multiple_of(2) { (w, h) } else { (h, w) };
     let base = |s: f64| -> (f64, f64) {
         match side {
             0 => (s, 0.0),
@@ -546,7 +546,7 @@ fn fit_edge_line(points: &[(f64, f64)]) -> Option<EdgeLine> {
                 .collect();
             if consensus
                 .as_ref()
-                .map_or(true, |(n, _)| agreeing.len() > *n)
+                .is_none_or(|(n, _)| agreeing.len() > *n)
             {
                 consensus = Some((agreeing.len(), agreeing));
             }

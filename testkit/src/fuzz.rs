@@ -614,7 +614,7 @@ fn random_image(w: u32, h: u32, kind: u8, seed: u64) -> image::GrayImage {
                     .objects
                     .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
             }
-            scene.background = if rng.next_u32() % 2 == 0 {
+            scene.background = if rng.next_u32().is_multiple_of(2) {
                 Background::Clutter { density: 1.5 }
             } else {
                 Background::Uniform(rng.range(0.0, 1.0))

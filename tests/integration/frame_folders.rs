@@ -40,3 +40,77 @@ fn a_folder_or_broken_link_among_the_frames_is_reported_not_skipped() {
     // The readable frames are all there.
     assert_eq!(stdout(&out).lines().count(), 3, "{}", stdout(&out));
 }
+
+/// Legacy circles all read as ID 0: in a sequence each keeps its own track
+/// number, which is what tells them apart; single images carry none.
+#[test]
+fn markers_of_a_sequence_keep_their_track_numbers() {
+    use whycode::camera::Camera;
+    use whycode::geometry::Marker;
+    use whycode::simulate::{render, LooseMarker, Placement, Scene, SceneObject};
+    let dir = tempfile::tempdir().unwrap();
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    let camera = Camera::ideal(480, 320, 60.0);
+    let marker = Marker::whycon(40.0);
+    for frame in 0..4 {
+        let mut scene = Scene::new(camera);
+        for (k, (u, v)) in [(100.0, 100.0), (240.0, 160.0), (380.0, 220.0)]
+            .into_iter()
+            .enumerate()
+        {
+            let step = 3.0 * frame as f64;
+            let at =
+                Placement::at_pixel(&camera, &marker, (u + step, v - step), 50.0, 0.2, 0.0, 0.0);
+            scene
+                .objects
+                .push(SceneObject::Marker(LooseMarker::new(marker, k as u32, at)));
+        }
+        let (image, _) = render(&scene);
+        image.save(frames.join(format!("f{frame}.png"))).unwrap();
+    }
+    let out = whycode_in(
+        dir.path(),
+        &["detect", "--legacy", "--format", "json", "frames"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let mut first: Vec<(f64, u64)> = Vec::new();
+    for (n, line) in stdout(&out).lines().enumerate() {
+        let frame: serde_json::Value = serde_json::from_str(line).unwrap();
+        let mut tracks: Vec<(f64, u64)> = frame["markers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| {
+                (
+                    m["u"].as_f64().unwrap(),
+                    m["track"].as_u64().expect("a track number"),
+                )
+            })
+            .collect();
+        tracks.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert_eq!(tracks.len(), 3, "frame {n}: {line}");
+        let numbers: Vec<u64> = tracks.iter().map(|t| t.1).collect();
+        if n == 0 {
+            let mut distinct = numbers.clone();
+            distinct.dedup();
+            assert_eq!(distinct.len(), 3, "{numbers:?}");
+            first = tracks;
+        } else {
+            assert_eq!(
+                numbers,
+                first.iter().map(|t| t.1).collect::<Vec<_>>(),
+                "frame {n}"
+            );
+        }
+    }
+    let single = whycode_in(
+        dir.path(),
+        &["detect", "--legacy", "--format", "json", "frames/f0.png"],
+    );
+    assert!(
+        !stdout(&single).contains("\"track\""),
+        "{}",
+        stdout(&single)
+    );
+}

@@ -447,7 +447,7 @@ impl Model {
             let k = angle::wrap_index(angle::floor_to_int((t - start) / sector), sectors) as u32;
             let bit = word >> (bits - 1 - k / 2) & 1;
             // A 1 is white then black.
-            let white = (bit == 1) == (k % 2 == 0);
+            let white = (bit == 1) == k.is_multiple_of(2);
             f64::from(u8::from(white))
         }));
         for (kernel, blurred) in self.kernels.iter().zip(&mut self.blurred) {

@@ -422,7 +422,7 @@ fn compare<C: Deref<Target = [u8]>>(
                     let sse = syy - sym_c * sym_c / smm_c;
                     let slot = &mut per_member[*id as usize];
                     *slot = slot.min(sse);
-                    if best.as_ref().map_or(true, |b| sse < b.sse) {
+                    if best.as_ref().is_none_or(|b| sse < b.sse) {
                         best = Some(Best {
                             sse,
                             id: *id,

@@ -573,7 +573,7 @@ mod tests {
     fn stepped(levels: &[f64], per_sector: usize) -> Vec<f64> {
         levels
             .iter()
-            .flat_map(|&level| std::iter::repeat(level).take(per_sector))
+            .flat_map(|&level| std::iter::repeat_n(level, per_sector))
             .collect()
     }
 

@@ -200,7 +200,7 @@ impl Detector {
     pub(super) fn update_tracks(
         &mut self,
         found: &[Candidate],
-        detections: &[Detection],
+        detections: &mut [Detection],
         poses: &[PoseMemory],
     ) {
         let mut next: Vec<Track> = Vec::with_capacity(found.len());
@@ -210,7 +210,7 @@ impl Detector {
                 taken[i] = true;
             }
         }
-        for ((c, d), pose) in found.iter().zip(detections).zip(poses) {
+        for ((c, d), pose) in found.iter().zip(detections.iter_mut()).zip(poses) {
             let threshold = ((c.black + c.white) / 2.0).round().clamp(1.0, 255.0) as u8;
             let (u, v, a, b) = (c.outer.u, c.outer.v, c.outer.semi_major, c.outer.semi_minor);
             let index = c.track.or_else(|| {
@@ -234,10 +234,14 @@ impl Detector {
                     t.observe_identity(d);
                     t.normal = pose.settled_normal.or(t.normal);
                     t.fitted = pose.fitted;
+                    d.track = Some(t.number);
                     next.push(t);
                 }
                 None => {
                     let mut t = Track::new(u, v, a, b, threshold);
+                    t.number = self.next_track;
+                    self.next_track += 1;
+                    d.track = Some(t.number);
                     t.observe_appearance(c.outer.angle, c.black, c.white);
                     if let Some(family) = self.config.target.family() {
                         t.observe_reading(family.len(), d);

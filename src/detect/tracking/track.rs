@@ -9,6 +9,8 @@ use crate::pose::CirclePose;
 /// What the detector remembers about one marker between frames.
 #[derive(Debug, Clone)]
 pub struct Track {
+    /// The number its detections carry (`Detection::track`).
+    pub number: u32,
     pub u: f64,
     pub v: f64,
     /// Image velocity, pixels per frame, smoothed over past frames.
@@ -69,6 +71,7 @@ pub struct PoseMemory {
 impl Track {
     pub fn new(u: f64, v: f64, a: f64, b: f64, threshold: u8) -> Track {
         Track {
+            number: 0,
             u,
             v,
             du: 0.0,
