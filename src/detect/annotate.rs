@@ -16,6 +16,12 @@ const AXIS: [u8; 3] = [230, 30, 30];
 
 /// The image in colour with the detections drawn, encoded as PNG.
 pub fn annotated_png(image: &GrayImage, detections: &[Detection]) -> Result<Vec<u8>> {
+    let picture = annotated_rgb(image, detections)?;
+    Ok(crate::image_io::encode_rgb_png(&picture)?)
+}
+
+/// The image in colour with the detections drawn (a video's frame).
+pub fn annotated_rgb(image: &GrayImage, detections: &[Detection]) -> Result<image::RgbImage> {
     let (w, h) = image.dimensions();
     let mut pixmap = Pixmap::new(w.max(1), h.max(1)).context("image too large to annotate")?;
     for (dst, &g) in pixmap.data_mut().chunks_exact_mut(4).zip(image.as_raw()) {
@@ -30,9 +36,8 @@ pub fn annotated_png(image: &GrayImage, detections: &[Detection]) -> Result<Vec<
         .chunks_exact(4)
         .flat_map(|p| [p[0], p[1], p[2]])
         .collect();
-    let picture = image::RgbImage::from_raw(pixmap.width(), pixmap.height(), rgb)
-        .context("annotated image has the wrong size")?;
-    Ok(crate::image_io::encode_rgb_png(&picture)?)
+    image::RgbImage::from_raw(pixmap.width(), pixmap.height(), rgb)
+        .context("annotated image has the wrong size")
 }
 
 fn paint(rgb: [u8; 3]) -> Paint<'static> {

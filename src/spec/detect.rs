@@ -27,6 +27,9 @@ pub struct DetectSpec {
     /// Smallest black ring of a legacy marker worth reporting, pixels
     /// (legacy only; default the original WhyCon's 100).
     pub min_ink: Option<f64>,
+    /// The camera comes with the frames (a bag's camera_info), so a
+    /// diameter without `camera` waits in the configuration for it.
+    pub camera_later: bool,
 }
 
 impl DetectSpec {
@@ -38,7 +41,9 @@ impl DetectSpec {
             .map(|d| within("diameter", d.mm(), limits::MARKER_DIAMETER_MM).map(|mm| mm / 1000.0))
             .transpose()?;
         match (diameter_m.is_some(), self.camera.is_some()) {
-            (true, false) => return Err(pose_needs_both("diameter", "camera")),
+            (true, false) if !self.camera_later => {
+                return Err(pose_needs_both("diameter", "camera"))
+            }
             (false, true) => return Err(pose_needs_both("camera", "diameter")),
             _ => {}
         }

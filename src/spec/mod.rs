@@ -15,10 +15,14 @@
 
 mod detect;
 pub mod limits;
+#[cfg(feature = "recordings")]
+mod recording;
 mod scene;
 mod target;
 
 pub use detect::DetectSpec;
+#[cfg(feature = "recordings")]
+pub use recording::RecordingSpec;
 pub use limits::{Limit, OutOfRange};
 pub use scene::{BackgroundKind, Layout, SceneSpec};
 pub use target::{Bits, TargetSpec};
