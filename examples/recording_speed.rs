@@ -48,7 +48,15 @@ fn main() {
     }
     let video = dir.path().join("run.mp4");
     let encoded = Command::new("ffmpeg")
-        .args(["-hide_banner", "-loglevel", "error", "-y", "-framerate", "30", "-i"])
+        .args([
+            "-hide_banner",
+            "-loglevel",
+            "error",
+            "-y",
+            "-framerate",
+            "30",
+            "-i",
+        ])
         .arg(dir.path().join("f%05d.png"))
         .args(["-c:v", "libx264", "-pix_fmt", "yuv420p"])
         .arg(&video)
@@ -94,10 +102,27 @@ fn main() {
     }
     let (b, r, w) = (median(&mut base), median(&mut read), median(&mut run));
     println!("{frames} frames of 640x480 H.264, medians of {REPEATS} runs each, in turns:");
-    println!("  ffmpeg alone to raw grey frames  {:8.1} ms  ({:.2} ms/frame)  1.00x", b, b / frames as f64);
-    println!("  whycode reading frames (no detect){:7.1} ms  ({:.2} ms/frame)  {:.2}x", r, r / frames as f64, r / b);
-    println!("  whole run: decode + detect + track{:7.1} ms  ({:.2} ms/frame)  {:.2}x", w, w / frames as f64, w / b);
-    println!("  markers found per frame: {:.2} (6 in view)", found as f64 / frames as f64);
+    println!(
+        "  ffmpeg alone to raw grey frames  {:8.1} ms  ({:.2} ms/frame)  1.00x",
+        b,
+        b / frames as f64
+    );
+    println!(
+        "  whycode reading frames (no detect){:7.1} ms  ({:.2} ms/frame)  {:.2}x",
+        r,
+        r / frames as f64,
+        r / b
+    );
+    println!(
+        "  whole run: decode + detect + track{:7.1} ms  ({:.2} ms/frame)  {:.2}x",
+        w,
+        w / frames as f64,
+        w / b
+    );
+    println!(
+        "  markers found per frame: {:.2} (6 in view)",
+        found as f64 / frames as f64
+    );
 }
 
 fn time(mut f: impl FnMut()) -> f64 {

@@ -524,7 +524,7 @@ fn create_topic<M: RosType>(
         ros2_client::MessageTypeName::new(M::PACKAGE, M::NAME),
         &qos,
     )
-        .map_err(|e| format!("cannot create topic {topic}: {e}"))
+    .map_err(|e| format!("cannot create topic {topic}: {e}"))
 }
 
 /// A publisher of `M` on a fully qualified ROS topic name.
@@ -896,11 +896,8 @@ impl Pipeline {
     /// that bags written by `whycode detect --output` share.
     fn describe(&self, detections: &[Detection], header: &Header) -> Described {
         let detector_diameter = self.detector.config().diameter_m;
-        let described = whycode::ros::describe::describe(
-            detections,
-            header,
-            detector_diameter,
-            |id| {
+        let described =
+            whycode::ros::describe::describe(detections, header, detector_diameter, |id| {
                 if id == 0 {
                     (
                         None,
@@ -910,8 +907,7 @@ impl Pipeline {
                     let (frame, size) = self.settings.tag(id);
                     (Some(frame.into_owned()), size)
                 }
-            },
-        );
+            });
         for frame in &described.duplicate_frames {
             self.log.once(
                 LogLevel::Warn,

@@ -302,7 +302,10 @@ fn run_recordings(args: DetectArgs) -> Result<ExitCode> {
     }
     if let Some(out) = &args.output {
         if out.extension().and_then(|e| e.to_str()) != Some("mcap") {
-            bail!("--output: {}: the detections bag is an MCAP file (name it .mcap)", out.display());
+            bail!(
+                "--output: {}: the detections bag is an MCAP file (name it .mcap)",
+                out.display()
+            );
         }
     }
     let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();

@@ -115,7 +115,12 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
         let fitted = camera
             .map(|c| c.for_image(width, height))
             .transpose()
-            .map_err(|e| anyhow!("{shown}: frame {}: the camera does not fit: {e}", frame.index))?;
+            .map_err(|e| {
+                anyhow!(
+                    "{shown}: frame {}: the camera does not fit: {e}",
+                    frame.index
+                )
+            })?;
         if detector.config().camera != fitted {
             let mut config = detector.config().clone();
             config.camera = fitted;
@@ -152,7 +157,10 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
             Annotate::None => {}
             Annotate::Folder(dir) => {
                 let png = whycode::detect::annotate::annotated_png(&frame.image, &markers)?;
-                whycode::io::write_atomic(&dir.join(format!("frame_{:06}.png", frame.index)), &png)?;
+                whycode::io::write_atomic(
+                    &dir.join(format!("frame_{:06}.png", frame.index)),
+                    &png,
+                )?;
             }
             Annotate::Video(_) => {
                 let rgb = whycode::detect::annotate::annotated_rgb(&frame.image, &markers)?;
@@ -200,7 +208,10 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
         writer.finish()?;
         staged.commit()?;
         if let Annotate::Video(target) = run.annotate {
-            output::say(format_args!("wrote the annotated video {}", target.display()));
+            output::say(format_args!(
+                "wrote the annotated video {}",
+                target.display()
+            ));
         }
     }
     for line in summary.lines(&skipped) {
@@ -221,9 +232,7 @@ pub fn header(format: Format, out: &mut output::Stdout) -> Result<()> {
 pub fn check_inputs(inputs: &[PathBuf]) -> Result<bool> {
     let recordings = inputs.iter().filter(|p| is_recording(p)).count();
     if recordings > 0 && recordings < inputs.len() {
-        bail!(
-            "bags and videos are read alone: give images and recordings to separate runs"
-        );
+        bail!("bags and videos are read alone: give images and recordings to separate runs");
     }
     Ok(recordings > 0)
 }

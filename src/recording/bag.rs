@@ -59,7 +59,11 @@ impl Bag {
                     .values()
                     .map(|c| ChannelInfo {
                         topic: c.topic.clone(),
-                        schema: c.schema.as_ref().map(|s| s.name.clone()).unwrap_or_default(),
+                        schema: c
+                            .schema
+                            .as_ref()
+                            .map(|s| s.name.clone())
+                            .unwrap_or_default(),
                         messages: counts.and_then(|m| m.get(&c.id).copied()),
                     })
                     .collect();
@@ -107,7 +111,7 @@ impl Bag {
         let images: Vec<&ChannelInfo> = self.channels.iter().filter(|c| c.is_image()).collect();
         let described = |c: &&ChannelInfo| format!("{} ({})", c.topic, c.schema);
         let chosen = match &options.topic {
-            Some(topic) => *images
+            Some(topic) if !images.is_empty() => *images
                 .iter()
                 .find(|c| c.topic == *topic)
                 .ok_or_else(|| RecordingError::UnknownTopic {
@@ -115,7 +119,7 @@ impl Bag {
                     topic: topic.clone(),
                     topics: images.iter().map(described).collect(),
                 })?,
-            None => match images.as_slice() {
+            _ => match images.as_slice() {
                 [one] => *one,
                 [] => {
                     return Err(RecordingError::NoImageTopic {
@@ -135,12 +139,11 @@ impl Bag {
                 }
             },
         };
-        let stream = mcap::MessageStream::new(&self.bytes).map_err(|e| {
-            RecordingError::CorruptBag {
+        let stream =
+            mcap::MessageStream::new(&self.bytes).map_err(|e| RecordingError::CorruptBag {
                 path: self.path.clone(),
                 problem: e.to_string(),
-            }
-        })?;
+            })?;
         let info_topic = camera_info_beside(&chosen.topic);
         Ok(BagFrames {
             path: &self.path,
@@ -216,14 +219,13 @@ impl BagFrames<'_> {
             let channel = &message.channel;
             let schema = channel.schema.as_ref().map(|s| s.name.as_str());
             if channel.topic == self.info_topic && schema == Some(&CameraInfo::schema_name()) {
-                let info: CameraInfo = cdr::decode(&message.data).map_err(|e| {
-                    RecordingError::BadMessage {
+                let info: CameraInfo =
+                    cdr::decode(&message.data).map_err(|e| RecordingError::BadMessage {
                         path: self.path.to_path_buf(),
                         topic: self.info_topic.clone(),
                         message: 0,
                         problem: e.to_string(),
-                    }
-                })?;
+                    })?;
                 // An invalid calibration leaves the previous one in place,
                 // as in the node.
                 if let Ok(camera) = info.camera(self.rectified) {

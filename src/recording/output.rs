@@ -3,9 +3,9 @@
 //! annotated frames as a video through ffmpeg.
 
 use super::RecordingError;
+use crate::ros::cdr;
 use crate::ros::describe::Described;
 use crate::ros::msg::{MarkerArray, RosType, TfMessage};
-use crate::ros::cdr;
 use std::collections::BTreeMap;
 use std::io::{Cursor, Write};
 use std::path::{Path, PathBuf};
@@ -108,7 +108,11 @@ impl DetectionsBag {
             writer.add_channel(schema, topic, "cdr", &BTreeMap::new())
         };
         let tf = channel(TF_TOPIC, TfMessage::schema_name(), tf_definition())?;
-        let markers = channel(MARKERS_TOPIC, MarkerArray::schema_name(), markers_definition())?;
+        let markers = channel(
+            MARKERS_TOPIC,
+            MarkerArray::schema_name(),
+            markers_definition(),
+        )?;
         Ok(DetectionsBag {
             writer,
             tf,
@@ -208,16 +212,44 @@ impl AnnotatedVideo {
             .unwrap_or("")
             .to_ascii_lowercase();
         let (muxer, codec): (&str, &[&str]) = match ext.as_str() {
-            "mkv" => ("matroska", &["-c:v", "libx264", "-preset", "veryfast", "-pix_fmt", "yuv420p"]),
-            "mov" => ("mov", &["-c:v", "libx264", "-preset", "veryfast", "-pix_fmt", "yuv420p"]),
-            "avi" => ("avi", &["-c:v", "mjpeg", "-q:v", "3", "-pix_fmt", "yuvj420p"]),
-            "webm" => ("webm", &["-c:v", "libvpx", "-deadline", "realtime", "-b:v", "2M"]),
-            _ => ("mp4", &["-c:v", "libx264", "-preset", "veryfast", "-pix_fmt", "yuv420p"]),
+            "mkv" => (
+                "matroska",
+                &[
+                    "-c:v", "libx264", "-preset", "veryfast", "-pix_fmt", "yuv420p",
+                ],
+            ),
+            "mov" => (
+                "mov",
+                &[
+                    "-c:v", "libx264", "-preset", "veryfast", "-pix_fmt", "yuv420p",
+                ],
+            ),
+            "avi" => (
+                "avi",
+                &["-c:v", "mjpeg", "-q:v", "3", "-pix_fmt", "yuvj420p"],
+            ),
+            "webm" => (
+                "webm",
+                &["-c:v", "libvpx", "-deadline", "realtime", "-b:v", "2M"],
+            ),
+            _ => (
+                "mp4",
+                &[
+                    "-c:v", "libx264", "-preset", "veryfast", "-pix_fmt", "yuv420p",
+                ],
+            ),
         };
         // 4:2:0 needs even sizes: the last odd row or column is dropped.
         let even = "crop=trunc(iw/2)*2:trunc(ih/2)*2";
         let child = Command::new(super::video::ffmpeg_program())
-            .args(["-hide_banner", "-nostdin", "-nostats", "-loglevel", "error", "-y"])
+            .args([
+                "-hide_banner",
+                "-nostdin",
+                "-nostats",
+                "-loglevel",
+                "error",
+                "-y",
+            ])
             .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-s"])
             .arg(format!("{width}x{height}"))
             .args(["-framerate", &format!("{fps:.6}"), "-i", "-", "-vf", even])
@@ -252,7 +284,10 @@ impl AnnotatedVideo {
         let stdin = self.child.as_mut().and_then(|c| c.stdin.as_mut());
         match stdin.map(|s| s.write_all(frame.as_raw())) {
             Some(Ok(())) => Ok(()),
-            _ => Err(self.finish_child().err().unwrap_or_else(|| self.fail("ffmpeg stopped"))),
+            _ => Err(self
+                .finish_child()
+                .err()
+                .unwrap_or_else(|| self.fail("ffmpeg stopped"))),
         }
     }
 

@@ -91,7 +91,10 @@ impl Summary {
             .map(|(id, s)| format!("{id} (frames {} to {}, in {})", s.first, s.last, s.frames))
             .collect();
         if !came_and_went.is_empty() {
-            lines.push(format!("IDs that came and went: {}", came_and_went.join(", ")));
+            lines.push(format!(
+                "IDs that came and went: {}",
+                came_and_went.join(", ")
+            ));
         }
         lines
     }

@@ -257,9 +257,11 @@ fn read_reports(
         if line.contains("Parsed_showinfo") {
             if let Some(base) = field(&line, "config in time_base:") {
                 *time_base.lock().unwrap_or_else(|p| p.into_inner()) = ratio(base);
-            } else if let (Some(n), Some(pts), Some(size)) =
-                (field(&line, " n:"), field(&line, " pts:"), field(&line, " s:"))
-            {
+            } else if let (Some(n), Some(pts), Some(size)) = (
+                field(&line, " n:"),
+                field(&line, " pts:"),
+                field(&line, " s:"),
+            ) {
                 let size = size.split_once('x');
                 if let (Ok(n), Ok(pts), Some((Ok(w), Ok(h)))) = (
                     n.parse(),
@@ -291,7 +293,9 @@ fn read_reports(
                 .and_then(|f| f.parse::<f64>().ok());
             let start = start_ns.unwrap_or(0) as f64 * 1e-9;
             let end = match end_ns {
-                Some(end) => Some(duration_s.map_or(end as f64 * 1e-9, |d| d.min(end as f64 * 1e-9))),
+                Some(end) => {
+                    Some(duration_s.map_or(end as f64 * 1e-9, |d| d.min(end as f64 * 1e-9)))
+                }
                 None => duration_s,
             };
             if let (Some(fps), Some(end)) = (fps, end) {

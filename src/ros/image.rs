@@ -8,9 +8,9 @@
 //! layout is converted into a buffer kept from frame to frame.
 
 use super::msg::{CompressedImage, Image};
+use crate::image_io::SizeLimit;
 use image::{GrayImage, ImageBuffer, Luma};
 use std::fmt;
-use crate::image_io::SizeLimit;
 
 /// Grey pixels borrowed from a message or from the converter's buffer.
 pub type GrayView<'a> = ImageBuffer<Luma<u8>, &'a [u8]>;

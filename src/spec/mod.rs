@@ -21,9 +21,9 @@ mod scene;
 mod target;
 
 pub use detect::DetectSpec;
+pub use limits::{Limit, OutOfRange};
 #[cfg(feature = "recordings")]
 pub use recording::RecordingSpec;
-pub use limits::{Limit, OutOfRange};
 pub use scene::{BackgroundKind, Layout, SceneSpec};
 pub use target::{Bits, TargetSpec};
 

@@ -24,7 +24,10 @@ impl RecordingSpec {
     pub fn build(&self) -> Result<ReadOptions, SpecError> {
         let every = self.every.unwrap_or(1);
         if every == 0 {
-            return Err(SpecError::invalid("every", "must be 1 or more (1 keeps every frame)"));
+            return Err(SpecError::invalid(
+                "every",
+                "must be 1 or more (1 keeps every frame)",
+            ));
         }
         let time = |option: &'static str, value: Option<f64>| -> Result<Option<i64>, SpecError> {
             match value {
@@ -69,7 +72,9 @@ impl RecordingSpec {
     /// (`1:30`, `0:01:30.5`).
     pub fn parse_time(text: &str) -> Result<f64, String> {
         let text = text.trim();
-        let bad = || format!("'{text}' is not a time (seconds like 12.5, or 1:30 for a minute and a half)");
+        let bad = || {
+            format!("'{text}' is not a time (seconds like 12.5, or 1:30 for a minute and a half)")
+        };
         let plain = text.strip_suffix('s').unwrap_or(text);
         let mut seconds = 0.0;
         for part in plain.split(':') {

@@ -19,9 +19,14 @@ pub const FOCAL: f64 = 300.0;
 /// The printed diameter of its markers, millimetres.
 pub const DIAMETER_MM: f64 = 40.0;
 /// Frames in the sequence.
-pub const FRAMES: usize = 12;
-/// The ID that is only in frames 4 to 8.
+pub const FRAMES: usize = 20;
+/// The ID that is only in some frames.
 pub const VISITOR: u32 = 7;
+/// The frames it is in.
+pub const VISIT: std::ops::RangeInclusive<usize> = 4..=15;
+/// A tracked stream finds a newcomer within this many frames: each frame
+/// looks for new markers in one of 8 bands of rows.
+pub const DISCOVERY_FRAMES: usize = 8;
 
 /// The sequence's camera.
 pub fn camera() -> Camera {
@@ -29,19 +34,45 @@ pub fn camera() -> Camera {
 }
 
 /// Frame `k` of the sequence and the IDs it shows (ascending): IDs 1 and
-/// 4 move across the frame, [`VISITOR`] joins in frames 4 to 8.
+/// 4 move across the frame, [`VISITOR`] joins in the frames of [`VISIT`].
 pub fn frame(k: usize) -> (GrayImage, Vec<u32>) {
     let family = Family::generate(8, 2).expect("the default family");
     let camera = camera();
-    let marker = |id: u32| (Marker::whycode(8, family.code(id).unwrap(), DIAMETER_MM), id);
+    let marker = |id: u32| {
+        (
+            Marker::whycode(8, family.code(id).unwrap(), DIAMETER_MM),
+            id,
+        )
+    };
     let t = k as f64;
     let mut markers = vec![
-        scenes::marker_at(&camera, marker(1), (60.0 + 4.0 * t, 70.0), 52.0, 0.1 * t, (0.0, 0.0)),
-        scenes::marker_at(&camera, marker(4), (250.0 - 3.0 * t, 160.0 + t), 56.0, 1.0, (0.3, 0.5)),
+        scenes::marker_at(
+            &camera,
+            marker(1),
+            (60.0 + 4.0 * t, 70.0),
+            52.0,
+            0.1 * t,
+            (0.0, 0.0),
+        ),
+        scenes::marker_at(
+            &camera,
+            marker(4),
+            (250.0 - 3.0 * t, 160.0 + t),
+            56.0,
+            1.0,
+            (0.3, 0.5),
+        ),
     ];
     let mut ids = vec![1, 4];
-    if (4..=8).contains(&k) {
-        markers.push(scenes::marker_at(&camera, marker(VISITOR), (150.0, 110.0 + 2.0 * t), 50.0, 2.0, (0.0, 0.0)));
+    if VISIT.contains(&k) {
+        markers.push(scenes::marker_at(
+            &camera,
+            marker(VISITOR),
+            (150.0, 110.0 + 2.0 * t),
+            50.0,
+            2.0,
+            (0.0, 0.0),
+        ));
         ids.push(VISITOR);
     }
     let look = Look {
@@ -74,10 +105,20 @@ pub fn python() -> PathBuf {
             .expect("python3 runs");
         assert!(made.success(), "python3 -m venv failed");
         let installed = Command::new(&python)
-            .args(["-m", "pip", "install", "-q", "mcap==1.6.0", "mcap-ros2-support==0.6.0"])
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "-q",
+                "mcap==1.6.0",
+                "mcap-ros2-support==0.6.0",
+            ])
             .status()
             .expect("pip runs");
-        assert!(installed.success(), "pip install mcap mcap-ros2-support failed");
+        assert!(
+            installed.success(),
+            "pip install mcap mcap-ros2-support failed"
+        );
         std::fs::write(&ready, "").unwrap();
     }
     python
@@ -98,7 +139,11 @@ pub fn write_bag(path: &Path, messages: &[serde_json::Value]) {
         .arg(&spec)
         .output()
         .expect("bag.py runs");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// Every message of a bag, decoded by mcap-ros2-support.
@@ -109,7 +154,11 @@ pub fn read_bag(path: &Path) -> Vec<serde_json::Value> {
         .arg(path)
         .output()
         .expect("bag.py runs");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8(out.stdout)
         .unwrap()
         .lines()
@@ -135,8 +184,33 @@ pub fn write_video(dir: &Path, name: &str, fps: u32, codec: &[&str]) -> PathBuf 
         .arg(&path)
         .output()
         .expect("ffmpeg runs (apt-get install ffmpeg)");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     path
+}
+
+/// Checks the IDs a tracked stream reported for frame `k`: only IDs the
+/// frame shows, those there from the start in every frame, and the
+/// visitor from at most [`DISCOVERY_FRAMES`] after it came until it left.
+pub fn assert_ids(k: usize, reported: &[u32], what: &str) {
+    let truth = &sequence()[k].1;
+    assert!(
+        reported.iter().all(|id| truth.contains(id)),
+        "{what}: frame {k} reports {reported:?}, shows {truth:?}"
+    );
+    assert!(
+        reported.contains(&1) && reported.contains(&4),
+        "{what}: frame {k}: {reported:?}"
+    );
+    if k >= VISIT.start() + DISCOVERY_FRAMES && VISIT.contains(&k) {
+        assert!(
+            reported.contains(&VISITOR),
+            "{what}: frame {k}: {reported:?}"
+        );
+    }
 }
 
 /// The JSON lines of `whycode detect` output.
