@@ -10,6 +10,9 @@ use std::sync::Mutex;
 use whycode::recording::{Frame, Recording, RecordingError};
 use whycode::spec::RecordingSpec;
 
+/// One frame as Python gets it: index, stamp (ns) and the grey image.
+type PyFrame<'py> = (u64, i64, Bound<'py, numpy::PyArray2<u8>>);
+
 /// Frames decoded ahead of the Python loop.
 const AHEAD: usize = 4;
 
@@ -34,10 +37,7 @@ impl FrameReader {
         slf
     }
 
-    fn __next__<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<Option<(u64, i64, Bound<'py, numpy::PyArray2<u8>>)>> {
+    fn __next__<'py>(&self, py: Python<'py>) -> PyResult<Option<PyFrame<'py>>> {
         let next = py.detach(|| {
             self.frames
                 .lock()
