@@ -153,18 +153,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
             bail!("{option}: applies to bags and videos (.mcap, .mp4, .mkv, .avi, .mov, .webm)");
         }
     }
-    let config = DetectSpec {
-        target: args.kind.spec()?,
-        diameter: args.diameter,
-        camera: args.camera.as_deref().map(Camera::load).transpose()?,
-        max_markers: args.max_markers,
-        tracking: false,
-        unreadable: args.unreadable,
-        min_ink: args.min_ink,
-        camera_later: false,
-    }
-    .build()
-    .map_err(spec_error)?;
+    let config = detector_config(&args, false)?;
     let family_bits = config.target.family().map(|f| f.bits());
     // In auto mode with a distance the IDs are there already; legacy
     // circles carry no ring.
@@ -269,24 +258,30 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     })
 }
 
+/// The detector the options ask for; a recording's camera may come later
+/// (a bag's camera_info), and its frames are tracked.
+fn detector_config(args: &DetectArgs, recording: bool) -> Result<DetectorConfig> {
+    DetectSpec {
+        target: args.kind.spec()?,
+        diameter: args.diameter,
+        camera: args.camera.as_deref().map(Camera::load).transpose()?,
+        max_markers: args.max_markers,
+        tracking: recording,
+        unreadable: args.unreadable,
+        min_ink: args.min_ink,
+        camera_later: recording && args.camera.is_none(),
+    }
+    .build()
+    .map_err(spec_error)
+}
+
 /// Bags and videos, each one tracked stream, one after the other.
 fn run_recordings(args: DetectArgs) -> Result<ExitCode> {
     if args.no_tracking {
         bail!("--no-tracking: a bag or video is read as one tracked stream");
     }
-    let config = DetectSpec {
-        target: args.kind.spec()?,
-        diameter: args.diameter,
-        camera: args.camera.as_deref().map(Camera::load).transpose()?,
-        max_markers: args.max_markers,
-        tracking: true,
-        unreadable: args.unreadable,
-        min_ink: args.min_ink,
-        // A bag's camera_info brings it.
-        camera_later: args.camera.is_none(),
-    }
-    .build()
-    .map_err(spec_error)?;
+    // A bag's camera_info brings the camera.
+    let config = detector_config(&args, true)?;
     let read = RecordingSpec {
         topic: args.topic.clone(),
         every: args.every,

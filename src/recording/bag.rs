@@ -312,13 +312,9 @@ impl Iterator for BagFrames<'_> {
     type Item = Result<Frame, RecordingError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        if self.done {
-            return None;
-        }
-        let result = self.next_frame().transpose();
-        if !matches!(result, Some(Ok(_))) {
-            self.done = true;
-        }
+        let mut done = self.done;
+        let result = super::fused(&mut done, || self.next_frame());
+        self.done = done;
         result
     }
 }

@@ -279,6 +279,22 @@ impl Iterator for Frames<'_> {
     }
 }
 
+/// The next item of a stream that ends at its first error: `done` is set
+/// once `next` gave an error or nothing.
+fn fused<T, E>(
+    done: &mut bool,
+    next: impl FnOnce() -> Result<Option<T>, E>,
+) -> Option<Result<T, E>> {
+    if *done {
+        return None;
+    }
+    let result = next().transpose();
+    if !matches!(result, Some(Ok(_))) {
+        *done = true;
+    }
+    result
+}
+
 /// Whether a frame at `offset_ns` from the first one falls in the window.
 fn in_window(options: &ReadOptions, offset_ns: i64) -> Window {
     if options.start_ns.is_some_and(|s| offset_ns < s) {
