@@ -186,6 +186,50 @@ pub fn write_atomic_with(
     }
 }
 
+/// An output that a program fills by its path (ffmpeg writing a video):
+/// staged beside the target like [`write_atomic`]'s, renamed into place by
+/// [`StagedFile::commit`], removed when dropped uncommitted. A FIFO or
+/// device target is handed over as it is.
+pub struct StagedFile {
+    path: PathBuf,
+    target: PathBuf,
+    staged: Option<Staged>,
+}
+
+impl StagedFile {
+    /// Stages an output for `path`.
+    pub fn new(path: &Path) -> Result<StagedFile, WriteError> {
+        let (target, staged) = match destination(path)? {
+            Destination::Special(target) => (target, None),
+            Destination::Regular(target) => {
+                let staged = stage_beside(path, &target)?;
+                (target, Some(staged))
+            }
+        };
+        Ok(StagedFile {
+            path: path.to_path_buf(),
+            target,
+            staged,
+        })
+    }
+
+    /// Where to write: the temporary file (or the device itself).
+    pub fn path(&self) -> &Path {
+        match &self.staged {
+            Some(staged) => &staged.path,
+            None => &self.target,
+        }
+    }
+
+    /// Renames the finished file into place.
+    pub fn commit(mut self) -> Result<(), WriteError> {
+        match self.staged.take() {
+            Some(staged) => commit(&self.path, &self.target, staged),
+            None => Ok(()),
+        }
+    }
+}
+
 /// Writes several files as one: each is staged in a temporary file beside
 /// its target, and only when all are staged are they renamed into place. A
 /// failure while staging (a full disk, a missing folder) or while writing

@@ -59,7 +59,11 @@ pub mod manifest;
 pub mod math;
 mod parallel;
 pub mod pose;
+#[cfg(feature = "recordings")]
+pub mod recording;
 pub mod render;
+#[cfg(feature = "ros")]
+pub mod ros;
 pub mod simulate;
 pub mod spec;
 pub mod units;

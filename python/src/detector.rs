@@ -330,6 +330,7 @@ impl PyMarker {
             elapsed_ms: 0.0,
             markers: vec![self.detection.clone()],
             timings: None,
+            stream: None,
         };
         crate::json_to_py(py, &frame.to_json())?
             .get_item("markers")?

@@ -13,6 +13,7 @@ mod camera;
 mod detector;
 mod family;
 mod pixels;
+mod recording;
 mod render;
 mod simulate;
 mod validate;
@@ -235,5 +236,6 @@ fn _whycode(m: &Bound<'_, PyModule>) -> PyResult<()> {
     render::register(m)?;
     validate::register(m)?;
     simulate::register(m)?;
+    recording::register(m)?;
     Ok(())
 }

@@ -1,7 +1,7 @@
 """Type stubs of the compiled whycode module."""
 
 import os
-from typing import Any, Iterator, Literal, Optional, Sequence, Union, overload
+from typing import Any, Iterator, Literal, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -178,6 +178,23 @@ def draw(image: ImageArray, markers: Sequence[Marker]) -> npt.NDArray[np.uint8]:
 
 def load_image(path: StrPath) -> npt.NDArray[np.uint8]:
     """An image file as the HxW uint8 grey array the CLI's loader makes."""
+
+class FrameReader:
+    """The frames of a recording: (frame, stamp_ns, HxW uint8 grey array)."""
+
+    def __iter__(self) -> FrameReader: ...
+    def __next__(self) -> Tuple[int, int, npt.NDArray[np.uint8]]: ...
+
+def read_frames(
+    path: StrPath,
+    *,
+    topic: Optional[str] = None,
+    every: Optional[int] = None,
+    start: Optional[float] = None,
+    end: Optional[float] = None,
+) -> FrameReader:
+    """A ROS 2 bag's (.mcap) or a video's frames, as `whycode detect` reads them:
+    frame index, stamp (ns: the header stamp or presentation time) and grey image."""
 
 def render_marker(
     id: Optional[int] = None,

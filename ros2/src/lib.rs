@@ -5,13 +5,15 @@
 //!
 //! Modules by job: [`args`] (the ROS command line and name resolution),
 //! [`params`] (parameters, and the one mapping to the library's detector
-//! configuration), [`msg`] (the ROS message types), [`image`] (camera
-//! messages to grey pixels), [`log`] (rclcpp-style log lines, once per
-//! cause) and [`node`] (the DDS entities and the frame loop).
+//! configuration), [`log`] (rclcpp-style log lines, once per cause) and
+//! [`node`] (the DDS entities and the frame loop). The message types
+//! ([`msg`]), camera messages to grey pixels ([`image`]) and detections to
+//! messages are the library's (`whycode::ros`), shared with the bags
+//! `whycode detect` reads and writes.
 
 pub mod args;
-pub mod image;
 pub mod log;
-pub mod msg;
 pub mod node;
 pub mod params;
+
+pub use whycode::ros::{image, msg};

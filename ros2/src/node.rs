@@ -11,8 +11,8 @@ use crate::args::{LogLevel, RosArgs};
 use crate::image::{Converter, FrameError, GrayView};
 use crate::log::Logger;
 use crate::msg::{
-    CameraInfo, CompatMarker, CompatMarkerArray, CompressedImage, Header, Image, Marker,
-    MarkerArray, RosType, TfMessage, Transform, TransformStamped, Vector3,
+    CameraInfo, CompatMarker, CompatMarkerArray, CompressedImage, Header, Image, MarkerArray,
+    RosType, TfMessage, TransformStamped, Vector3,
 };
 use crate::params::{self, Change, Settings, Transport};
 use futures::channel::mpsc::{unbounded, UnboundedReceiver, UnboundedSender};
@@ -175,10 +175,7 @@ impl Topics {
         let camera_info = if args.remaps_name("camera_info", base, namespace) {
             r("camera_info")?
         } else {
-            match image.rsplit_once('/') {
-                Some(("", _)) | None => "/camera_info".to_string(),
-                Some((parent, _)) => format!("{parent}/camera_info"),
-            }
+            whycode::ros::camera_info_beside(&image)
         };
         let debug_image = r("~/debug_image")?;
         Ok(Topics {
@@ -522,8 +519,12 @@ fn create_topic<M: RosType>(
     qos: QosProfile,
 ) -> Result<ros2_client::dds::rustdds::Topic, String> {
     let name = Name::parse(topic).map_err(|e| format!("topic {topic}: {e:?}"))?;
-    node.create_topic(&name, M::type_name(), &qos)
-        .map_err(|e| format!("cannot create topic {topic}: {e}"))
+    node.create_topic(
+        &name,
+        ros2_client::MessageTypeName::new(M::PACKAGE, M::NAME),
+        &qos,
+    )
+    .map_err(|e| format!("cannot create topic {topic}: {e}"))
 }
 
 /// A publisher of `M` on a fully qualified ROS topic name.
@@ -891,95 +892,30 @@ impl Pipeline {
 
     /// The detections as a marker array and as transforms: one per
     /// identified marker with a pose, to its frame (the most confident
-    /// marker when two read as the same ID).
+    /// marker when two read as the same ID), by the library's conversion
+    /// that bags written by `whycode detect --output` share.
     fn describe(&self, detections: &[Detection], header: &Header) -> Described {
         let detector_diameter = self.detector.config().diameter_m;
-        let mut markers = Vec::with_capacity(detections.len());
-        let mut poses = Vec::with_capacity(detections.len());
-        let mut transforms: Vec<(f64, TransformStamped)> = Vec::new();
-        for d in detections {
-            let (frame, size) = if d.id == 0 {
-                (
-                    None,
-                    (self.settings.diameter > 0.0).then_some(self.settings.diameter),
-                )
-            } else {
-                let (frame, size) = self.settings.tag(d.id);
-                (Some(frame.into_owned()), size)
-            };
-            // Poses scale with the diameter: the detector's was computed
-            // for its one diameter.
-            let pose = match (d.pose, size, detector_diameter) {
-                (Some(mut pose), Some(size), Some(computed)) => {
-                    pose.position *= size / computed;
-                    Some(pose)
-                }
-                _ => None,
-            };
-            let published_frame = match (&frame, pose) {
-                (Some(frame), Some(pose)) => {
-                    let transform = TransformStamped {
-                        header: header.clone(),
-                        child_frame_id: frame.clone(),
-                        transform: Transform {
-                            translation: Vector3 {
-                                x: pose.position.x,
-                                y: pose.position.y,
-                                z: pose.position.z,
-                            },
-                            rotation: crate::msg::Pose::from(pose).orientation,
-                        },
-                    };
-                    match transforms
-                        .iter_mut()
-                        .find(|(_, t)| t.child_frame_id == *frame)
-                    {
-                        Some(slot) => {
-                            self.log.once(
-                                LogLevel::Warn,
-                                &format!("duplicate {frame}"),
-                                &format!(
-                                    "two markers read as {frame} in one frame: /tf gets the \
-                                     more confident one"
-                                ),
-                            );
-                            if d.confidence > slot.0 {
-                                *slot = (d.confidence, transform);
-                            }
-                        }
-                        None => transforms.push((d.confidence, transform)),
-                    }
-                    frame.clone()
-                }
-                _ => String::new(),
-            };
-            poses.push(pose);
-            markers.push(Marker {
-                id: d.id,
-                code: d.code.unwrap_or(0),
-                has_code: d.code.is_some(),
-                bits: d.bits.map_or(0, |b| b as u8),
-                status: d
-                    .status
-                    .map(|s| format!("{s:?}").to_ascii_lowercase())
-                    .unwrap_or_default(),
-                u: d.u,
-                v: d.v,
-                semi_major: d.axes[0],
-                semi_minor: d.axes[1],
-                axis_angle: d.angle,
-                yaw: d.yaw.unwrap_or(0.0),
-                has_yaw: d.yaw.is_some(),
-                confidence: d.confidence,
-                pose: pose.map(crate::msg::Pose::from).unwrap_or_default(),
-                has_pose: pose.is_some(),
-                diameter: if pose.is_some() {
-                    size.unwrap_or(0.0)
+        let described =
+            whycode::ros::describe::describe(detections, header, detector_diameter, |id| {
+                if id == 0 {
+                    (
+                        None,
+                        (self.settings.diameter > 0.0).then_some(self.settings.diameter),
+                    )
                 } else {
-                    0.0
-                },
-                frame_id: published_frame,
+                    let (frame, size) = self.settings.tag(id);
+                    (Some(frame.into_owned()), size)
+                }
             });
+        for frame in &described.duplicate_frames {
+            self.log.once(
+                LogLevel::Warn,
+                &format!("duplicate {frame}"),
+                &format!(
+                    "two markers read as {frame} in one frame: /tf gets the more confident one"
+                ),
+            );
         }
         if detections.iter().any(|d| d.id != 0) && detector_diameter.is_none() {
             self.log.once(
@@ -999,12 +935,9 @@ impl Pipeline {
             );
         }
         Described {
-            markers: MarkerArray {
-                header: header.clone(),
-                markers,
-            },
-            transforms: transforms.into_iter().map(|(_, t)| t).collect(),
-            poses,
+            markers: described.markers,
+            transforms: described.transforms,
+            poses: described.poses,
         }
     }
 

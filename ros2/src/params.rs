@@ -95,7 +95,7 @@ impl Default for Settings {
             rectified: false,
             image_transport: Transport::Raw,
             camera_frame: String::new(),
-            frame_prefix: "whycode_".into(),
+            frame_prefix: whycode::ros::DEFAULT_FRAME_PREFIX.into(),
             tag_ids: Vec::new(),
             tag_frames: Vec::new(),
             tag_sizes: Vec::new(),
@@ -342,20 +342,18 @@ pub fn detector_config(
             family_file: family_file.then(|| PathBuf::from(&settings.family_file)),
             ..TargetSpec::default()
         },
-        // A pose needs both; until camera_info arrives there is none.
-        diameter: camera.and(settings.detector_diameter()).map(Length::from_m),
+        diameter: settings.detector_diameter().map(Length::from_m),
         camera,
         max_markers: Some(settings.max_markers as usize),
         tracking: settings.tracking,
+        // The camera comes from camera_info (the node fits it to each
+        // frame); the diameter waits in the configuration until then.
+        camera_later: true,
         ..DetectSpec::default()
     };
-    let mut config = spec
+    let config = spec
         .build()
         .map_err(|e| e.message_with(|option| format!("parameter {option}")))?;
-    // The camera comes later, from camera_info (the node fits it to each
-    // frame); the diameter, checked against the same range when it was set,
-    // waits in the configuration until then.
-    config.diameter_m = settings.detector_diameter();
     if let Target::WhyCode(family) = &config.target {
         if let Some(id) = settings
             .tag_ids

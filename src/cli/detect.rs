@@ -2,6 +2,7 @@
 
 use super::args::{spec_error, Format, FormatArg, MarkerKindArgs};
 use super::output;
+use super::recording::{self, Annotate};
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
 use std::io::IsTerminal;
@@ -13,7 +14,7 @@ use whycode::detect::family_check::FamilyCheck;
 use whycode::detect::report::{FrameReport, CSV_HEADER};
 use whycode::detect::{Detector, DetectorConfig, StageTimings, Target};
 use whycode::image_io::load_gray;
-use whycode::spec::DetectSpec;
+use whycode::spec::{DetectSpec, RecordingSpec};
 use whycode::units::Length;
 
 const EXAMPLES: &str = "\
@@ -25,13 +26,18 @@ Examples:
   whycode detect --bits auto photo.jpg               # each ring's bit count and code
   whycode detect --bits auto --distance 2 photo.jpg  # and its ID in that family
   whycode detect --timings frames/                   # where the detector's time goes
+  whycode detect --diameter 122mm --output found.mcap run.mcap   # a ROS 2 bag
+  whycode detect --every 2 --start 1:00 --annotate out.mp4 run.mp4  # a video
 
 Formats: table (for reading), csv (one row per marker) or json (one object
 per image and line).
 
 Folders are sequences: their images are read in name order and markers are
 tracked from frame to frame. Files named on the command line are independent
-images, read in parallel.";
+images, read in parallel. ROS 2 bags (.mcap: sensor_msgs Image and
+CompressedImage, the camera from camera_info) and videos (.mp4, .mkv, .avi,
+.mov, .webm, through ffmpeg) are tracked streams: each JSON line gains frame,
+stamp_ns (and topic); a summary ends on stderr.";
 
 /// Image file extensions read from folders.
 const IMAGE_EXTENSIONS: [&str; 9] = [
@@ -44,9 +50,9 @@ const PROGRESS_MIN_IMAGES: usize = 20;
 #[derive(Debug, clap::Args)]
 #[command(after_help = EXAMPLES)]
 pub struct DetectArgs {
-    /// Images (PNG, JPEG, PGM/PPM, BMP; 8 or 16 bit; grey or colour) or
-    /// folders of frames
-    #[arg(required = true, value_name = "IMAGE|FOLDER")]
+    /// Images (PNG, JPEG, PGM/PPM, BMP; 8 or 16 bit; grey or colour),
+    /// folders of frames, ROS 2 bags (.mcap) or videos
+    #[arg(required = true, value_name = "IMAGE|FOLDER|RECORDING")]
     inputs: Vec<PathBuf>,
 
     #[command(flatten)]
@@ -57,12 +63,12 @@ pub struct DetectArgs {
         long,
         value_name = "LENGTH",
         value_parser = parse_diameter,
-        requires = "camera",
         allow_hyphen_values = true
     )]
     diameter: Option<Length>,
 
-    /// Camera calibration (ROS camera_info or OpenCV YAML), for pose
+    /// Camera calibration (ROS camera_info or OpenCV YAML), for pose; a
+    /// bag's camera_info gives it without this
     #[arg(long, value_name = "FILE", requires = "diameter")]
     camera: Option<PathBuf>,
 
@@ -70,9 +76,31 @@ pub struct DetectArgs {
     format: FormatArg,
 
     /// Write each image with the markers' ellipses, IDs and +x axes drawn
-    /// into DIR as <name>.annotated.png (never over an input)
-    #[arg(long, value_name = "DIR")]
+    /// into DIR as <name>.annotated.png (never over an input); for a bag
+    /// or video, a video file (out.mp4) or a folder of frame_N.png
+    #[arg(long, value_name = "DIR|VIDEO")]
     annotate: Option<PathBuf>,
+
+    /// Write a bag or video's detections as a ROS 2 bag (MCAP): /tf and
+    /// /whycode/markers as the ROS 2 node publishes them
+    #[arg(long, value_name = "FILE.mcap")]
+    output: Option<PathBuf>,
+
+    /// The bag's image topic, when it has several
+    #[arg(long, value_name = "TOPIC")]
+    topic: Option<String>,
+
+    /// Read every N-th frame of a bag or video
+    #[arg(long, value_name = "N")]
+    every: Option<u64>,
+
+    /// Start a bag or video this long after its first frame: 12.5, 90s, 1:30
+    #[arg(long, value_name = "TIME", value_parser = RecordingSpec::parse_time)]
+    start: Option<f64>,
+
+    /// End a bag or video this long after its first frame
+    #[arg(long, value_name = "TIME", value_parser = RecordingSpec::parse_time)]
+    end: Option<f64>,
 
     /// Most markers to report per image
     #[arg(long, value_name = "N")]
@@ -117,18 +145,21 @@ enum Job {
 }
 
 pub fn run(args: DetectArgs) -> Result<ExitCode> {
-    let config = DetectSpec {
-        target: args.kind.spec()?,
-        diameter: args.diameter,
-        camera: args.camera.as_deref().map(Camera::load).transpose()?,
-        max_markers: args.max_markers,
-        tracking: false,
-        unreadable: args.unreadable,
-        min_ink: args.min_ink,
-        timings: args.timings,
+    if recording::check_inputs(&args.inputs)? {
+        return run_recordings(args);
     }
-    .build()
-    .map_err(spec_error)?;
+    for (given, option) in [
+        (args.output.is_some(), "--output"),
+        (args.topic.is_some(), "--topic"),
+        (args.every.is_some(), "--every"),
+        (args.start.is_some(), "--start"),
+        (args.end.is_some(), "--end"),
+    ] {
+        if given {
+            bail!("{option}: applies to bags and videos (.mcap, .mp4, .mkv, .avi, .mov, .webm)");
+        }
+    }
+    let config = detector_config(&args, false)?;
     let family_bits = config.target.family().map(|f| f.bits());
     // In auto mode with a distance the IDs are there already; legacy
     // circles carry no ring.
@@ -238,6 +269,83 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// The detector the options ask for; a recording's camera may come later
+/// (a bag's camera_info), and its frames are tracked.
+fn detector_config(args: &DetectArgs, recording: bool) -> Result<DetectorConfig> {
+    DetectSpec {
+        target: args.kind.spec()?,
+        diameter: args.diameter,
+        camera: args.camera.as_deref().map(Camera::load).transpose()?,
+        max_markers: args.max_markers,
+        tracking: recording,
+        unreadable: args.unreadable,
+        min_ink: args.min_ink,
+        timings: args.timings,
+        camera_later: recording && args.camera.is_none(),
+    }
+    .build()
+    .map_err(spec_error)
+}
+
+/// Bags and videos, each one tracked stream, one after the other.
+fn run_recordings(args: DetectArgs) -> Result<ExitCode> {
+    if args.no_tracking {
+        bail!("--no-tracking: a bag or video is read as one tracked stream");
+    }
+    // A bag's camera_info brings the camera.
+    let config = detector_config(&args, true)?;
+    let read = RecordingSpec {
+        topic: args.topic.clone(),
+        every: args.every,
+        start: args.start,
+        end: args.end,
+    }
+    .build()
+    .map_err(spec_error)?;
+    let annotate = Annotate::of(args.annotate.as_deref());
+    let single_output = matches!(annotate, Annotate::Video(_)) || args.output.is_some();
+    if single_output && args.inputs.len() > 1 {
+        bail!("--output and --annotate VIDEO take one recording at a time");
+    }
+    if let Some(out) = &args.output {
+        if out.extension().and_then(|e| e.to_str()) != Some("mcap") {
+            bail!(
+                "--output: {}: the detections bag is an MCAP file (name it .mcap)",
+                out.display()
+            );
+        }
+    }
+    let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+    let mut outputs: Vec<&Path> = args.output.iter().map(PathBuf::as_path).collect();
+    match &annotate {
+        Annotate::Video(path) => outputs.push(path),
+        Annotate::Folder(dir) => std::fs::create_dir_all(dir)
+            .with_context(|| format!("{}: cannot create folder", dir.display()))?,
+        Annotate::None => {}
+    }
+    whycode::io::check_outputs(&inputs, &outputs)?;
+    for out in &outputs {
+        whycode::io::check_output_dir(out)?;
+    }
+    let run = recording::Run {
+        config,
+        camera_given: args.camera.is_some(),
+        read,
+        format: args.format.format,
+        annotate: &annotate,
+        output: args.output.as_deref(),
+    };
+    let mut out = output::Stdout::new();
+    recording::header(run.format, &mut out)?;
+    for input in &args.inputs {
+        if let Err(err) = recording::run(input, &run, &mut out) {
+            out.flush()?;
+            return Err(err);
+        }
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 /// Checks every input exists before any work starts, and lists folders.
@@ -352,6 +460,7 @@ fn detect_one(
         elapsed_ms,
         markers,
         timings: detector.last_timings(),
+        stream: None,
     })
 }
 

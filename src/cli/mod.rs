@@ -9,6 +9,7 @@ mod detect;
 mod ids;
 mod marker;
 mod output;
+mod recording;
 mod sheet;
 mod simulate;
 mod validate;

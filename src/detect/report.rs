@@ -21,6 +21,19 @@ pub struct FrameReport {
     /// How long each stage of the detector took on this frame, when asked
     /// for ([`DetectorConfig::timings`](super::DetectorConfig::timings)).
     pub timings: Option<super::timings::StageTimings>,
+    /// Where the image sits in a recorded stream (a bag or a video).
+    pub stream: Option<StreamPosition>,
+}
+
+/// A frame's place in a recorded stream.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StreamPosition {
+    /// 0-based index in the stream.
+    pub frame: u64,
+    /// A bag's header stamp or a video's presentation time, nanoseconds.
+    pub stamp_ns: i64,
+    /// The bag topic the frame came from.
+    pub topic: Option<String>,
 }
 
 /// The CSV header line (without its newline); [`FrameReport::to_csv_rows`]
@@ -37,6 +50,12 @@ fn round(x: f64, decimals: i32) -> f64 {
 #[derive(serde::Serialize)]
 struct FrameRecord<'a> {
     image: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    frame: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    stamp_ns: Option<i64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    topic: Option<&'a str>,
     width: u32,
     height: u32,
     elapsed_ms: f64,
@@ -67,7 +86,8 @@ struct MarkerRecord {
 }
 
 impl FrameReport {
-    /// One JSON object on one line (no newline): image, width, height,
+    /// One JSON object on one line (no newline): image (and for a frame
+    /// of a recording: frame, stamp_ns and a bag's topic), width, height,
     /// elapsed_ms and the markers with id, code, u, v, yaw, axes,
     /// confidence, position, rotation and quaternion; then the stage
     /// timings, when measured.
@@ -104,8 +124,12 @@ impl FrameReport {
                 }
             })
             .collect();
+        let stream = self.stream.as_ref();
         let record = FrameRecord {
             image: &self.image,
+            frame: stream.map(|s| s.frame),
+            stamp_ns: stream.map(|s| s.stamp_ns),
+            topic: stream.and_then(|s| s.topic.as_deref()),
             width: self.width,
             height: self.height,
             elapsed_ms: round(self.elapsed_ms, 3),
@@ -254,6 +278,7 @@ mod tests {
             elapsed_ms: 1.23456,
             markers,
             timings: None,
+            stream: None,
         }
     }
 

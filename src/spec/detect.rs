@@ -30,6 +30,9 @@ pub struct DetectSpec {
     /// Time each stage of every frame (read with
     /// [`Detector::last_timings`](crate::Detector::last_timings)).
     pub timings: bool,
+    /// The camera comes with the frames (a bag's camera_info), so a
+    /// diameter without `camera` waits in the configuration for it.
+    pub camera_later: bool,
 }
 
 impl DetectSpec {
@@ -41,7 +44,9 @@ impl DetectSpec {
             .map(|d| within("diameter", d.mm(), limits::MARKER_DIAMETER_MM).map(|mm| mm / 1000.0))
             .transpose()?;
         match (diameter_m.is_some(), self.camera.is_some()) {
-            (true, false) => return Err(pose_needs_both("diameter", "camera")),
+            (true, false) if !self.camera_later => {
+                return Err(pose_needs_both("diameter", "camera"))
+            }
             (false, true) => return Err(pose_needs_both("camera", "diameter")),
             _ => {}
         }

@@ -15,11 +15,15 @@
 
 mod detect;
 pub mod limits;
+#[cfg(feature = "recordings")]
+mod recording;
 mod scene;
 mod target;
 
 pub use detect::DetectSpec;
 pub use limits::{Limit, OutOfRange};
+#[cfg(feature = "recordings")]
+pub use recording::RecordingSpec;
 pub use scene::{BackgroundKind, Layout, SceneSpec};
 pub use target::{Bits, TargetSpec};
 

@@ -375,7 +375,11 @@ fn find_edge(
 ) -> Result<EdgeLine, String> {
     // Base point on the nominal border at along-side coordinate s, and the
     // outward normal.
-    let (length, across) = if side.is_multiple_of(2) { (w, h) } else { (h, w) };
+    let (length, across) = if side.is_multiple_of(2) {
+        (w, h)
+    } else {
+        (h, w)
+    };
     let base = |s: f64| -> (f64, f64) {
         match side {
             0 => (s, 0.0),
@@ -544,10 +548,7 @@ fn fit_edge_line(points: &[(f64, f64)]) -> Option<EdgeLine> {
                 .filter(|r| (r.1 - through.offset(r.0)).abs() <= AGREE_MM)
                 .copied()
                 .collect();
-            if consensus
-                .as_ref()
-                .is_none_or(|(n, _)| agreeing.len() > *n)
-            {
+            if consensus.as_ref().is_none_or(|(n, _)| agreeing.len() > *n) {
                 consensus = Some((agreeing.len(), agreeing));
             }
         }

@@ -24,6 +24,7 @@ mod output_streams;
 mod pose_properties;
 mod pose_roundtrip;
 mod pose_synthetic;
+mod recordings;
 mod reference;
 mod render_cli_errors;
 mod render_encoding;

@@ -5,6 +5,7 @@
 //! harness) is in the `whycode-testkit` crate.
 #![allow(dead_code)]
 
+pub mod recordings;
 pub mod reference;
 pub mod ring_view;
 pub mod sheets;
@@ -30,6 +31,15 @@ pub fn whycode(args: &[&str]) -> Output {
 pub fn whycode_in(dir: &Path, args: &[&str]) -> Output {
     whycode_command(args)
         .current_dir(dir)
+        .output()
+        .expect("the whycode binary runs")
+}
+
+/// [`whycode_in`] with one environment variable set.
+pub fn whycode_env(dir: &Path, args: &[&str], (name, value): (&str, &str)) -> Output {
+    whycode_command(args)
+        .current_dir(dir)
+        .env(name, value)
         .output()
         .expect("the whycode binary runs")
 }

@@ -1,14 +1,15 @@
-//! The ROS 2 messages the node reads and writes, as serde structs whose
-//! field order is the `.msg` order: ros2-client encodes them as CDR, the
-//! layout every RMW puts on the wire. Each type names its ROS package and
-//! type ([`RosType`]), from which the DDS type name
-//! (`sensor_msgs::msg::dds_::Image_`) follows.
+//! The ROS 2 messages the node publishes and reads and that bags hold, as
+//! serde structs whose field order is the `.msg` order: serialised as CDR
+//! (ros2-client's on DDS, [`super::cdr`] in bags) they have the layout
+//! every RMW puts on the wire. Each type names its ROS package and type
+//! ([`RosType`]), from which the DDS type name
+//! (`sensor_msgs::msg::dds_::Image_`) and a bag's schema name
+//! (`sensor_msgs/msg/Image`) follow.
 //!
 //! `whycode_msgs` is ours (its `.msg` files ship in `ros2/whycode_msgs/`,
 //! for colcon); `whycode_interfaces` is the original whycode-ros2 node's,
 //! published on a compatibility topic only.
 
-use ros2_client::MessageTypeName;
 use serde::{Deserialize, Serialize};
 
 /// A message type's ROS package and name.
@@ -18,9 +19,9 @@ pub trait RosType {
     /// Type name within the package, e.g. `Image`.
     const NAME: &'static str;
 
-    /// The name ros2-client turns into the DDS type name.
-    fn type_name() -> MessageTypeName {
-        MessageTypeName::new(Self::PACKAGE, Self::NAME)
+    /// The name a bag's schema carries: `sensor_msgs/msg/Image`.
+    fn schema_name() -> String {
+        format!("{}/msg/{}", Self::PACKAGE, Self::NAME)
     }
 }
 
@@ -30,7 +31,6 @@ macro_rules! ros_type {
             const PACKAGE: &'static str = $package;
             const NAME: &'static str = $name;
         }
-        impl ros2_client::Message for $type {}
     };
 }
 
@@ -298,7 +298,7 @@ impl CameraInfo {
     /// (or, for a rectified image topic, P without distortion), cropped to
     /// its region of interest and scaled for its binning. A camera_info
     /// that describes no calibrated camera is refused with the reason.
-    pub fn camera(&self, rectified: bool) -> Result<whycode::Camera, String> {
+    pub fn camera(&self, rectified: bool) -> Result<crate::Camera, String> {
         if self.width == 0 || self.height == 0 {
             return Err(format!(
                 "camera_info has no image size ({}x{})",
@@ -324,7 +324,7 @@ impl CameraInfo {
         };
         // ROS puts the principal point in the same pixel-centre convention
         // as OpenCV, which is the library's.
-        let mut camera = whycode::Camera {
+        let mut camera = crate::Camera {
             fx,
             fy,
             cx,
@@ -388,8 +388,8 @@ impl CameraInfo {
     }
 }
 
-impl From<whycode::Pose> for Pose {
-    fn from(pose: whycode::Pose) -> Pose {
+impl From<crate::Pose> for Pose {
+    fn from(pose: crate::Pose) -> Pose {
         let [x, y, z, w] = pose.quaternion;
         Pose {
             position: Point {
@@ -407,10 +407,11 @@ mod tests {
     use super::*;
 
     fn cdr<T: Serialize>(value: &T) -> Vec<u8> {
-        use ros2_client::dds::rustdds::{no_key::SerializerAdapter, CDRSerializerAdapter};
-        CDRSerializerAdapter::<T>::to_bytes(value)
-            .expect("serialises")
-            .to_vec()
+        let bytes = super::super::cdr::encode(value);
+        // A bag's message starts with the CDR encapsulation (little-endian
+        // CDR: 00 01 00 00); the rest is what DDS puts on the wire.
+        assert_eq!(bytes[..4], [0, 1, 0, 0]);
+        bytes[4..].to_vec()
     }
 
     #[test]
@@ -529,18 +530,9 @@ mod tests {
     }
 
     #[test]
-    fn dds_type_names_follow_the_ros_convention() {
-        assert_eq!(
-            Image::type_name().dds_msg_type(),
-            "sensor_msgs::msg::dds_::Image_"
-        );
-        assert_eq!(
-            TfMessage::type_name().dds_msg_type(),
-            "tf2_msgs::msg::dds_::TFMessage_"
-        );
-        assert_eq!(
-            CompatMarkerArray::type_name().dds_msg_type(),
-            "whycode_interfaces::msg::dds_::MarkerArray_"
-        );
+    fn schema_names_follow_the_ros_convention() {
+        assert_eq!(Image::schema_name(), "sensor_msgs/msg/Image");
+        assert_eq!(TfMessage::schema_name(), "tf2_msgs/msg/TFMessage");
+        assert_eq!(MarkerArray::schema_name(), "whycode_msgs/msg/MarkerArray");
     }
 }

@@ -1,4 +1,4 @@
-//! Camera messages to the detector's 8-bit grey pixels: sensor_msgs/Image
+//! Camera messages (from DDS or from a bag) to the detector's 8-bit grey pixels: sensor_msgs/Image
 //! in any of the encodings camera drivers publish for visible light, and
 //! sensor_msgs/CompressedImage (JPEG, PNG). A message that cannot be read
 //! gives a [`FrameError`] naming why; nothing here panics on what arrives
@@ -7,15 +7,15 @@
 //! A `mono8` image whose rows are packed is read in place; every other
 //! layout is converted into a buffer kept from frame to frame.
 
-use crate::msg::{CompressedImage, Image};
+use super::msg::{CompressedImage, Image};
+use crate::image_io::SizeLimit;
 use image::{GrayImage, ImageBuffer, Luma};
 use std::fmt;
-use whycode::image_io::SizeLimit;
 
 /// Grey pixels borrowed from a message or from the converter's buffer.
 pub type GrayView<'a> = ImageBuffer<Luma<u8>, &'a [u8]>;
 
-/// Why a frame was skipped.
+/// Why a frame could not be read.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum FrameError {
     /// Width or height is zero.
@@ -213,7 +213,7 @@ impl Converter {
                 // The library's rule for 16-bit grey (10- and 12-bit
                 // cameras fill only the low bits): the brightest value
                 // present becomes 255.
-                self.buffer = whycode::image_io::stretched_values(&wide);
+                self.buffer = crate::image_io::stretched_values(&wide);
                 &self.buffer
             }
             Layout::Colour { bytes, rgb } => {
@@ -250,7 +250,7 @@ impl Converter {
         if msg.format.contains("compressedDepth") {
             return Err(FrameError::UnknownEncoding(msg.format.clone()));
         }
-        let gray = whycode::decode_gray(std::path::Path::new(topic), &msg.data, SizeLimit::FILES)
+        let gray = crate::decode_gray(std::path::Path::new(topic), &msg.data, SizeLimit::FILES)
             .map_err(|e| FrameError::Undecodable(e.to_string()))?;
         if gray.width() == 0 || gray.height() == 0 {
             return Err(FrameError::Empty {
@@ -265,7 +265,7 @@ impl Converter {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::msg::Header;
+    use crate::ros::msg::Header;
 
     fn image(encoding: &str, width: u32, height: u32, step: u32, data: Vec<u8>) -> Image {
         Image {
@@ -443,7 +443,7 @@ mod tests {
         let gray = converter
             .gray_compressed(&msg, "/cam/image/compressed")
             .unwrap();
-        assert_eq!(gray.as_raw(), whycode::image_io::to_gray(picture).as_raw());
+        assert_eq!(gray.as_raw(), crate::image_io::to_gray(picture).as_raw());
         let garbage = CompressedImage {
             data: vec![1, 2, 3, 4],
             ..msg.clone()

@@ -1,0 +1,239 @@
+//! `whycode detect` on recorded runs: a ROS 2 bag or a video read as one
+//! tracked stream, a JSON line (or CSV rows, or a table) per frame on
+//! stdout, the stream's summary on stderr, and optionally the detections
+//! as a bag and the annotated frames as a video or a folder of images.
+
+use super::args::Format;
+use super::output;
+use anyhow::{anyhow, bail, Context, Result};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+use whycode::detect::report::{FrameReport, StreamPosition, CSV_HEADER};
+use whycode::detect::{Detector, DetectorConfig};
+use whycode::recording::output::{AnnotatedVideo, DetectionsBag};
+use whycode::recording::{Kind, ReadOptions, Recording, Summary};
+use whycode::ros::describe::describe;
+use whycode::ros::msg::{Header, Time};
+
+/// Where the annotated frames go.
+pub enum Annotate {
+    /// Nowhere.
+    None,
+    /// Images `frame_000012.png` in a folder.
+    Folder(PathBuf),
+    /// A video file.
+    Video(PathBuf),
+}
+
+impl Annotate {
+    /// A path with a video's extension is a video, anything else a folder.
+    pub fn of(path: Option<&Path>) -> Annotate {
+        match path {
+            None => Annotate::None,
+            Some(p) if Kind::of(p) == Some(Kind::Video) => Annotate::Video(p.to_path_buf()),
+            Some(p) => Annotate::Folder(p.to_path_buf()),
+        }
+    }
+}
+
+/// What one recording is read with.
+pub struct Run<'a> {
+    /// The detector's configuration (tracking is turned on here).
+    pub config: DetectorConfig,
+    /// The camera came from `--camera`, so a bag's camera_info is not used.
+    pub camera_given: bool,
+    /// Frames to read.
+    pub read: ReadOptions,
+    /// How frames are printed.
+    pub format: Format,
+    /// Where the annotated frames go.
+    pub annotate: &'a Annotate,
+    /// The detections bag to write.
+    pub output: Option<&'a Path>,
+}
+
+/// Whether a path (that exists as a file) is a recording.
+pub fn is_recording(path: &Path) -> bool {
+    Kind::of(path).is_some() && !path.is_dir()
+}
+
+/// Reads one recording; an error ends the stream (stdout keeps the frames
+/// before it, the outputs are not written).
+pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
+    let recording = Recording::open(path)?;
+    let mut frames = recording.frames(&run.read)?;
+    let progress = if std::io::stderr().is_terminal() {
+        let bar = indicatif::ProgressBar::no_length();
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{pos}/{len} frames, {per_sec}, {eta} left {wide_bar}",
+            )
+            .expect("a valid template"),
+        );
+        bar
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let mut detector = Detector::new(DetectorConfig {
+        tracking: true,
+        ..run.config.clone()
+    });
+    let mut bag = run
+        .output
+        .map(|_| DetectionsBag::new())
+        .transpose()
+        .context("cannot start the detections bag")?;
+    let mut video = match run.annotate {
+        Annotate::Video(target) => {
+            let staged = whycode::io::StagedFile::new(target)?;
+            let writer = AnnotatedVideo::new(target, staged.path());
+            Some((writer, staged))
+        }
+        _ => None,
+    };
+    if let Some(n) = frames.expected() {
+        progress.set_length(n);
+    }
+    let mut summary = Summary::default();
+    let shown = path.display().to_string();
+    let mut result: Result<()> = Ok(());
+    while let Some(frame) = frames.next() {
+        let frame = match frame {
+            Ok(frame) => frame,
+            Err(e) => {
+                result = Err(e.into());
+                break;
+            }
+        };
+        let (width, height) = frame.image.dimensions();
+        let camera = if run.camera_given {
+            run.config.camera
+        } else {
+            frame.camera
+        };
+        let fitted = camera
+            .map(|c| c.for_image(width, height))
+            .transpose()
+            .map_err(|e| {
+                anyhow!(
+                    "{shown}: frame {}: the camera does not fit: {e}",
+                    frame.index
+                )
+            })?;
+        if detector.config().camera != fitted {
+            let mut config = detector.config().clone();
+            config.camera = fitted;
+            detector.restart(config);
+        }
+        let start = Instant::now();
+        let markers = detector.detect(&frame.image);
+        let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;
+        summary.observe(frame.index, &markers);
+        let stamp = Time {
+            sec: frame.stamp_ns.div_euclid(1_000_000_000) as i32,
+            nanosec: frame.stamp_ns.rem_euclid(1_000_000_000) as u32,
+        };
+        if let Some(bag) = &mut bag {
+            let header = Header {
+                stamp,
+                frame_id: if frame.frame_id.is_empty() {
+                    "camera".into()
+                } else {
+                    frame.frame_id.clone()
+                },
+            };
+            let computed_for = detector.config().diameter_m;
+            let described = describe(&markers, &header, computed_for, |id| {
+                (
+                    Some(format!("{}{id}", whycode::ros::DEFAULT_FRAME_PREFIX)),
+                    computed_for,
+                )
+            });
+            bag.add(frame.stamp_ns, &described)
+                .context("cannot write the detections bag")?;
+        }
+        match run.annotate {
+            Annotate::None => {}
+            Annotate::Folder(dir) => {
+                let png = whycode::detect::annotate::annotated_png(&frame.image, &markers)?;
+                whycode::io::write_atomic(
+                    &dir.join(format!("frame_{:06}.png", frame.index)),
+                    &png,
+                )?;
+            }
+            Annotate::Video(_) => {
+                let rgb = whycode::detect::annotate::annotated_rgb(&frame.image, &markers)?;
+                if let Some((writer, _)) = &mut video {
+                    writer.push(rgb, frame.stamp_ns)?;
+                }
+            }
+        }
+        let report = FrameReport {
+            image: shown.clone(),
+            width,
+            height,
+            elapsed_ms,
+            markers,
+            timings: detector.last_timings(),
+            stream: Some(StreamPosition {
+                frame: frame.index,
+                stamp_ns: frame.stamp_ns,
+                topic: frame.topic.clone(),
+            }),
+        };
+        progress.suspend(|| -> Result<()> {
+            match run.format {
+                Format::Json => out.line(report.to_json()),
+                Format::Csv => out.write(&report.to_csv_rows()),
+                Format::Table => out.write(&report.to_table(true)),
+            }
+        })?;
+        progress.inc(1);
+        if let (None, Some(n)) = (progress.length(), frames.expected()) {
+            progress.set_length(n);
+        }
+    }
+    progress.finish_and_clear();
+    out.flush()?;
+    let skipped = frames.skipped().clone();
+    drop(frames);
+    result?;
+    if let Some(bag) = bag {
+        let bytes = bag.finish().context("cannot finish the detections bag")?;
+        let target = run.output.expect("a bag only with an output");
+        whycode::io::write_atomic(target, &bytes)?;
+        output::say(format_args!("wrote the detections to {}", target.display()));
+    }
+    if let Some((writer, staged)) = video {
+        writer.finish()?;
+        staged.commit()?;
+        if let Annotate::Video(target) = run.annotate {
+            output::say(format_args!(
+                "wrote the annotated video {}",
+                target.display()
+            ));
+        }
+    }
+    for line in summary.lines(&skipped) {
+        output::say(format_args!("{shown}: {line}"));
+    }
+    Ok(())
+}
+
+/// The CSV header, when the format has one.
+pub fn header(format: Format, out: &mut output::Stdout) -> Result<()> {
+    if format == Format::Csv {
+        out.line(CSV_HEADER)?;
+    }
+    Ok(())
+}
+
+/// Checks the options that only recordings take were given with them.
+pub fn check_inputs(inputs: &[PathBuf]) -> Result<bool> {
+    let recordings = inputs.iter().filter(|p| is_recording(p)).count();
+    if recordings > 0 && recordings < inputs.len() {
+        bail!("bags and videos are read alone: give images and recordings to separate runs");
+    }
+    Ok(recordings > 0)
+}

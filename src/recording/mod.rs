@@ -1,0 +1,314 @@
+//! Recorded runs read as one stream of frames: ROS 2 bags (MCAP, rosbag2's
+//! default storage; [`bag`]) and video files (through the `ffmpeg` program;
+//! [`video`]). Each frame comes with its index in the stream, its stamp and,
+//! for bags, its topic and the camera the bag's camera_info describes.
+//! [`output`] writes the detections back as a bag in the ROS 2 node's
+//! layout; [`summary`] tallies a stream's markers. Feature `recordings`.
+
+pub mod bag;
+pub mod output;
+pub mod summary;
+pub mod video;
+
+use crate::camera::Camera;
+use crate::ros::image::FrameError;
+use image::GrayImage;
+use std::path::{Path, PathBuf};
+
+pub use summary::Summary;
+
+/// Video file extensions (any codec ffmpeg decodes).
+pub const VIDEO_EXTENSIONS: [&str; 5] = ["mp4", "mkv", "avi", "mov", "webm"];
+
+/// What to read of a recording; built by [`crate::spec::RecordingSpec`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ReadOptions {
+    /// A bag's image topic; needed when it has several.
+    pub topic: Option<String>,
+    /// Keep every n-th frame (1: all).
+    pub every: u64,
+    /// Skip the frames before this time, nanoseconds from the recording's
+    /// first frame.
+    pub start_ns: Option<i64>,
+    /// Stop after this time, nanoseconds from the recording's first frame.
+    pub end_ns: Option<i64>,
+}
+
+impl Default for ReadOptions {
+    fn default() -> ReadOptions {
+        ReadOptions {
+            topic: None,
+            every: 1,
+            start_ns: None,
+            end_ns: None,
+        }
+    }
+}
+
+/// One frame of a recording.
+#[derive(Debug, Clone)]
+pub struct Frame {
+    /// 0-based index in the stream (within `--start`/`--end`, counted before
+    /// thinning: with every 5th frame, 0, 5, 10, ...).
+    pub index: u64,
+    /// A bag's header stamp, or a video's presentation time, nanoseconds.
+    pub stamp_ns: i64,
+    /// The bag topic it came from.
+    pub topic: Option<String>,
+    /// The camera frame the image header names (empty for videos).
+    pub frame_id: String,
+    /// The pixels, 8-bit grey.
+    pub image: GrayImage,
+    /// The newest valid calibration from the bag's camera_info beside the
+    /// image topic, at its own size.
+    pub camera: Option<Camera>,
+}
+
+/// Which kind of recording a path is, by its extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// An MCAP file.
+    Bag,
+    /// A video file.
+    Video,
+}
+
+impl Kind {
+    /// The kind of recording `path` names, or `None` for anything else
+    /// (an image, a folder).
+    pub fn of(path: &Path) -> Option<Kind> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        if ext == "mcap" {
+            Some(Kind::Bag)
+        } else if VIDEO_EXTENSIONS.contains(&ext.as_str()) {
+            Some(Kind::Video)
+        } else {
+            None
+        }
+    }
+}
+
+/// A recording that cannot be read; each names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordingError {
+    /// The file cannot be opened or read.
+    #[error("{}: cannot read: {source}", path.display())]
+    Io {
+        /// The recording.
+        path: PathBuf,
+        /// Why.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A bag that is cut short or damaged.
+    #[error("{}: truncated or corrupt bag: {problem}", path.display())]
+    CorruptBag {
+        /// The bag.
+        path: PathBuf,
+        /// What the MCAP reader found.
+        problem: String,
+    },
+    /// A bag without sensor_msgs Image or CompressedImage messages.
+    #[error("{}: no image topic (sensor_msgs/msg/Image or CompressedImage){}", path.display(), listed(topics))]
+    NoImageTopic {
+        /// The bag.
+        path: PathBuf,
+        /// The topics it has, with their types.
+        topics: Vec<String>,
+    },
+    /// A bag with several image topics and none chosen.
+    #[error("{}: several image topics, choose one: {}", path.display(), topics.join(", "))]
+    SeveralImageTopics {
+        /// The bag.
+        path: PathBuf,
+        /// The image topics.
+        topics: Vec<String>,
+    },
+    /// The chosen topic is not an image topic of the bag.
+    #[error("{}: no image topic {topic}; its image topics: {}", path.display(), topics.join(", "))]
+    UnknownTopic {
+        /// The bag.
+        path: PathBuf,
+        /// The topic asked for.
+        topic: String,
+        /// The image topics there are.
+        topics: Vec<String>,
+    },
+    /// A message that is not what its channel says, or an image in an
+    /// encoding that is not read.
+    #[error("{}: {topic}, message {message}: {problem}", path.display())]
+    BadMessage {
+        /// The bag.
+        path: PathBuf,
+        /// Its topic.
+        topic: String,
+        /// 0-based index of the message on its topic.
+        message: u64,
+        /// What is wrong.
+        problem: String,
+    },
+    /// A raw image the detector cannot read (an unknown encoding, a data
+    /// length that does not match).
+    #[error("{}: {topic}, frame {frame}: {problem}", path.display())]
+    BadImage {
+        /// The bag.
+        path: PathBuf,
+        /// Its topic.
+        topic: String,
+        /// The frame's index.
+        frame: u64,
+        /// What is wrong.
+        problem: FrameError,
+    },
+    /// The `ffmpeg` program is not installed.
+    #[error(
+        "{}: reading videos needs the ffmpeg program, which is not installed \
+         (Debian/Ubuntu: apt-get install ffmpeg; macOS: brew install ffmpeg; \
+         or set WHYCODE_FFMPEG to its path)",
+        path.display()
+    )]
+    FfmpegMissing {
+        /// The video.
+        path: PathBuf,
+    },
+    /// ffmpeg could not read the video (or write one).
+    #[error("{}: {problem}", path.display())]
+    Video {
+        /// The video.
+        path: PathBuf,
+        /// ffmpeg's own words.
+        problem: String,
+    },
+}
+
+fn listed(topics: &[String]) -> String {
+    if topics.is_empty() {
+        "; it holds no messages".into()
+    } else {
+        format!("; its topics: {}", topics.join(", "))
+    }
+}
+
+/// CompressedImages that did not decode: skipped, counted.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Skipped {
+    /// How many frames were skipped.
+    pub count: u64,
+    /// The first skipped frame's index and why.
+    pub first: Option<(u64, String)>,
+}
+
+impl Skipped {
+    fn add(&mut self, index: u64, reason: String) {
+        self.count += 1;
+        if self.first.is_none() {
+            self.first = Some((index, reason));
+        }
+    }
+}
+
+/// An open recording.
+pub enum Recording {
+    /// A bag, mapped into memory.
+    Bag(bag::Bag),
+    /// A video, read when its frames are asked for.
+    Video(PathBuf),
+}
+
+impl Recording {
+    /// Opens `path` as the recording [`Kind::of`] says it is: a bag's
+    /// index is read now (a truncated bag fails here), a video is only
+    /// checked to exist.
+    pub fn open(path: &Path) -> Result<Recording, RecordingError> {
+        match Kind::of(path) {
+            Some(Kind::Bag) => Ok(Recording::Bag(bag::Bag::open(path)?)),
+            _ => {
+                std::fs::metadata(path).map_err(|source| RecordingError::Io {
+                    path: path.to_path_buf(),
+                    source,
+                })?;
+                Ok(Recording::Video(path.to_path_buf()))
+            }
+        }
+    }
+
+    /// The frames, in order.
+    pub fn frames(&self, options: &ReadOptions) -> Result<Frames<'_>, RecordingError> {
+        Ok(match self {
+            Recording::Bag(bag) => Frames::Bag(Box::new(bag.frames(options)?)),
+            Recording::Video(path) => Frames::Video(video::VideoFrames::open(path, options)?),
+        })
+    }
+}
+
+/// A recording's frames, one at a time.
+pub enum Frames<'a> {
+    /// From a bag.
+    Bag(Box<bag::BagFrames<'a>>),
+    /// From a video.
+    Video(video::VideoFrames),
+}
+
+impl Frames<'_> {
+    /// How many frames the stream will give, when the recording says
+    /// (a bag's message count, a video's duration times its rate).
+    pub fn expected(&self) -> Option<u64> {
+        match self {
+            Frames::Bag(b) => b.expected(),
+            Frames::Video(v) => v.expected(),
+        }
+    }
+
+    /// The frames skipped so far (CompressedImages that do not decode).
+    pub fn skipped(&self) -> &Skipped {
+        match self {
+            Frames::Bag(b) => b.skipped(),
+            Frames::Video(v) => v.skipped(),
+        }
+    }
+}
+
+impl Iterator for Frames<'_> {
+    type Item = Result<Frame, RecordingError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        match self {
+            Frames::Bag(b) => b.next(),
+            Frames::Video(v) => v.next(),
+        }
+    }
+}
+
+/// The next item of a stream that ends at its first error: `done` is set
+/// once `next` gave an error or nothing.
+fn fused<T, E>(
+    done: &mut bool,
+    next: impl FnOnce() -> Result<Option<T>, E>,
+) -> Option<Result<T, E>> {
+    if *done {
+        return None;
+    }
+    let result = next().transpose();
+    if !matches!(result, Some(Ok(_))) {
+        *done = true;
+    }
+    result
+}
+
+/// Whether a frame at `offset_ns` from the first one falls in the window.
+fn in_window(options: &ReadOptions, offset_ns: i64) -> Window {
+    if options.start_ns.is_some_and(|s| offset_ns < s) {
+        Window::Before
+    } else if options.end_ns.is_some_and(|e| offset_ns > e) {
+        Window::After
+    } else {
+        Window::In
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Window {
+    Before,
+    In,
+    After,
+}

@@ -1,0 +1,405 @@
+//! Recorded runs: a simulated sequence written to MCAP by an independent
+//! writer (PyPI's mcap-ros2-support) and to MJPG and H.264 videos by
+//! ffmpeg, read back by `whycode detect` as one tracked stream: every frame,
+//! the IDs in each, the stamps; the detections bag read back by the same
+//! independent reader; and bad recordings refused in one line.
+
+use crate::support::recordings::{
+    assert_ids, camera, ids, lines, read_bag, sequence, write_bag, write_video, FRAMES, SIZE,
+    VISIT, VISITOR,
+};
+use crate::support::{stderr, stdout, whycode_in};
+use serde_json::{json, Value};
+use std::path::Path;
+
+/// Stamps far from zero and not on round numbers, as a robot's clock gives.
+fn stamp(k: usize) -> i64 {
+    1_700_000_000_123_456_789 + k as i64 * 33_366_667
+}
+
+fn image_message(dir: &Path, topic: &str, k: usize, encoding: &str) -> Value {
+    let (image, _) = &sequence()[k];
+    let (w, h) = SIZE;
+    let (data, step): (Vec<u8>, u32) = match encoding {
+        "mono8" => (image.as_raw().clone(), w),
+        // Grey in colour: the conversion gives the grey back.
+        "bgr8" => (
+            image.as_raw().iter().flat_map(|&g| [g, g, g]).collect(),
+            3 * w,
+        ),
+        // An encoding nobody reads: its bytes do not matter.
+        _ => (vec![0; (w * h) as usize], w),
+    };
+    let file = dir.join(format!("{}-{k}.bin", topic.replace('/', "_")));
+    std::fs::write(&file, data).unwrap();
+    json!({
+        "topic": topic, "type": "sensor_msgs/msg/Image", "log_time": stamp(k) + 1000,
+        "stamp_ns": stamp(k), "frame_id": "cam_optical", "height": h, "width": w,
+        "encoding": encoding, "is_bigendian": 0, "step": step, "data_file": file,
+    })
+}
+
+fn compressed_message(dir: &Path, topic: &str, k: usize, bytes: Vec<u8>) -> Value {
+    let file = dir.join(format!("{}-{k}.jpg", topic.replace('/', "_")));
+    std::fs::write(&file, bytes).unwrap();
+    json!({
+        "topic": topic, "type": "sensor_msgs/msg/CompressedImage", "log_time": stamp(k) + 2000,
+        "stamp_ns": stamp(k), "format": "jpeg", "data_file": file,
+    })
+}
+
+fn camera_info(k: usize) -> Value {
+    let c = camera();
+    json!({
+        "topic": "/cam/camera_info", "type": "sensor_msgs/msg/CameraInfo",
+        "log_time": stamp(k), "stamp_ns": stamp(k), "height": SIZE.1, "width": SIZE.0,
+        "k": [c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0],
+        "p": [c.fx, 0.0, c.cx, 0.0, 0.0, c.fy, c.cy, 0.0, 0.0, 0.0, 1.0, 0.0],
+    })
+}
+
+/// The sequence on /cam/image_raw (mono8 and bgr8 frames in turn), its
+/// camera_info, the same frames as JPEG on /cam/image_raw/compressed with
+/// one that does not decode, and a string topic.
+fn write_swarm_bag(dir: &Path) -> std::path::PathBuf {
+    let mut messages = Vec::new();
+    for k in 0..FRAMES {
+        messages.push(camera_info(k));
+        let encoding = if k % 2 == 0 { "mono8" } else { "bgr8" };
+        messages.push(image_message(dir, "/cam/image_raw", k, encoding));
+        let jpeg =
+            whycode::image_io::encode_image(Path::new("f.jpg"), &sequence()[k].0, 95).unwrap();
+        messages.push(compressed_message(
+            dir,
+            "/cam/image_raw/compressed",
+            k,
+            jpeg,
+        ));
+        if k == 5 {
+            messages.push(compressed_message(
+                dir,
+                "/cam/image_raw/compressed",
+                99,
+                b"not a jpeg".to_vec(),
+            ));
+        }
+    }
+    messages.push(json!({"topic": "/chatter", "type": "std_msgs/msg/String", "log_time": stamp(0), "data": "hi"}));
+    let path = dir.join("swarm.mcap");
+    write_bag(&path, &messages);
+    path
+}
+
+#[test]
+fn a_bag_is_read_as_one_stream_and_its_detections_written_as_the_node_would() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_swarm_bag(d);
+
+    // Two image topics: the error names them.
+    let out = whycode_in(d, &["detect", "--format", "json", "swarm.mcap"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("swarm.mcap") && err.contains("/cam/image_raw/compressed"),
+        "{err}"
+    );
+
+    let out = whycode_in(
+        d,
+        &[
+            "detect",
+            "--format",
+            "json",
+            "--topic",
+            "/cam/image_raw",
+            "--diameter",
+            "40mm",
+            "--output",
+            "found.mcap",
+            "swarm.mcap",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let frames = lines(&stdout(&out));
+    assert_eq!(frames.len(), FRAMES);
+    for (k, line) in frames.iter().enumerate() {
+        assert_eq!(line["frame"], k as u64);
+        assert_eq!(line["stamp_ns"], stamp(k));
+        assert_eq!(line["topic"], "/cam/image_raw");
+        assert_ids(k, &ids(line), "/cam/image_raw");
+        // camera_info gave the camera: every marker has a pose.
+        for marker in line["markers"].as_array().unwrap() {
+            assert!(marker["position"][2].as_f64().unwrap() > 0.0, "{marker}");
+        }
+    }
+    let summary = stderr(&out);
+    assert!(
+        summary.contains(&format!("read {FRAMES} frames")),
+        "{summary}"
+    );
+    let went = format!("IDs that came and went: {VISITOR} (frames ");
+    assert!(summary.contains(&went), "{summary}");
+    assert!(
+        summary.contains(&format!(" to {}, in ", VISIT.end())),
+        "{summary}"
+    );
+
+    // The detections bag, read by the independent reader: a marker array
+    // per frame and the transforms, stamped like the images.
+    let messages = read_bag(&d.join("found.mcap"));
+    let arrays: Vec<&Value> = messages
+        .iter()
+        .filter(|m| m["topic"] == "/whycode/markers")
+        .collect();
+    let tf: Vec<&Value> = messages.iter().filter(|m| m["topic"] == "/tf").collect();
+    assert_eq!(arrays.len(), FRAMES);
+    assert_eq!(tf.len(), FRAMES);
+    for (k, array) in arrays.iter().enumerate() {
+        assert_eq!(array["schema"], "whycode_msgs/msg/MarkerArray");
+        assert_eq!(array["log_time"], stamp(k));
+        let header = &array["message"]["header"];
+        assert_eq!(
+            header["stamp"]["sec"].as_i64().unwrap() * 1_000_000_000
+                + header["stamp"]["nanosec"].as_i64().unwrap(),
+            stamp(k)
+        );
+        assert_eq!(header["frame_id"], "cam_optical");
+        // The same markers as the JSON line of the frame.
+        let mut found: Vec<u32> = array["message"]["markers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|m| m["id"].as_u64().unwrap() as u32)
+            .collect();
+        found.sort_unstable();
+        assert_eq!(found, ids(&frames[k]));
+        let mut children: Vec<String> = tf[k]["message"]["transforms"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|t| t["child_frame_id"].as_str().unwrap().to_string())
+            .collect();
+        children.sort();
+        let expected: Vec<String> = found.iter().map(|id| format!("whycode_{id}")).collect();
+        assert_eq!(children, expected);
+        assert_eq!(tf[k]["schema"], "tf2_msgs/msg/TFMessage");
+    }
+
+    // The compressed topic: the frame that does not decode is skipped and
+    // counted, the stream goes on.
+    let out = whycode_in(
+        d,
+        &[
+            "detect",
+            "--format",
+            "json",
+            "--topic",
+            "/cam/image_raw/compressed",
+            "swarm.mcap",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let frames = lines(&stdout(&out));
+    assert_eq!(frames.len(), FRAMES);
+    for line in &frames {
+        let k = line["frame"].as_u64().unwrap() as usize;
+        let k = if k > 6 { k - 1 } else { k };
+        assert_ids(k, &ids(line), "/cam/image_raw/compressed");
+    }
+    assert!(
+        stderr(&out).contains("skipped 1 that did not decode"),
+        "{}",
+        stderr(&out)
+    );
+
+    // Thinned and cut: every 3rd frame from the 2nd to the 9th.
+    let out = whycode_in(
+        d,
+        &[
+            "detect",
+            "--format",
+            "json",
+            "--topic",
+            "/cam/image_raw",
+            "--every",
+            "3",
+            "--start",
+            "0.05",
+            "--end",
+            "0.28",
+            "swarm.mcap",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let stamps: Vec<i64> = lines(&stdout(&out))
+        .iter()
+        .map(|l| l["stamp_ns"].as_i64().unwrap())
+        .collect();
+    assert_eq!(stamps, [stamp(2), stamp(5), stamp(8)]);
+}
+
+#[test]
+fn bad_bags_are_refused_in_one_line_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let full = write_swarm_bag(d);
+    let bytes = std::fs::read(&full).unwrap();
+    std::fs::write(d.join("cut.mcap"), &bytes[..bytes.len() / 2]).unwrap();
+    let mut flipped = bytes.clone();
+    for b in &mut flipped[bytes.len() / 3..bytes.len() / 3 + 64] {
+        *b ^= 0x5a;
+    }
+    std::fs::write(d.join("flipped.mcap"), flipped).unwrap();
+    write_bag(&d.join("infos.mcap"), &[camera_info(0), camera_info(1)]);
+    write_bag(
+        &d.join("bayer.mcap"),
+        &[image_message(d, "/cam/image_raw", 0, "bayer_rggb8")],
+    );
+    for (bag, words) in [
+        ("cut.mcap", "truncated or corrupt"),
+        ("flipped.mcap", ""),
+        ("infos.mcap", "no image topic"),
+        ("bayer.mcap", "bayer_rggb8"),
+    ] {
+        let out = whycode_in(
+            d,
+            &[
+                "detect",
+                "--format",
+                "json",
+                "--topic",
+                "/cam/image_raw",
+                bag,
+            ],
+        );
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{bag}: {err}");
+        assert_eq!(err.lines().count(), 1, "{bag}: {err}");
+        assert!(err.contains(bag), "{bag}: {err}");
+        assert!(err.contains(words), "{bag}: {err}");
+        assert!(!d.join("found.mcap").exists());
+    }
+}
+
+#[test]
+fn videos_are_read_with_their_presentation_times() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_video(d, "run.avi", 10, &["-c:v", "mjpeg", "-q:v", "2"]);
+    write_video(
+        d,
+        "run.mp4",
+        10,
+        &["-c:v", "libx264", "-crf", "12", "-pix_fmt", "yuv420p"],
+    );
+    for video in ["run.avi", "run.mp4"] {
+        let out = whycode_in(
+            d,
+            &[
+                "detect",
+                "--format",
+                "json",
+                "--annotate",
+                "seen.mp4",
+                video,
+            ],
+        );
+        assert!(out.status.success(), "{video}: {}", stderr(&out));
+        let frames = lines(&stdout(&out));
+        assert_eq!(frames.len(), FRAMES, "{video}");
+        for (k, line) in frames.iter().enumerate() {
+            assert_eq!(line["frame"], k as u64);
+            assert_eq!(line["stamp_ns"], k as i64 * 100_000_000, "{video}");
+            assert!(line.get("topic").is_none());
+            assert_ids(k, &ids(line), video);
+        }
+        // The annotated video has every frame.
+        let probe = std::process::Command::new("ffprobe")
+            .args([
+                "-v",
+                "error",
+                "-count_frames",
+                "-select_streams",
+                "v:0",
+                "-show_entries",
+                "stream=nb_read_frames,width,height",
+                "-of",
+                "csv=p=0",
+            ])
+            .arg(d.join("seen.mp4"))
+            .output()
+            .unwrap();
+        assert_eq!(
+            String::from_utf8_lossy(&probe.stdout).trim(),
+            format!("{},{},{FRAMES}", SIZE.0, SIZE.1)
+        );
+    }
+    let out = whycode_in(
+        d,
+        &[
+            "detect", "--format", "json", "--every", "3", "--start", "0.3", "--end", "0.85",
+            "run.mp4",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let got: Vec<(u64, i64)> = lines(&stdout(&out))
+        .iter()
+        .map(|l| {
+            (
+                l["frame"].as_u64().unwrap(),
+                l["stamp_ns"].as_i64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(got, [(0, 300_000_000), (3, 600_000_000)]);
+}
+
+#[test]
+fn bad_videos_and_a_missing_ffmpeg_are_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mp4 = write_video(
+        d,
+        "run.mp4",
+        10,
+        &["-c:v", "libx264", "-pix_fmt", "yuv420p"],
+    );
+    let bytes = std::fs::read(&mp4).unwrap();
+    std::fs::write(d.join("cut.mp4"), &bytes[..bytes.len() / 2]).unwrap();
+    std::fs::write(d.join("noise.mkv"), vec![7u8; 5000]).unwrap();
+    for video in ["cut.mp4", "noise.mkv"] {
+        let out = whycode_in(
+            d,
+            &[
+                "detect",
+                "--format",
+                "json",
+                "--annotate",
+                "seen.mp4",
+                video,
+            ],
+        );
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{video}: {err}");
+        assert_eq!(err.lines().count(), 1, "{video}: {err}");
+        assert!(
+            err.starts_with(&format!("whycode: error: {video}: ")),
+            "{video}: {err}"
+        );
+        assert!(!d.join("seen.mp4").exists(), "no half-written video");
+    }
+    let out = crate::support::whycode_env(
+        d,
+        &["detect", "run.mp4"],
+        ("WHYCODE_FFMPEG", "/nonexistent/ffmpeg"),
+    );
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("run.mp4") && err.contains("apt-get install ffmpeg"),
+        "{err}"
+    );
+}
