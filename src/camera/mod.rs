@@ -9,7 +9,7 @@
 
 mod calibration;
 
-pub use calibration::CameraError;
+pub use calibration::{CalibrationFormat, CameraError};
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 

@@ -13,11 +13,13 @@
 //! command line prints `--camera-distance: …` where Python prints
 //! `camera_distance: …` for the same mistake.
 
+mod calibrate;
 mod detect;
 pub mod limits;
 mod scene;
 mod target;
 
+pub use calibrate::CalibrateSpec;
 pub use detect::DetectSpec;
 pub use limits::{Limit, OutOfRange};
 pub use scene::{BackgroundKind, Layout, SceneSpec};
