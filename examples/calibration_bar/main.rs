@@ -56,7 +56,8 @@ fn python() -> Result<PathBuf, String> {
 
 fn opencv(images: &[PathBuf], camera: &Camera) -> Result<OpenCvReport, String> {
     let python = python()?;
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/calibration_bar/opencv_chessboard.py");
+    let script =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/calibration_bar/opencv_chessboard.py");
     let (cols, rows) = calibration::CHESS_SQUARES;
     let job = serde_json::json!({
         "images": images,
@@ -102,8 +103,12 @@ fn row(truth: &Camera, camera: &Camera, used: usize, total: usize, rms: f64) -> 
 
 fn main() {
     let mut args = std::env::args().skip(1);
-    let count: usize = args.next().map_or(15, |a| a.parse().expect("VIEWS is a number"));
-    let seed: u64 = args.next().map_or(1, |a| a.parse().expect("SEED is a number"));
+    let count: usize = args
+        .next()
+        .map_or(15, |a| a.parse().expect("VIEWS is a number"));
+    let seed: u64 = args
+        .next()
+        .map_or(1, |a| a.parse().expect("SEED is a number"));
     let truth = calibration::lens();
     let manifest = calibration::a4_sheet();
     let poses = calibration::views(&truth, count, seed);
@@ -124,10 +129,13 @@ fn main() {
     }
     if let Ok(folder) = std::env::var("CALIBRATION_BAR_SAVE") {
         for (name, image) in &sheets {
-            image.save(Path::new(&folder).join(name)).expect("saved view");
+            image
+                .save(Path::new(&folder).join(name))
+                .expect("saved view");
         }
         for path in &boards {
-            std::fs::copy(path, Path::new(&folder).join(path.file_name().unwrap())).expect("copied view");
+            std::fs::copy(path, Path::new(&folder).join(path.file_name().unwrap()))
+                .expect("copied view");
         }
     }
 
@@ -136,7 +144,10 @@ fn main() {
     match &ours {
         Ok(c) => {
             print!("{}", c.to_table());
-            rows.push(("whycode (markers)", Some(row(&truth, &c.camera, c.views.len(), count, c.rms))));
+            rows.push((
+                "whycode (markers)",
+                Some(row(&truth, &c.camera, c.views.len(), count, c.rms)),
+            ));
         }
         Err(e) => {
             println!("whycode refused: {e}");
@@ -148,15 +159,19 @@ fn main() {
         Ok(report) => {
             version = report.opencv.clone();
             let used = report.found.iter().filter(|&&f| f).count();
-            let camera = report.camera_matrix.as_ref().zip(report.dist.as_ref()).map(|(k, d)| Camera {
-                fx: k[0],
-                fy: k[4],
-                cx: k[2],
-                cy: k[5],
-                distortion: [d[0], d[1], d[2], d[3], d.get(4).copied().unwrap_or(0.0)],
-                width: truth.width,
-                height: truth.height,
-            });
+            let camera = report
+                .camera_matrix
+                .as_ref()
+                .zip(report.dist.as_ref())
+                .map(|(k, d)| Camera {
+                    fx: k[0],
+                    fy: k[4],
+                    cx: k[2],
+                    cy: k[5],
+                    distortion: [d[0], d[1], d[2], d[3], d.get(4).copied().unwrap_or(0.0)],
+                    width: truth.width,
+                    height: truth.height,
+                });
             rows.push((
                 "OpenCV (chessboard)",
                 camera.map(|c| row(&truth, &c, used, count, report.rms.unwrap_or(f64::NAN))),
@@ -168,7 +183,11 @@ fn main() {
     println!(
         "{count} views of an A4 target 0.35-0.6 m from a 1280x960 camera, k1 = {}, seed {seed}{}",
         truth.distortion[0],
-        if version.is_empty() { String::new() } else { format!("; OpenCV {version}") }
+        if version.is_empty() {
+            String::new()
+        } else {
+            format!("; OpenCV {version}")
+        }
     );
     println!(
         "{:<20} {:>6} {:>9} {:>11} {:>11} {:>9} {:>9}",

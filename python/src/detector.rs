@@ -260,6 +260,7 @@ impl PyMarker {
             height: 0,
             elapsed_ms: 0.0,
             markers: vec![self.detection.clone()],
+            boards: Vec::new(),
         };
         crate::json_to_py(py, &frame.to_json())?
             .get_item("markers")?

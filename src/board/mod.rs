@@ -165,8 +165,12 @@ impl Board {
 
     /// The bundles of a bundle file's text (see [`Board::load`]).
     pub fn parse_bundles(text: &str) -> Result<Vec<Board>, String> {
-        let file: BundleFile = serde_yaml::from_str(text)
-            .map_err(|e| format!("neither a sheet manifest nor a marker bundle: {}", crate::error::one_line(&anyhow::Error::new(e))))?;
+        let file: BundleFile = serde_yaml::from_str(text).map_err(|e| {
+            format!(
+                "neither a sheet manifest nor a marker bundle: {}",
+                crate::error::one_line(&anyhow::Error::new(e))
+            )
+        })?;
         if file.bundles.is_empty() {
             return Err("lists no bundles".into());
         }
@@ -182,23 +186,38 @@ impl Board {
                     .iter()
                     .map(|m| {
                         if !ids.insert(m.id) {
-                            return Err(format!("bundle {}: ID {} listed twice", bundle.name, m.id));
+                            return Err(format!(
+                                "bundle {}: ID {} listed twice",
+                                bundle.name, m.id
+                            ));
                         }
                         let mm = m.diameter * 1000.0;
                         crate::spec::limits::MARKER_DIAMETER_MM
                             .check(mm)
-                            .map_err(|e| format!("bundle {} ID {}: diameter {e}", bundle.name, m.id))?;
+                            .map_err(|e| {
+                                format!("bundle {} ID {}: diameter {e}", bundle.name, m.id)
+                            })?;
                         if ![m.x, m.y, m.z].iter().all(|v| v.is_finite()) {
-                            return Err(format!("bundle {} ID {}: position is not a number", bundle.name, m.id));
+                            return Err(format!(
+                                "bundle {} ID {}: position is not a number",
+                                bundle.name, m.id
+                            ));
                         }
                         let rotation = match (m.qw, m.qx, m.qy, m.qz) {
                             (None, None, None, None) => None,
                             (Some(w), Some(x), Some(y), Some(z)) => {
                                 let q = nalgebra::Quaternion::new(w, x, y, z);
                                 if !(q.norm() > 1e-6 && q.norm().is_finite()) {
-                                    return Err(format!("bundle {} ID {}: orientation is not a rotation", bundle.name, m.id));
+                                    return Err(format!(
+                                        "bundle {} ID {}: orientation is not a rotation",
+                                        bundle.name, m.id
+                                    ));
                                 }
-                                Some(*UnitQuaternion::from_quaternion(q).to_rotation_matrix().matrix())
+                                Some(
+                                    *UnitQuaternion::from_quaternion(q)
+                                        .to_rotation_matrix()
+                                        .matrix(),
+                                )
                             }
                             _ => {
                                 return Err(format!(
@@ -271,7 +290,8 @@ pub fn locate(
     camera: &Camera,
     detector_diameter_m: f64,
 ) -> Option<BoardPose> {
-    let read = |d: &&Detection| matches!(d.status, Some(MatchStatus::Exact | MatchStatus::Corrected));
+    let read =
+        |d: &&Detection| matches!(d.status, Some(MatchStatus::Exact | MatchStatus::Corrected));
     let mut sightings: Vec<Sighting> = Vec::new();
     for marker in &board.markers {
         let mut found = detections.iter().filter(read).filter(|d| d.id == marker.id);
@@ -296,9 +316,11 @@ pub fn locate(
     let mut best: Option<(f64, DVector<f64>)> = None;
     for (rotation, translation) in &starts {
         let x0 = params(rotation, translation);
-        let x = fit(&sightings, &active, camera, detector_diameter_m, x0)?;
+        let Some(x) = fit(&sightings, &active, camera, detector_diameter_m, x0) else {
+            continue;
+        };
         let score = median_residual(&sightings, camera, &x);
-        if best.as_ref().is_none_or(|(s, _)| score < *s) {
+        if best.as_ref().map_or(true, |(s, _)| score < *s) {
             best = Some((score, x));
         }
     }
@@ -355,7 +377,14 @@ pub fn locate(
 
 fn params(rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> DVector<f64> {
     let r = Rotation3::from_matrix(rotation).scaled_axis();
-    DVector::from_vec(vec![r.x, r.y, r.z, translation.x, translation.y, translation.z])
+    DVector::from_vec(vec![
+        r.x,
+        r.y,
+        r.z,
+        translation.x,
+        translation.y,
+        translation.z,
+    ])
 }
 
 fn from_params(x: &DVector<f64>) -> (Matrix3<f64>, Vector3<f64>) {
@@ -365,7 +394,11 @@ fn from_params(x: &DVector<f64>) -> (Matrix3<f64>, Vector3<f64>) {
     )
 }
 
-fn centre_residual(s: &Sighting, camera: &Camera, x: &DVector<f64>) -> Option<nalgebra::Vector2<f64>> {
+fn centre_residual(
+    s: &Sighting,
+    camera: &Camera,
+    x: &DVector<f64>,
+) -> Option<nalgebra::Vector2<f64>> {
     let (rotation, translation) = from_params(x);
     let (u, v) = camera.project(&(rotation * s.marker.position + translation))?;
     Some(nalgebra::Vector2::new(s.detection.u - u, s.detection.v - v))
@@ -397,7 +430,8 @@ fn fit(
             out.extend([r.x, r.y]);
             if let (Some(pose), Some(to_board)) = (&s.detection.pose, s.marker.rotation) {
                 let predicted = rotation * to_board;
-                let error = Rotation3::from_matrix(&(predicted.transpose() * pose.rotation)).scaled_axis();
+                let error =
+                    Rotation3::from_matrix(&(predicted.transpose() * pose.rotation)).scaled_axis();
                 out.extend((error * ORIENTATION_PX_PER_RAD).iter().copied());
             }
         }

@@ -259,14 +259,30 @@ pub(crate) fn refine(
     // The held intrinsics keep these values (no tangential or k3 term: 0).
     let held: [f64; 9] = [
         camera.fx,
-        if freedom.fix_aspect { camera.fx } else { camera.fy },
+        if freedom.fix_aspect {
+            camera.fx
+        } else {
+            camera.fy
+        },
         camera.cx,
         camera.cy,
         camera.distortion[0],
         camera.distortion[1],
-        if freedom.tangential { camera.distortion[2] } else { 0.0 },
-        if freedom.tangential { camera.distortion[3] } else { 0.0 },
-        if freedom.k3 { camera.distortion[4] } else { 0.0 },
+        if freedom.tangential {
+            camera.distortion[2]
+        } else {
+            0.0
+        },
+        if freedom.tangential {
+            camera.distortion[3]
+        } else {
+            0.0
+        },
+        if freedom.k3 {
+            camera.distortion[4]
+        } else {
+            0.0
+        },
     ];
     let intrinsics = |x: &DVector<f64>| {
         let mut full = held;

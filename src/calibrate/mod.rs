@@ -578,7 +578,10 @@ fn report(
 
 /// A detector for the manifest's family that reports the markers' centres
 /// through `camera` when one is given.
-fn detector_config(manifest: &Manifest, camera: Option<Camera>) -> Result<DetectorConfig, CalibrationError> {
+fn detector_config(
+    manifest: &Manifest,
+    camera: Option<Camera>,
+) -> Result<DetectorConfig, CalibrationError> {
     let family_ref = match manifest.family {
         Some(f) if !manifest.legacy => f,
         _ => return Err(CalibrationError::Legacy),
@@ -614,7 +617,10 @@ pub fn calibrate(
         });
     };
     let (width, height) = first_image.dimensions();
-    if let Some((name, image)) = photos.iter().find(|(_, i)| i.dimensions() != (width, height)) {
+    if let Some((name, image)) = photos
+        .iter()
+        .find(|(_, i)| i.dimensions() != (width, height))
+    {
         return Err(CalibrationError::ImageSizes {
             first: first.clone(),
             first_size: [width, height],
@@ -766,7 +772,8 @@ mod tests {
                         let (x, y) = (0.025 + 0.04 * f64::from(i), 0.03 + 0.04 * f64::from(j));
                         // Page frame (y down, z into the page) to the
                         // simulator's (centre, y up, z out).
-                        let p = placement.to_camera_mm(1000.0 * (x - 0.105), -1000.0 * (y - 0.1485));
+                        let p =
+                            placement.to_camera_mm(1000.0 * (x - 0.105), -1000.0 * (y - 0.1485));
                         let (u, v) = camera.project(&p).unwrap();
                         view.ids.push(view.ids.len() as u32);
                         view.plane.push([x, y]);
@@ -806,9 +813,17 @@ mod tests {
             .into_iter()
             .map(|(_, _, roll, at)| (0.0, 0.0, roll, at))
             .collect();
-        let err = calibrate_views(synthetic(&camera, &poses), 1280, 960, &CalibrationOptions::default())
-            .unwrap_err();
-        assert!(matches!(err, CalibrationError::FrontoParallel { .. }), "{err}");
+        let err = calibrate_views(
+            synthetic(&camera, &poses),
+            1280,
+            960,
+            &CalibrationOptions::default(),
+        )
+        .unwrap_err();
+        assert!(
+            matches!(err, CalibrationError::FrontoParallel { .. }),
+            "{err}"
+        );
     }
 
     #[test]
@@ -829,7 +844,10 @@ mod tests {
             }
         }
         let err = calibrate_views(views, 1280, 960, &CalibrationOptions::default()).unwrap_err();
-        assert!(matches!(err, CalibrationError::Undetermined { .. }), "{err}");
+        assert!(
+            matches!(err, CalibrationError::Undetermined { .. }),
+            "{err}"
+        );
         assert!(err.to_string().starts_with("the views leave k"), "{err}");
     }
 
@@ -843,6 +861,10 @@ mod tests {
             &CalibrationOptions::default(),
         )
         .unwrap_err();
-        assert!(err.to_string().starts_with("only 2 usable views (3 needed)"), "{err}");
+        assert!(
+            err.to_string()
+                .starts_with("only 2 usable views (3 needed)"),
+            "{err}"
+        );
     }
 }

@@ -442,9 +442,7 @@ impl Camera {
     }
 
     fn camera_matrix(&self) -> [f64; 9] {
-        [
-            self.fx, 0.0, self.cx, 0.0, self.fy, self.cy, 0.0, 0.0, 1.0,
-        ]
+        [self.fx, 0.0, self.cx, 0.0, self.fy, self.cy, 0.0, 0.0, 1.0]
     }
 
     /// The calibration as OpenCV FileStorage YAML (what

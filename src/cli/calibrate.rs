@@ -88,7 +88,12 @@ pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
     let photos = args
         .photos
         .iter()
-        .map(|path| Ok((path.display().to_string(), whycode::image_io::load_gray(path)?)))
+        .map(|path| {
+            Ok((
+                path.display().to_string(),
+                whycode::image_io::load_gray(path)?,
+            ))
+        })
         .collect::<Result<Vec<_>>>()?;
     let calibration = calibrate(&manifest, &photos, &options)?;
     let format = match args.output_format {
@@ -97,9 +102,7 @@ pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
         Some(FormatArg::OpencvXml) => CalibrationFormat::OpenCvXml,
         None => CalibrationFormat::for_path(&args.output),
     };
-    let text = calibration
-        .camera
-        .to_file_text(format, &args.camera_name);
+    let text = calibration.camera.to_file_text(format, &args.camera_name);
     whycode::io::write_atomic(&args.output, text.as_bytes())?;
     output::print(&calibration.to_table())?;
     Ok(ExitCode::SUCCESS)

@@ -65,6 +65,12 @@ pub struct DetectArgs {
     #[arg(long, value_name = "FILE", requires = "diameter")]
     camera: Option<PathBuf>,
 
+    /// A board (a sheet's manifest: each page a plane) or a bundle file
+    /// (YAML: markers' IDs, diameters and poses): each frame's JSON gets
+    /// its pose in `boards`. Repeatable; needs --camera
+    #[arg(long, value_name = "FILE", requires = "camera")]
+    board: Vec<PathBuf>,
+
     #[command(flatten)]
     format: FormatArg,
 
@@ -119,6 +125,14 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         tracking: false,
         unreadable: args.unreadable,
         min_ink: args.min_ink,
+        boards: args
+            .board
+            .iter()
+            .map(|path| whycode::board::Board::load(path))
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter()
+            .flatten()
+            .collect(),
     }
     .build()
     .map_err(spec_error)?;
@@ -327,6 +341,7 @@ fn detect_one(
     let start = Instant::now();
     let markers = detector.detect(&image);
     let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;
+    let boards = detector.locate_boards(&markers);
     if let Some(out) = annotate {
         let png = whycode::detect::annotate::annotated_png(&image, &markers)?;
         whycode::io::write_atomic(out, &png)?;
@@ -337,6 +352,7 @@ fn detect_one(
         height: image.height(),
         elapsed_ms,
         markers,
+        boards,
     })
 }
 

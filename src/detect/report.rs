@@ -18,6 +18,8 @@ pub struct FrameReport {
     pub elapsed_ms: f64,
     /// What was found, in the detector's order.
     pub markers: Vec<Detection>,
+    /// The configured boards' poses ([`super::Detector::locate_boards`]).
+    pub boards: Vec<crate::board::BoardPose>,
 }
 
 /// The CSV header line (without its newline); [`FrameReport::to_csv_rows`]
@@ -38,6 +40,20 @@ struct FrameRecord<'a> {
     height: u32,
     elapsed_ms: f64,
     markers: Vec<MarkerRecord>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    boards: Vec<BoardRecord>,
+}
+
+#[derive(serde::Serialize)]
+struct BoardRecord {
+    name: String,
+    position: [f64; 3],
+    rotation: [[f64; 3]; 3],
+    quaternion: [f64; 4],
+    used: Vec<u32>,
+    seen: Vec<u32>,
+    rejected: Vec<u32>,
+    rms_px: f64,
 }
 
 #[derive(serde::Serialize)]
@@ -100,6 +116,26 @@ impl FrameReport {
             height: self.height,
             elapsed_ms: round(self.elapsed_ms, 3),
             markers,
+            boards: self
+                .boards
+                .iter()
+                .map(|b| BoardRecord {
+                    name: b.name.clone(),
+                    position: [
+                        round(b.position.x, 6),
+                        round(b.position.y, 6),
+                        round(b.position.z, 6),
+                    ],
+                    rotation: std::array::from_fn(|r| {
+                        std::array::from_fn(|c| round(b.rotation[(r, c)], 7))
+                    }),
+                    quaternion: b.quaternion.map(|q| round(q, 7)),
+                    used: b.used.clone(),
+                    seen: b.seen.clone(),
+                    rejected: b.rejected.clone(),
+                    rms_px: round(b.rms_px, 4),
+                })
+                .collect(),
         };
         serde_json::to_string(&record).expect("plain records serialise")
     }
@@ -242,6 +278,7 @@ mod tests {
             height: 480,
             elapsed_ms: 1.23456,
             markers,
+            boards: Vec::new(),
         }
     }
 

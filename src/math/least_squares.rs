@@ -123,13 +123,24 @@ mod tests {
         let residuals = |x: &DVector<f64>| {
             Some(DVector::from_iterator(
                 samples.len(),
-                samples.iter().map(|&(t, y)| y - (x[0] * (-x[1] * t).exp() + x[2])),
+                samples
+                    .iter()
+                    .map(|&(t, y)| y - (x[0] * (-x[1] * t).exp() + x[2])),
             ))
         };
         let jacobian = |x: &DVector<f64>| numeric_jacobian(x, residuals, &[1e-6; 3]);
-        let m = levenberg_marquardt(DVector::from_vec(vec![1.0, 0.1, 0.0]), residuals, jacobian, 100)
-            .unwrap();
-        assert!((m.x[0] - 3.0).abs() < 1e-8 && (m.x[1] - 0.7).abs() < 1e-8, "{}", m.x);
+        let m = levenberg_marquardt(
+            DVector::from_vec(vec![1.0, 0.1, 0.0]),
+            residuals,
+            jacobian,
+            100,
+        )
+        .unwrap();
+        assert!(
+            (m.x[0] - 3.0).abs() < 1e-8 && (m.x[1] - 0.7).abs() < 1e-8,
+            "{}",
+            m.x
+        );
         assert!(m.residuals.norm() < 1e-9);
     }
 }

@@ -42,10 +42,10 @@ pub fn lens() -> Camera {
     }
 }
 
-/// The sheet: 35 markers of 30 mm (IDs 1-35 of the 8-bit, distance-2
+/// The sheet: 35 markers of 30 mm (IDs 1-35 of the 10-bit, distance-2
 /// family) in 5 columns and 7 rows, 40 mm apart, centred on the page.
 pub fn a4_sheet() -> Manifest {
-    let family = Family::generate(8, 2).expect("the default family");
+    let family = Family::generate(10, 2).expect("10 bits, distance 2");
     let [w, h] = PAGE_MM;
     let x0 = w / 2.0 - MARKER_PITCH_MM * f64::from(MARKER_COLUMNS - 1) / 2.0;
     let y0 = h / 2.0 - MARKER_PITCH_MM * f64::from(MARKER_ROWS - 1) / 2.0;
@@ -64,7 +64,7 @@ pub fn a4_sheet() -> Manifest {
         version: 1,
         tool: "whycode-testkit".into(),
         family: Some(FamilyRef {
-            bits: 8,
+            bits: 10,
             distance: 2,
         }),
         legacy: false,
@@ -125,14 +125,19 @@ pub fn views(camera: &Camera, count: usize, seed: u64) -> Vec<Placement> {
         if !(0.25..=0.8).contains(&tilt_total) {
             continue;
         }
-        let inside = [(0.0, 0.0), (PAGE_MM[0], 0.0), (0.0, PAGE_MM[1]), PAGE_MM.into()]
-            .into_iter()
-            .all(|corner| {
-                let (px, py) = page_frame(corner);
-                camera
-                    .project(&placement.to_camera_mm(px, py))
-                    .is_some_and(|(u, v)| u > 8.0 && v > 8.0 && u < w - 9.0 && v < h - 9.0)
-            });
+        let inside = [
+            (0.0, 0.0),
+            (PAGE_MM[0], 0.0),
+            (0.0, PAGE_MM[1]),
+            PAGE_MM.into(),
+        ]
+        .into_iter()
+        .all(|corner| {
+            let (px, py) = page_frame(corner);
+            camera
+                .project(&placement.to_camera_mm(px, py))
+                .is_some_and(|(u, v)| u > 8.0 && v > 8.0 && u < w - 9.0 && v < h - 9.0)
+        });
         if inside {
             out.push(placement);
         }
@@ -155,7 +160,12 @@ fn scene(camera: &Camera, object: SceneObject, seed: u64) -> Scene {
 }
 
 /// The sheet seen from `placement` (the page centre's pose).
-pub fn sheet_view(camera: &Camera, manifest: &Manifest, placement: Placement, seed: u64) -> GrayImage {
+pub fn sheet_view(
+    camera: &Camera,
+    manifest: &Manifest,
+    placement: Placement,
+    seed: u64,
+) -> GrayImage {
     let page = SheetPage::new(manifest.clone(), 1, placement);
     simulate::render(&scene(camera, SceneObject::Page(page), seed)).0
 }
@@ -173,12 +183,7 @@ pub fn chessboard_view(camera: &Camera, placement: Placement, seed: u64) -> Gray
         let black = inside && (x - c0 + y - r0) % 2 == 0;
         image::Luma([if black { 0 } else { 255 }])
     });
-    let square = PrintedSquare::new(
-        bitmap,
-        f64::from(side) * CHESS_SQUARE_MM,
-        0,
-        placement,
-    );
+    let square = PrintedSquare::new(bitmap, f64::from(side) * CHESS_SQUARE_MM, 0, placement);
     simulate::render(&scene(camera, SceneObject::Square(square), seed)).0
 }
 

@@ -7,6 +7,7 @@
 
 mod support;
 
+mod board_roundtrip;
 mod calibrate_roundtrip;
 mod defects_cli;
 mod detect_cli;
