@@ -17,9 +17,14 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
+use image::GrayImage;
+use nalgebra::{Matrix3, Rotation3, Vector3};
 use serde::Deserialize;
+use whycode::board::Board;
 use whycode::calibrate::{calibrate, disagreement, CalibrationOptions};
 use whycode::camera::Camera;
+use whycode::detect::{Detector, DetectorConfig, Target};
+use whycode::simulate::Placement;
 use whycode_testkit::calibration;
 
 const SETUP: &str = "python3 -m venv target/calib-venv && \
@@ -31,7 +36,14 @@ struct OpenCvReport {
     rms: Option<f64>,
     camera_matrix: Option<Vec<f64>>,
     dist: Option<Vec<f64>>,
+    pnp: Option<Vec<Option<PnpPose>>>,
     opencv: String,
+}
+
+#[derive(Deserialize)]
+struct PnpPose {
+    rvec: [f64; 3],
+    tvec: [f64; 3],
 }
 
 fn python() -> Result<PathBuf, String> {
@@ -65,6 +77,10 @@ fn opencv(images: &[PathBuf], camera: &Camera) -> Result<OpenCvReport, String> {
         "corners_mm": calibration::chessboard_corners_mm(),
         "width": camera.width,
         "height": camera.height,
+        "pnp_camera": {
+            "K": [camera.fx, 0.0, camera.cx, 0.0, camera.fy, camera.cy, 0.0, 0.0, 1.0],
+            "dist": camera.distortion,
+        },
     });
     let mut child = Command::new(python)
         .arg(script)
@@ -78,6 +94,94 @@ fn opencv(images: &[PathBuf], camera: &Camera) -> Result<OpenCvReport, String> {
         return Err("opencv_chessboard.py failed".into());
     }
     serde_json::from_slice(&out.stdout).map_err(|e| e.to_string())
+}
+
+/// The page's pose (board frame: top-left corner, x right, y down, z into
+/// the page) from the simulator's placement of the page centre.
+fn true_board_pose(placement: &Placement) -> (Matrix3<f64>, Vector3<f64>) {
+    let [w, h] = calibration::PAGE_MM;
+    let flip = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
+    (
+        placement.rotation * flip,
+        placement.to_camera_mm(-w / 2.0, h / 2.0),
+    )
+}
+
+/// Rotation error (degrees) and position error (fraction of the distance).
+fn pose_error(
+    truth: &(Matrix3<f64>, Vector3<f64>),
+    rotation: &Matrix3<f64>,
+    position: &Vector3<f64>,
+) -> (f64, f64) {
+    let angle = Rotation3::from_matrix(&(truth.0.transpose() * rotation))
+        .angle()
+        .to_degrees();
+    (angle, (position - truth.1).norm() / truth.1.norm())
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied().unwrap_or(f64::NAN)
+}
+
+fn worst(values: &[f64]) -> f64 {
+    values.iter().copied().fold(f64::NAN, f64::max)
+}
+
+/// Board poses through the true camera: ours from the sheet's markers
+/// (`Detector::locate_boards`), one per view seen.
+fn our_board_errors(
+    truth: &Camera,
+    manifest: &whycode::manifest::Manifest,
+    sheets: &[(String, GrayImage)],
+    poses: &[Placement],
+) -> (Vec<f64>, Vec<f64>) {
+    let family = whycode::family::Family::generate(10, 2).expect("the sheet's family");
+    let mut detector = Detector::new(DetectorConfig {
+        target: Target::WhyCode(family),
+        camera: Some(*truth),
+        diameter_m: Some(calibration::MARKER_DIAMETER_MM / 1000.0),
+        boards: vec![Board::from_manifest_page(manifest, 1, "sheet".into(), 1.0)],
+        max_markers: 100,
+        ..Default::default()
+    });
+    let (mut rotations, mut positions) = (Vec::new(), Vec::new());
+    for ((_, image), placement) in sheets.iter().zip(poses) {
+        detector.reset();
+        let found = detector.detect(image);
+        if let Some(pose) = detector.locate_boards(&found).first() {
+            let (r, p) = pose_error(&true_board_pose(placement), &pose.rotation, &pose.position);
+            rotations.push(r);
+            positions.push(p);
+        }
+    }
+    (rotations, positions)
+}
+
+/// OpenCV's solvePnP poses on the chessboard's corners through the true
+/// camera. Its corner order may start at either end of the board (a 180°
+/// turn about the page centre): the labelling nearer the truth is taken.
+fn opencv_board_errors(pnp: &[Option<PnpPose>], poses: &[Placement]) -> (Vec<f64>, Vec<f64>) {
+    let [w, h] = calibration::PAGE_MM;
+    let centre = Vector3::new(w / 1000.0, h / 1000.0, 0.0);
+    let half_turn = Matrix3::from_diagonal(&Vector3::new(-1.0, -1.0, 1.0));
+    let (mut rotations, mut positions) = (Vec::new(), Vec::new());
+    for (found, placement) in pnp.iter().zip(poses) {
+        let Some(found) = found else { continue };
+        let rotation = *Rotation3::new(Vector3::from(found.rvec)).matrix();
+        let position = Vector3::from(found.tvec);
+        let truth = true_board_pose(placement);
+        let direct = pose_error(&truth, &rotation, &position);
+        let turned = pose_error(
+            &truth,
+            &(rotation * half_turn),
+            &(position + rotation * centre),
+        );
+        let best = if direct.0 <= turned.0 { direct } else { turned };
+        rotations.push(best.0);
+        positions.push(best.1);
+    }
+    (rotations, positions)
 }
 
 struct Row {
@@ -155,8 +259,15 @@ fn main() {
         }
     }
     let mut version = String::new();
+    let mut board_rows: Vec<(&str, (Vec<f64>, Vec<f64>))> = vec![(
+        "whycode (markers)",
+        our_board_errors(&truth, &manifest, &sheets, &poses),
+    )];
     match opencv(&boards, &truth) {
         Ok(report) => {
+            if let Some(pnp) = &report.pnp {
+                board_rows.push(("OpenCV solvePnP", opencv_board_errors(pnp, &poses)));
+            }
             version = report.opencv.clone();
             let used = report.found.iter().filter(|&&f| f).count();
             let camera = report
@@ -203,4 +314,23 @@ fn main() {
         }
     }
     println!("(mean/worst: distance between where the recovered and the true camera put each ray, over a 4-px grid of the whole image)");
+    println!();
+    println!("Board pose through the true camera (page frame), per view:");
+    println!(
+        "{:<20} {:>6} {:>12} {:>12} {:>12} {:>12}",
+        "", "views", "rot med °", "rot worst °", "pos med %", "pos worst %"
+    );
+    for (name, (mut rotations, mut positions)) in board_rows {
+        let n = rotations.len();
+        let (rw, pw) = (worst(&rotations), worst(&positions));
+        println!(
+            "{name:<20} {:>6} {:>12.4} {:>12.4} {:>12.4} {:>12.4}",
+            format!("{n}/{count}"),
+            median(&mut rotations),
+            rw,
+            100.0 * median(&mut positions),
+            100.0 * pw
+        );
+    }
+    println!("(pos: distance from the true board origin, % of its distance from the camera)");
 }
