@@ -128,6 +128,9 @@ fn worst(values: &[f64]) -> f64 {
     values.iter().copied().fold(f64::NAN, f64::max)
 }
 
+/// Per view: rotation error (degrees), position error (fraction of the distance).
+type PoseErrors = (Vec<f64>, Vec<f64>);
+
 /// Board poses through the true camera: ours from the sheet's markers
 /// (`Detector::locate_boards`), one per view seen.
 fn our_board_errors(
@@ -135,7 +138,7 @@ fn our_board_errors(
     manifest: &whycode::manifest::Manifest,
     sheets: &[(String, GrayImage)],
     poses: &[Placement],
-) -> (Vec<f64>, Vec<f64>) {
+) -> PoseErrors {
     let family = whycode::family::Family::generate(10, 2).expect("the sheet's family");
     let mut detector = Detector::new(DetectorConfig {
         target: Target::WhyCode(family),
@@ -161,7 +164,7 @@ fn our_board_errors(
 /// OpenCV's solvePnP poses on the chessboard's corners through the true
 /// camera. Its corner order may start at either end of the board (a 180°
 /// turn about the page centre): the labelling nearer the truth is taken.
-fn opencv_board_errors(pnp: &[Option<PnpPose>], poses: &[Placement]) -> (Vec<f64>, Vec<f64>) {
+fn opencv_board_errors(pnp: &[Option<PnpPose>], poses: &[Placement]) -> PoseErrors {
     let [w, h] = calibration::PAGE_MM;
     let centre = Vector3::new(w / 1000.0, h / 1000.0, 0.0);
     let half_turn = Matrix3::from_diagonal(&Vector3::new(-1.0, -1.0, 1.0));
@@ -259,7 +262,7 @@ fn main() {
         }
     }
     let mut version = String::new();
-    let mut board_rows: Vec<(&str, (Vec<f64>, Vec<f64>))> = vec![(
+    let mut board_rows: Vec<(&str, PoseErrors)> = vec![(
         "whycode (markers)",
         our_board_errors(&truth, &manifest, &sheets, &poses),
     )];

@@ -445,7 +445,8 @@ fn check_determined(
             || (k == 8 && !freedom.k3)
     };
     for (k, (&sd, &limit)) in fit.std_devs.iter().zip(&limits).enumerate() {
-        if !held(k) && !(sd <= limit) {
+        // NaN counts as undetermined.
+        if !held(k) && (sd.is_nan() || sd > limit) {
             return Err(CalibrationError::Undetermined {
                 parameter: fit::NAMES[k],
                 std_dev: sd,

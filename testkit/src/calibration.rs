@@ -114,7 +114,12 @@ pub fn views(camera: &Camera, count: usize, seed: u64) -> Vec<Placement> {
         let (x, y) = camera.undistort(u, v);
         let tilt = rng.range(-40.0f64, 40.0).to_radians();
         let pan = rng.range(-40.0f64, 40.0).to_radians();
-        let roll = rng.range(-30.0f64, 30.0).to_radians() + if k % 2 == 1 { 1.5708 } else { 0.0 };
+        let roll = rng.range(-30.0f64, 30.0).to_radians()
+            + if k % 2 == 1 {
+                std::f64::consts::FRAC_PI_2
+            } else {
+                0.0
+            };
         let placement = Placement::viewed(
             Vector3::new(x * distance, y * distance, distance),
             tilt,
