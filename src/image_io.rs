@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Result;
+use crate::error::{FileKind, LoadError, LoadProblem, WriteError};
 use image::GrayImage;
 
 /// Largest image side accepted by [`load_gray`].
@@ -36,79 +36,42 @@ impl SizeLimit {
     }
 }
 
-/// Why an image file could not be read. Each message is one line that
-/// starts with the file's name; the cause, when there is one, is also the
-/// error's `source`.
+/// Why an image could not be written.
 #[derive(Debug, thiserror::Error)]
-pub enum ImageError {
-    /// The file could not be opened or read.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
-    /// The file starts like no image format at all (whatever its name says).
-    #[error(
-        "{}: not an image (no PNG, JPEG, PGM/PPM or BMP signature)",
-        path.display()
-    )]
-    NotAnImage {
-        /// The file.
+pub enum ImageWriteError {
+    /// The output's extension names no format this crate writes.
+    #[error("{}: unknown image type (use .png, .jpg, .pgm or .bmp)", path.display())]
+    UnknownType {
+        /// The output.
         path: PathBuf,
     },
-    /// The file is an image the decoders do not understand, or is damaged.
-    #[error("{}: {source}", path.display())]
-    Decode {
-        /// The file.
+    /// The encoder refused the pixels.
+    #[error("cannot encode {}: {source}", path.display())]
+    Encode {
+        /// The output.
         path: PathBuf,
-        /// What the decoder said.
+        /// What the encoder said.
         #[source]
         source: image::ImageError,
     },
-    /// The image is larger than the reader's [`SizeLimit`]: refused before
-    /// decoding, so a hostile header cannot exhaust memory.
-    #[error(
-        "{}: image of {width}x{height} pixels is larger than the supported {} px a side and {} megapixels",
-        path.display(),
-        limit.max_side,
-        limit.max_pixels / 1_000_000
-    )]
-    TooLarge {
-        /// The file.
-        path: PathBuf,
-        /// Width in the header, pixels.
-        width: u32,
-        /// Height in the header, pixels.
-        height: u32,
-        /// What the reader accepts.
-        limit: SizeLimit,
-    },
-    /// A JPEG file that ends before its image data does.
-    #[error(
-        "{}: JPEG file is truncated (no end-of-image marker after its image data)",
-        path.display()
-    )]
-    TruncatedJpeg {
-        /// The file.
-        path: PathBuf,
-    },
+    /// The encoded bytes could not be written.
+    #[error(transparent)]
+    Write(#[from] WriteError),
+}
+
+fn image_error(path: &Path, problem: LoadProblem) -> LoadError {
+    LoadError::new(path, FileKind::Image, problem)
 }
 
 /// Reads an image file (PNG, JPEG, PGM/PPM, BMP; 8 or 16 bit; grey or
 /// colour) as 8-bit grey. Refuses sizes beyond [`SizeLimit::FILES`] before
 /// decoding.
-pub fn load_gray(path: &Path) -> std::result::Result<GrayImage, ImageError> {
+pub fn load_gray(path: &Path) -> Result<GrayImage, LoadError> {
     let open = || std::fs::File::open(path).map(std::io::BufReader::new);
     let (decoded, format) = decode(path, open, SizeLimit::FILES)?;
     if format == image::ImageFormat::Jpeg {
         // Only now the whole file: the decoder has already read it once.
-        let bytes = std::fs::read(path).map_err(|source| ImageError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let bytes = std::fs::read(path).map_err(|e| image_error(path, LoadProblem::Read(e)))?;
         check_jpeg_complete(path, &bytes)?;
     }
     Ok(to_gray(decoded))
@@ -118,11 +81,7 @@ pub fn load_gray(path: &Path) -> std::result::Result<GrayImage, ImageError> {
 /// browser page, bytes from a socket): same formats, same conversion, same
 /// errors, with `name` standing for the file in them and `limit` for what
 /// the caller can hold.
-pub fn decode_gray(
-    name: &Path,
-    bytes: &[u8],
-    limit: SizeLimit,
-) -> std::result::Result<GrayImage, ImageError> {
+pub fn decode_gray(name: &Path, bytes: &[u8], limit: SizeLimit) -> Result<GrayImage, LoadError> {
     let open = || Ok(std::io::Cursor::new(bytes));
     let (decoded, format) = decode(name, open, limit)?;
     if format == image::ImageFormat::Jpeg {
@@ -137,34 +96,37 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
     path: &Path,
     open: impl Fn() -> std::io::Result<R>,
     limit: SizeLimit,
-) -> std::result::Result<(image::DynamicImage, image::ImageFormat), ImageError> {
-    let io = |source| ImageError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let decode = |source| ImageError::Decode {
-        path: path.to_path_buf(),
-        source,
-    };
-    let reader = || -> std::result::Result<_, ImageError> {
+) -> Result<(image::DynamicImage, image::ImageFormat), LoadError> {
+    let io = |e| image_error(path, LoadProblem::Read(e));
+    let decode = |e| image_error(path, LoadProblem::Decode(e));
+    let reader = || -> Result<_, LoadError> {
         image::ImageReader::new(open().map_err(io)?)
             .with_guessed_format()
             .map_err(io)
     };
     let probe = reader()?;
     let Some(format) = probe.format() else {
-        return Err(ImageError::NotAnImage {
-            path: path.to_path_buf(),
-        });
+        return Err(image_error(
+            path,
+            LoadProblem::Invalid("not an image (no PNG, JPEG, PGM/PPM or BMP signature)".into()),
+        ));
     };
     let (width, height) = probe.into_dimensions().map_err(decode)?;
+    if width == 0 || height == 0 {
+        return Err(image_error(
+            path,
+            LoadProblem::Invalid(format!("image of {width}x{height} pixels holds nothing")),
+        ));
+    }
     if !limit.admits(width, height) {
-        return Err(ImageError::TooLarge {
-            path: path.to_path_buf(),
-            width,
-            height,
-            limit,
-        });
+        return Err(image_error(
+            path,
+            LoadProblem::TooLarge {
+                width,
+                height,
+                limit,
+            },
+        ));
     }
     let mut reader = reader()?;
     let mut limits = image::Limits::no_limits();
@@ -214,13 +176,16 @@ pub fn stretched_values(wide: &[u16]) -> Vec<u8> {
 /// reports no error, which would read as "no markers here". A complete
 /// file has an end-of-image marker after its last scan (a thumbnail's EOI
 /// comes before the main image's scans; entropy-coded data never holds FF D9).
-fn check_jpeg_complete(path: &Path, bytes: &[u8]) -> std::result::Result<(), ImageError> {
+fn check_jpeg_complete(path: &Path, bytes: &[u8]) -> Result<(), LoadError> {
     let last_scan = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]);
     let ends = last_scan.is_some_and(|k| bytes[k..].windows(2).any(|w| w == [0xFF, 0xD9]));
     if !ends {
-        return Err(ImageError::TruncatedJpeg {
-            path: path.to_path_buf(),
-        });
+        return Err(image_error(
+            path,
+            LoadProblem::Invalid(
+                "JPEG file is truncated (no end-of-image marker after its image data)".into(),
+            ),
+        ));
     }
     Ok(())
 }
@@ -240,7 +205,7 @@ pub enum ImageFormat {
 
 impl ImageFormat {
     /// The format named by the file's extension, or an error naming the file.
-    pub fn from_path(path: &Path) -> Result<ImageFormat> {
+    pub fn from_path(path: &Path) -> Result<ImageFormat, ImageWriteError> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
@@ -251,10 +216,11 @@ impl ImageFormat {
             "jpg" | "jpeg" => ImageFormat::Jpeg,
             "pgm" | "pnm" => ImageFormat::Pgm,
             "bmp" => ImageFormat::Bmp,
-            _ => anyhow::bail!(
-                "{}: unknown image type (use .png, .jpg, .pgm or .bmp)",
-                path.display()
-            ),
+            _ => {
+                return Err(ImageWriteError::UnknownType {
+                    path: path.to_path_buf(),
+                })
+            }
         })
     }
 }
@@ -275,13 +241,20 @@ pub fn encode_rgb_png(picture: &image::RgbImage) -> Result<Vec<u8>, image::Image
 /// Writes a grey image whole or not at all, in the format of the path's
 /// extension (JPEG at `jpeg_quality`).
 #[cfg(feature = "files")]
-pub fn save_image(path: &Path, image: &GrayImage, jpeg_quality: u8) -> Result<()> {
-    crate::io::write_atomic(path, &encode_image(path, image, jpeg_quality)?)
+pub fn save_image(path: &Path, image: &GrayImage, jpeg_quality: u8) -> Result<(), ImageWriteError> {
+    Ok(crate::io::write_atomic(
+        path,
+        &encode_image(path, image, jpeg_quality)?,
+    )?)
 }
 
 /// The bytes [`save_image`] writes: `image` in the format `path`'s
 /// extension names, for writing together with other files.
-pub fn encode_image(path: &Path, image: &GrayImage, jpeg_quality: u8) -> Result<Vec<u8>> {
+pub fn encode_image(
+    path: &Path,
+    image: &GrayImage,
+    jpeg_quality: u8,
+) -> Result<Vec<u8>, ImageWriteError> {
     use image::ImageEncoder;
     let format = ImageFormat::from_path(path)?;
     let (w, h) = image.dimensions();
@@ -311,7 +284,10 @@ pub fn encode_image(path: &Path, image: &GrayImage, jpeg_quality: u8) -> Result<
             colour,
         ),
     };
-    result.map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", path.display()))?;
+    result.map_err(|source| ImageWriteError::Encode {
+        path: path.to_path_buf(),
+        source,
+    })?;
     Ok(bytes)
 }
 
@@ -367,8 +343,8 @@ mod tests {
         let bytes = png_bytes(&GrayImage::new(30, 20));
         let err = decode_gray(Path::new("wide.png"), &bytes, small).unwrap_err();
         assert!(matches!(
-            err,
-            ImageError::TooLarge {
+            err.problem,
+            LoadProblem::TooLarge {
                 width: 30,
                 height: 20,
                 ..
@@ -382,8 +358,17 @@ mod tests {
         image::codecs::jpeg::JpegEncoder::new(&mut jpeg)
             .encode_image(&GrayImage::new(64, 64))
             .unwrap();
+        let err =
+            decode_gray(Path::new("empty.pgm"), b"P5\n0 0\n255\n", SizeLimit::FILES).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "empty.pgm: image of 0x0 pixels holds nothing"
+        );
         jpeg.truncate(jpeg.len() - 2);
         let err = decode_gray(Path::new("cut.jpg"), &jpeg, SizeLimit::FILES).unwrap_err();
-        assert!(matches!(err, ImageError::TruncatedJpeg { .. }), "{err}");
+        assert_eq!(
+            err.to_string(),
+            "cut.jpg: JPEG file is truncated (no end-of-image marker after its image data)"
+        );
     }
 }

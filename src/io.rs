@@ -11,7 +11,7 @@
 //! the command line's handler, after `kill -9` by the next write into the
 //! same folder).
 
-use anyhow::{bail, Context, Result};
+use crate::error::WriteError;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -79,7 +79,7 @@ impl Drop for Staged {
 /// every path a command reads and every path it would write, derived names
 /// (the manifest beside a sheet, the ground truth beside an image)
 /// included.
-pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<()> {
+pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), WriteError> {
     let read: Vec<(PathBuf, &Path)> = inputs
         .iter()
         .filter_map(|p| std::fs::canonicalize(p).ok().map(|c| (c, *p)))
@@ -88,17 +88,15 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<()> {
     for &output in outputs {
         let real = real_path(output);
         if let Some((_, input)) = read.iter().find(|(c, _)| *c == real) {
-            bail!(
-                "{}: would overwrite {}, which this command reads; write the output elsewhere",
-                output.display(),
-                input.display()
-            );
+            return Err(WriteError::WouldOverwriteInput {
+                output: output.to_path_buf(),
+                input: input.to_path_buf(),
+            });
         }
         if written.contains(&real) {
-            bail!(
-                "{}: two outputs of this command would land in the same file",
-                output.display()
-            );
+            return Err(WriteError::SameFileTwice {
+                output: output.to_path_buf(),
+            });
         }
         written.push(real);
     }
@@ -155,8 +153,8 @@ fn sweep_stale(dir: &Path) {
 
 /// Writes a file through a temporary file in the same folder and a rename,
 /// so that a failure never leaves a partial file under `path`.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    write_atomic_with(path, |w| w.write_all(bytes).map_err(Into::into))
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+    write_atomic_with(path, |w| w.write_all(bytes))
 }
 
 /// Like [`write_atomic`], with the content produced by a writer callback.
@@ -167,24 +165,21 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// in memory first and then written to it in one go.
 pub fn write_atomic_with(
     path: &Path,
-    produce: impl FnOnce(&mut dyn Write) -> Result<()>,
-) -> Result<()> {
-    let fail = || format!("cannot write {}", path.display());
+    produce: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), WriteError> {
+    let fail = |e| WriteError::io(path, without_temp_path(e));
     match destination(path)? {
         Destination::Special(target) => {
             let mut bytes = Vec::new();
-            produce(&mut bytes).with_context(fail)?;
+            produce(&mut bytes).map_err(fail)?;
             write_in_place(path, &target, &bytes)
         }
         Destination::Regular(target) => {
             let mut tmp = stage_beside(path, &target)?;
             {
                 let mut buffered = std::io::BufWriter::new(tmp.file());
-                produce(&mut buffered).with_context(fail)?;
-                buffered
-                    .flush()
-                    .map_err(without_temp_path)
-                    .with_context(fail)?;
+                produce(&mut buffered).map_err(fail)?;
+                buffered.flush().map_err(fail)?;
             }
             commit(path, &target, tmp)
         }
@@ -195,7 +190,7 @@ pub fn write_atomic_with(
 /// its target, and only when all are staged are they renamed into place. A
 /// failure while staging (a full disk, a missing folder) or while writing
 /// to a device leaves every regular target as it was, old outputs included.
-pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
+pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<(), WriteError> {
     let mut staged = Vec::with_capacity(files.len());
     let mut in_place = Vec::new();
     for (path, bytes) in files {
@@ -206,8 +201,7 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
                 let file = tmp.file();
                 file.write_all(bytes)
                     .and_then(|()| file.flush())
-                    .map_err(without_temp_path)
-                    .with_context(|| format!("cannot write {}", path.display()))?;
+                    .map_err(|e| WriteError::io(path, without_temp_path(e)))?;
                 staged.push((path, target, tmp));
             }
         }
@@ -218,10 +212,45 @@ pub fn write_all_atomic(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
     for (path, target, bytes) in in_place {
         write_in_place(path, &target, bytes)?;
     }
+    let _locks = lock_folders(&staged)?;
     for (path, target, tmp) in staged {
         commit(path, &target, tmp)?;
     }
     Ok(())
+}
+
+/// Exclusive locks on the folders a set of staged files is renamed into,
+/// held until dropped: two runs writing the same set at once (four
+/// `simulate`s with one `-o`) then leave one run's files whole, never one
+/// run's image beside another's ground truth. Taken in path order, so two
+/// runs never wait for each other's second folder.
+fn lock_folders(staged: &[(&PathBuf, PathBuf, Staged)]) -> Result<Vec<std::fs::File>, WriteError> {
+    if staged.len() < 2 {
+        return Ok(Vec::new());
+    }
+    let mut folders: Vec<(PathBuf, &Path)> = staged
+        .iter()
+        .map(|(path, target, _)| {
+            let dir = match target.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p,
+                _ => Path::new("."),
+            };
+            (
+                std::fs::canonicalize(dir).unwrap_or_else(|_| dir.to_path_buf()),
+                path.as_path(),
+            )
+        })
+        .collect();
+    folders.sort();
+    folders.dedup_by(|a, b| a.0 == b.0);
+    folders
+        .into_iter()
+        .map(|(dir, path)| {
+            let folder = std::fs::File::open(&dir).map_err(|e| WriteError::io(path, e))?;
+            folder.lock().map_err(|e| WriteError::io(path, e))?;
+            Ok(folder)
+        })
+        .collect()
 }
 
 /// Output files for annotated copies of `inputs`, one per distinct input,
@@ -264,30 +293,31 @@ enum Destination {
     Regular(PathBuf),
 }
 
-fn destination(path: &Path) -> Result<Destination> {
+fn destination(path: &Path) -> Result<Destination, WriteError> {
     let target = resolve_links(path);
     match std::fs::metadata(&target) {
-        Ok(meta) if meta.is_dir() => bail!("cannot write {}: it is a folder", path.display()),
+        Ok(meta) if meta.is_dir() => Err(WriteError::IsAFolder {
+            path: path.to_path_buf(),
+        }),
         Ok(meta) if !meta.is_file() => Ok(Destination::Special(target)),
         _ => Ok(Destination::Regular(target)),
     }
 }
 
-fn write_in_place(path: &Path, target: &Path, bytes: &[u8]) -> Result<()> {
+fn write_in_place(path: &Path, target: &Path, bytes: &[u8]) -> Result<(), WriteError> {
+    let fail = |e| WriteError::io(path, without_temp_path(e));
     let mut file = std::fs::OpenOptions::new()
         .write(true)
         .open(target)
-        .map_err(without_temp_path)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+        .map_err(fail)?;
     file.write_all(bytes)
         .and_then(|()| file.flush())
-        .map_err(without_temp_path)
-        .with_context(|| format!("cannot write {}", path.display()))
+        .map_err(fail)
 }
 
 /// Fails early, before any work, when the output's folder is missing or is
 /// not a folder at all (a path under a regular file).
-pub fn check_output_dir(path: &Path) -> Result<()> {
+pub fn check_output_dir(path: &Path) -> Result<(), WriteError> {
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -298,29 +328,27 @@ pub fn check_output_dir(path: &Path) -> Result<()> {
     }
 }
 
-fn folder_problem(path: &Path, dir: &Path) -> Option<anyhow::Error> {
+fn folder_problem(path: &Path, dir: &Path) -> Option<WriteError> {
     if dir.is_dir() {
         return None;
     }
     // The nearest existing ancestor tells a missing folder from a file in the way.
     let blocker = dir.ancestors().find(|a| a.exists() && !a.is_dir());
     Some(match blocker {
-        Some(file) => anyhow::anyhow!(
-            "cannot write {}: {} is a file, not a folder",
-            path.display(),
-            file.display()
-        ),
-        None => anyhow::anyhow!(
-            "cannot write {}: folder {} does not exist",
-            path.display(),
-            dir.display()
-        ),
+        Some(file) => WriteError::FileInTheWay {
+            path: path.to_path_buf(),
+            file: file.to_path_buf(),
+        },
+        None => WriteError::NoFolder {
+            path: path.to_path_buf(),
+            dir: dir.to_path_buf(),
+        },
     })
 }
 
 /// A temporary file in the target's folder, so that the final rename stays
 /// on one file system and is atomic.
-fn stage_beside(path: &Path, target: &Path) -> Result<Staged> {
+fn stage_beside(path: &Path, target: &Path) -> Result<Staged, WriteError> {
     let dir = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -340,32 +368,24 @@ fn stage_beside(path: &Path, target: &Path) -> Result<Staged> {
     }
     let tmp = builder
         .tempfile_in(dir)
-        .map_err(without_temp_path)
-        .with_context(|| format!("cannot write {}", path.display()))?;
+        .map_err(|e| WriteError::io(path, without_temp_path(e)))?;
     Ok(Staged::new(tmp))
 }
 
-fn commit(path: &Path, target: &Path, mut staged: Staged) -> Result<()> {
-    let fail = || format!("cannot write {}", path.display());
+fn commit(path: &Path, target: &Path, mut staged: Staged) -> Result<(), WriteError> {
+    let fail = |e| WriteError::io(path, without_temp_path(e));
     // A file replaced keeps its permissions (a shared 0666 log stays shared).
     if let Ok(old) = std::fs::metadata(target) {
         staged
             .file()
             .set_permissions(old.permissions())
-            .map_err(without_temp_path)
-            .with_context(fail)?;
+            .map_err(fail)?;
     }
     // On disk before the rename: after a crash the name holds the old
     // content or the new, not an empty file.
-    staged
-        .file()
-        .sync_all()
-        .map_err(without_temp_path)
-        .with_context(fail)?;
+    staged.file().sync_all().map_err(fail)?;
     let tmp = staged.tmp.take().expect("committed once");
-    tmp.persist(target)
-        .map_err(|e| without_temp_path(e.error))
-        .with_context(fail)?;
+    tmp.persist(target).map_err(|e| fail(e.error))?;
     Ok(())
 }
 
@@ -402,6 +422,36 @@ fn without_temp_path(err: std::io::Error) -> std::io::Error {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn concurrent_writers_of_one_set_leave_one_writers_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let (image, truth) = (dir.path().join("view.png"), dir.path().join("view.json"));
+        for round in 0..40 {
+            let barrier = std::sync::Barrier::new(4);
+            std::thread::scope(|scope| {
+                for writer in 0..4u8 {
+                    let (image, truth, barrier) = (&image, &truth, &barrier);
+                    scope.spawn(move || {
+                        // Large enough that staging and renaming overlap.
+                        let bytes = vec![writer; 256 * 1024];
+                        barrier.wait();
+                        write_all_atomic(&[(image.clone(), bytes.clone()), (truth.clone(), bytes)])
+                            .unwrap();
+                    });
+                }
+            });
+            let (a, b) = (
+                std::fs::read(&image).unwrap(),
+                std::fs::read(&truth).unwrap(),
+            );
+            assert_eq!(
+                a[0], b[0],
+                "round {round}: image of writer {}, truth of writer {}",
+                a[0], b[0]
+            );
+        }
+    }
 
     #[test]
     fn symlink_is_followed_and_kept() {

@@ -67,13 +67,14 @@ pub mod spec;
 pub mod units;
 pub mod validate;
 
-pub use camera::{Camera, CameraError};
+pub use camera::{Camera, OtherCamera};
 pub use detect::report::FrameReport;
 pub use detect::{Detection, Detector, DetectorConfig, Target};
-pub use family::{Decoded, Decoder, Family, FamilyError, FamilyFileError, MatchStatus};
+pub use error::{FileKind, LoadError, LoadProblem, WriteError};
+pub use family::{Decoded, Decoder, Family, FamilyError, MatchStatus};
 pub use geometry::{Design, Marker, MarkerKind};
-pub use image_io::{decode_gray, load_gray, ImageError};
-pub use manifest::{Manifest, ManifestError};
+pub use image_io::{decode_gray, load_gray};
+pub use manifest::Manifest;
 pub use math::Ellipse;
 pub use pose::Pose;
 pub use render::{Format, MarkerOptions, Sheet, SheetMarker, SheetSpec, Template};

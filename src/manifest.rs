@@ -3,51 +3,9 @@
 //! out a photographed sheet from it and `validate` reads it to know which
 //! marker should be where.
 
+use crate::error::{FileKind, LoadError, LoadProblem};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-
-/// Why a manifest could not be used. Each message is one line that starts
-/// with the file's name (or says which file it could not read).
-#[derive(Debug, thiserror::Error)]
-pub enum ManifestError {
-    /// The file could not be read.
-    #[error("cannot read manifest {name}: {source}")]
-    Io {
-        /// The file's name.
-        name: String,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
-    /// The text is not JSON of a manifest's shape.
-    #[error("{name} is not a whycode sheet manifest: {source}")]
-    Json {
-        /// The file's name.
-        name: String,
-        /// What the JSON parser said.
-        #[source]
-        source: serde_json::Error,
-    },
-    /// Written by a newer whycode than this one.
-    #[error(
-        "{name}: manifest version {version} is newer than this tool reads ({MANIFEST_VERSION})"
-    )]
-    TooNew {
-        /// The file's name.
-        name: String,
-        /// The version the file declares.
-        version: u32,
-    },
-    /// Well-formed, but its content breaks what validation relies on
-    /// (no markers, a marker off its page, an ID listed twice, ...).
-    #[error("{name}: {problem}")]
-    Invalid {
-        /// The file's name.
-        name: String,
-        /// What is wrong, in words.
-        problem: String,
-    },
-}
 
 /// Current manifest format version.
 pub const MANIFEST_VERSION: u32 = 1;
@@ -113,33 +71,31 @@ fn version_one() -> u32 {
 
 impl Manifest {
     /// Reads and checks a manifest file; errors name the file.
-    pub fn load(path: &Path) -> Result<Manifest, ManifestError> {
-        let name = path.display().to_string();
-        let text = match std::fs::read_to_string(path) {
-            Ok(text) => text,
-            Err(source) => return Err(ManifestError::Io { name, source }),
-        };
-        Manifest::from_json(&name, &text)
+    pub fn load(path: &Path) -> Result<Manifest, LoadError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| LoadError::read(path, FileKind::Manifest, e))?;
+        Manifest::from_json(&path.display().to_string(), &text)
     }
 
     /// Parses and checks a manifest's text; `name` (the file's name) starts
     /// every error message. For callers without files, such as the browser.
-    pub fn from_json(name: &str, text: &str) -> Result<Manifest, ManifestError> {
-        let manifest: Manifest =
-            serde_json::from_str(text).map_err(|source| ManifestError::Json {
-                name: name.to_string(),
-                source,
-            })?;
+    pub fn from_json(name: &str, text: &str) -> Result<Manifest, LoadError> {
+        let invalid = |problem| {
+            LoadError::new(
+                Path::new(name),
+                FileKind::Manifest,
+                LoadProblem::Invalid(problem),
+            )
+        };
+        let manifest: Manifest = serde_json::from_str(text)
+            .map_err(|e| invalid(format!("not a whycode sheet manifest: {e}")))?;
         if manifest.version > MANIFEST_VERSION {
-            return Err(ManifestError::TooNew {
-                name: name.to_string(),
-                version: manifest.version,
-            });
+            return Err(invalid(format!(
+                "manifest version {} is newer than this tool reads ({MANIFEST_VERSION})",
+                manifest.version
+            )));
         }
-        manifest.check().map_err(|problem| ManifestError::Invalid {
-            name: name.to_string(),
-            problem,
-        })?;
+        manifest.check().map_err(invalid)?;
         Ok(manifest)
     }
 
@@ -302,7 +258,7 @@ impl Manifest {
 
     #[cfg(feature = "files")]
     /// Writes the manifest whole or not at all.
-    pub fn save(&self, path: &Path) -> anyhow::Result<()> {
+    pub fn save(&self, path: &Path) -> Result<(), crate::error::WriteError> {
         crate::io::write_atomic(path, self.to_json().as_bytes())
     }
 }

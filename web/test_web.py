@@ -287,7 +287,7 @@ class Tests:
         self.cli("sheet", "--bits", 8, "--distance", 2, "--ids", "1-4", "--diameter", "40mm", "-o", "small.pdf")
         cases = [
             ("small.json", ["notes.png"], "notes.png: not an image"),
-            ("family.json", ["notes.png"], "family.json is not a whycode sheet manifest"),
+            ("family.json", ["notes.png"], "family.json: not a whycode sheet manifest"),
             ("small.json", ["wide.png"], "wide.png: image of 13000x40 pixels is larger than the supported 12000 px a side and 60 megapixels"),
             ("small.json", ["huge.png"], "huge.png: image of 9000x7500 pixels is larger than the supported 12000 px a side and 60 megapixels"),
         ]

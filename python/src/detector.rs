@@ -6,7 +6,7 @@ use crate::{guard, Error};
 use pyo3::prelude::*;
 use std::sync::Mutex;
 use whycode::detect::report::FrameReport;
-use whycode::detect::{Detection, Detector, DetectorConfig, Target};
+use whycode::detect::{Detection, Detector, DetectorConfig, StageTimings, Target};
 use whycode::spec::{DetectSpec, TargetSpec};
 
 /// Finds WhyCode markers (or legacy WhyCon circles) in frames.
@@ -22,6 +22,8 @@ pub struct PyDetector {
     /// Idle workers (without tracking), or the one tracking detector.
     idle: Mutex<Vec<Detector>>,
     tracking_state: Mutex<Option<Detector>>,
+    /// The stage timings of the frame detected last (with `timings=True`).
+    last_timings: Mutex<Option<StageTimings>>,
 }
 
 impl PyDetector {
@@ -35,17 +37,25 @@ impl PyDetector {
             // A panic below leaves `state` empty, never half-updated.
             let mut taken = std::mem::replace(detector, self.fresh.clone());
             let found = taken.detect(view);
+            self.keep_timings(&taken);
             *detector = taken;
             found
         } else {
             let worker = self.idle.lock().unwrap_or_else(|p| p.into_inner()).pop();
             let mut worker = worker.unwrap_or_else(|| self.fresh.clone());
             let found = worker.detect(view);
+            self.keep_timings(&worker);
             self.idle
                 .lock()
                 .unwrap_or_else(|p| p.into_inner())
                 .push(worker);
             found
+        }
+    }
+
+    fn keep_timings(&self, detector: &Detector) {
+        if self.config.timings {
+            *self.last_timings.lock().unwrap_or_else(|p| p.into_inner()) = detector.last_timings();
         }
     }
 }
@@ -55,9 +65,10 @@ impl PyDetector {
     /// `family`: a Family, or None for legacy WhyCon markers (no ID ring);
     /// default Family(8, 2). `diameter` (metres, or text like "122mm") and
     /// `camera` together give each marker a pose. `tracking` follows markers
-    /// from frame to frame (calls are then one sequence).
+    /// from frame to frame (calls are then one sequence). `timings` times
+    /// each stage of every frame (see `last_timings()`).
     #[new]
-    #[pyo3(signature = (family = None, *, legacy = false, diameter = None, camera = None, tracking = false, max_markers = None))]
+    #[pyo3(signature = (family = None, *, legacy = false, diameter = None, camera = None, tracking = false, max_markers = None, timings = false))]
     fn new(
         family: Option<PyRef<'_, PyFamily>>,
         legacy: bool,
@@ -65,6 +76,7 @@ impl PyDetector {
         camera: Option<PyRef<'_, PyCamera>>,
         tracking: bool,
         max_markers: Option<usize>,
+        timings: bool,
     ) -> PyResult<PyDetector> {
         let spec = DetectSpec {
             target: match family {
@@ -76,6 +88,7 @@ impl PyDetector {
             camera: camera.map(|c| c.camera),
             max_markers,
             tracking,
+            timings,
             ..DetectSpec::default()
         };
         if legacy && spec.target.family.is_some() {
@@ -90,13 +103,22 @@ impl PyDetector {
             fresh,
             idle: Mutex::new(Vec::new()),
             tracking_state: Mutex::new(None),
+            last_timings: Mutex::new(None),
         })
     }
 
     /// Finds the markers in one frame: a numpy array, uint8 or uint16, HxW
     /// grey, HxWx3 BGR or HxWx4 BGRA. The GIL is released meanwhile.
     fn detect(&self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<Vec<PyMarker>> {
-        let found = crate::pixels::with_gray(py, image, |view| Ok(self.run(view)))?;
+        let found = crate::pixels::with_gray(py, image, |view| {
+            // The detector rescales a calibration made for another
+            // resolution of the same sensor by itself; another aspect ratio
+            // is another camera, refused here rather than left without pose.
+            if let Some(camera) = self.config.camera {
+                camera.for_image(view.width(), view.height())?;
+            }
+            Ok(self.run(view))
+        })?;
         Ok(found.into_iter().map(PyMarker::from).collect())
     }
 
@@ -120,6 +142,19 @@ impl PyDetector {
             times.sort_by(f64::total_cmp);
             Ok(times[times.len() / 2])
         })
+    }
+
+    /// How long each stage of the detector took on the frame detected
+    /// last, as `whycode detect --timings` prints it in JSON:
+    /// `{"frames": 1, "total_ms": ..., "stages_ms": {"prepare": ..., ...}}`.
+    /// None without `timings=True` or before the first frame.
+    fn last_timings<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyAny>>> {
+        let last = *self.last_timings.lock().unwrap_or_else(|p| p.into_inner());
+        last.map(|t| {
+            let text = serde_json::to_string(&t).expect("timings serialise");
+            crate::json_to_py(py, &text)
+        })
+        .transpose()
     }
 
     /// Forgets tracks and adapted tolerances.
@@ -215,6 +250,18 @@ impl PyMarker {
     fn axes(&self) -> (f64, f64) {
         (self.detection.axes[0], self.detection.axes[1])
     }
+    /// Direction of the outer ellipse's major axis, radians, atan2(dv, du):
+    /// with `u, v` and `axes`, what `cv2.ellipse` needs (in degrees).
+    #[getter]
+    fn angle(&self) -> f64 {
+        self.detection.angle
+    }
+    /// The ring's bit count as the ring itself shows it (None where its
+    /// sectors are too fine to count, or for a legacy circle).
+    #[getter]
+    fn bits(&self) -> Option<u32> {
+        self.detection.bits
+    }
     #[getter]
     fn confidence(&self) -> f64 {
         self.detection.confidence
@@ -236,6 +283,21 @@ impl PyMarker {
                 .collect();
             numpy::PyArray2::from_vec2(py, &rows).expect("3x3")
         })
+    }
+    /// The rotation as OpenCV's Rodrigues vector (axis times angle,
+    /// radians), as `cv2.solvePnP` returns it (None without a pose).
+    #[getter]
+    fn rvec<'py>(&self, py: Python<'py>) -> Option<Bound<'py, numpy::PyArray1<f64>>> {
+        self.detection
+            .pose
+            .as_ref()
+            .map(|p| numpy::PyArray1::from_slice(py, p.rotation_vector().as_slice()))
+    }
+    /// The marker centre in the camera frame, metres: OpenCV's `tvec`, the
+    /// same values as `position` (None without a pose).
+    #[getter]
+    fn tvec<'py>(&self, py: Python<'py>) -> Option<Bound<'py, numpy::PyArray1<f64>>> {
+        self.position(py)
     }
     /// The rotation as a quaternion (x, y, z, w) (None without a pose).
     #[getter]
@@ -261,6 +323,7 @@ impl PyMarker {
             elapsed_ms: 0.0,
             markers: vec![self.detection.clone()],
             boards: Vec::new(),
+            timings: None,
         };
         crate::json_to_py(py, &frame.to_json())?
             .get_item("markers")?
@@ -283,7 +346,30 @@ impl PyMarker {
     }
 }
 
+/// The markers drawn over the image as `whycode detect --annotate` draws
+/// them (outer ellipse, ID, +x axis): a new HxWx3 uint8 array in BGR order,
+/// OpenCV's. An 8-bit BGR or BGRA image keeps its colours; grey and 16-bit
+/// images are drawn over their grey.
+#[pyfunction]
+fn draw<'py>(
+    py: Python<'py>,
+    image: &Bound<'py, PyAny>,
+    markers: Vec<PyRef<'py, PyMarker>>,
+) -> PyResult<Bound<'py, numpy::PyArray3<u8>>> {
+    use whycode::detect::annotate::{annotated_rgb, drawn_over};
+    let detections: Vec<Detection> = markers.iter().map(|m| m.detection.clone()).collect();
+    let picture = match crate::pixels::colour_image(image)? {
+        Some(colour) => py.detach(|| guard(|| Ok(drawn_over(&colour, &detections)?)))?,
+        None => {
+            let grey = crate::pixels::gray_image(py, image)?;
+            py.detach(|| guard(|| Ok(annotated_rgb(&grey, &detections)?)))?
+        }
+    };
+    crate::pixels::bgr_to_array(py, picture)
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(draw, m)?)?;
     m.add_class::<PyDetector>()?;
     m.add_class::<PyMarker>()?;
     m.add_function(wrap_pyfunction!(crate::pixels::load_image, m)?)?;

@@ -34,24 +34,59 @@ impl Error {
     pub(crate) fn value(message: impl Into<String>) -> Error {
         Error::Value(message.into())
     }
-
-    /// A file-system problem the library reports without an `io::Error`
-    /// (a missing output folder).
-    pub(crate) fn os(err: anyhow::Error) -> Error {
-        Error::Os(one_line(&err))
-    }
 }
 
-impl From<anyhow::Error> for Error {
-    fn from(err: anyhow::Error) -> Error {
-        let message = one_line(&err);
-        if err.chain().any(|c| c.is::<std::io::Error>()) {
-            Error::Os(message)
+/// The message every front end shows for `err`.
+fn message(err: &(dyn std::error::Error + 'static)) -> String {
+    whycode::error::one_line(err)
+}
+
+impl From<whycode::LoadError> for Error {
+    fn from(err: whycode::LoadError) -> Error {
+        if err.is_io() {
+            Error::Os(message(&err))
         } else {
-            Error::Value(message)
+            Error::Value(message(&err))
         }
     }
 }
+
+impl From<whycode::WriteError> for Error {
+    fn from(err: whycode::WriteError) -> Error {
+        use whycode::WriteError::*;
+        match err {
+            // Asked to write over its own input: the arguments are wrong.
+            WouldOverwriteInput { .. } | SameFileTwice { .. } => Error::Value(message(&err)),
+            _ => Error::Os(message(&err)),
+        }
+    }
+}
+
+impl From<whycode::image_io::ImageWriteError> for Error {
+    fn from(err: whycode::image_io::ImageWriteError) -> Error {
+        match err {
+            whycode::image_io::ImageWriteError::Write(err) => err.into(),
+            other => Error::Value(message(&other)),
+        }
+    }
+}
+
+/// Errors that are always about the values given, never the file system.
+macro_rules! value_errors {
+    ($($t:ty),*) => {$(
+        impl From<$t> for Error {
+            fn from(err: $t) -> Error {
+                Error::Value(message(&err))
+            }
+        }
+    )*};
+}
+value_errors!(
+    whycode::render::RenderError,
+    whycode::validate::UnvalidatableSheet,
+    whycode::OtherCamera,
+    whycode::family::FamilyError
+);
 
 /// A library spec's error in Python's words: the keyword as it is spelled
 /// here (`camera_distance: ...`); a file that could not be read is an
@@ -69,14 +104,13 @@ impl From<whycode::render::job::PrintError> for Error {
     fn from(err: whycode::render::job::PrintError) -> Error {
         match err {
             whycode::render::job::PrintError::Option(err) => spec_error(err),
+            whycode::render::job::PrintError::Render(
+                err @ whycode::render::RenderError::SelfCheck { .. },
+            ) => Error::Value(format!(
+                "{err} (nothing written; check=False skips the check)"
+            )),
             whycode::render::job::PrintError::Render(err) => err.into(),
         }
-    }
-}
-
-impl From<whycode::family::FamilyError> for Error {
-    fn from(err: whycode::family::FamilyError) -> Error {
-        Error::Value(err.to_string())
     }
 }
 
@@ -97,8 +131,6 @@ impl From<Error> for PyErr {
 }
 
 pub(crate) type Result<T> = std::result::Result<T, Error>;
-
-use whycode::error::one_line;
 
 /// Runs `f`, turning a panic into an error: a Python caller must never lose
 /// its interpreter to a bug here.
@@ -205,21 +237,3 @@ fn _whycode(m: &Bound<'_, PyModule>) -> PyResult<()> {
     simulate::register(m)?;
     Ok(())
 }
-
-/// The library's typed load errors go the anyhow way: an I/O cause makes an
-/// OSError, anything else a ValueError, with the same one-line message.
-macro_rules! from_library_error {
-    ($($t:ty),*) => {$(
-        impl From<$t> for Error {
-            fn from(err: $t) -> Error {
-                Error::from(anyhow::Error::from(err))
-            }
-        }
-    )*};
-}
-from_library_error!(
-    whycode::CameraError,
-    whycode::FamilyFileError,
-    whycode::ImageError,
-    whycode::ManifestError
-);

@@ -198,13 +198,39 @@ pub(crate) fn to_array<'py>(
     numpy::PyArray1::from_vec(py, image.into_raw()).reshape([h, w])
 }
 
-/// An RGB image as a new HxWx3 uint8 array (RGB order, as matplotlib shows it).
-pub(crate) fn rgb_to_array<'py>(
+/// A colour picture as a new HxWx3 uint8 array in BGR order: what the
+/// arrays this module takes hold, and what OpenCV shows and writes.
+pub(crate) fn bgr_to_array<'py>(
     py: Python<'py>,
-    image: image::RgbImage,
+    picture: image::RgbImage,
 ) -> PyResult<Bound<'py, numpy::PyArray3<u8>>> {
-    let (w, h) = (image.width() as usize, image.height() as usize);
-    numpy::PyArray1::from_vec(py, image.into_raw()).reshape([h, w, 3])
+    let (w, h) = (picture.width() as usize, picture.height() as usize);
+    let mut data = picture.into_raw();
+    for pixel in data.chunks_exact_mut(3) {
+        pixel.swap(0, 2);
+    }
+    numpy::PyArray1::from_vec(py, data).reshape([h, w, 3])
+}
+
+/// The colours of an 8-bit HxWx3 BGR or HxWx4 BGRA array, as RGB; None for
+/// grey and 16-bit arrays (drawn over their grey).
+pub(crate) fn colour_image(image: &Bound<'_, PyAny>) -> PyResult<Option<image::RgbImage>> {
+    let Ok(array) = image.cast::<PyUntypedArray>() else {
+        return Ok(None);
+    };
+    let layout = layout(array)?;
+    if layout.depth != Depth::U8 || layout.channels < 3 {
+        return Ok(None);
+    }
+    let values: PyReadonlyArray3<'_, u8> = array
+        .extract()
+        .map_err(|e| Error::value(PyErr::from(e).to_string()))?;
+    let view = values.as_array();
+    let mut rgb = Vec::with_capacity(layout.width as usize * layout.height as usize * 3);
+    for pixel in view.rows() {
+        rgb.extend_from_slice(&[pixel[2], pixel[1], pixel[0]]);
+    }
+    Ok(image::RgbImage::from_raw(layout.width, layout.height, rgb))
 }
 
 /// Reads an image file into the HxW uint8 grey array the CLI's own loader

@@ -110,7 +110,7 @@ fn render_marker<'py>(
     let bytes = py.detach(|| {
         guard(|| {
             if let Some(path) = &output {
-                whycode::render::check_output_dir(path).map_err(crate::Error::os)?;
+                whycode::render::check_output_dir(path)?;
             }
             if let Some(family) = &family {
                 check_generated(family)?;
@@ -184,7 +184,7 @@ fn render_sheet<'py>(
     let (files, manifest) = py.detach(|| {
         guard(|| {
             if let Some(path) = &output {
-                whycode::render::check_output_dir(path).map_err(crate::Error::os)?;
+                whycode::render::check_output_dir(path)?;
             }
             let template = Template::resolve(&template)?;
             if let Some(family) = &family {
@@ -250,7 +250,7 @@ fn render_marker_image<'py>(
                 id.ok_or_else(|| Error::value("render_marker_image needs an id (or legacy=True)"))?;
             let code = family
                 .code(id)
-                .ok_or_else(|| Error::value(id_range_error(&family, id)))?;
+                .ok_or_else(|| Error::value(id_range_error(&family, id).to_string()))?;
             Marker::whycode(family.bits(), code, diameter_px / 10.0)
         }
     };

@@ -10,7 +10,8 @@ use whycode::manifest::Manifest;
 /// `images` holds paths (read by the CLI's loader) or numpy arrays (named
 /// "image1", "image2", ... in the report). Returns the report as
 /// `whycode validate --format json` prints it; with `annotate=True`,
-/// `(report, [annotated RGB array per photo])`.
+/// `(report, [annotated BGR array per photo])` (OpenCV's order, as the
+/// arrays taken).
 #[pyfunction(name = "validate")]
 #[pyo3(signature = (manifest, images, camera = None, *, annotate = false))]
 fn validate_photos<'py>(
@@ -28,7 +29,7 @@ fn validate_photos<'py>(
         guard(|| {
             let data = Manifest::load(&manifest)?;
             let detector = whycode::validate::detector_for(&data)
-                .map_err(|e| Error::from(e.context(manifest.display().to_string())))?;
+                .map_err(|e| Error::value(format!("{}: {e}", manifest.display())))?;
             Ok((data, detector))
         })
     })?;
@@ -74,7 +75,7 @@ fn validate_photos<'py>(
     if annotate {
         let arrays = pictures
             .into_iter()
-            .map(|p| crate::pixels::rgb_to_array(py, p).map(Bound::into_any))
+            .map(|p| crate::pixels::bgr_to_array(py, p).map(Bound::into_any))
             .collect::<PyResult<Vec<_>>>()?;
         Ok((report, arrays).into_pyobject(py)?.into_any())
     } else {

@@ -106,3 +106,81 @@ def test_render_marker_image_is_detected() -> None:
         assert abs(2 * marker.axes[0] - 80) < 2
     [legacy] = whycode.Detector(legacy=True).detect(whycode.render_marker_image(legacy=True))
     assert legacy.id == 0 and legacy.yaw is None
+
+
+def test_timings_give_each_stage_of_the_last_frame(grey: np.ndarray,
+                                                    reference: list) -> None:
+    assert whycode.Detector().last_timings() is None
+    detector = whycode.Detector(timings=True)
+    assert detector.last_timings() is None
+    assert [m.as_dict() for m in detector.detect(grey)] == reference
+    timings = detector.last_timings()
+    assert timings is not None and timings["frames"] == 1
+    stages = timings["stages_ms"]
+    assert list(stages) == ["prepare", "follow", "threshold", "scan", "shade", "fallback",
+                            "describe", "pose", "finish"]
+    assert all(ms >= 0 for ms in stages.values())
+    assert abs(sum(stages.values()) - timings["total_ms"]) < 1e-3  # each rounded to 0.1 us
+    assert timings["total_ms"] > 0
+
+
+def test_a_calibration_for_another_resolution_is_rescaled_or_refused() -> None:
+    small = whycode.Camera.ideal(640, 360, 70.0)
+    image, truth = whycode.simulate(ids=range(1, 5), diameter=0.05, camera=small,
+                                    camera_distance=0.9, noise=2, seed=4)
+    assert image.shape == (360, 640)
+    # The same sensor calibrated at twice the resolution: the detector
+    # rescales it, and the poses are those of the calibration that fits.
+    full = whycode.Camera.ideal(1280, 720, 70.0)
+    direct = whycode.Detector(diameter="50mm", camera=small).detect(image)
+    rescaled = whycode.Detector(diameter="50mm", camera=full).detect(image)
+    assert len(direct) == 4 and len(rescaled) == 4
+    for a, b in zip(direct, rescaled):
+        assert a.position is not None and b.position is not None
+        assert np.allclose(a.position, b.position, atol=1e-6)
+        true = next(t for t in truth["markers"] if t["id"] == a.id)
+        assert abs(b.position[2] - true["position"][2]) < 0.01
+    # Another aspect ratio is another camera: refused, never a wrong pose.
+    other = whycode.Camera.ideal(1280, 960, 70.0)
+    with pytest.raises(ValueError, match="image is 640x360 but the camera calibration is for 1280x960"):
+        whycode.Detector(diameter="50mm", camera=other).detect(image)
+
+
+def rodrigues(rvec: np.ndarray) -> np.ndarray:
+    angle = float(np.linalg.norm(rvec))
+    k = rvec / angle
+    cross = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * cross + (1 - np.cos(angle)) * cross @ cross
+
+
+def test_markers_carry_what_opencv_users_draw_and_solve_with() -> None:
+    camera = whycode.Camera.ideal(640, 480, 60.0)
+    image, _ = whycode.simulate(ids=range(1, 4), diameter=0.05, camera=camera,
+                                camera_distance=0.6, tilt=25, noise=2, seed=5)
+    found = whycode.Detector(diameter="50mm", camera=camera).detect(image)
+    assert len(found) == 3
+    for m in found:
+        d = m.as_dict()
+        assert m.bits == d["bits"] == 8
+        assert -np.pi <= m.angle <= np.pi
+        assert m.rvec is not None and m.tvec is not None and m.rotation is not None
+        assert np.allclose(rodrigues(m.rvec), m.rotation, atol=1e-9)
+        assert np.array_equal(m.tvec, m.position)
+    assert [m.rvec for m in whycode.Detector().detect(image)] == [None] * 3
+
+
+def test_draw_returns_bgr_over_the_colours_given() -> None:
+    image, _ = whycode.simulate(ids=range(1, 4), size=(320, 240), camera_distance=0.5, seed=2)
+    markers = whycode.Detector().detect(image)
+    assert len(markers) == 3
+    drawn = whycode.draw(image, markers)
+    assert drawn.shape == (240, 320, 3) and drawn.dtype == np.uint8
+    untouched = np.all(drawn == image[:, :, None], axis=2)
+    assert 0 < np.count_nonzero(~untouched) < untouched.size // 4
+    # A BGR frame keeps its colours where nothing is drawn, in its order.
+    bgr = np.dstack([image, image // 2, image // 4])
+    over = whycode.draw(bgr, markers)
+    assert np.array_equal(over[untouched], bgr[untouched])
+    assert np.array_equal(whycode.draw(bgr, []), bgr)
+    # The known-ID outline is green in BGR order: (60, 200, 40) somewhere.
+    assert np.any(np.all(over == [60, 200, 40], axis=2))

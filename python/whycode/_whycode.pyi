@@ -133,6 +133,17 @@ class Marker:
     def rotation(self) -> Optional[npt.NDArray[np.float64]]: ...
     @property
     def quaternion(self) -> Optional[tuple[float, float, float, float]]: ...
+    @property
+    def rvec(self) -> Optional[npt.NDArray[np.float64]]:
+        """The rotation as OpenCV's Rodrigues vector (radians)."""
+    @property
+    def tvec(self) -> Optional[npt.NDArray[np.float64]]:
+        """OpenCV's translation: the marker centre in the camera frame, metres."""
+    @property
+    def angle(self) -> float:
+        """Direction of the outer ellipse's major axis, radians."""
+    @property
+    def bits(self) -> Optional[int]: ...
     def as_dict(self) -> dict[str, Any]:
         """The object ``whycode detect --format json`` prints for this marker."""
 
@@ -148,13 +159,19 @@ class Detector:
         camera: Optional[Camera] = None,
         tracking: bool = False,
         max_markers: Optional[int] = None,
+        timings: bool = False,
     ) -> None: ...
     def detect(self, image: ImageArray) -> list[Marker]: ...
+    def last_timings(self) -> Optional[dict[str, Any]]:
+        """Milliseconds per stage of the frame detected last (``timings=True``)."""
     def reset(self) -> None: ...
     @property
     def tracking(self) -> bool: ...
     @property
     def family(self) -> Optional[Family]: ...
+
+def draw(image: ImageArray, markers: Sequence[Marker]) -> npt.NDArray[np.uint8]:
+    """The markers drawn over the image: a new HxWx3 BGR array."""
 
 def load_image(path: StrPath) -> npt.NDArray[np.uint8]:
     """An image file as the HxW uint8 grey array the CLI's loader makes."""

@@ -1067,10 +1067,13 @@ impl Pipeline {
         };
         let owned = image::GrayImage::from_raw(gray.width(), gray.height(), gray.as_raw().to_vec())
             .expect("a whole image");
-        let drawn = whycode::detect::annotate::annotated_png(&owned, detections).and_then(|png| {
-            let rgb = image::load_from_memory_with_format(&png, image::ImageFormat::Png)?.to_rgb8();
-            Ok((png, rgb))
-        });
+        // Drawn once; the PNG is encoded from the same pixels, not decoded back.
+        let drawn = whycode::detect::annotate::annotated_rgb(&owned, detections)
+            .map_err(|e| e.to_string())
+            .and_then(|rgb| {
+                let png = whycode::image_io::encode_rgb_png(&rgb).map_err(|e| e.to_string())?;
+                Ok((png, rgb))
+            });
         let (png, rgb) = match drawn {
             Ok(drawn) => drawn,
             Err(e) => {

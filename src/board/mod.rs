@@ -12,13 +12,14 @@
 //! that disagree with the rest (a wrong ID, a moved marker) are left out
 //! and named.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use nalgebra::{DVector, Matrix3, Rotation3, UnitQuaternion, Vector3};
 use serde::Deserialize;
 
 use crate::camera::Camera;
 use crate::detect::Detection;
+use crate::error::{FileKind, LoadError, LoadProblem};
 use crate::family::MatchStatus;
 use crate::manifest::Manifest;
 use crate::math::least_squares::{levenberg_marquardt, numeric_jacobian};
@@ -43,28 +44,6 @@ pub struct Board {
     pub name: String,
     /// Its markers.
     pub markers: Vec<BoardMarker>,
-}
-
-/// Why a board file could not be used. One line, starting with the file.
-#[derive(Debug, thiserror::Error)]
-pub enum BoardError {
-    /// The file could not be read.
-    #[error("{}: cannot read board: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
-    /// Neither a sheet manifest nor a bundle, or a bundle with impossible values.
-    #[error("{}: {problem}", path.display())]
-    Invalid {
-        /// The file.
-        path: PathBuf,
-        /// What is wrong.
-        problem: String,
-    },
 }
 
 /// A marker printed unrotated on a page: its +x along the page's x, its +y
@@ -133,18 +112,14 @@ impl Board {
     /// `tag_bundles:`, each with `name` and a `layout` of markers with
     /// `id`, `diameter` (or `size`), `x`, `y`, `z` in metres and
     /// optionally `qw`, `qx`, `qy`, `qz`).
-    pub fn load(path: &Path) -> Result<Vec<Board>, BoardError> {
-        let text = std::fs::read_to_string(path).map_err(|source| BoardError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let invalid = |problem: String| BoardError::Invalid {
-            path: path.to_path_buf(),
-            problem,
-        };
+    pub fn load(path: &Path) -> Result<Vec<Board>, LoadError> {
+        let text =
+            std::fs::read_to_string(path).map_err(|e| LoadError::read(path, FileKind::Board, e))?;
+        let invalid =
+            |problem: String| LoadError::new(path, FileKind::Board, LoadProblem::Invalid(problem));
         if text.trim_start().starts_with('{') {
             let manifest = Manifest::from_json(&path.display().to_string(), &text)
-                .map_err(|e| invalid(e.to_string()))?;
+                .map_err(|e| invalid(e.problem.to_string()))?;
             let stem = path
                 .file_stem()
                 .map(|s| s.to_string_lossy().into_owned())
@@ -168,7 +143,7 @@ impl Board {
         let file: BundleFile = serde_yaml::from_str(text).map_err(|e| {
             format!(
                 "neither a sheet manifest nor a marker bundle: {}",
-                crate::error::one_line(&anyhow::Error::new(e))
+                crate::error::one_line(&e)
             )
         })?;
         if file.bundles.is_empty() {

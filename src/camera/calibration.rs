@@ -1,50 +1,28 @@
 //! Calibration files: ROS `camera_info` YAML, OpenCV FileStorage YAML and
 //! XML, Kalibr camchain YAML in; ROS YAML out.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use anyhow::{anyhow, bail, Result};
+use crate::error::{refuse, FileKind, LoadError};
 use serde_yaml::Value;
 
 use super::Camera;
 
-/// Why a calibration could not be read or used. Each message is one line;
-/// from a file it starts with the file's name.
-#[derive(Debug, thiserror::Error)]
-pub enum CameraError {
-    /// The file could not be read.
-    #[error("{}: cannot read camera calibration: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
-    /// The text is not a calibration this crate reads, or its values are
-    /// impossible (a missing camera matrix, a negative focal length, ...).
-    #[error("{}{problem}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default())]
-    Invalid {
-        /// The file, when the text came from one.
-        path: Option<PathBuf>,
-        /// What is wrong or missing, in words.
-        problem: String,
-    },
-    /// An image whose aspect ratio differs from the calibration's: another
-    /// camera or a crop, for which no rescaled calibration is right.
-    #[error(
-        "image is {}x{} but the camera calibration is for {}x{}",
-        image[0],
-        image[1],
-        calibration[0],
-        calibration[1]
-    )]
-    OtherCamera {
-        /// The image's width and height, pixels.
-        image: [u32; 2],
-        /// The width and height the calibration was made for, pixels.
-        calibration: [u32; 2],
-    },
+/// An image whose aspect ratio differs from the calibration's: another
+/// camera or a crop, for which no rescaled calibration is right.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "image is {}x{} but the camera calibration is for {}x{}",
+    image[0],
+    image[1],
+    calibration[0],
+    calibration[1]
+)]
+pub struct OtherCamera {
+    /// The image's width and height, pixels.
+    pub image: [u32; 2],
+    /// The width and height the calibration was made for, pixels.
+    pub calibration: [u32; 2],
 }
 
 impl Camera {
@@ -53,26 +31,17 @@ impl Camera {
     /// an OpenCV FileStorage YAML (`%YAML:1.0`, `!!opencv-matrix`) or XML,
     /// or a Kalibr camchain YAML (first camera, pinhole/radtan).
     /// Errors carry the file name as context and say what is missing.
-    pub fn load(path: impl AsRef<Path>) -> std::result::Result<Camera, CameraError> {
+    pub fn load(path: impl AsRef<Path>) -> Result<Camera, LoadError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| CameraError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        Camera::parse(&text).map_err(|err| match err {
-            CameraError::Invalid { problem, .. } => CameraError::Invalid {
-                path: Some(path.to_path_buf()),
-                problem,
-            },
-            other => other,
-        })
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| LoadError::read(path, FileKind::Camera, e))?;
+        Camera::parse(&text).map_err(|err| err.in_file(path))
     }
 
     /// Parse the text of a calibration file (see [`Camera::load`]).
-    pub fn parse(text: &str) -> std::result::Result<Camera, CameraError> {
-        parse_calibration(text).map_err(|err| CameraError::Invalid {
-            path: None,
-            problem: crate::error::one_line(&err),
+    pub fn parse(text: &str) -> Result<Camera, LoadError> {
+        parse_calibration(text).map_err(|problem| {
+            LoadError::invalid_text(FileKind::Camera, crate::error::shorten_words(&problem))
         })
     }
 
@@ -193,19 +162,19 @@ fn nesting(text: &str) -> usize {
     deepest
 }
 
-fn parse_calibration(text: &str) -> Result<Camera> {
+fn parse_calibration(text: &str) -> Result<Camera, String> {
     if nesting(text) > MAX_NESTING {
-        bail!("nested more than {MAX_NESTING} levels deep: not a camera calibration");
+        refuse!("nested more than {MAX_NESTING} levels deep: not a camera calibration");
     }
     let doc = if text.trim_start().starts_with("<?xml") || text.contains("<opencv_storage>") {
         opencv_xml_to_value(text)?
     } else {
         let cleaned = strip_opencv_yaml(text);
         serde_yaml::from_str(&cleaned)
-            .map_err(|e| anyhow!("not a readable calibration YAML: {}", one_line(&e)))?
+            .map_err(|e| format!("not a readable calibration YAML: {}", one_line(&e)))?
     };
     let Value::Mapping(_) = doc else {
-        bail!("not a camera calibration (expected a YAML mapping)");
+        refuse!("not a camera calibration (expected a YAML mapping)");
     };
     // Kalibr camchain files nest each camera under cam0, cam1, ...
     let doc = match field(&doc, &["cam0"]) {
@@ -214,34 +183,34 @@ fn parse_calibration(text: &str) -> Result<Camera> {
     };
 
     let k = matrix_field(&doc, CAMERA_MATRIX_KEYS)?
-        .ok_or_else(|| anyhow!("missing camera_matrix (or K)"))?;
+        .ok_or_else(|| "missing camera_matrix (or K)".to_string())?;
     let k = match k.len() {
         9 => k,
         // Kalibr: [fu, fv, pu, pv].
         4 => vec![k[0], 0.0, k[2], 0.0, k[1], k[3], 0.0, 0.0, 1.0],
-        n => bail!("camera_matrix has {n} values, expected 9 (3x3)"),
+        n => refuse!("camera_matrix has {n} values, expected 9 (3x3)"),
     };
     let (fx, skew, cx, fy, cy) = (k[0], k[1], k[2], k[4], k[5]);
     if !(fx > 0.0 && fy > 0.0 && fx.is_finite() && fy.is_finite()) {
-        bail!("camera_matrix has invalid focal lengths fx={fx}, fy={fy}");
+        refuse!("camera_matrix has invalid focal lengths fx={fx}, fy={fy}");
     }
     if !cx.is_finite() || !cy.is_finite() {
-        bail!("camera_matrix has an invalid principal point");
+        refuse!("camera_matrix has an invalid principal point");
     }
     if skew.abs() > 1e-6 * fx || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0 {
-        bail!("camera_matrix is not of the form [fx 0 cx; 0 fy cy; 0 0 1]");
+        refuse!("camera_matrix is not of the form [fx 0 cx; 0 fy cy; 0 0 1]");
     }
 
     if let Some(model) = field(&doc, &["distortion_model"]) {
         let model = model.as_str().unwrap_or_default();
         let supported = ["plumb_bob", "rational_polynomial", "radtan", "none", ""];
         if !supported.contains(&model) {
-            bail!("unsupported distortion_model {model:?} (only plumb_bob)");
+            refuse!("unsupported distortion_model {model:?} (only plumb_bob)");
         }
     }
     if let Some(model) = field(&doc, &["camera_model"]).and_then(Value::as_str) {
         if model != "pinhole" {
-            bail!("unsupported camera_model {model:?} (only pinhole)");
+            refuse!("unsupported camera_model {model:?} (only pinhole)");
         }
     }
     let coefficients = matrix_field(
@@ -262,33 +231,35 @@ fn parse_calibration(text: &str) -> Result<Camera> {
         *slot = value;
     }
     if coefficients.len() > 5 && coefficients[5..].iter().any(|&c| c != 0.0) {
-        bail!(
+        refuse!(
             "distortion_coefficients has {} terms with non-zero k4.. ; only the 5-term \
                  plumb_bob model (k1 k2 p1 p2 k3) is supported",
             coefficients.len()
         );
     }
     if distortion.iter().any(|c| !c.is_finite()) {
-        bail!("distortion_coefficients contains a non-finite value");
+        refuse!("distortion_coefficients contains a non-finite value");
     }
 
     // Kalibr gives `resolution: [width, height]` instead.
     let resolution = matrix_field(&doc, &["resolution"])?;
-    let from_resolution = |index: usize, name: &str| -> Result<Option<u32>> {
+    let from_resolution = |index: usize, name: &str| -> Result<Option<u32>, String> {
         match &resolution {
             Some(r) if r.len() == 2 => image_size(r[index], name).map(Some),
-            Some(_) => bail!("resolution must be [width, height]"),
+            Some(_) => refuse!("resolution must be [width, height]"),
             None => Ok(None),
         }
     };
     let width = match size_field(&doc, &["image_width", "imageWidth", "width"])? {
         Some(w) => w,
-        None => from_resolution(0, "image_width")?.ok_or_else(|| anyhow!("missing image_width"))?,
+        None => {
+            from_resolution(0, "image_width")?.ok_or_else(|| "missing image_width".to_string())?
+        }
     };
     let height = match size_field(&doc, &["image_height", "imageHeight", "height"])? {
         Some(h) => h,
         None => {
-            from_resolution(1, "image_height")?.ok_or_else(|| anyhow!("missing image_height"))?
+            from_resolution(1, "image_height")?.ok_or_else(|| "missing image_height".to_string())?
         }
     };
 
@@ -301,9 +272,7 @@ fn parse_calibration(text: &str) -> Result<Camera> {
         width,
         height,
     };
-    camera
-        .check_plausible()
-        .map_err(|problem| anyhow!(problem))?;
+    camera.check_plausible()?;
     Ok(camera)
 }
 
@@ -322,9 +291,9 @@ const CAMERA_MATRIX_KEYS: &[&str] = &["camera_matrix", "cameraMatrix", "K", "k",
 /// scalars (`<image_width>640</image_width>`) and matrices
 /// (`<camera_matrix type_id="opencv-matrix"><rows>..<data>..</data>`),
 /// turned into the same structure the YAML reader produces.
-fn opencv_xml_to_value(text: &str) -> Result<Value> {
+fn opencv_xml_to_value(text: &str) -> Result<Value, String> {
     let body = inner_xml(text, "opencv_storage").ok_or_else(|| {
-        anyhow!("not an OpenCV calibration XML (no complete <opencv_storage> element)")
+        "not an OpenCV calibration XML (no complete <opencv_storage> element)".to_string()
     })?;
     let mut map = serde_yaml::Mapping::new();
     let mut rest = body;
@@ -336,19 +305,31 @@ fn opencv_xml_to_value(text: &str) -> Result<Value> {
         }
         let name_end = after
             .find(|c: char| c.is_whitespace() || c == '>' || c == '/')
-            .ok_or_else(|| anyhow!("malformed XML element"))?;
+            .ok_or_else(|| "malformed XML element".to_string())?;
         let name = &after[..name_end];
         let content = inner_xml(rest, name)
-            .ok_or_else(|| anyhow!("malformed XML: <{name}> is not closed"))?;
+            .ok_or_else(|| format!("malformed XML: <{name}> is not closed"))?;
+        // A matrix keeps its declared rows and cols, so that the YAML
+        // reader's check (rows x cols values) holds XML files to the same.
         let value = match inner_xml(content, "data") {
-            Some(data) => Value::Sequence(data.split_whitespace().map(|t| t.into()).collect()),
+            Some(data) => {
+                let mut matrix = serde_yaml::Mapping::new();
+                for dimension in ["rows", "cols"] {
+                    if let Some(n) = inner_xml(content, dimension) {
+                        matrix.insert(dimension.into(), n.trim().into());
+                    }
+                }
+                let values = data.split_whitespace().map(|t| t.into()).collect();
+                matrix.insert("data".into(), Value::Sequence(values));
+                Value::Mapping(matrix)
+            }
             None => content.trim().trim_matches('"').into(),
         };
         map.insert(name.into(), value);
         let close = format!("</{name}>");
         let end = rest
             .find(&close)
-            .ok_or_else(|| anyhow!("malformed XML: <{name}> is not closed"))?;
+            .ok_or_else(|| format!("malformed XML: <{name}> is not closed"))?;
         rest = &rest[end + close.len()..];
     }
     Ok(Value::Mapping(map))
@@ -531,7 +512,7 @@ fn field<'a>(doc: &'a Value, names: &[&str]) -> Option<&'a Value> {
 }
 
 /// A matrix either as `{rows, cols, data: [...]}` or as a flat list.
-fn matrix_field(doc: &Value, names: &[&str]) -> Result<Option<Vec<f64>>> {
+fn matrix_field(doc: &Value, names: &[&str]) -> Result<Option<Vec<f64>>, String> {
     let Some(value) = field(doc, names) else {
         return Ok(None);
     };
@@ -540,24 +521,24 @@ fn matrix_field(doc: &Value, names: &[&str]) -> Result<Option<Vec<f64>>> {
     let data = match value {
         Value::Sequence(_) => value,
         Value::Mapping(_) => {
-            field(value, &["data"]).ok_or_else(|| anyhow!("{name} has no data list"))?
+            field(value, &["data"]).ok_or_else(|| format!("{name} has no data list"))?
         }
-        _ => bail!("{name} is neither a list nor a matrix with data"),
+        _ => refuse!("{name} is neither a list nor a matrix with data"),
     };
     let Value::Sequence(items) = untag(data) else {
-        bail!("{name} data is not a list");
+        refuse!("{name} data is not a list");
     };
     let values = items
         .iter()
         .map(number)
         .collect::<Option<Vec<f64>>>()
-        .ok_or_else(|| anyhow!("{name} contains a non-numeric value"))?;
+        .ok_or_else(|| format!("{name} contains a non-numeric value"))?;
     if let Value::Mapping(_) = value {
         let rows = field(value, &["rows"]).and_then(number);
         let cols = field(value, &["cols"]).and_then(number);
         if let (Some(rows), Some(cols)) = (rows, cols) {
             if (rows * cols) as usize != values.len() {
-                bail!(
+                refuse!(
                     "{name} declares {rows}x{cols} but has {} values",
                     values.len()
                 );
@@ -567,17 +548,17 @@ fn matrix_field(doc: &Value, names: &[&str]) -> Result<Option<Vec<f64>>> {
     Ok(Some(values))
 }
 
-fn size_field(doc: &Value, names: &[&str]) -> Result<Option<u32>> {
+fn size_field(doc: &Value, names: &[&str]) -> Result<Option<u32>, String> {
     let Some(value) = field(doc, names) else {
         return Ok(None);
     };
-    let n = number(value).ok_or_else(|| anyhow!("{} is not a number", names[0]))?;
+    let n = number(value).ok_or_else(|| format!("{} is not a number", names[0]))?;
     image_size(n, names[0]).map(Some)
 }
 
-fn image_size(n: f64, name: &str) -> Result<u32> {
+fn image_size(n: f64, name: &str) -> Result<u32, String> {
     if !((1.0..=1_000_000.0).contains(&n) && n.fract() == 0.0) {
-        bail!("{name} = {n} is not a valid image size");
+        refuse!("{name} = {n} is not a valid image size");
     }
     Ok(n as u32)
 }
@@ -704,6 +685,19 @@ cam0:
   resolution: [640, 480]
   rostopic: /cam0/image_raw
 ";
+
+    #[test]
+    fn opencv_xml_matrices_must_hold_what_they_declare() {
+        let five = "-2.8e-01 9.0e-02 1.2e-03 -8.0e-04 -1.2e-02";
+        for data in ["", "-2.8e-01", &"0.1 ".repeat(100)] {
+            let text = OPENCV_XML.replace(five, data);
+            let err = Camera::parse(&text).unwrap_err().to_string();
+            assert!(
+                err.starts_with("distortion_coefficients declares 5x1 but has"),
+                "{err}"
+            );
+        }
+    }
 
     #[test]
     fn parses_opencv_xml_and_kalibr() {

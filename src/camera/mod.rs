@@ -9,7 +9,7 @@
 
 mod calibration;
 
-pub use calibration::{CalibrationFormat, CameraError};
+pub use calibration::{CalibrationFormat, OtherCamera};
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 
@@ -152,7 +152,7 @@ impl Camera {
     /// rescaled when the image is the same sensor at another resolution. A
     /// different aspect ratio means another camera or a crop, for which no
     /// rescaling is right, and is refused.
-    pub fn for_image(&self, width: u32, height: u32) -> Result<Camera, CameraError> {
+    pub fn for_image(&self, width: u32, height: u32) -> Result<Camera, OtherCamera> {
         if self.width == width && self.height == height {
             return Ok(*self);
         }
@@ -161,7 +161,7 @@ impl Camera {
             || self.height == 0
             || (aspect(self.width, self.height) / aspect(width, height) - 1.0).abs() > 0.01
         {
-            return Err(CameraError::OtherCamera {
+            return Err(OtherCamera {
                 image: [width, height],
                 calibration: [self.width, self.height],
             });

@@ -5,6 +5,7 @@ use anyhow::{bail, Result};
 use std::path::PathBuf;
 use whycode::detect::Target;
 use whycode::render::job::PrintError;
+use whycode::render::RenderError;
 use whycode::spec::{cli_option, limits, Bits, SpecError, TargetSpec};
 use whycode::units::Length;
 
@@ -156,7 +157,10 @@ impl MarkerKindArgs {
 pub fn print_error(err: PrintError) -> anyhow::Error {
     match err {
         PrintError::Option(err) => spec_error(err),
-        PrintError::Render(err) => err,
+        PrintError::Render(err @ RenderError::SelfCheck { .. }) => {
+            anyhow::anyhow!("{err} (nothing written; --no-check skips the check)")
+        }
+        PrintError::Render(err) => err.into(),
     }
 }
 

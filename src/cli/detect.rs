@@ -11,7 +11,7 @@ use std::time::Instant;
 use whycode::camera::Camera;
 use whycode::detect::family_check::FamilyCheck;
 use whycode::detect::report::{FrameReport, CSV_HEADER};
-use whycode::detect::{Detector, DetectorConfig, Target};
+use whycode::detect::{Detector, DetectorConfig, StageTimings, Target};
 use whycode::image_io::load_gray;
 use whycode::spec::DetectSpec;
 use whycode::units::Length;
@@ -24,6 +24,7 @@ Examples:
   whycode detect --legacy --annotate out/ many.png
   whycode detect --bits auto photo.jpg               # each ring's bit count and code
   whycode detect --bits auto --distance 2 photo.jpg  # and its ID in that family
+  whycode detect --timings frames/                   # where the detector's time goes
 
 Formats: table (for reading), csv (one row per marker) or json (one object
 per image and line).
@@ -104,6 +105,11 @@ pub struct DetectArgs {
         allow_hyphen_values = true
     )]
     min_ink: Option<f64>,
+
+    /// Time each stage of the detector: a "timings" object in each JSON
+    /// line, and milliseconds per stage over all images on standard error
+    #[arg(long)]
+    timings: bool,
 }
 
 fn parse_diameter(text: &str) -> Result<Length, String> {
@@ -133,6 +139,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
             .into_iter()
             .flatten()
             .collect(),
+        timings: args.timings,
     }
     .build()
     .map_err(spec_error)?;
@@ -202,10 +209,14 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         out.line(CSV_HEADER)?;
     }
     let mut check = FamilyCheck::new(family_bits);
+    let mut timings = StageTimings::default();
     for result in results.into_iter().flatten() {
         match result {
             Ok(frame) => {
                 check.observe(&frame.markers);
+                if let Some(frame_timings) = &frame.timings {
+                    timings += frame_timings;
+                }
                 match args.format.format {
                     Format::Json => out.line(frame.to_json())?,
                     Format::Csv => out.write(&frame.to_csv_rows())?,
@@ -220,6 +231,9 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         }
     }
     out.flush()?;
+    if args.timings && timings.frames() > 0 {
+        output::say(format_args!("time per stage:\n{timings}"));
+    }
     if let Some(dir) = &args.annotate {
         let written = total - failures;
         output::say(format_args!(
@@ -353,6 +367,7 @@ fn detect_one(
         elapsed_ms,
         markers,
         boards,
+        timings: detector.last_timings(),
     })
 }
 

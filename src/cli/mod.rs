@@ -167,7 +167,10 @@ impl Cli {
     }
 }
 
-pub use whycode::error::one_line;
+/// The one line the command line prints for an error: its causes joined.
+pub fn one_line(err: &anyhow::Error) -> String {
+    whycode::error::one_line(err.as_ref())
+}
 
 #[cfg(test)]
 mod tests {

@@ -89,5 +89,5 @@ pub fn run(args: ValidateArgs) -> Result<ExitCode> {
 fn save_rgb(path: &Path, picture: &image::RgbImage) -> Result<()> {
     let bytes = whycode::image_io::encode_rgb_png(picture)
         .map_err(|e| anyhow::anyhow!("cannot encode {}: {e}", path.display()))?;
-    whycode::io::write_atomic(path, &bytes)
+    Ok(whycode::io::write_atomic(path, &bytes)?)
 }

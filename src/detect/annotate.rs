@@ -2,8 +2,8 @@
 //! ellipse, its +x axis and its ID, for checking a detector run by eye.
 
 use super::Detection;
-use anyhow::{Context, Result};
-use image::GrayImage;
+use crate::render::RenderError;
+use image::{GrayImage, RgbImage};
 use std::f64::consts::PI;
 use tiny_skia::{Color, LineCap, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
@@ -15,12 +15,54 @@ const LEGACY: [u8; 3] = [0, 190, 230];
 const AXIS: [u8; 3] = [230, 30, 30];
 
 /// The image in colour with the detections drawn, encoded as PNG.
-pub fn annotated_png(image: &GrayImage, detections: &[Detection]) -> Result<Vec<u8>> {
-    let (w, h) = image.dimensions();
-    let mut pixmap = Pixmap::new(w.max(1), h.max(1)).context("image too large to annotate")?;
-    for (dst, &g) in pixmap.data_mut().chunks_exact_mut(4).zip(image.as_raw()) {
-        dst.copy_from_slice(&[g, g, g, 255]);
-    }
+pub fn annotated_png(image: &GrayImage, detections: &[Detection]) -> Result<Vec<u8>, RenderError> {
+    crate::image_io::encode_rgb_png(&annotated_rgb(image, detections)?).map_err(|e| {
+        RenderError::Encode {
+            format: "PNG",
+            detail: e.to_string(),
+        }
+    })
+}
+
+/// The image in colour with the detections drawn: what [`annotated_png`]
+/// encodes, for callers that send pixels on (a video, a ROS image topic).
+pub fn annotated_rgb(image: &GrayImage, detections: &[Detection]) -> Result<RgbImage, RenderError> {
+    drawn(image.width(), image.height(), detections, |pixels| {
+        for (dst, &g) in pixels.chunks_exact_mut(4).zip(image.as_raw()) {
+            dst.copy_from_slice(&[g, g, g, 255]);
+        }
+    })
+}
+
+/// The detections drawn over a colour picture of the frame they came from
+/// (the caller's own camera image rather than its grey).
+pub fn drawn_over(picture: &RgbImage, detections: &[Detection]) -> Result<RgbImage, RenderError> {
+    drawn(picture.width(), picture.height(), detections, |pixels| {
+        for (dst, src) in pixels
+            .chunks_exact_mut(4)
+            .zip(picture.as_raw().chunks_exact(3))
+        {
+            dst.copy_from_slice(&[src[0], src[1], src[2], 255]);
+        }
+    })
+}
+
+/// The detections drawn over what `fill` puts in an opaque RGBA canvas of
+/// `w` x `h`.
+fn drawn(
+    w: u32,
+    h: u32,
+    detections: &[Detection],
+    fill: impl FnOnce(&mut [u8]),
+) -> Result<RgbImage, RenderError> {
+    let too_large = RenderError::ImageTooLarge {
+        width: w,
+        height: h,
+    };
+    let Some(mut pixmap) = Pixmap::new(w.max(1), h.max(1)) else {
+        return Err(too_large);
+    };
+    fill(pixmap.data_mut());
     let line = (f64::from(w.max(h)) / 800.0).clamp(1.0, 4.0) as f32;
     for d in detections {
         draw_detection(&mut pixmap, d, line);
@@ -30,9 +72,7 @@ pub fn annotated_png(image: &GrayImage, detections: &[Detection]) -> Result<Vec<
         .chunks_exact(4)
         .flat_map(|p| [p[0], p[1], p[2]])
         .collect();
-    let picture = image::RgbImage::from_raw(pixmap.width(), pixmap.height(), rgb)
-        .context("annotated image has the wrong size")?;
-    Ok(crate::image_io::encode_rgb_png(&picture)?)
+    RgbImage::from_raw(pixmap.width(), pixmap.height(), rgb).ok_or(too_large)
 }
 
 fn paint(rgb: [u8; 3]) -> Paint<'static> {

@@ -202,6 +202,11 @@ pub struct Detector {
     /// A follow of this frame fell back to the flood fill.
     follow_filled: bool,
     tracks: Vec<Track>,
+    /// The configured camera fitted to this frame's size (rescaled for the
+    /// same sensor at another resolution); None without a camera, or for a
+    /// frame of another aspect ratio, which then gets no pose rather than a
+    /// wrong one.
+    frame_camera: Option<crate::camera::Camera>,
     /// How this detector's markers decoded so far.
     check: family_check::FamilyCheck,
     search: ThresholdSearch,
@@ -264,6 +269,7 @@ impl Detector {
             occupied: Vec::new(),
             follow_filled: false,
             tracks: Vec::new(),
+            frame_camera: None,
             check,
             search: ThresholdSearch::default(),
             frame: 0,
@@ -279,13 +285,15 @@ impl Detector {
 
     /// Fits the configured camera to an image of `width` x `height` with
     /// [`Camera::for_image`] (rescaled for the same sensor at another
-    /// resolution, refused for another aspect ratio), so that a calibration
-    /// made for another image size never gives silently wrong poses.
+    /// resolution, refused for another aspect ratio). [`Detector::detect`]
+    /// does the same for every frame by itself and gives a frame of another
+    /// aspect ratio no pose; a front end calls this first to tell its user
+    /// why.
     pub fn fit_camera(
         &mut self,
         width: u32,
         height: u32,
-    ) -> Result<(), crate::camera::CameraError> {
+    ) -> Result<(), crate::camera::OtherCamera> {
         if let Some(camera) = self.config.camera {
             self.config.camera = Some(camera.for_image(width, height)?);
         }
@@ -404,6 +412,10 @@ impl Detector {
             return None;
         }
         self.frame += 1;
+        self.frame_camera = self
+            .config
+            .camera
+            .and_then(|camera| camera.for_image(image.width(), image.height()).ok());
         self.labels.begin(width, height);
         self.follow_filled = false;
         Some(Gray {

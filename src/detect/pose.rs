@@ -75,7 +75,7 @@ impl Detector {
         ring: &RingRead,
         followed: Option<Posed>,
     ) -> PoseMemory {
-        let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) else {
+        let (Some(camera), Some(diameter)) = (self.frame_camera, self.config.diameter_m) else {
             return PoseMemory::default();
         };
         let family_bits = self.config.target.family().map(Family::bits);
@@ -142,7 +142,7 @@ impl Detector {
         code: u32,
         previous_yaw: f64,
     ) -> Option<FollowedPose> {
-        let (camera, diameter) = (self.config.camera?, self.config.diameter_m?);
+        let (camera, diameter) = (self.frame_camera?, self.config.diameter_m?);
         let radius_m = diameter / 2.0;
         let track = &self.tracks[index];
         let hints = PoseHints {

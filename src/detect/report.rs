@@ -20,6 +20,9 @@ pub struct FrameReport {
     pub markers: Vec<Detection>,
     /// The configured boards' poses ([`super::Detector::locate_boards`]).
     pub boards: Vec<crate::board::BoardPose>,
+    /// How long each stage of the detector took on this frame, when asked
+    /// for ([`DetectorConfig::timings`](super::DetectorConfig::timings)).
+    pub timings: Option<super::timings::StageTimings>,
 }
 
 /// The CSV header line (without its newline); [`FrameReport::to_csv_rows`]
@@ -42,6 +45,8 @@ struct FrameRecord<'a> {
     markers: Vec<MarkerRecord>,
     #[serde(skip_serializing_if = "Vec::is_empty")]
     boards: Vec<BoardRecord>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    timings: Option<&'a super::timings::StageTimings>,
 }
 
 #[derive(serde::Serialize)]
@@ -77,7 +82,8 @@ struct MarkerRecord {
 impl FrameReport {
     /// One JSON object on one line (no newline): image, width, height,
     /// elapsed_ms and the markers with id, code, u, v, yaw, axes,
-    /// confidence, position, rotation and quaternion.
+    /// confidence, position, rotation and quaternion; then the stage
+    /// timings, when measured.
     pub fn to_json(&self) -> String {
         let markers = self
             .markers
@@ -136,6 +142,7 @@ impl FrameReport {
                     rms_px: round(b.rms_px, 4),
                 })
                 .collect(),
+            timings: self.timings.as_ref(),
         };
         serde_json::to_string(&record).expect("plain records serialise")
     }
@@ -279,6 +286,7 @@ mod tests {
             elapsed_ms: 1.23456,
             markers,
             boards: Vec::new(),
+            timings: None,
         }
     }
 

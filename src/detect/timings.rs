@@ -170,8 +170,10 @@ impl Serialize for StageTimings {
     }
 }
 
+/// Milliseconds to the tenth of a microsecond: finer than the clock's
+/// repeatability, and without binary fractions' long tails in JSON.
 fn milliseconds(time: Duration) -> f64 {
-    1e3 * time.as_secs_f64()
+    (1e7 * time.as_secs_f64()).round() / 1e4
 }
 
 /// A frame's laps through the stages; reads the clock only when on.

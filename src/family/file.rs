@@ -26,34 +26,10 @@
 
 use super::necklace::self_distance;
 use super::Family;
-use anyhow::{bail, Context, Result};
+use crate::error::{refuse, FileKind, LoadError};
 use serde::Deserialize;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
-
-/// Why a family file could not be used. Each message is one line; from a
-/// file it starts with the file's name.
-#[derive(Debug, thiserror::Error)]
-pub enum FamilyFileError {
-    /// The file could not be read.
-    #[error("{}: {source}", path.display())]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What the operating system said.
-        #[source]
-        source: std::io::Error,
-    },
-    /// The text is not a family file, or its codes break the family's
-    /// promises, or a derived field contradicts the codes.
-    #[error("{}{problem}", path.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default())]
-    Invalid {
-        /// The file, when the text came from one.
-        path: Option<PathBuf>,
-        /// What is wrong, in words.
-        problem: String,
-    },
-}
+use std::path::Path;
 
 /// Value of the `format` field.
 pub const FAMILY_FILE_FORMAT: &str = "whycode-family";
@@ -122,37 +98,36 @@ impl Family {
 
     /// Parses and checks a family file's text (see the module docs). Errors
     /// are one line, naming the problem; [`Family::load`] adds the file name.
-    pub fn from_json(text: &str) -> std::result::Result<Family, FamilyFileError> {
-        parse_family(text).map_err(|err| FamilyFileError::Invalid {
-            path: None,
-            problem: crate::error::one_line(&err),
+    pub fn from_json(text: &str) -> Result<Family, LoadError> {
+        parse_family(text).map_err(|problem| {
+            LoadError::invalid_text(FileKind::Family, crate::error::shorten_words(&problem))
         })
     }
 }
 
-/// The checks behind [`Family::from_json`], with anyhow's context for the
-/// nested causes.
-fn parse_family(text: &str) -> Result<Family> {
-    let header: Header = serde_json::from_str(text).context("not valid JSON")?;
+/// The checks behind [`Family::from_json`]; the problem in words.
+fn parse_family(text: &str) -> Result<Family, String> {
+    let header: Header = serde_json::from_str(text).map_err(|e| format!("not valid JSON: {e}"))?;
     match header.format.as_deref() {
         Some(FAMILY_FILE_FORMAT) => {}
-        Some(other) => bail!("format is \"{other}\", expected \"{FAMILY_FILE_FORMAT}\""),
-        None => bail!("not a whycode family file (no \"format\" field)"),
+        Some(other) => refuse!("format is \"{other}\", expected \"{FAMILY_FILE_FORMAT}\""),
+        None => refuse!("not a whycode family file (no \"format\" field)"),
     }
     match header.version {
         Some(serde_json::Value::Number(n))
             if n.as_u64() == Some(u64::from(FAMILY_FILE_VERSION)) => {}
-        Some(v) => bail!(
+        Some(v) => refuse!(
             "unsupported family file version {v} (this build reads version {FAMILY_FILE_VERSION})"
         ),
-        None => bail!("no \"version\" field"),
+        None => refuse!("no \"version\" field"),
     }
-    let doc: Document = serde_json::from_str(text).context("malformed family file")?;
+    let doc: Document =
+        serde_json::from_str(text).map_err(|e| format!("malformed family file: {e}"))?;
     let mut codes = Vec::with_capacity(doc.codes.len());
     for (k, entry) in doc.codes.iter().enumerate() {
         let expected_id = k as u32 + 1;
         if entry.id != expected_id {
-            bail!(
+            refuse!(
                 "code entry {} has ID {}, expected {expected_id} (IDs run 1, 2, 3, ... in order)",
                 k + 1,
                 entry.id
@@ -162,16 +137,16 @@ fn parse_family(text: &str) -> Result<Family> {
     }
     if let Some(count) = doc.count {
         if count != codes.len() {
-            bail!("count is {count} but {} codes are listed", codes.len());
+            refuse!("count is {count} but {} codes are listed", codes.len());
         }
     }
-    let family = Family::from_codes(doc.bits, doc.distance, codes)?;
+    let family = Family::from_codes(doc.bits, doc.distance, codes).map_err(|e| e.to_string())?;
     let bits = doc.bits as usize;
     for entry in &doc.codes {
         if let Some(binary) = &entry.binary {
             let expected = format!("{:0bits$b}", entry.code);
             if *binary != expected {
-                bail!(
+                refuse!(
                     "ID {}: binary \"{binary}\" does not match code {} (\"{expected}\")",
                     entry.id,
                     entry.code
@@ -181,7 +156,7 @@ fn parse_family(text: &str) -> Result<Family> {
         if let Some(sd) = entry.self_distance {
             let actual = self_distance(entry.code, doc.bits);
             if sd != actual {
-                bail!(
+                refuse!(
                     "ID {}: self_distance is {sd}, the code's is {actual}",
                     entry.id
                 );
@@ -191,14 +166,14 @@ fn parse_family(text: &str) -> Result<Family> {
     if let Some(declared) = doc.min_self_distance {
         let actual = family.min_self_distance();
         if declared != actual {
-            bail!("min_self_distance is {declared}, the codes' is {actual}");
+            refuse!("min_self_distance is {declared}, the codes' is {actual}");
         }
     }
     if let Some(declared) = doc.min_distance {
         match family.min_distance() {
             Some(actual) if actual == declared => {}
-            Some(actual) => bail!("min_distance is {declared}, the codes' is {actual}"),
-            None => bail!("min_distance is {declared}, but a family of one has none"),
+            Some(actual) => refuse!("min_distance is {declared}, the codes' is {actual}"),
+            None => refuse!("min_distance is {declared}, but a family of one has none"),
         }
     }
     Ok(family)
@@ -207,23 +182,15 @@ fn parse_family(text: &str) -> Result<Family> {
 impl Family {
     /// Writes the family file whole or not at all.
     #[cfg(feature = "files")]
-    pub fn save(&self, path: &Path) -> Result<()> {
+    pub fn save(&self, path: &Path) -> Result<(), crate::error::WriteError> {
         crate::io::write_atomic(path, self.to_json().as_bytes())
     }
 
     /// Reads and checks a family file. Errors read `<file>: <problem>`.
-    pub fn load(path: &Path) -> std::result::Result<Family, FamilyFileError> {
-        let text = std::fs::read_to_string(path).map_err(|source| FamilyFileError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        Family::from_json(&text).map_err(|err| match err {
-            FamilyFileError::Invalid { problem, .. } => FamilyFileError::Invalid {
-                path: Some(path.to_path_buf()),
-                problem,
-            },
-            other => other,
-        })
+    pub fn load(path: &Path) -> Result<Family, LoadError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| LoadError::read(path, FileKind::Family, e))?;
+        Family::from_json(&text).map_err(|err| err.in_file(path))
     }
 }
 

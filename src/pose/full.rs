@@ -22,6 +22,13 @@ pub struct Pose {
 }
 
 impl Pose {
+    /// The rotation as a Rodrigues vector (the axis scaled by the angle,
+    /// radians): OpenCV's `rvec`, from the quaternion, which is unit.
+    pub fn rotation_vector(&self) -> Vector3<f64> {
+        let [x, y, z, w] = self.quaternion;
+        UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(w, x, y, z)).scaled_axis()
+    }
+
     /// Pose from a position and a rotation matrix (re-orthonormalised).
     pub fn new(position: Vector3<f64>, rotation: Matrix3<f64>) -> Pose {
         let orthonormal = (rotation.transpose() * rotation - Matrix3::identity()).norm() < 1e-9

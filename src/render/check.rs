@@ -6,13 +6,13 @@
 use super::page::Page;
 use super::raster;
 use super::sheet::Sheet;
+use super::RenderError;
 use crate::detect::{Detection, Detector, DetectorConfig, Target};
 use crate::family::Family;
 use crate::geometry::{Design, Marker, MarkerKind};
 use crate::manifest::PrintedMarker;
 use crate::math::angle::wrap_signed;
 use crate::parallel::prelude::*;
-use anyhow::{bail, Result};
 
 /// The resolution a sheet is usually printed at.
 pub const PRINT_DPI: f64 = 300.0;
@@ -144,14 +144,18 @@ fn check_marker(
 /// marker. `target` says what the sheet holds: for WhyCode markers their
 /// family (IDs and yaw are checked), for WhyCon circles only presence and
 /// position are.
-pub fn check_sheet(sheet: &Sheet, target: &Target) -> Result<CheckReport> {
+pub fn check_sheet(sheet: &Sheet, target: &Target) -> Result<CheckReport, RenderError> {
     check_pages(&sheet.pages, &sheet.manifest.markers, target, None)
 }
 
 /// [`check_sheet`] for a sheet written as PNG at `output_dpi`: that raster
 /// is what gets printed, so it is checked too when it is coarser than print
 /// resolution.
-pub fn check_sheet_png(sheet: &Sheet, target: &Target, output_dpi: f64) -> Result<CheckReport> {
+pub fn check_sheet_png(
+    sheet: &Sheet,
+    target: &Target,
+    output_dpi: f64,
+) -> Result<CheckReport, RenderError> {
     check_pages(
         &sheet.pages,
         &sheet.manifest.markers,
@@ -170,10 +174,12 @@ pub fn check_marker_page(
     id: u32,
     target: &Target,
     png_dpi: Option<f64>,
-) -> Result<CheckReport> {
+) -> Result<CheckReport, RenderError> {
     let on_paper = page.on_white(marker.outer_radius());
     let Some((_, x_mm, y_mm)) = on_paper.markers().next() else {
-        bail!("self-check failed: the page holds no marker");
+        return Err(RenderError::SelfCheck {
+            problem: "the page holds no marker".into(),
+        });
     };
     let code = match marker.kind {
         MarkerKind::WhyCode { code, .. } => code,
@@ -200,7 +206,7 @@ fn check_pages(
     markers: &[PrintedMarker],
     target: &Target,
     png_dpi: Option<f64>,
-) -> Result<CheckReport> {
+) -> Result<CheckReport, RenderError> {
     let mut resolutions = resolutions_for(markers, target.family());
     if let Some(dpi) = png_dpi.filter(|&d| d < PRINT_DPI && !resolutions.contains(&d)) {
         resolutions.push(dpi);
@@ -216,7 +222,7 @@ fn check_pages(
                 .iter()
                 .filter(|m| m.page as usize == p + 1)
                 .collect();
-            let image = raster::render_page(page, dpi).map_err(|e| format!("{e:#}"))?;
+            let image = raster::render_page(page, dpi).map_err(|e| e.to_string())?;
             let mut detector = Detector::new(DetectorConfig {
                 target: target.clone(),
                 max_markers: expected.len() * 2 + 16,
@@ -239,9 +245,7 @@ fn check_pages(
     for outcome in failures {
         match outcome {
             Ok(n) => readings += n,
-            Err(problem) => {
-                bail!("self-check failed: {problem} (nothing written; --no-check skips the check)")
-            }
+            Err(problem) => return Err(RenderError::SelfCheck { problem }),
         }
     }
     Ok(CheckReport {

@@ -24,7 +24,7 @@ pub enum PrintError {
     Option(#[from] SpecError),
     /// Laying out, encoding or reading back the pages failed.
     #[error(transparent)]
-    Render(#[from] anyhow::Error),
+    Render(#[from] super::RenderError),
 }
 
 type Result<T> = std::result::Result<T, PrintError>;
@@ -147,7 +147,9 @@ impl MarkerJob<'_> {
             }
             (Some(family), Some(id)) => {
                 let Some(code) = family.code(id) else {
-                    return Err(SpecError::invalid("id", id_range_error(family, id)).into());
+                    return Err(
+                        SpecError::invalid("id", id_range_error(family, id).to_string()).into(),
+                    );
                 };
                 (
                     Marker::whycode(family.bits(), code, self.diameter_mm),

@@ -3,9 +3,9 @@
 
 use super::font::{helvetica_width_mm, CAP_HEIGHT};
 use super::page::{Anchor, Item, Page, MM_PER_PT};
-use crate::geometry::{Marker, MarkerKind, MIN_MARGIN_RATIO};
+use super::RenderError;
+use crate::geometry::{Marker, MarkerKind};
 use crate::units::trim_float;
-use anyhow::{bail, Result};
 
 /// Label font size when none is asked for, in points.
 pub const DEFAULT_LABEL_PT: f64 = 7.0;
@@ -74,18 +74,16 @@ fn round_to(v: f64, step: f64) -> f64 {
 }
 
 /// Checks a requested white margin against the least the detector needs.
-pub fn checked_margin(marker: &Marker, margin_mm: Option<f64>) -> Result<f64> {
+pub fn checked_margin(marker: &Marker, margin_mm: Option<f64>) -> Result<f64, RenderError> {
     let least = marker.min_margin();
     match margin_mm {
         None => Ok(least),
         Some(m) if m + 1e-9 >= least && m.is_finite() => Ok(m),
-        Some(m) => bail!(
-            "a margin of {} mm is too small for a {} mm marker: the detector needs at least {} mm ({}R) of white around the black disc",
-            trim_float(m),
-            trim_float(marker.diameter_mm),
-            trim_float((least * 100.0).ceil() / 100.0),
-            MIN_MARGIN_RATIO
-        ),
+        Some(m) => Err(RenderError::MarginTooSmall {
+            margin_mm: m,
+            diameter_mm: marker.diameter_mm,
+            least_mm: least,
+        }),
     }
 }
 
@@ -132,9 +130,11 @@ pub fn fitting_size(text: &str, wanted_pt: f64, width: f64) -> f64 {
 
 /// Lays out a single marker on a page exactly as large as it needs: the
 /// black disc, its white margin, and room for the cut guide and label.
-pub fn marker_page(marker: &Marker, options: &MarkerOptions) -> Result<Page> {
+pub fn marker_page(marker: &Marker, options: &MarkerOptions) -> Result<Page, RenderError> {
     if !(marker.diameter_mm.is_finite() && marker.diameter_mm > 0.0) {
-        bail!("the marker diameter must be positive");
+        return Err(RenderError::DiameterNotPositive {
+            diameter_mm: marker.diameter_mm,
+        });
     }
     let margin = checked_margin(marker, options.margin_mm)?;
     let pad = if options.cut_guide {

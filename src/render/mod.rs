@@ -5,6 +5,7 @@
 //! PNG writers and the rasteriser used for checking all draw those pages.
 
 pub mod check;
+mod error;
 pub mod font;
 pub mod job;
 pub mod marker;
@@ -17,13 +18,13 @@ pub mod sheet;
 pub mod svg;
 pub mod template;
 
+pub use error::RenderError;
 pub use marker::{marker_page, MarkerOptions};
 pub use page::{Item, Page};
 pub use raster::{render_marker, render_page};
 pub use sheet::{layout, Sheet, SheetMarker, SheetSpec};
 pub use template::Template;
 
-use anyhow::{bail, Result};
 use std::path::{Path, PathBuf};
 
 /// Output file formats, chosen by file extension.
@@ -39,7 +40,7 @@ pub enum Format {
 
 impl Format {
     /// The format named by the file's extension, or an error naming the file.
-    pub fn from_path(path: &Path) -> Result<Format> {
+    pub fn from_path(path: &Path) -> Result<Format, RenderError> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
@@ -48,14 +49,10 @@ impl Format {
             Some("svg") => Ok(Format::Svg),
             Some("pdf") => Ok(Format::Pdf),
             Some("png") => Ok(Format::Png),
-            Some(other) => bail!(
-                "{}: unknown output format '.{other}' (use .svg, .pdf or .png)",
-                path.display()
-            ),
-            None => bail!(
-                "{}: no file extension to choose the format by (use .svg, .pdf or .png)",
-                path.display()
-            ),
+            _ => Err(RenderError::UnknownFormat {
+                path: path.to_path_buf(),
+                extension: ext,
+            }),
         }
     }
 }
@@ -86,16 +83,17 @@ pub fn encode_pages(
     path: &Path,
     title: &str,
     dpi: f64,
-) -> Result<Vec<(PathBuf, Vec<u8>)>> {
+) -> Result<Vec<(PathBuf, Vec<u8>)>, RenderError> {
     let format = Format::from_path(path)?;
     Ok(match format {
         #[cfg(feature = "pdf")]
         Format::Pdf => vec![(path.to_path_buf(), pdf::pages_pdf(pages, title)?)],
         #[cfg(not(feature = "pdf"))]
-        Format::Pdf => bail!(
-            "{}: this build of whycode writes no PDF (it lacks the `pdf` feature)",
-            path.display()
-        ),
+        Format::Pdf => {
+            return Err(RenderError::NoPdf {
+                path: path.to_path_buf(),
+            })
+        }
         Format::Svg => page_paths(path, pages.len())
             .into_iter()
             .zip(pages)
@@ -113,13 +111,13 @@ pub fn encode_pages(
 
 /// Fails early, before any rendering, when the output's folder is missing.
 #[cfg(feature = "files")]
-pub fn check_output_dir(path: &Path) -> Result<()> {
+pub fn check_output_dir(path: &Path) -> Result<(), crate::error::WriteError> {
     crate::io::check_output_dir(path)
 }
 
 /// Writes a sheet's or marker's files together: all of them, or (when one
 /// cannot be written) none, with any earlier outputs left as they were.
 #[cfg(feature = "files")]
-pub fn write_all(files: &[(PathBuf, Vec<u8>)]) -> Result<()> {
+pub fn write_all(files: &[(PathBuf, Vec<u8>)]) -> Result<(), crate::error::WriteError> {
     crate::io::write_all_atomic(files)
 }

@@ -5,7 +5,7 @@
 //! hash of the content.
 
 use super::page::{circle_segments, marker_black_path, Anchor, Item, Page, Segment, MM_PER_PT};
-use anyhow::{Context, Result};
+use super::RenderError;
 use printpdf::{
     BuiltinFont, Color, Greyscale, Line, LineCapStyle, LineDashPattern, LinePoint, Mm, Op,
     PaintMode, PdfDocument, PdfFontHandle, PdfPage, PdfSaveOptions, Point, Polygon, PolygonRing,
@@ -212,7 +212,7 @@ fn fnv1a(bytes: &[u8], seed: u64) -> u64 {
 }
 
 /// The pages as one PDF document.
-pub fn pages_pdf(pages: &[Page], title: &str) -> Result<Vec<u8>> {
+pub fn pages_pdf(pages: &[Page], title: &str) -> Result<Vec<u8>, RenderError> {
     let mut doc = PdfDocument::new(title);
     doc.metadata.info.producer = format!("whycode {}", env!("CARGO_PKG_VERSION"));
     doc.metadata.info.creator = doc.metadata.info.producer.clone();
@@ -243,7 +243,10 @@ pub fn pages_pdf(pages: &[Page], title: &str) -> Result<Vec<u8>> {
     strip_info_noise(&mut lo);
     lo.compress();
     let mut bytes = Vec::new();
-    lo.save_to(&mut bytes).context("cannot encode PDF")?;
+    lo.save_to(&mut bytes).map_err(|e| RenderError::Encode {
+        format: "PDF",
+        detail: e.to_string(),
+    })?;
     Ok(bytes)
 }
 

@@ -8,8 +8,8 @@
 
 use super::font;
 use super::page::{marker_black_path, Anchor, Item, Page, Segment};
+use super::RenderError;
 use crate::geometry::Marker;
-use anyhow::{bail, Result};
 use image::GrayImage;
 use tiny_skia::{
     FillRule, LineCap, LineJoin, Paint, PathBuilder, Pixmap, Stroke, StrokeDash, Transform,
@@ -35,20 +35,28 @@ pub fn page_size_px(page: &Page, dpi: f64) -> (u32, u32) {
 }
 
 /// Renders a page to an opaque RGBA pixmap at `dpi`.
-pub fn page_pixmap(page: &Page, dpi: f64) -> Result<Pixmap> {
+pub fn page_pixmap(page: &Page, dpi: f64) -> Result<Pixmap, RenderError> {
     if !(dpi.is_finite() && dpi > 0.0) {
-        bail!("resolution must be a positive number of dpi, got {dpi}");
+        return Err(RenderError::DpiOutOfRange { dpi });
     }
     let (w, h) = page_size_px(page, dpi);
     if w > MAX_SIDE_PX || h > MAX_SIDE_PX || u64::from(w) * u64::from(h) > MAX_AREA_PX {
-        bail!(
-            "a {:.0} x {:.0} mm page at {dpi} dpi would be {w} x {h} pixels, too large",
-            page.width_mm,
-            page.height_mm
-        );
+        return Err(RenderError::RasterTooLarge {
+            width_mm: page.width_mm,
+            height_mm: page.height_mm,
+            dpi,
+            width: w,
+            height: h,
+        });
     }
     let Some(mut pixmap) = Pixmap::new(w, h) else {
-        bail!("cannot allocate a {w} x {h} raster");
+        return Err(RenderError::RasterTooLarge {
+            width_mm: page.width_mm,
+            height_mm: page.height_mm,
+            dpi,
+            width: w,
+            height: h,
+        });
     };
     pixmap.fill(tiny_skia::Color::WHITE);
     let s = px_per_mm(dpi) as f32;
@@ -61,14 +69,14 @@ pub fn page_pixmap(page: &Page, dpi: f64) -> Result<Pixmap> {
 
 /// Renders a page to an 8-bit grey image at `dpi` (labels in the built-in
 /// stroke font). This is what the sheet self-check and the simulator see.
-pub fn render_page(page: &Page, dpi: f64) -> Result<GrayImage> {
+pub fn render_page(page: &Page, dpi: f64) -> Result<GrayImage, RenderError> {
     let pixmap = page_pixmap(page, dpi)?;
     Ok(pixmap_to_gray(&pixmap))
 }
 
 /// Renders one marker, centred, with `margin_mm` of white around its black
 /// disc, at `dpi`.
-pub fn render_marker(marker: &Marker, margin_mm: f64, dpi: f64) -> Result<GrayImage> {
+pub fn render_marker(marker: &Marker, margin_mm: f64, dpi: f64) -> Result<GrayImage, RenderError> {
     let side = marker.diameter_mm + 2.0 * margin_mm;
     let mut page = Page::new(side, side);
     page.push(Item::Marker {

@@ -1,8 +1,8 @@
 //! Page templates for print sheets: small TOML files, the standard ones built
 //! into the binary from `templates/`, a user's own loaded from a path.
 
+use crate::error::{refuse, FileKind, LoadError};
 use crate::units::Length;
-use anyhow::{anyhow, bail, Context, Result};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -68,13 +68,13 @@ fn default_scale_bar() -> String {
     "100mm".to_string()
 }
 
-fn length(field: &str, text: &str) -> Result<f64> {
+fn length(field: &str, text: &str) -> Result<f64, String> {
     text.parse::<Length>()
         .map(Length::mm)
-        .map_err(|e| anyhow!("{field}: {e}"))
+        .map_err(|e| format!("{field}: {e}"))
 }
 
-fn zero_or_length(field: &str, text: &str) -> Result<f64> {
+fn zero_or_length(field: &str, text: &str) -> Result<f64, String> {
     if text.trim().trim_end_matches(|c: char| c.is_alphabetic()) == "0" {
         return Ok(0.0);
     }
@@ -85,13 +85,22 @@ fn zero_or_length(field: &str, text: &str) -> Result<f64> {
 pub const MAX_PAGE_MM: f64 = 10_000.0;
 
 impl Template {
-    /// Parses a template's TOML text.
-    pub fn parse(name: &str, text: &str) -> Result<Template> {
+    /// Parses a template's TOML text; `name` (the file's name) starts every
+    /// error message.
+    pub fn parse(name: &str, text: &str) -> Result<Template, LoadError> {
+        Template::checked(name, text).map_err(|problem| {
+            LoadError::invalid_text(FileKind::Template, problem).in_file(Path::new(name))
+        })
+    }
+
+    fn checked(name: &str, text: &str) -> Result<Template, String> {
         let file: TemplateFile = toml::from_str(text).map_err(|e| {
-            anyhow!(
-                "{}",
-                e.to_string().lines().collect::<Vec<_>>().join(" ").trim()
-            )
+            e.to_string()
+                .lines()
+                .collect::<Vec<_>>()
+                .join(" ")
+                .trim()
+                .to_string()
         })?;
         let template = Template {
             name: name.to_string(),
@@ -105,7 +114,7 @@ impl Template {
             scale_bar_mm: length("scale_bar", &file.scale_bar)?,
         };
         if !(template.label_size_pt.is_finite() && (3.0..=36.0).contains(&template.label_size_pt)) {
-            bail!(
+            refuse!(
                 "label_size_pt must be between 3 and 36, got {}",
                 template.label_size_pt
             );
@@ -115,7 +124,7 @@ impl Template {
             ("page_height", template.page_height_mm),
         ] {
             if !(mm > 0.0 && mm <= MAX_PAGE_MM) {
-                bail!(
+                refuse!(
                     "{field} must be more than 0 and at most {} m (a plotter roll), got {} mm",
                     MAX_PAGE_MM / 1000.0,
                     crate::units::trim_float(mm)
@@ -123,12 +132,12 @@ impl Template {
             }
         }
         if 2.0 * template.margin_mm >= template.page_width_mm.min(template.page_height_mm) {
-            bail!("the margins leave no room on the page");
+            refuse!("the margins leave no room on the page");
         }
         // A gap wider than the page leaves room for one marker per page and
         // made the hexagonal packing search for hours.
         if template.gap_mm >= template.page_width_mm.min(template.page_height_mm) {
-            bail!(
+            refuse!(
                 "gap {} mm is wider than the page",
                 crate::units::trim_float(template.gap_mm)
             );
@@ -137,28 +146,30 @@ impl Template {
     }
 
     /// A built-in template by name (case-insensitive).
-    pub fn builtin(name: &str) -> Result<Template> {
+    pub fn builtin(name: &str) -> Result<Template, LoadError> {
         let lower = name.to_ascii_lowercase();
         let Some((key, text)) = BUILTIN.iter().find(|(k, _)| *k == lower) else {
-            bail!(
-                "unknown template '{name}' (known: {}; or give a path to a .toml file)",
-                builtin_names().join(", ")
-            );
+            return Err(LoadError::invalid_text(
+                FileKind::Template,
+                format!(
+                    "unknown template '{name}' (known: {}; or give a path to a .toml file)",
+                    builtin_names().join(", ")
+                ),
+            ));
         };
-        Template::parse(key, text).with_context(|| format!("built-in template {key}"))
+        Template::parse(key, text)
     }
 
     /// A user's template file.
-    pub fn load(path: &Path) -> Result<Template> {
+    pub fn load(path: &Path) -> Result<Template, LoadError> {
         let text = std::fs::read_to_string(path)
-            .with_context(|| format!("cannot read template {}", path.display()))?;
+            .map_err(|e| LoadError::read(path, FileKind::Template, e))?;
         Template::parse(&path.display().to_string(), &text)
-            .with_context(|| format!("template {}", path.display()))
     }
 
     /// A built-in name, or a path when the argument looks like one
     /// (contains a path separator or ends in .toml).
-    pub fn resolve(name_or_path: &str) -> Result<Template> {
+    pub fn resolve(name_or_path: &str) -> Result<Template, LoadError> {
         let looks_like_path = name_or_path.contains('/')
             || name_or_path.contains(std::path::MAIN_SEPARATOR)
             || name_or_path.to_ascii_lowercase().ends_with(".toml");

@@ -30,6 +30,9 @@ pub struct DetectSpec {
     /// Boards and bundles whose poses each frame reports (with `camera`;
     /// without `diameter` the first board's first marker gives it).
     pub boards: Vec<crate::board::Board>,
+    /// Time each stage of every frame (read with
+    /// [`Detector::last_timings`](crate::Detector::last_timings)).
+    pub timings: bool,
 }
 
 impl DetectSpec {
@@ -74,6 +77,7 @@ impl DetectSpec {
             tracking: self.tracking,
             report_unreadable: self.unreadable,
             boards: self.boards.clone(),
+            timings: self.timings,
             ..DetectorConfig::default()
         };
         if let Some(n) = self.max_markers {

@@ -55,15 +55,13 @@ pub enum Problem {
     /// The family's parameters or codes.
     #[error(transparent)]
     Family(#[from] crate::family::FamilyError),
-    /// A family file that cannot be read.
+    /// A file (a family file, a manifest, a calibration) that cannot be
+    /// read or used.
     #[error(transparent)]
-    FamilyFile(#[from] crate::family::FamilyFileError),
-    /// A sheet manifest that cannot be read.
-    #[error(transparent)]
-    Manifest(#[from] crate::manifest::ManifestError),
+    File(#[from] crate::error::LoadError),
     /// A camera that does not fit the image.
     #[error(transparent)]
-    Camera(#[from] crate::camera::CameraError),
+    Camera(#[from] crate::camera::OtherCamera),
 }
 
 impl SpecError {
@@ -100,11 +98,7 @@ impl SpecError {
     /// Whether the problem is a file that could not be read (an `OSError`
     /// to Python) rather than a wrong value.
     pub fn is_io(&self) -> bool {
-        matches!(
-            &self.problem,
-            Problem::FamilyFile(crate::family::FamilyFileError::Io { .. })
-                | Problem::Manifest(crate::manifest::ManifestError::Io { .. })
-        )
+        matches!(&self.problem, Problem::File(err) if err.is_io())
     }
 }
 

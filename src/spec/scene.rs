@@ -243,7 +243,7 @@ impl SceneSpec {
                         let code = family.code(id).ok_or_else(|| {
                             SpecError::invalid(
                                 "ids",
-                                crate::render::sheet::id_range_error(&family, id),
+                                crate::render::sheet::id_range_error(&family, id).to_string(),
                             )
                         })?;
                         Ok((Marker::whycode(family.bits(), code, diameter_mm), id))

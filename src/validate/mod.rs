@@ -24,17 +24,25 @@ pub use report::{summarise, Counts, MarkerVerdict, PageVerdict, Report};
 
 use crate::manifest::Manifest;
 
+/// Why a sheet cannot be validated.
+#[derive(Debug, thiserror::Error)]
+pub enum UnvalidatableSheet {
+    /// Legacy WhyCon circles carry no IDs to match by.
+    #[error("the sheet has legacy WhyCon markers without IDs; validation matches markers by ID")]
+    LegacyMarkers,
+    /// The family the manifest names cannot be made.
+    #[error("the manifest's family: {0}")]
+    Family(#[from] crate::family::FamilyError),
+}
+
 /// A detector for the manifest's family (legacy WhyCon sheets carry no IDs
 /// and cannot be validated by ID).
-pub fn detector_for(manifest: &Manifest) -> anyhow::Result<crate::detect::Detector> {
+pub fn detector_for(manifest: &Manifest) -> Result<crate::detect::Detector, UnvalidatableSheet> {
     let family_ref = match manifest.family {
         Some(f) if !manifest.legacy => f,
-        _ => anyhow::bail!(
-            "the sheet has legacy WhyCon markers without IDs; validation matches markers by ID"
-        ),
+        _ => return Err(UnvalidatableSheet::LegacyMarkers),
     };
-    let family = crate::family::Family::generate(family_ref.bits, family_ref.distance)
-        .map_err(|e| anyhow::anyhow!("the manifest's family: {e}"))?;
+    let family = crate::family::Family::generate(family_ref.bits, family_ref.distance)?;
     Ok(crate::detect::Detector::new(
         crate::detect::DetectorConfig {
             target: crate::detect::Target::WhyCode(family),

@@ -426,3 +426,61 @@ fn tilted_board_keeps_the_right_normal_under_blur_and_noise() {
         }
     }
 }
+
+#[test]
+fn timings_give_each_frame_its_stages_and_the_run_a_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let frames = dir.path().join("frames");
+    std::fs::create_dir(&frames).unwrap();
+    for k in 0..3 {
+        marker_png(&frames, &format!("f{k}.png"), 5, 0.2 * k as f64);
+    }
+    let out = whycode(&[
+        "detect",
+        "--timings",
+        "--format",
+        "json",
+        frames.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let lines = json_lines(&out);
+    assert_eq!(lines.len(), 3);
+    for frame in &lines {
+        let timings = &frame["timings"];
+        assert_eq!(timings["frames"], 1, "{frame}");
+        let stages = timings["stages_ms"].as_object().unwrap();
+        // (serde_json's map sorts the keys; the line has them in stage order.)
+        let names: Vec<&str> = stages.keys().map(String::as_str).collect();
+        assert_eq!(
+            names,
+            [
+                "describe",
+                "fallback",
+                "finish",
+                "follow",
+                "pose",
+                "prepare",
+                "scan",
+                "shade",
+                "threshold"
+            ]
+        );
+        let line = serde_json::to_string(frame).unwrap();
+        assert!(line.contains("\"timings\""), "{line}");
+        let sum: f64 = stages.values().map(|v| v.as_f64().unwrap()).sum();
+        let total = timings["total_ms"].as_f64().unwrap();
+        // Each figure is rounded to 0.1 µs.
+        assert!((sum - total).abs() < 1e-3, "{sum} vs {total}");
+        assert_eq!(frame["markers"].as_array().unwrap().len(), 1);
+    }
+    let err = stderr(&out);
+    assert!(err.contains("time per stage:"), "{err}");
+    assert!(err.contains("(3 frames)"), "{err}");
+
+    // Without the option neither appears.
+    let plain = whycode(&["detect", "--format", "json", frames.to_str().unwrap()]);
+    assert!(json_lines(&plain)
+        .iter()
+        .all(|f| f.get("timings").is_none()));
+    assert!(!stderr(&plain).contains("time per stage"));
+}

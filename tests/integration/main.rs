@@ -20,6 +20,7 @@ mod family_props;
 mod frame_folders;
 mod fuzz_bounded;
 mod ids_cli;
+mod library_errors;
 mod output_files;
 mod output_streams;
 mod pose_properties;

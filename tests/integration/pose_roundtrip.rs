@@ -138,3 +138,43 @@ fn pose_from_detected_ellipse_matches_simulated_truth() {
     };
     check(distorted, "640x480 distorted");
 }
+
+/// A calibration made at another resolution of the same sensor gives the
+/// poses of the calibration that fits the frame, without the caller fitting
+/// it; one of another aspect ratio gives no pose rather than a wrong one.
+#[test]
+fn the_detector_fits_a_calibration_of_another_resolution_to_each_frame() {
+    let frame_camera = Camera::ideal(640, 360, 70.0);
+    let family = whycode::Family::generate(8, 2).unwrap();
+    let id = 5;
+    let marker = Marker::whycode(8, family.code(id).unwrap(), 50.0);
+    let mut scene = Scene::new(frame_camera);
+    let placement =
+        Placement::at_pixel(&frame_camera, &marker, (300.0, 170.0), 60.0, 0.5, 0.2, 0.3);
+    scene
+        .objects
+        .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+    let (image, truth) = render(&scene);
+    let poses = |camera: Camera| {
+        let mut detector = Detector::new(DetectorConfig {
+            target: whycode::Target::WhyCode(family.clone()),
+            camera: Some(camera),
+            diameter_m: Some(0.05),
+            ..DetectorConfig::default()
+        });
+        let found = detector.detect(&image);
+        assert_eq!(found.len(), 1);
+        assert_eq!(found[0].id, id);
+        found[0].pose
+    };
+    let fitted = poses(frame_camera).expect("a pose with the frame's own calibration");
+    let full = poses(Camera::ideal(1280, 720, 70.0)).expect("a pose with the rescaled calibration");
+    assert!((fitted.position - full.position).norm() < 1e-9);
+    let z = truth.markers[0].position[2];
+    assert!(
+        (full.position.z - z).abs() < 0.01 * z,
+        "{} vs {z}",
+        full.position.z
+    );
+    assert!(poses(Camera::ideal(1280, 960, 70.0)).is_none());
+}

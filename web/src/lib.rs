@@ -28,7 +28,7 @@ const PHOTO_LIMIT: image_io::SizeLimit = image_io::SizeLimit {
 };
 
 fn js_error(err: anyhow::Error) -> JsError {
-    JsError::new(&one_line(&err))
+    JsError::new(&one_line(err.as_ref()))
 }
 
 /// A library spec's error in the page's words, which are the command
@@ -40,7 +40,10 @@ fn spec_error(err: SpecError) -> anyhow::Error {
 fn print_error(err: PrintError) -> anyhow::Error {
     match err {
         PrintError::Option(err) => spec_error(err),
-        PrintError::Render(err) => err,
+        PrintError::Render(err @ whycode::render::RenderError::SelfCheck { .. }) => {
+            anyhow::anyhow!("{err} (nothing written)")
+        }
+        PrintError::Render(err) => err.into(),
     }
 }
 
@@ -320,12 +323,12 @@ fn marker_files(options: &str) -> Result<Files> {
 /// Decodes a photo's bytes to 8-bit grey with the CLI's loader, within
 /// what a tab can hold.
 fn decode_gray(name: &str, bytes: &[u8]) -> Result<GrayImage> {
-    image_io::decode_gray(Path::new(name), bytes, PHOTO_LIMIT).map_err(|err| match err {
-        image_io::ImageError::TooLarge { .. } => anyhow::anyhow!(
+    image_io::decode_gray(Path::new(name), bytes, PHOTO_LIMIT).map_err(|err| match err.problem {
+        whycode::LoadProblem::TooLarge { .. } => anyhow::anyhow!(
             "{err}; scale it down, or check it with the whycode command (up to {} px a side)",
             image_io::MAX_SIDE
         ),
-        other => other.into(),
+        _ => err.into(),
     })
 }
 
@@ -488,7 +491,7 @@ mod tests {
     #[test]
     fn a_text_file_is_not_a_photo() {
         let err = decode_gray("notes.txt", b"hello, not an image").unwrap_err();
-        assert!(one_line(&err).starts_with("notes.txt: not an image"));
+        assert!(one_line(err.as_ref()).starts_with("notes.txt: not an image"));
     }
 
     #[test]
@@ -503,7 +506,7 @@ mod tests {
             image::ExtendedColorType::L8,
         )
         .unwrap();
-        let text = one_line(&decode_gray("wide.png", &bytes).unwrap_err());
+        let text = one_line(decode_gray("wide.png", &bytes).unwrap_err().as_ref());
         assert!(
             text.starts_with("wide.png: image of 13000x40 pixels is larger than the supported 12000 px a side and 60 megapixels; scale it down"),
             "{text}"

@@ -8,12 +8,12 @@ use super::font::CAP_HEIGHT;
 use super::marker::{cut_circle, marker_label, LABEL_GAP_MM};
 use super::page::{Anchor, Item, Page, MM_PER_PT};
 use super::template::Template;
+use super::RenderError;
 use crate::family::{check_id_list, Family, MAX_LISTED_IDS};
 use crate::geometry::Marker;
 use crate::manifest::{FamilyRef, Manifest, PrintedMarker};
 use crate::spec::SpecError;
 use crate::units::trim_float;
-use anyhow::{bail, Result};
 use footer::push_footer;
 use packing::{best_packing, layout_area, Cell};
 
@@ -58,11 +58,15 @@ pub struct Sheet {
 
 /// Markers of a family for a list of IDs; an ID outside the family is an
 /// error naming the valid range.
-pub fn family_markers(family: &Family, ids: &[u32], diameter_mm: f64) -> Result<Vec<SheetMarker>> {
+pub fn family_markers(
+    family: &Family,
+    ids: &[u32],
+    diameter_mm: f64,
+) -> Result<Vec<SheetMarker>, RenderError> {
     ids.iter()
         .map(|&id| {
             let Some(code) = family.code(id) else {
-                bail!("{}", id_range_error(family, id));
+                return Err(id_range_error(family, id));
             };
             let marker = Marker::whycode(family.bits(), code, diameter_mm);
             let size = format!("{} mm", trim_float((diameter_mm * 10.0).round() / 10.0));
@@ -80,21 +84,13 @@ pub fn family_markers(family: &Family, ids: &[u32], diameter_mm: f64) -> Result<
         .collect()
 }
 
-/// The message for an ID that is not in a family.
-pub fn id_range_error(family: &Family, id: u32) -> String {
-    if family.is_empty() {
-        format!(
-            "ID {id} is not in the {}-bit distance-{} family (it has no IDs)",
-            family.bits(),
-            family.distance()
-        )
-    } else {
-        format!(
-            "ID {id} is not in the {}-bit distance-{} family (IDs 1-{})",
-            family.bits(),
-            family.distance(),
-            family.len()
-        )
+/// The error for an ID that is not in a family, naming the IDs it has.
+pub fn id_range_error(family: &Family, id: u32) -> RenderError {
+    RenderError::IdOutOfRange {
+        id,
+        bits: family.bits(),
+        distance: family.distance(),
+        count: family.len(),
     }
 }
 
@@ -229,10 +225,10 @@ pub fn largest_fitting_diameter(markers: &[SheetMarker], template: &Template) ->
 }
 
 /// Lays the markers out on as many pages as they need.
-pub fn layout(spec: &SheetSpec) -> Result<Sheet> {
+pub fn layout(spec: &SheetSpec) -> Result<Sheet, RenderError> {
     let template = &spec.template;
     if spec.markers.is_empty() {
-        bail!("no markers to print");
+        return Err(RenderError::NoMarkers);
     }
     let diameter = spec.markers[0].marker.diameter_mm;
     if spec
@@ -240,20 +236,19 @@ pub fn layout(spec: &SheetSpec) -> Result<Sheet> {
         .iter()
         .any(|m| (m.marker.diameter_mm - diameter).abs() > 1e-9)
     {
-        bail!("all markers on a sheet must have the same diameter");
+        return Err(RenderError::MixedDiameters);
     }
     let (cell, packing) = best_packing(&spec.markers, diameter, template);
     if packing.centres.is_empty() {
         let largest = largest_fitting_diameter(&spec.markers, template);
-        bail!(
-            "a {} mm marker does not fit on the {} page ({} x {} mm, {} mm margins); the largest that fits is {} mm",
-            trim_float(diameter),
-            template.name,
-            trim_float(template.page_width_mm),
-            trim_float(template.page_height_mm),
-            trim_float(template.margin_mm),
-            trim_float(largest)
-        );
+        return Err(RenderError::DoesNotFit {
+            diameter_mm: diameter,
+            template: template.name.clone(),
+            page_width_mm: template.page_width_mm,
+            page_height_mm: template.page_height_mm,
+            margin_mm: template.margin_mm,
+            largest_mm: largest,
+        });
     }
     let (left, top, _, _) = layout_area(template);
     let per_page = packing.centres.len();
