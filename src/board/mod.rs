@@ -295,7 +295,7 @@ pub fn locate(
             continue;
         };
         let score = median_residual(&sightings, camera, &x);
-        if best.as_ref().map_or(true, |(s, _)| score < *s) {
+        if best.as_ref().is_none_or(|(s, _)| score < *s) {
             best = Some((score, x));
         }
     }
