@@ -16,6 +16,8 @@ pub enum FileKind {
     Camera,
     /// A page template.
     Template,
+    /// A board: a sheet's manifest or a marker bundle.
+    Board,
 }
 
 impl FileKind {
@@ -27,6 +29,7 @@ impl FileKind {
             FileKind::Manifest => "sheet manifest",
             FileKind::Camera => "camera calibration",
             FileKind::Template => "template",
+            FileKind::Board => "board",
         }
     }
 }

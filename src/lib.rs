@@ -47,6 +47,8 @@
 //! [`Manifest`], against which [`validate`] checks photos of the print
 //! (its [`Report`]).
 
+pub mod board;
+pub mod calibrate;
 pub mod camera;
 pub mod detect;
 pub mod error;

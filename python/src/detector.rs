@@ -329,6 +329,7 @@ impl PyMarker {
             height: 0,
             elapsed_ms: 0.0,
             markers: vec![self.detection.clone()],
+            boards: Vec::new(),
             timings: None,
             stream: None,
         };

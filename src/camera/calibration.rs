@@ -382,6 +382,98 @@ impl Camera {
     }
 }
 
+/// The calibration file formats [`Camera::to_file_text`] writes, all of
+/// which [`Camera::load`] reads back exactly.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CalibrationFormat {
+    /// ROS `camera_info` YAML, as `camera_calibration` writes it.
+    RosYaml,
+    /// OpenCV FileStorage YAML (`%YAML:1.0`, `!!opencv-matrix`).
+    OpenCvYaml,
+    /// OpenCV FileStorage XML.
+    OpenCvXml,
+}
+
+impl CalibrationFormat {
+    /// The format a file name asks for: `.xml` OpenCV XML, `.yml` OpenCV
+    /// YAML (the extension OpenCV's samples write), anything else ROS YAML.
+    pub fn for_path(path: &Path) -> CalibrationFormat {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("xml") => CalibrationFormat::OpenCvXml,
+            Some("yml") => CalibrationFormat::OpenCvYaml,
+            _ => CalibrationFormat::RosYaml,
+        }
+    }
+}
+
+impl Camera {
+    /// The calibration in `format`; `camera_name` goes where the format
+    /// has a place for it (ROS YAML).
+    pub fn to_file_text(&self, format: CalibrationFormat, camera_name: &str) -> String {
+        match format {
+            CalibrationFormat::RosYaml => self.to_ros_yaml(camera_name),
+            CalibrationFormat::OpenCvYaml => self.to_opencv_yaml(),
+            CalibrationFormat::OpenCvXml => self.to_opencv_xml(),
+        }
+    }
+
+    fn camera_matrix(&self) -> [f64; 9] {
+        [self.fx, 0.0, self.cx, 0.0, self.fy, self.cy, 0.0, 0.0, 1.0]
+    }
+
+    /// The calibration as OpenCV FileStorage YAML (what
+    /// `cv::FileStorage` and the calibration sample write).
+    pub fn to_opencv_yaml(&self) -> String {
+        let matrix = |rows: usize, cols: usize, values: &[f64]| {
+            format!(
+                "!!opencv-matrix\n   rows: {rows}\n   cols: {cols}\n   dt: d\n   data: [ {} ]\n",
+                exact_list(values, ", ")
+            )
+        };
+        format!(
+            "%YAML:1.0\n---\nimage_width: {}\nimage_height: {}\ncamera_matrix: {}\
+             distortion_coefficients: {}",
+            self.width,
+            self.height,
+            matrix(3, 3, &self.camera_matrix()),
+            matrix(5, 1, &self.distortion),
+        )
+    }
+
+    /// The calibration as OpenCV FileStorage XML.
+    pub fn to_opencv_xml(&self) -> String {
+        let matrix = |name: &str, rows: usize, cols: usize, values: &[f64]| {
+            format!(
+                "<{name} type_id=\"opencv-matrix\">\n  <rows>{rows}</rows>\n  <cols>{cols}</cols>\n  \
+                 <dt>d</dt>\n  <data>\n    {}</data></{name}>\n",
+                exact_list(values, " ")
+            )
+        };
+        format!(
+            "<?xml version=\"1.0\"?>\n<opencv_storage>\n<image_width>{}</image_width>\n\
+             <image_height>{}</image_height>\n{}{}</opencv_storage>\n",
+            self.width,
+            self.height,
+            matrix("camera_matrix", 3, 3, &self.camera_matrix()),
+            matrix("distortion_coefficients", 5, 1, &self.distortion),
+        )
+    }
+}
+
+/// Numbers in their shortest form that reads back to the same bits.
+fn exact_list(values: &[f64], separator: &str) -> String {
+    values
+        .iter()
+        .map(|v| format!("{v:?}"))
+        .collect::<Vec<_>>()
+        .join(separator)
+}
+
 /// OpenCV writes `%YAML:1.0` (not valid YAML 1.1/1.2 syntax) and tags its
 /// matrices `!!opencv-matrix`; neither carries information we need.
 fn strip_opencv_yaml(text: &str) -> String {
@@ -629,6 +721,25 @@ cam0:
         };
         let text = cam.to_ros_yaml("front: camera");
         assert_eq!(Camera::parse(&text).unwrap(), cam, "{text}");
+    }
+
+    #[test]
+    fn every_writer_round_trips_and_the_extension_picks_it() {
+        let cam = Camera {
+            fx: 1234.5678901234,
+            distortion: [-0.28, 0.09, 1.2e-5, -0.0008, -0.012],
+            ..distorted()
+        };
+        for (name, format) in [
+            ("cam.yaml", CalibrationFormat::RosYaml),
+            ("cam.yml", CalibrationFormat::OpenCvYaml),
+            ("cam.XML", CalibrationFormat::OpenCvXml),
+            ("cam", CalibrationFormat::RosYaml),
+        ] {
+            assert_eq!(CalibrationFormat::for_path(Path::new(name)), format);
+            let text = cam.to_file_text(format, "cam");
+            assert_eq!(Camera::parse(&text).unwrap(), cam, "{text}");
+        }
     }
 
     #[test]

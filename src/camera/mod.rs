@@ -9,7 +9,7 @@
 
 mod calibration;
 
-pub use calibration::OtherCamera;
+pub use calibration::{CalibrationFormat, OtherCamera};
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 

@@ -72,6 +72,12 @@ pub struct DetectArgs {
     #[arg(long, value_name = "FILE", requires = "diameter")]
     camera: Option<PathBuf>,
 
+    /// A board (a sheet's manifest: each page a plane) or a bundle file
+    /// (YAML: markers' IDs, diameters and poses): each frame's JSON gets
+    /// its pose in `boards`. Repeatable; needs --camera
+    #[arg(long, value_name = "FILE", requires = "camera")]
+    board: Vec<PathBuf>,
+
     #[command(flatten)]
     format: FormatArg,
 
@@ -282,6 +288,14 @@ fn detector_config(args: &DetectArgs, recording: bool) -> Result<DetectorConfig>
         tracking: recording,
         unreadable: args.unreadable,
         min_ink: args.min_ink,
+        boards: args
+            .board
+            .iter()
+            .map(|path| whycode::board::Board::load(path))
+            .collect::<Result<Vec<_>, _>>()?
+            .into_iter()
+            .flatten()
+            .collect(),
         timings: args.timings,
         camera_later: recording && args.camera.is_none(),
     }
@@ -449,6 +463,7 @@ fn detect_one(
     let start = Instant::now();
     let markers = detector.detect(&image);
     let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;
+    let boards = detector.locate_boards(&markers);
     if let Some(out) = annotate {
         let png = whycode::detect::annotate::annotated_png(&image, &markers)?;
         whycode::io::write_atomic(out, &png)?;
@@ -459,6 +474,7 @@ fn detect_one(
         height: image.height(),
         elapsed_ms,
         markers,
+        boards,
         timings: detector.last_timings(),
         stream: None,
     })

@@ -5,6 +5,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod args;
+mod calibrate;
 mod detect;
 mod ids;
 mod marker;
@@ -39,6 +40,8 @@ enum Command {
     Validate(validate::ValidateArgs),
     /// Render what a camera would see of markers or sheets, with ground truth
     Simulate(simulate::SimulateArgs),
+    /// Calibrate a camera (intrinsics, lens distortion) from photos of a printed sheet
+    Calibrate(calibrate::CalibrateArgs),
 }
 
 /// An interrupted run (Ctrl-C, `kill`, a closed terminal) removes the
@@ -71,6 +74,7 @@ pub fn main() -> ExitCode {
         Command::Detect(args) => detect::run(args),
         Command::Validate(args) => validate::run(args),
         Command::Simulate(args) => simulate::run(args),
+        Command::Calibrate(args) => calibrate::run(args),
     };
     match result {
         Ok(code) => code,

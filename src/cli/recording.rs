@@ -169,12 +169,14 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
                 }
             }
         }
+        let boards = detector.locate_boards(&markers);
         let report = FrameReport {
             image: shown.clone(),
             width,
             height,
             elapsed_ms,
             markers,
+            boards,
             timings: detector.last_timings(),
             stream: Some(StreamPosition {
                 frame: frame.index,

@@ -1,6 +1,8 @@
 //! `whycode simulate`: render a synthetic camera view with ground truth.
 
-use super::args::{parse_plain_number, spec_error, whole_number, DistanceArg, FamilyArgs};
+use super::args::{
+    parse_plain_number, parse_scale, spec_error, whole_number, DistanceArg, FamilyArgs,
+};
 use super::output;
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
@@ -138,15 +140,6 @@ enum BackgroundArg {
     Grey,
     Table,
     Clutter,
-}
-
-fn parse_scale(text: &str) -> Result<f64, String> {
-    let t = text.trim();
-    match t.strip_suffix('%') {
-        Some(p) => p.trim().parse::<f64>().map(|p| p / 100.0),
-        None => t.parse::<f64>(),
-    }
-    .map_err(|_| format!("'{text}' is not a scale (write e.g. 0.97 or 97%)"))
 }
 
 fn parse_pixels(text: &str) -> Result<f64, String> {

@@ -88,6 +88,9 @@ pub struct DetectorConfig {
     /// [`Detector::last_timings`]. Off, the detector reads no clock (nor
     /// does it on wasm32-unknown-unknown, which has none).
     pub timings: bool,
+    /// Rigid sets of markers whose poses [`Detector::locate_boards`]
+    /// reports (with a camera).
+    pub boards: Vec<crate::board::Board>,
 }
 
 impl Default for DetectorConfig {
@@ -105,6 +108,7 @@ impl Default for DetectorConfig {
             report_unreadable: false,
             legacy_min_ink_px: legacy::MIN_INK_PX,
             timings: false,
+            boards: Vec::new(),
         }
     }
 }
@@ -315,6 +319,20 @@ impl Detector {
     /// frame, and on targets without a clock (wasm32-unknown-unknown).
     pub fn last_timings(&self) -> Option<StageTimings> {
         self.timings
+    }
+
+    /// The pose of every configured board seen in `detections` (this
+    /// detector's last frame), through the configured camera; none
+    /// without a camera and a diameter.
+    pub fn locate_boards(&self, detections: &[Detection]) -> Vec<crate::board::BoardPose> {
+        let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) else {
+            return Vec::new();
+        };
+        self.config
+            .boards
+            .iter()
+            .filter_map(|board| crate::board::locate(board, detections, &camera, diameter))
+            .collect()
     }
 
     /// Forgets tracks and adapted tolerances.

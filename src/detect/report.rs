@@ -18,6 +18,8 @@ pub struct FrameReport {
     pub elapsed_ms: f64,
     /// What was found, in the detector's order.
     pub markers: Vec<Detection>,
+    /// The configured boards' poses ([`super::Detector::locate_boards`]).
+    pub boards: Vec<crate::board::BoardPose>,
     /// How long each stage of the detector took on this frame, when asked
     /// for ([`DetectorConfig::timings`](super::DetectorConfig::timings)).
     pub timings: Option<super::timings::StageTimings>,
@@ -60,8 +62,22 @@ struct FrameRecord<'a> {
     height: u32,
     elapsed_ms: f64,
     markers: Vec<MarkerRecord>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    boards: Vec<BoardRecord>,
     #[serde(skip_serializing_if = "Option::is_none")]
     timings: Option<&'a super::timings::StageTimings>,
+}
+
+#[derive(serde::Serialize)]
+struct BoardRecord {
+    name: String,
+    position: [f64; 3],
+    rotation: [[f64; 3]; 3],
+    quaternion: [f64; 4],
+    used: Vec<u32>,
+    seen: Vec<u32>,
+    rejected: Vec<u32>,
+    rms_px: f64,
 }
 
 #[derive(serde::Serialize)]
@@ -134,6 +150,26 @@ impl FrameReport {
             height: self.height,
             elapsed_ms: round(self.elapsed_ms, 3),
             markers,
+            boards: self
+                .boards
+                .iter()
+                .map(|b| BoardRecord {
+                    name: b.name.clone(),
+                    position: [
+                        round(b.position.x, 6),
+                        round(b.position.y, 6),
+                        round(b.position.z, 6),
+                    ],
+                    rotation: std::array::from_fn(|r| {
+                        std::array::from_fn(|c| round(b.rotation[(r, c)], 7))
+                    }),
+                    quaternion: b.quaternion.map(|q| round(q, 7)),
+                    used: b.used.clone(),
+                    seen: b.seen.clone(),
+                    rejected: b.rejected.clone(),
+                    rms_px: round(b.rms_px, 4),
+                })
+                .collect(),
             timings: self.timings.as_ref(),
         };
         serde_json::to_string(&record).expect("plain records serialise")
@@ -277,6 +313,7 @@ mod tests {
             height: 480,
             elapsed_ms: 1.23456,
             markers,
+            boards: Vec::new(),
             timings: None,
             stream: None,
         }

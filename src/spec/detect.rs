@@ -27,6 +27,9 @@ pub struct DetectSpec {
     /// Smallest black ring of a legacy marker worth reporting, pixels
     /// (legacy only; default the original WhyCon's 100).
     pub min_ink: Option<f64>,
+    /// Boards and bundles whose poses each frame reports (with `camera`;
+    /// without `diameter` the first board's first marker gives it).
+    pub boards: Vec<crate::board::Board>,
     /// Time each stage of every frame (read with
     /// [`Detector::last_timings`](crate::Detector::last_timings)).
     pub timings: bool,
@@ -39,10 +42,25 @@ impl DetectSpec {
     /// Checks every option and builds the detector's configuration.
     pub fn build(&self) -> Result<DetectorConfig, SpecError> {
         let target = self.target.resolve()?;
-        let diameter_m = self
+        let mut diameter_m = self
             .diameter
             .map(|d| within("diameter", d.mm(), limits::MARKER_DIAMETER_MM).map(|mm| mm / 1000.0))
             .transpose()?;
+        if !self.boards.is_empty() {
+            if self.camera.is_none() {
+                return Err(SpecError::of(
+                    "board",
+                    Problem::Conflict("a board's pose needs the camera: give camera too".into()),
+                ));
+            }
+            diameter_m = diameter_m.or_else(|| {
+                self.boards
+                    .iter()
+                    .flat_map(|b| b.markers.first())
+                    .map(|m| m.diameter_m)
+                    .next()
+            });
+        }
         match (diameter_m.is_some(), self.camera.is_some()) {
             (true, false) if !self.camera_later => {
                 return Err(pose_needs_both("diameter", "camera"))
@@ -63,6 +81,7 @@ impl DetectSpec {
             camera: self.camera,
             tracking: self.tracking,
             report_unreadable: self.unreadable,
+            boards: self.boards.clone(),
             timings: self.timings,
             ..DetectorConfig::default()
         };

@@ -13,6 +13,7 @@
 //! command line prints `--camera-distance: …` where Python prints
 //! `camera_distance: …` for the same mistake.
 
+mod calibrate;
 mod detect;
 pub mod limits;
 #[cfg(feature = "recordings")]
@@ -20,6 +21,7 @@ mod recording;
 mod scene;
 mod target;
 
+pub use calibrate::CalibrateSpec;
 pub use detect::DetectSpec;
 pub use limits::{Limit, OutOfRange};
 #[cfg(feature = "recordings")]

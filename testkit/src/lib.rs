@@ -15,6 +15,7 @@
 //! - [`fuzz`]: the fuzz harness (the test suite's bounded run and
 //!   `examples/fuzz`'s long one).
 
+pub mod calibration;
 pub mod desk;
 pub mod fuzz;
 pub mod scenario;

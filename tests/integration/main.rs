@@ -7,6 +7,8 @@
 
 mod support;
 
+mod board_roundtrip;
+mod calibrate_roundtrip;
 mod defects_cli;
 mod detect_cli;
 mod detect_compat;

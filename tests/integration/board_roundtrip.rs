@@ -1,0 +1,189 @@
+//! Board and bundle poses on simulated photos through a distorting lens:
+//! a sheet with half its markers painted over (through `detect --board`),
+//! and a bundle of markers on three faces of a cube.
+
+use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
+
+use crate::support::run_ok;
+use whycode::board::Board;
+use whycode::detect::{Detector, DetectorConfig, Target};
+use whycode::family::Family;
+use whycode::geometry::Marker;
+use whycode::simulate::{self, Blot, LooseMarker, Placement, Scene, SceneObject, SheetPage};
+use whycode_testkit::calibration;
+
+fn angle_deg(a: &Matrix3<f64>, b: &Matrix3<f64>) -> f64 {
+    Rotation3::from_matrix(&(a.transpose() * b))
+        .angle()
+        .to_degrees()
+}
+
+#[test]
+fn a_sheet_with_half_its_markers_covered_gives_the_page_pose() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = calibration::lens();
+    let manifest = calibration::a4_sheet();
+    let placement = calibration::views(&truth, 3, 11)[2];
+    let mut page = SheetPage::new(manifest.clone(), 1, placement);
+    // White paint over every other marker: half the board unseen.
+    for m in manifest.markers.iter().filter(|m| m.id % 2 == 0) {
+        page.blots.push(Blot {
+            x_mm: m.x_mm,
+            y_mm: m.y_mm,
+            radius_mm: m.diameter_mm * 0.7,
+            black: false,
+        });
+    }
+    let mut scene = Scene::new(truth);
+    scene.objects.push(SceneObject::Page(page));
+    scene.focus_blur_px = 0.6;
+    scene.noise = 1.5;
+    let image = simulate::render(&scene).0;
+    let photo = dir.path().join("view.png");
+    image.save(&photo).unwrap();
+    let sheet = dir.path().join("sheet.json");
+    std::fs::write(&sheet, serde_json::to_string(&manifest).unwrap()).unwrap();
+    let camera = dir.path().join("camera.yaml");
+    std::fs::write(&camera, truth.to_ros_yaml("lens")).unwrap();
+
+    let out = run_ok(&[
+        "detect",
+        "--bits",
+        "10",
+        "--distance",
+        "2",
+        "--diameter",
+        "30mm",
+        "--camera",
+        camera.to_str().unwrap(),
+        "--board",
+        sheet.to_str().unwrap(),
+        "--format",
+        "json",
+        photo.to_str().unwrap(),
+    ]);
+    let frame: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    let board = &frame["boards"][0];
+    assert_eq!(board["name"], "sheet", "{out}");
+    let used: Vec<u64> = board["used"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert!(used.len() >= 16, "{board}");
+    assert!(used.iter().all(|id| id % 2 == 1), "{board}");
+
+    // The page's top-left corner, x right, y down, z into the page, in
+    // the simulator's page frame (centre, y up, z out).
+    let [w, h] = calibration::PAGE_MM;
+    let flip = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
+    let true_rotation = placement.rotation * flip;
+    let true_position = placement.to_camera_mm(-w / 2.0, h / 2.0);
+    let position = Vector3::from_iterator(
+        board["position"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap()),
+    );
+    let rotation = Matrix3::from_iterator(
+        board["rotation"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|row| row.as_array().unwrap().iter().map(|v| v.as_f64().unwrap())),
+    )
+    .transpose();
+    let distance = true_position.norm();
+    let rotation_error = angle_deg(&rotation, &true_rotation);
+    let position_error = (position - true_position).norm() / distance;
+    assert!(
+        rotation_error < 0.05,
+        "rotation off by {rotation_error}°: {board}"
+    );
+    assert!(
+        position_error < 5e-4,
+        "position off by {:.4} % of the distance: {board}",
+        100.0 * position_error
+    );
+}
+
+#[test]
+fn a_bundle_on_a_cube_gives_the_cube_pose() {
+    let truth = calibration::lens();
+    let family = Family::generate(10, 2).unwrap();
+    let side = 0.06;
+    // Three faces: +z, +x, +y; each marker's +z out of its face.
+    let faces = [
+        (
+            1,
+            Vector3::new(0.0, 0.0, side / 2.0),
+            UnitQuaternion::identity(),
+        ),
+        (
+            2,
+            Vector3::new(side / 2.0, 0.0, 0.0),
+            UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2),
+        ),
+        (
+            3,
+            Vector3::new(0.0, side / 2.0, 0.0),
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -std::f64::consts::FRAC_PI_2),
+        ),
+    ];
+    let bundle: String = std::iter::once("bundles:\n  - name: cube\n    layout:\n".to_string())
+        .chain(faces.iter().map(|(id, p, q)| {
+            format!(
+                "      - {{id: {id}, diameter: 0.04, x: {}, y: {}, z: {}, qw: {}, qx: {}, qy: {}, qz: {}}}\n",
+                p.x, p.y, p.z, q.w, q.i, q.j, q.k
+            )
+        }))
+        .collect();
+    let boards = Board::parse_bundles(&bundle).unwrap();
+
+    let cube_rotation = *Rotation3::rotation_between(
+        &Vector3::new(1.0, 1.0, 1.0),
+        &Vector3::new(0.15, -0.1, -1.0),
+    )
+    .unwrap()
+    .matrix();
+    let cube_position = Vector3::new(0.03, -0.02, 0.45);
+    let mut scene = Scene::new(truth);
+    for (id, p, q) in &faces {
+        let marker = Marker::whycode(10, family.code(*id).unwrap(), 40.0);
+        let placement = Placement::new(
+            cube_position + cube_rotation * p,
+            cube_rotation * q.to_rotation_matrix().matrix(),
+        );
+        let mut loose = LooseMarker::new(marker, *id, placement);
+        loose.card_half_mm = 29.0;
+        scene.objects.push(SceneObject::Marker(loose));
+    }
+    scene.focus_blur_px = 0.6;
+    scene.noise = 1.5;
+    let image = simulate::render(&scene).0;
+
+    let mut detector = Detector::new(DetectorConfig {
+        target: Target::WhyCode(family),
+        camera: Some(truth),
+        diameter_m: Some(0.04),
+        boards,
+        ..Default::default()
+    });
+    let found = detector.detect(&image);
+    let poses = detector.locate_boards(&found);
+    assert_eq!(poses.len(), 1, "{found:?}");
+    let pose = &poses[0];
+    assert_eq!(pose.used, vec![1, 2, 3], "{pose:?}");
+    let rotation_error = angle_deg(&pose.rotation, &cube_rotation);
+    let position_error = (pose.position - cube_position).norm();
+    assert!(
+        rotation_error < 0.2,
+        "rotation off by {rotation_error}°: {pose:?}"
+    );
+    assert!(
+        position_error < 0.5e-3,
+        "position off by {position_error} m: {pose:?}"
+    );
+}
