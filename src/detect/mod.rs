@@ -38,6 +38,8 @@ mod scan;
 pub(crate) mod segment;
 pub(crate) mod threshold;
 mod timings;
+#[cfg(feature = "trace")]
+pub mod trace;
 mod tracking;
 
 pub use timings::{Stage, StageTimings};
@@ -208,6 +210,9 @@ pub struct Detector {
     stopwatch: Stopwatch,
     /// The last frame's stage timings, with `config.timings`.
     timings: Option<StageTimings>,
+    /// Where the scan lost each segment (feature `trace` only).
+    #[cfg(feature = "trace")]
+    trace: Vec<trace::Loss>,
 }
 
 /// A disc that passed every test.
@@ -265,6 +270,8 @@ impl Detector {
             frame: 0,
             stopwatch: Stopwatch::default(),
             timings: None,
+            #[cfg(feature = "trace")]
+            trace: Vec::new(),
         }
     }
 
