@@ -288,8 +288,9 @@ impl Rings {
         }
     }
 
-    /// The ring read through the motion blur its outline shows, when the
-    /// blur is long enough to smear the sectors the reader samples.
+    /// The ring read through the blur its outline shows: a motion blur
+    /// long enough to smear the sectors the reader samples, else a focus
+    /// blur wide enough to.
     fn read_blurred<C: Deref<Target = [u8]>>(
         &self,
         image: &ImageBuffer<Luma<u8>, C>,
@@ -297,13 +298,15 @@ impl Rings {
         outer: &Ellipse,
     ) -> Option<SmallRing> {
         let family = self.family()?;
-        let blur = ellipse::linear_blur(gray, outer)?;
-        // Below this the sector reader's central samples stay clear of
-        // the neighbouring sectors.
-        if blur.length < ellipse::MIN_MOTION_BLUR_PX {
-            return None;
+        // Below this length the sector reader's central samples stay clear
+        // of the neighbouring sectors.
+        let motion = ellipse::linear_blur(gray, outer)
+            .filter(|blur| blur.length >= ellipse::MIN_MOTION_BLUR_PX);
+        if let Some(blur) = motion {
+            return model::read_blurred_ring(image, outer, family, &blur);
         }
-        model::read_blurred_ring(image, outer, family, &blur)
+        let sigma = ellipse::defocus(gray, outer).filter(|&s| s >= MIN_DEFOCUS_PX)?;
+        model::read_defocused_ring(image, outer, family, sigma)
     }
 }
 
@@ -415,6 +418,10 @@ fn coarser_ring<C: Deref<Target = [u8]>>(
         _ => None,
     }
 }
+
+/// Focus blur (Gaussian sigma, pixels) from which a ring that the
+/// structure test or the reader could not settle is read through it.
+const MIN_DEFOCUS_PX: f64 = 0.5;
 
 /// Least sector width (pixels, see [`manchester::sector_pixels`]) at which
 /// a ring read without a family is believed.
