@@ -305,7 +305,13 @@ impl Rings {
         if let Some(blur) = motion {
             return model::read_blurred_ring(image, outer, family, &blur);
         }
-        let sigma = ellipse::defocus(gray, outer).filter(|&s| s >= MIN_DEFOCUS_PX)?;
+        // A blur narrow beside the half-sectors leaves their edges to the
+        // structure test and the reader: a ring they refute then is no
+        // marker's (desk clutter's washers and letters, whose edges read
+        // as half a pixel of blur, cost the model 20 times a desk frame).
+        let sectors = manchester::sector_pixels(outer, family.bits());
+        let sigma = ellipse::defocus(gray, outer)
+            .filter(|&s| s >= MIN_DEFOCUS_PX && s >= MIN_DEFOCUS_PER_SECTOR * sectors)?;
         model::read_defocused_ring(image, outer, family, sigma)
     }
 }
@@ -422,6 +428,10 @@ fn coarser_ring<C: Deref<Target = [u8]>>(
 /// Focus blur (Gaussian sigma, pixels) from which a ring that the
 /// structure test or the reader could not settle is read through it.
 const MIN_DEFOCUS_PX: f64 = 0.5;
+
+/// Focus blur, relative to the half-sector's width, from which the sectors'
+/// edges are too soft for the structure test and the reader.
+const MIN_DEFOCUS_PER_SECTOR: f64 = 0.3;
 
 /// Least sector width (pixels, see [`manchester::sector_pixels`]) at which
 /// a ring read without a family is believed.
