@@ -43,6 +43,15 @@ struct TagReport {
 }
 
 impl AprilTag {
+    /// The same detector without decimation (`quad_decimate` 1).
+    pub fn full_resolution(&self) -> AprilTag {
+        AprilTag {
+            python: self.python.clone(),
+            script: self.script.clone(),
+            quad_decimate: 1.0,
+        }
+    }
+
     /// `$APRILTAG_PYTHON`, else `target/bench-venv` of this checkout, else
     /// `python3`: the first that imports pupil_apriltags. The error says
     /// why none did.

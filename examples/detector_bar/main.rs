@@ -9,13 +9,17 @@
 //!
 //! `--quick` runs a third of the frames; `--only` runs those sections.
 //! AprilTag needs a Python with pupil-apriltags ([`apriltag::SETUP`];
-//! `APRILTAG_PYTHON` names one), the original a build of its sources
-//! (`original/build.sh`); without them their cells say "not measured".
+//! `APRILTAG_PYTHON` names one), ArUco (the defocus row, 9) one with
+//! opencv-python-headless ([`aruco::SETUP`]; `ARUCO_PYTHON`), the original
+//! a build of its sources (`original/build.sh`); without them their cells
+//! say "not measured".
 //! A new row is a [`Scenario`] (which markers, how many frames, the look;
 //! `whycode_testkit::scenario`), its counts for ours and the rivals', and a
 //! `table.row(...)`.
 
 mod apriltag;
+mod aruco;
+mod defocus;
 mod measures;
 mod original;
 mod rival;
@@ -26,6 +30,7 @@ use std::f64::consts::PI;
 use std::time::Instant;
 
 use apriltag::AprilTag;
+use aruco::Aruco;
 use measures::{normal_errors, yaw_errors, NormalResult};
 use original::Original;
 use rival::Rival;
@@ -38,7 +43,7 @@ use whycode_testkit::scenes::cast_shadow;
 use whycode_testkit::tally::Counts;
 
 /// The rivals in [`table::RIVALS`] order; `None` where one cannot be run.
-pub type Rivals<'a> = [Option<&'a dyn Rival>; 2];
+pub type Rivals<'a> = [Option<&'a dyn Rival>; 3];
 
 fn ids(c: &Counts) -> String {
     format!(
@@ -57,7 +62,7 @@ fn rates(c: &Counts) -> String {
 }
 
 /// Every rival's counts on the scenario's frames.
-fn rival_counts(scenario: &Scenario, rivals: &Rivals) -> [Option<Counts>; 2] {
+fn rival_counts(scenario: &Scenario, rivals: &Rivals) -> [Option<Counts>; 3] {
     rivals.map(|r| rival::counts(scenario, r))
 }
 
@@ -90,11 +95,17 @@ fn main() {
         .inspect(|_| println!("original WhyCode: measured (whycon-ros CWhycon, node defaults)"))
         .inspect_err(|e| println!("original WhyCode: not measured ({e})"))
         .ok();
+    let aruco = Aruco::find()
+        .inspect(|_| println!("ArUco: OpenCV cv2.aruco, DICT_4X4_50, one thread (defocus row)"))
+        .inspect_err(|e| println!("ArUco: not measured ({e})"))
+        .ok();
+    // ArUco joins on the defocus row only (issue 25's comparison).
     let rivals: Rivals = [
         apriltag.as_ref().map(|a| a as &dyn Rival),
         original.as_ref().map(|o| o as &dyn Rival),
+        None,
     ];
-    let mut table = Table::new(rivals.map(|r| r.is_none()));
+    let mut table = Table::new([apriltag.is_none(), original.is_none(), aruco.is_none()]);
     let mut families = Families::default();
     let fam8 = families.get(8, 2);
 
@@ -120,6 +131,19 @@ fn main() {
     if run(8) {
         println!("8. speed");
         speed::rows(&mut table, &mut families, quick, &rivals);
+    }
+    if run(9) {
+        println!("9. defocus");
+        // AprilTag at full resolution (quad_decimate 1), as issue 25
+        // measured it: its default halves the image, and loses the small
+        // tags before decoding them.
+        let apriltag_full = apriltag.as_ref().map(AprilTag::full_resolution);
+        let rivals: Rivals = [
+            apriltag_full.as_ref().map(|a| a as &dyn Rival),
+            None,
+            aruco.as_ref().map(|a| a as &dyn Rival),
+        ];
+        defocus::rows(&mut table, &fam8, scale, &rivals);
     }
     table.print();
     println!("{:.0} s in all", started.elapsed().as_secs_f64());
@@ -476,7 +500,7 @@ fn smallest_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals
     let mut smallest_detect = None;
     let mut smallest_legacy = None;
     let mut smallest_id = None;
-    let mut smallest_rival: [Option<f64>; 2] = [None; 2];
+    let mut smallest_rival: [Option<f64>; 3] = [None; 3];
     let mut by_size = Vec::new();
     for d in [
         8.0, 9.0, 10.0, 11.0, 12.0, 13.0, 14.0, 16.0, 18.0, 20.0, 24.0,
@@ -534,7 +558,7 @@ fn smallest_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals
             px(smallest_id),
             px(smallest_legacy)
         ),
-        [0, 1].map(|k| rivals[k].map(|_| format!("ID read from {}", px(smallest_rival[k])))),
+        [0, 1, 2].map(|k| rivals[k].map(|_| format!("ID read from {}", px(smallest_rival[k])))),
         "stops at 16 px",
         smallest_detect.is_some_and(|d| d < 16.0)
             && smallest_legacy.is_some_and(|d| d < 16.0)

@@ -13,7 +13,6 @@ use whycode::simulate::{self, Background, Sighting};
 use whycode_testkit::scenario::{
     camera, detector, scene, spread_markers, Families, Print, Scenario, Spread, DEG, DIAMETER_M,
 };
-use whycode_testkit::tag36h11::with_tags;
 use whycode_testkit::tally::Counts;
 
 use crate::rival::{self, Setup};
@@ -230,9 +229,7 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Ri
         let theirs: Cells = rivals.map(|rival| {
             let rival = rival.filter(|_| k == 0)?;
             let mut printed = s.clone();
-            if rival.print() == Print::AprilTag {
-                with_tags(&mut printed);
-            }
+            rival.print().apply(&mut printed);
             let (image, truth) = simulate::render(&printed);
             let setup = Setup {
                 camera: &cam,

@@ -1,31 +1,32 @@
 //! The bar's table: per item our figure, the rivals' measured on the same
-//! scenes in the same run (AprilTag, the original WhyCode; the original's
-//! figure as quoted in issue 9 where it could not be run), and whether ours
-//! passes (meets the item's target and is no worse than any rival).
+//! scenes in the same run (AprilTag, the original WhyCode, and on the
+//! defocus row OpenCV's ArUco; the original's figure as quoted in issue 9
+//! where it could not be run), and whether ours passes (meets the item's
+//! target and is no worse than any rival).
 
 use whycode_testkit::tally::Counts;
 
 /// The rivals' columns, in this order.
-pub const RIVALS: [&str; 2] = ["AprilTag", "original WhyCode"];
+pub const RIVALS: [&str; 3] = ["AprilTag", "original WhyCode", "ArUco 4x4"];
 
 /// Rival figures of one row, in [`RIVALS`] order; `None`: not measured.
-pub type Cells = [Option<String>; 2];
+pub type Cells = [Option<String>; 3];
 
 pub struct Row {
     item: String,
     ours: String,
-    theirs: [String; 2],
+    theirs: [String; 3],
     pass: bool,
 }
 
 pub struct Table {
     rows: Vec<Row>,
     /// Which rivals could not be run at all.
-    missing: [bool; 2],
+    missing: [bool; 3],
 }
 
 impl Table {
-    pub fn new(missing: [bool; 2]) -> Table {
+    pub fn new(missing: [bool; 3]) -> Table {
         Table {
             rows: Vec::new(),
             missing,
@@ -35,20 +36,23 @@ impl Table {
     /// A row; `quoted` is the original's figure from issue 9, shown where
     /// the original was not measured ("" if the issue gives none).
     pub fn row(&mut self, item: &str, ours: String, theirs: Cells, quoted: &str, pass: bool) {
-        let [apriltag, original] = theirs;
+        let [apriltag, original, aruco] = theirs;
         let missing = |k: usize| if self.missing[k] { "not measured" } else { "-" };
         let apriltag = apriltag.unwrap_or_else(|| missing(0).into());
         let original = original.unwrap_or_else(|| match quoted {
             "" => missing(1).into(),
             q => format!("quoted (issue 9): {q}"),
         });
+        let aruco = aruco.unwrap_or_else(|| missing(2).into());
         println!("  {item}: {ours}  [{}]", if pass { "pass" } else { "FAIL" });
-        println!("    {}: {apriltag}", RIVALS[0]);
-        println!("    {}: {original}", RIVALS[1]);
+        let theirs = [apriltag, original, aruco];
+        for (name, figure) in RIVALS.iter().zip(&theirs) {
+            println!("    {name}: {figure}");
+        }
         self.rows.push(Row {
             item: item.to_string(),
             ours,
-            theirs: [apriltag, original],
+            theirs,
             pass,
         });
     }
@@ -61,17 +65,18 @@ impl Table {
     pub fn print(&self) {
         println!();
         println!(
-            "| item | ours | {} (same scenes) | {} (same frames) | result |",
-            RIVALS[0], RIVALS[1]
+            "| item | ours | {} (same scenes) | {} (same frames) | {} (same scenes) | result |",
+            RIVALS[0], RIVALS[1], RIVALS[2]
         );
-        println!("| --- | --- | --- | --- | --- |");
+        println!("| --- | --- | --- | --- | --- | --- |");
         for r in &self.rows {
             println!(
-                "| {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} |",
                 r.item,
                 r.ours,
                 r.theirs[0],
                 r.theirs[1],
+                r.theirs[2],
                 if r.pass { "pass" } else { "FAIL" }
             );
         }
@@ -86,7 +91,7 @@ impl Table {
 
 /// Each rival's figure, where measured.
 pub fn cells<T>(theirs: &[Option<T>], show: impl Fn(&T) -> String) -> Cells {
-    [0, 1].map(|k| theirs.get(k).and_then(|t| t.as_ref()).map(&show))
+    [0, 1, 2].map(|k| theirs.get(k).and_then(|t| t.as_ref()).map(&show))
 }
 
 /// Ours no worse than every measured rival by `better`.

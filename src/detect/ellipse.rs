@@ -597,44 +597,7 @@ const BLUR_RAYS: usize = 48;
 /// where the edge is sharpest) gives L. `None` when the outline shows no
 /// anisotropic spread (a sharp or evenly blurred edge) or cannot be read.
 pub fn linear_blur(image: Gray<'_>, outer: &Ellipse) -> Option<LinearBlur> {
-    let (s, c) = outer.angle.sin_cos();
-    let (a, b) = (outer.semi_major, outer.semi_minor);
-    if !(a.is_finite() && b > 4.0) {
-        return None;
-    }
-    // Along the normal, from inside the black annulus (0.4 R wide) to the
-    // white margin (0.3 R wide).
-    let (inside, outside) = (0.35 * b, 0.3 * b);
-    let step = 0.5;
-    let samples = ((inside + outside) / step) as usize + 1;
-    let mut profile = vec![0.0f64; samples];
-    // (normal angle, inverse steepest slope, contrast) per ray.
-    let mut rays: Vec<(f64, f64, f64)> = Vec::with_capacity(BLUR_RAYS);
-    for k in 0..BLUR_RAYS {
-        let t = std::f64::consts::TAU * (k as f64 + 0.5) / BLUR_RAYS as f64;
-        let (px, py) = outer.point_at(t);
-        // Outward normal: gradient of the implicit form, rotated to the image.
-        let (nl, nm) = (t.cos() / a, t.sin() / b);
-        let (nx, ny) = (nl * c - nm * s, nl * s + nm * c);
-        let norm = nx.hypot(ny);
-        let (nx, ny) = (nx / norm, ny / norm);
-        if !sample_line(image, (px, py), (nx, ny), (-inside, step), &mut profile) {
-            continue;
-        }
-        // Slope over two pixels (four steps), against noise.
-        let slope = (4..samples)
-            .map(|j| (profile[j] - profile[j - 4]) / (4.0 * step))
-            .fold(f64::MIN, f64::max);
-        let low = profile.iter().copied().fold(f64::MAX, f64::min);
-        let high = profile.iter().copied().fold(f64::MIN, f64::max);
-        if slope <= 0.0 || high - low < 8.0 {
-            continue;
-        }
-        rays.push((ny.atan2(nx), 1.0 / slope, high - low));
-    }
-    if rays.len() < BLUR_RAYS * 3 / 4 {
-        return None;
-    }
+    let rays = edge_spread(image, outer)?;
     // Least squares of inverse slope = a + b·|cos(φ - θ)| on a grid of θ.
     let mut best: Option<(f64, f64, f64, f64)> = None;
     for step in 0..90 {
@@ -678,6 +641,101 @@ pub fn linear_blur(image: Gray<'_>, outer: &Ellipse) -> Option<LinearBlur> {
         angle: theta,
         base_width: (offset * contrast).max(0.0),
     })
+}
+
+/// The outline's edge spread along [`BLUR_RAYS`] rays across it: per ray
+/// that reads both levels, the outward normal's angle, the inverse of the
+/// steepest slope (over two pixels) and the black-white contrast. `None`
+/// when too few rays read (a ring under 8 px across the minor axis, cut
+/// by the border, or without contrast).
+fn edge_spread(image: Gray<'_>, outer: &Ellipse) -> Option<Vec<(f64, f64, f64)>> {
+    let (s, c) = outer.angle.sin_cos();
+    let (a, b) = (outer.semi_major, outer.semi_minor);
+    if !(a.is_finite() && b > 4.0) {
+        return None;
+    }
+    // Along the normal, from inside the black annulus (0.4 R wide) to the
+    // white margin (0.3 R wide).
+    let (inside, outside) = (0.35 * b, 0.3 * b);
+    let step = 0.5;
+    let samples = ((inside + outside) / step) as usize + 1;
+    let mut profile = vec![0.0f64; samples];
+    // (normal angle, inverse steepest slope, contrast) per ray.
+    let mut rays: Vec<(f64, f64, f64)> = Vec::with_capacity(BLUR_RAYS);
+    for k in 0..BLUR_RAYS {
+        let t = std::f64::consts::TAU * (k as f64 + 0.5) / BLUR_RAYS as f64;
+        let (px, py) = outer.point_at(t);
+        // Outward normal: gradient of the implicit form, rotated to the image.
+        let (nl, nm) = (t.cos() / a, t.sin() / b);
+        let (nx, ny) = (nl * c - nm * s, nl * s + nm * c);
+        let norm = nx.hypot(ny);
+        let (nx, ny) = (nx / norm, ny / norm);
+        if !sample_line(image, (px, py), (nx, ny), (-inside, step), &mut profile) {
+            continue;
+        }
+        // Slope over two pixels (four steps), against noise.
+        let slope = (4..samples)
+            .map(|j| (profile[j] - profile[j - 4]) / (4.0 * step))
+            .fold(f64::MIN, f64::max);
+        let low = profile.iter().copied().fold(f64::MAX, f64::min);
+        let high = profile.iter().copied().fold(f64::MIN, f64::max);
+        if slope <= 0.0 || high - low < 8.0 {
+            continue;
+        }
+        rays.push((ny.atan2(nx), 1.0 / slope, high - low));
+    }
+    (rays.len() >= BLUR_RAYS * 3 / 4).then_some(rays)
+}
+
+/// Variance (px²) the outline's edge profile shows on top of the focus
+/// blur: the pixel's own area (1/12) and the bilinear sampler's (1/6).
+const SAMPLED_EDGE_VARIANCE: f64 = 0.25;
+
+/// The isotropic (defocus) blur the outline's edge profile shows: the
+/// sigma, pixels, of a Gaussian focus blur on top of the pixels' own area.
+/// A Gaussian of sigma s spreads an edge of contrast C so that its slope
+/// over two pixels peaks at C·erf(1/(s√2))/2; the median over the rays of
+/// the contrast over that slope gives s. `None` when the edge cannot be
+/// read (see [`edge_spread`]).
+pub fn defocus(image: Gray<'_>, outer: &Ellipse) -> Option<f64> {
+    let rays = edge_spread(image, outer)?;
+    let mut widths: Vec<f64> = rays
+        .iter()
+        .map(|&(_, inverse, contrast)| inverse * contrast)
+        .collect();
+    widths.sort_by(f64::total_cmp);
+    let width = widths[widths.len() / 2];
+    // width = 2 / erf(1/(s√2)) grows with s from 2 (a sharp step): bisect.
+    let width_of = |s: f64| 2.0 / erf(1.0 / (s * std::f64::consts::SQRT_2));
+    if width <= width_of(0.05) {
+        return Some(0.0);
+    }
+    let (mut low, mut high) = (0.05f64, 8.0f64);
+    for _ in 0..40 {
+        let mid = 0.5 * (low + high);
+        if width_of(mid) < width {
+            low = mid;
+        } else {
+            high = mid;
+        }
+    }
+    let total = 0.5 * (low + high);
+    Some((total * total - SAMPLED_EDGE_VARIANCE).max(0.0).sqrt())
+}
+
+/// The error function (Abramowitz and Stegun 7.1.26, error under 1.5e-7).
+fn erf(x: f64) -> f64 {
+    let t = 1.0 / (1.0 + 0.327_591_1 * x.abs());
+    let poly = t
+        * (0.254_829_592
+            + t * (-0.284_496_736
+                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    let y = 1.0 - poly * (-x * x).exp();
+    if x < 0.0 {
+        -y
+    } else {
+        y
+    }
 }
 
 #[cfg(test)]
@@ -765,6 +823,49 @@ mod tests {
             assert!(off < 0.1, "{length} px at {angle}: {blur:?}");
             let ratio = blur.length / length;
             assert!((0.7..1.05).contains(&ratio), "{length} px: {blur:?}");
+        }
+    }
+
+    /// A marker rendered out of focus: the outline's edge spread gives the
+    /// Gaussian's sigma to within the span the ring model tries around it.
+    #[test]
+    fn the_outline_of_a_defocused_marker_gives_the_blur() {
+        use crate::camera::Camera;
+        use crate::geometry::Marker;
+        use crate::simulate::{self, LooseMarker, Placement, Scene, SceneObject};
+        use nalgebra::Vector3;
+        let camera = Camera::ideal(320, 240, 60.0);
+        for (diameter, sigma) in [
+            (30.0, 0.0),
+            (30.0, 1.0),
+            (30.0, 2.0),
+            (60.0, 1.5),
+            (60.0, 3.0),
+        ] {
+            let z = camera.fx * 0.05 / diameter;
+            let mut scene = Scene::new(camera);
+            scene.noise = 2.0;
+            scene.focus_blur_px = sigma;
+            let marker = Marker::whycode(8, 0b0001_0011, 50.0);
+            let placement = Placement::viewed(Vector3::new(0.0, 0.0, z), 0.0, 0.0, 0.5);
+            scene
+                .objects
+                .push(SceneObject::Marker(LooseMarker::new(marker, 1, placement)));
+            let (image, truth) = simulate::render(&scene);
+            let m = &truth.markers[0];
+            let outer = Ellipse {
+                u: m.u,
+                v: m.v,
+                semi_major: m.diameter_px / 2.0,
+                semi_minor: m.diameter_px / 2.0,
+                angle: 0.0,
+            };
+            let gray = Gray::new(image.as_raw(), 320, 240);
+            let measured = defocus(gray, &outer).expect("edge readable");
+            assert!(
+                (measured - sigma).abs() < 0.25 * sigma + 0.4,
+                "sigma {sigma} on {diameter} px read as {measured}"
+            );
         }
     }
 

@@ -38,6 +38,8 @@ mod scan;
 pub(crate) mod segment;
 pub(crate) mod threshold;
 mod timings;
+#[cfg(feature = "trace")]
+pub mod trace;
 mod tracking;
 
 pub use timings::{Stage, StageTimings};
@@ -223,6 +225,9 @@ pub struct Detector {
     stopwatch: Stopwatch,
     /// The last frame's stage timings, with `config.timings`.
     timings: Option<StageTimings>,
+    /// Where the scan lost each segment (feature `trace` only).
+    #[cfg(feature = "trace")]
+    trace: Vec<trace::Loss>,
 }
 
 /// A disc that passed every test.
@@ -282,6 +287,8 @@ impl Detector {
             frame: 0,
             stopwatch: Stopwatch::default(),
             timings: None,
+            #[cfg(feature = "trace")]
+            trace: Vec::new(),
         }
     }
 

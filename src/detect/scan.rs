@@ -10,6 +10,16 @@ use super::threshold::{self, ThresholdMap};
 use super::{ellipse, Candidate, Detector, Stage, SCAN_CHUNK};
 use crate::geometry::Design;
 
+/// Returns None from a candidate test, recording (feature `trace`) which
+/// test lost the segment of these statistics.
+macro_rules! lost {
+    ($detector:ident, $reached:ident, $stats:expr) => {{
+        #[cfg(feature = "trace")]
+        $detector.note_loss(super::trace::Reached::$reached, &$stats);
+        return None;
+    }};
+}
+
 /// Slack of the concentricity test, in outer radii: WhyCode's white region
 /// has its ring sectors on one side or the other, so its centroid wanders.
 fn concentricity_tolerance(design: Design) -> f64 {
@@ -262,7 +272,7 @@ impl Detector {
             .filler
             .fill(gray, map, &mut self.labels, seed, Fill::Dark);
         if dark.escaped {
-            return None;
+            lost!(self, Escaped, dark.stats);
         }
         let dark = dark.stats;
         let white_fraction = self.ratio.expected;
@@ -270,11 +280,11 @@ impl Detector {
         let min_d = self.config.min_diameter_px;
         let n = dark.count as f64;
         if n < 0.5 * dark_fraction * PI / 4.0 * min_d * min_d {
-            return None;
+            lost!(self, Size, dark);
         }
         let (bw, bh) = (f64::from(dark.width()), f64::from(dark.height()));
         if bw < 4.0 || bh < 4.0 {
-            return None;
+            lost!(self, Size, dark);
         }
         let (cu, cv) = dark.centroid();
         if !known.is_empty() {
@@ -304,7 +314,7 @@ impl Detector {
         };
         let roundness = n / (PI / 4.0 * bw * bh * dark_fraction * slant) - 1.0;
         if roundness.abs() >= self.roundness.tolerance() {
-            return None;
+            lost!(self, Roundness, dark);
         }
         // The grey values are read only for segments that pass every test
         // up to the contrast test, which is most of all a round blob of
@@ -323,7 +333,9 @@ impl Detector {
         ];
         let max_count = (n * white_fraction / dark_fraction * 2.5) as u64 + 16;
         let reach = concentricity_tolerance(design) * 0.25 * (bw + bh);
-        let white = self.fill_inside(gray, map, (cu, cv), reach, bounds, max_count)?;
+        let Some(white) = self.fill_inside(gray, map, (cu, cv), reach, bounds, max_count) else {
+            lost!(self, WhiteInside, dark);
+        };
         let total = dark.merged(&white);
         let ratio = white.count as f64 / total.count as f64;
         let coarse = ellipse::from_moments(&total);
@@ -350,14 +362,14 @@ impl Detector {
             Some(e) if accepted => e,
             _ => {
                 self.filler.undo_last(&mut self.labels);
-                return None;
+                lost!(self, RatioOrConcentricity, dark);
             }
         };
         // Eq. 4 on the whole disc. Pixel counts of small discs carry a
         // boundary quantisation error of about 1/(2b) of the area.
         let area_error = coarse.area() / total.count as f64 - 1.0;
         if area_error.abs() >= self.area.tolerance() + 0.5 / coarse.semi_minor {
-            return None;
+            lost!(self, Area, dark);
         }
         let black = Stats {
             sum_i: self.filler.kept_grey_sum(gray),
@@ -370,18 +382,22 @@ impl Detector {
         }
         .mean_intensity();
         if white_level - black < map.min_contrast() {
-            return None;
+            lost!(self, Contrast, dark);
         }
         // The outline must be an ellipse along the whole edge: squares and
         // blobs pass the moment tests (a square's area is within 5 % of its
         // moment ellipse's) but not this.
-        let refined = ellipse::refine(gray, &coarse, &mut self.edge_scratch)?;
+        let Some(refined) = ellipse::refine(gray, &coarse, &mut self.edge_scratch) else {
+            lost!(self, EllipseFit, dark);
+        };
         // A motion-blurred outline is fitted on the stretches across the
         // blur only (at least 45 % of the rays).
         let min_support = if refined.blur.is_some() { 0.45 } else { 0.75 };
         if refined.support < min_support || refined.rms > 0.35 + 0.015 * coarse.semi_major {
-            return None;
+            lost!(self, EllipseFit, dark);
         }
+        #[cfg(feature = "trace")]
+        self.note_loss(super::trace::Reached::Candidate, &dark);
         let outer = refined.ellipse;
         Some(Candidate {
             outer,

@@ -10,11 +10,13 @@
 //! - [`scenario`]: seeded series of frames with a row's look, as the
 //!   detector bar measures them, and [`tally`]: what a detector made of
 //!   them ([`tally::Counts`], [`tally::Errors`]);
-//! - [`tag36h11`]: AprilTags printed in the markers' places;
+//! - [`tag36h11`], [`aruco4x4`]: AprilTags and ArUco tags printed in the
+//!   markers' places;
 //! - [`desk`]: desk clutter without markers, for the phantom rules;
 //! - [`fuzz`]: the fuzz harness (the test suite's bounded run and
 //!   `examples/fuzz`'s long one).
 
+pub mod aruco4x4;
 pub mod calibration;
 pub mod desk;
 pub mod fuzz;

@@ -17,10 +17,12 @@ use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
 use whycode::math::Pcg32;
-use whycode::simulate::{self, LooseMarker, Placement, Scene, SceneObject, Sighting, TrueTarget};
+use whycode::simulate::{
+    self, LooseMarker, Placement, PrintedSquare, Scene, SceneObject, Sighting, TrueTarget,
+};
 
-use crate::tag36h11::with_tags;
 use crate::tally::Counts;
+use crate::{aruco4x4, tag36h11};
 
 /// One degree in radians.
 pub const DEG: f64 = PI / 180.0;
@@ -44,8 +46,11 @@ impl Families {
 
 /// A distortion-free camera with a 60° horizontal field of view.
 pub fn camera(width: u32, height: u32) -> Camera {
-    Camera::ideal(width, height, 60.0)
+    Camera::ideal(width, height, DEFAULT_FOV_DEG)
 }
+
+/// The scenarios' horizontal field of view unless one says otherwise.
+const DEFAULT_FOV_DEG: f64 = 60.0;
 
 /// How markers are spread over a frame.
 #[derive(Debug, Clone, Copy)]
@@ -151,8 +156,13 @@ pub fn spread_markers(
             // instead of from the optical axis.
             let turn = tilt.hypot(pan);
             let axis = Vector3::new(tilt, -pan, 0.0) / turn.max(1e-12);
-            Placement::at_pixel(camera, &marker, (u, v), d, 0.0, 0.0, roll)
-                .tilted_from_sight(turn, axis)
+            let facing = Placement::at_pixel(camera, &marker, (u, v), d, 0.0, 0.0, roll);
+            // Face-on to the line of sight has no axis to turn about.
+            if turn > 0.0 {
+                facing.tilted_from_sight(turn, axis)
+            } else {
+                facing
+            }
         } else {
             Placement::at_pixel(camera, &marker, (u, v), d, tilt, pan, roll)
         };
@@ -191,14 +201,47 @@ pub struct Frame {
     pub targets: Vec<TrueTarget>,
 }
 
-/// Which targets a frame shows: our markers, or tag36h11 AprilTags of the
-/// same printed footprint in their places.
+/// Which targets a frame shows: our markers, or square tags of the same
+/// printed footprint in their places.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Print {
     /// WhyCode (or WhyCon) markers.
     WhyCode,
-    /// AprilTags in the markers' places ([`crate::tag36h11::tag_for`]).
+    /// AprilTags (tag36h11) in the markers' places.
     AprilTag,
+    /// ArUco tags (OpenCV's 4x4_50) in the markers' places.
+    Aruco4x4,
+}
+
+impl Print {
+    /// The tag printed where `marker` was, for a print of tags: its black
+    /// square as wide as the marker's disc, on a card of the same size (so
+    /// the tag's white border is the card's margin); the tag's ID from the
+    /// marker's.
+    pub fn tag_for(self, marker: &LooseMarker) -> Option<PrintedSquare> {
+        let (tags, bitmap): (u32, fn(u32) -> GrayImage) = match self {
+            Print::WhyCode => return None,
+            Print::AprilTag => (tag36h11::TAGS, tag36h11::bitmap),
+            Print::Aruco4x4 => (aruco4x4::TAGS, aruco4x4::bitmap),
+        };
+        let id = marker.id % tags;
+        Some(PrintedSquare {
+            card_half_mm: marker.card_half_mm,
+            ..PrintedSquare::new(bitmap(id), marker.marker.diameter_mm, id, marker.placement)
+        })
+    }
+
+    /// Swaps the scene's markers for this print's tags (see
+    /// [`Print::tag_for`]; ours stay).
+    pub fn apply(self, scene: &mut Scene) {
+        for object in &mut scene.objects {
+            if let SceneObject::Marker(m) = object {
+                if let Some(tag) = self.tag_for(m) {
+                    *object = SceneObject::Square(tag);
+                }
+            }
+        }
+    }
 }
 
 type Look<'a> = dyn Fn(&mut Scene, &mut Pcg32, usize) + 'a;
@@ -208,11 +251,13 @@ type AfterRender<'a> = dyn Fn(&mut GrayImage, &mut Pcg32) + 'a;
 /// spread as `spread` over a distortion-free 60° camera, then the row's
 /// look. Frame `f` draws everything from `Pcg32::new(seed0 + f, 1)`: first
 /// the markers, then whatever [`Scenario::look`] and
-/// [`Scenario::after_render`] draw, in that order; so the AprilTag frame
-/// of the same `f` differs only in what is printed.
+/// [`Scenario::after_render`] draw, in that order; so the tags' frame of
+/// the same `f` differs only in what is printed.
 pub struct Scenario<'a> {
     /// Image size, pixels.
     pub size: (u32, u32),
+    /// Horizontal field of view of the distortion-free camera, degrees.
+    pub fov_deg: f64,
     /// The markers' family; `None`: legacy WhyCon.
     pub family: Option<&'a Family>,
     /// How markers are spread over each frame.
@@ -230,6 +275,7 @@ impl<'a> Scenario<'a> {
     pub fn new(family: Option<&'a Family>, spread: Spread, frames: usize, seed0: u64) -> Self {
         Scenario {
             size: (800, 600),
+            fov_deg: DEFAULT_FOV_DEG,
             family,
             spread,
             frames,
@@ -242,6 +288,16 @@ impl<'a> Scenario<'a> {
     /// Frames of `width` x `height`.
     pub fn size(mut self, width: u32, height: u32) -> Self {
         self.size = (width, height);
+        self
+    }
+
+    /// A camera of focal length `focal_px` (pixels) instead of the 60°
+    /// field of view.
+    pub fn focal(mut self, focal_px: f64) -> Self {
+        self.fov_deg = 2.0
+            * (0.5 * f64::from(self.size.0) / focal_px)
+                .atan()
+                .to_degrees();
         self
     }
 
@@ -260,7 +316,7 @@ impl<'a> Scenario<'a> {
 
     /// The scenario's camera.
     pub fn camera(&self) -> Camera {
-        camera(self.size.0, self.size.1)
+        Camera::ideal(self.size.0, self.size.1, self.fov_deg)
     }
 
     /// Frame `f`, printed as `print`.
@@ -274,9 +330,7 @@ impl<'a> Scenario<'a> {
             seed,
         );
         (self.look)(&mut s, &mut rng, f);
-        if print == Print::AprilTag {
-            with_tags(&mut s);
-        }
+        print.apply(&mut s);
         let (mut image, truth) = simulate::render(&s);
         if let Some(change) = &self.after_render {
             change(&mut image, &mut rng);
@@ -321,4 +375,40 @@ impl<'a> Scenario<'a> {
     pub fn counts(&self) -> Counts {
         self.counts_with(|_, _| {})
     }
+}
+
+/// The defocus row's sizes (face-on diameter, pixels), views (degrees
+/// from face-on, against each marker's line of sight) and Gaussian
+/// defocus (sigma, pixels), issue 25.
+pub const DEFOCUS_SIZES: [f64; 4] = [20.0, 30.0, 45.0, 60.0];
+/// See [`DEFOCUS_SIZES`].
+pub const DEFOCUS_VIEWS: [f64; 3] = [0.0, 45.0, 65.0];
+/// See [`DEFOCUS_SIZES`].
+pub const DEFOCUS_SIGMAS: [f64; 3] = [1.0, 1.5, 2.0];
+
+/// One cell of the defocus row (issue 25): `frames` frames of 1280x720
+/// (f = 1000 px), each with 8 markers of `diameter_px` seen at `view_deg`
+/// from face-on, under a Gaussian defocus of `sigma_px`, sensor noise of
+/// sigma 4 and light clutter.
+pub fn defocused(
+    family: &Family,
+    diameter_px: f64,
+    view_deg: f64,
+    sigma_px: f64,
+    frames: usize,
+    seed0: u64,
+) -> Scenario<'_> {
+    Scenario::new(
+        Some(family),
+        Spread::fixed_view(8, (diameter_px, diameter_px), view_deg),
+        frames,
+        seed0,
+    )
+    .size(1280, 720)
+    .focal(1000.0)
+    .look(move |s, _, _| {
+        s.background = simulate::Background::Clutter { density: 1.0 };
+        s.noise = 4.0;
+        s.focus_blur_px = sigma_px;
+    })
 }

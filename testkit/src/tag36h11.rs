@@ -6,7 +6,6 @@
 //! bit is white).
 
 use image::{GrayImage, Luma};
-use whycode::simulate::{LooseMarker, PrintedSquare, Scene, SceneObject};
 
 /// How many tags the scenes draw from.
 pub const TAGS: u32 = CODES.len() as u32;
@@ -130,24 +129,4 @@ pub fn bitmap(id: u32) -> GrayImage {
         }
     }
     image
-}
-
-/// The tag printed where `marker` was: its black square as wide as the
-/// marker's disc, on a card of the same size, so the tag's white border
-/// (two cells) is the card's margin; tag ID from the marker's ID.
-pub fn tag_for(marker: &LooseMarker) -> PrintedSquare {
-    let id = marker.id % TAGS;
-    PrintedSquare {
-        card_half_mm: marker.card_half_mm,
-        ..PrintedSquare::new(bitmap(id), marker.marker.diameter_mm, id, marker.placement)
-    }
-}
-
-/// A scene's markers swapped for AprilTags (see [`tag_for`]).
-pub fn with_tags(scene: &mut Scene) {
-    for object in &mut scene.objects {
-        if let SceneObject::Marker(m) = object {
-            *object = SceneObject::Square(tag_for(m));
-        }
-    }
 }

@@ -633,3 +633,53 @@ fn face_on_normals_are_within_a_degree() {
     eprintln!("{count} markers: normal within {worst:.2}°, centre within {worst_centre:.3} px");
     assert!(worst_centre < 0.1, "centre {worst_centre:.3} px off");
 }
+
+/// Issue 25: steep markers out of focus (the detector bar's defocus
+/// scenes, other seeds) are read through the focus blur their outline's
+/// edge shows. Before, these lost half their markers to the structure
+/// test (no Manchester edges under the blur) or to "unknown"; and a ring
+/// past reading is unknown or not reported, never another member.
+#[test]
+fn defocused_steep_markers_are_named_through_the_blur_and_never_misread() {
+    use whycode_testkit::scenario::{defocused, detector, Families, Print};
+    use whycode_testkit::tally::Counts;
+    let family = Families::default().get(8, 2);
+    for (size, view, sigma, least_named) in [
+        (20.0, 45.0, 1.0, 0.75),
+        (45.0, 65.0, 1.5, 0.75),
+        (60.0, 65.0, 2.0, 0.75),
+        (30.0, 65.0, 2.0, 0.0),
+    ] {
+        let scenario = defocused(&family, size, view, sigma, 2, 2_500_000 + size as u64);
+        let mut det = detector(Some(&family), &scenario.camera(), false);
+        let mut counts = Counts::default();
+        for f in 0..scenario.frames {
+            let frame = scenario.frame(f, Print::WhyCode);
+            let seen: Vec<simulate::Sighting> = det
+                .detect(&frame.image)
+                .iter()
+                .map(simulate::Sighting::from)
+                .collect();
+            counts.add(frame.seed, &frame.targets, &seen);
+        }
+        eprintln!(
+            "{size} px at {view}°, σ {sigma}: {} of {} named, {} unknown, {} wrong, {} false",
+            counts.correct_id,
+            counts.markers,
+            counts.unknown_id,
+            counts.wrong_id,
+            counts.false_detections
+        );
+        assert_eq!(counts.wrong_id, 0, "{size} px at {view}°, σ {sigma}");
+        assert_eq!(
+            counts.false_detections, 0,
+            "{size} px at {view}°, σ {sigma}"
+        );
+        assert!(
+            counts.id_rate() >= least_named,
+            "{size} px at {view}°, σ {sigma}: {} of {} named",
+            counts.correct_id,
+            counts.markers
+        );
+    }
+}

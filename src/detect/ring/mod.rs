@@ -288,8 +288,9 @@ impl Rings {
         }
     }
 
-    /// The ring read through the motion blur its outline shows, when the
-    /// blur is long enough to smear the sectors the reader samples.
+    /// The ring read through the blur its outline shows: a motion blur
+    /// long enough to smear the sectors the reader samples, else a focus
+    /// blur wide enough to.
     fn read_blurred<C: Deref<Target = [u8]>>(
         &self,
         image: &ImageBuffer<Luma<u8>, C>,
@@ -297,13 +298,21 @@ impl Rings {
         outer: &Ellipse,
     ) -> Option<SmallRing> {
         let family = self.family()?;
-        let blur = ellipse::linear_blur(gray, outer)?;
-        // Below this the sector reader's central samples stay clear of
-        // the neighbouring sectors.
-        if blur.length < ellipse::MIN_MOTION_BLUR_PX {
-            return None;
+        // Below this length the sector reader's central samples stay clear
+        // of the neighbouring sectors.
+        let motion = ellipse::linear_blur(gray, outer)
+            .filter(|blur| blur.length >= ellipse::MIN_MOTION_BLUR_PX);
+        if let Some(blur) = motion {
+            return model::read_blurred_ring(image, outer, family, &blur);
         }
-        model::read_blurred_ring(image, outer, family, &blur)
+        // A blur narrow beside the half-sectors leaves their edges to the
+        // structure test and the reader: a ring they refute then is no
+        // marker's (desk clutter's washers and letters, whose edges read
+        // as half a pixel of blur, cost the model 20 times a desk frame).
+        let sectors = manchester::sector_pixels(outer, family.bits());
+        let sigma = ellipse::defocus(gray, outer)
+            .filter(|&s| s >= MIN_DEFOCUS_PX && s >= MIN_DEFOCUS_PER_SECTOR * sectors)?;
+        model::read_defocused_ring(image, outer, family, sigma)
     }
 }
 
@@ -415,6 +424,14 @@ fn coarser_ring<C: Deref<Target = [u8]>>(
         _ => None,
     }
 }
+
+/// Focus blur (Gaussian sigma, pixels) from which a ring that the
+/// structure test or the reader could not settle is read through it.
+const MIN_DEFOCUS_PX: f64 = 0.5;
+
+/// Focus blur, relative to the half-sector's width, from which the sectors'
+/// edges are too soft for the structure test and the reader.
+const MIN_DEFOCUS_PER_SECTOR: f64 = 0.3;
 
 /// Least sector width (pixels, see [`manchester::sector_pixels`]) at which
 /// a ring read without a family is believed.

@@ -164,17 +164,52 @@ pub fn read_blurred_ring<C: Deref<Target = [u8]>>(
         .iter()
         .map(|&k| line_footprint(k * blur.length, blur.angle))
         .collect();
-    // About COMPARED_PIXELS pixels whatever the ring's size.
-    let disc = PI * (outer.semi_major * COMPARED_RADIUS) * (outer.semi_minor * COMPARED_RADIUS);
-    let stride = ((disc / COMPARED_PIXELS).sqrt().floor() as u32).max(1);
     compare(
         image,
         outer,
         family,
         &footprints,
-        stride,
+        compared_stride(outer),
         Thresholds::BLURRED,
     )
+}
+
+/// Defocus tried, relative to the sigma read off the outline's edge: the
+/// edge of a small or steep ring is short and noisy, and the ring's own
+/// sectors blur a little more than the outline shows where the ring is
+/// foreshortened.
+const DEFOCUS_SCALES: [f64; 3] = [0.8, 1.0, 1.25];
+
+/// Reads a ring out of focus by the Gaussian blur of `sigma` pixels the
+/// outline's edge spread shows ([`crate::detect::ellipse::defocus`]): the
+/// same comparison with every member rendered through Gaussians about
+/// that wide, on about [`COMPARED_PIXELS`] pixels whatever the ring's size.
+pub fn read_defocused_ring<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    outer: &ImageEllipse,
+    family: &Family,
+    sigma: f64,
+) -> Option<SmallRing> {
+    let footprints: Vec<Footprint> = DEFOCUS_SCALES
+        .iter()
+        .map(|&k| gaussian_footprint(k * sigma))
+        .collect();
+    compare(
+        image,
+        outer,
+        family,
+        &footprints,
+        compared_stride(outer),
+        Thresholds::BLURRED,
+    )
+}
+
+/// Pixel stride at which about [`COMPARED_PIXELS`] of the ring's are
+/// compared (the blur, not the pixel, sets the scale of what the model can
+/// tell apart).
+fn compared_stride(outer: &ImageEllipse) -> u32 {
+    let disc = PI * (outer.semi_major * COMPARED_RADIUS) * (outer.semi_minor * COMPARED_RADIUS);
+    ((disc / COMPARED_PIXELS).sqrt().floor() as u32).max(1)
 }
 
 /// Sub-pixel offsets and weights (summing to 1) over which one pixel's
