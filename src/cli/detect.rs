@@ -297,6 +297,7 @@ fn detector_config(args: &DetectArgs, recording: bool) -> Result<DetectorConfig>
             .flatten()
             .collect(),
         timings: args.timings,
+        scan_every_frame: recording,
         camera_later: recording && args.camera.is_none(),
     }
     .build()

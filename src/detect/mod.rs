@@ -90,6 +90,12 @@ pub struct DetectorConfig {
     /// [`Detector::last_timings`]. Off, the detector reads no clock (nor
     /// does it on wasm32-unknown-unknown, which has none).
     pub timings: bool,
+    /// With tracking, look for new markers over the whole frame every
+    /// frame. Off (live use), a frame whose every track was followed looks
+    /// in one band of rows only, so a marker that comes into view is found
+    /// within 8 frames; on (a recording read offline, where nothing waits
+    /// for the frame), in the frame it comes.
+    pub scan_every_frame: bool,
     /// Rigid sets of markers whose poses [`Detector::locate_boards`]
     /// reports (with a camera).
     pub boards: Vec<crate::board::Board>,
@@ -110,6 +116,7 @@ impl Default for DetectorConfig {
             report_unreadable: false,
             legacy_min_ink_px: legacy::MIN_INK_PX,
             timings: false,
+            scan_every_frame: false,
             boards: Vec::new(),
         }
     }
@@ -378,8 +385,10 @@ impl Detector {
             self.follow_tracks(image, gray, &mut finds);
         }
         let followed = finds.candidates.len();
-        let every_track_followed =
-            self.config.tracking && followed > 0 && followed == self.tracks.len();
+        let every_track_followed = self.config.tracking
+            && !self.config.scan_every_frame
+            && followed > 0
+            && followed == self.tracks.len();
         self.timed(Stage::Follow, |d| {
             d.mark_followed(&finds.candidates, gray.width, gray.height)
         });

@@ -40,24 +40,17 @@ pub fn page_pixmap(page: &Page, dpi: f64) -> Result<Pixmap, RenderError> {
         return Err(RenderError::DpiOutOfRange { dpi });
     }
     let (w, h) = page_size_px(page, dpi);
-    if w > MAX_SIDE_PX || h > MAX_SIDE_PX || u64::from(w) * u64::from(h) > MAX_AREA_PX {
-        return Err(RenderError::RasterTooLarge {
-            width_mm: page.width_mm,
-            height_mm: page.height_mm,
-            dpi,
-            width: w,
-            height: h,
-        });
-    }
-    let Some(mut pixmap) = Pixmap::new(w, h) else {
-        return Err(RenderError::RasterTooLarge {
-            width_mm: page.width_mm,
-            height_mm: page.height_mm,
-            dpi,
-            width: w,
-            height: h,
-        });
+    let too_large = || RenderError::RasterTooLarge {
+        width_mm: page.width_mm,
+        height_mm: page.height_mm,
+        dpi,
+        width: w,
+        height: h,
     };
+    if w > MAX_SIDE_PX || h > MAX_SIDE_PX || u64::from(w) * u64::from(h) > MAX_AREA_PX {
+        return Err(too_large());
+    }
+    let mut pixmap = Pixmap::new(w, h).ok_or_else(too_large)?;
     pixmap.fill(tiny_skia::Color::WHITE);
     let s = px_per_mm(dpi) as f32;
     let transform = Transform::from_scale(s, s);

@@ -33,6 +33,9 @@ pub struct DetectSpec {
     /// Time each stage of every frame (read with
     /// [`Detector::last_timings`](crate::Detector::last_timings)).
     pub timings: bool,
+    /// Look for new markers over the whole frame in every tracked frame
+    /// (a recording read offline): a marker is found in the frame it comes.
+    pub scan_every_frame: bool,
     /// The camera comes with the frames (a bag's camera_info), so a
     /// diameter without `camera` waits in the configuration for it.
     pub camera_later: bool,
@@ -83,6 +86,7 @@ impl DetectSpec {
             report_unreadable: self.unreadable,
             boards: self.boards.clone(),
             timings: self.timings,
+            scan_every_frame: self.scan_every_frame,
             ..DetectorConfig::default()
         };
         if let Some(n) = self.max_markers {
