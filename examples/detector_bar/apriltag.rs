@@ -66,34 +66,17 @@ impl AprilTag {
         };
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let script = root.join("examples/detector_bar/apriltag.py");
-        let candidates: Vec<PathBuf> = match std::env::var_os("APRILTAG_PYTHON") {
-            Some(p) => vec![PathBuf::from(p)],
-            None => vec![
-                root.join("target/bench-venv/bin/python"),
-                PathBuf::from("python3"),
-            ],
-        };
-        for python in &candidates {
-            let ok = Command::new(python)
-                .args(["-c", "import pupil_apriltags, numpy"])
-                .output()
-                .is_ok_and(|o| o.status.success());
-            if ok {
-                return Ok(AprilTag {
-                    python: python.clone(),
-                    script,
-                    quad_decimate,
-                });
-            }
-        }
-        Err(format!(
-            "no Python with pupil_apriltags among {}; set up with `{SETUP}` (or point APRILTAG_PYTHON at one)",
-            candidates
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))
+        let python = crate::rival::find_python(
+            "APRILTAG_PYTHON",
+            "import pupil_apriltags, numpy",
+            "pupil_apriltags",
+            SETUP,
+        )?;
+        Ok(AprilTag {
+            python,
+            script,
+            quad_decimate,
+        })
     }
 }
 

@@ -42,33 +42,13 @@ impl Aruco {
     pub fn find() -> Result<Aruco, String> {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
         let script = root.join("examples/detector_bar/aruco.py");
-        let candidates: Vec<PathBuf> = match std::env::var_os("ARUCO_PYTHON") {
-            Some(p) => vec![PathBuf::from(p)],
-            None => vec![
-                root.join("target/bench-venv/bin/python"),
-                PathBuf::from("python3"),
-            ],
-        };
-        for python in &candidates {
-            let ok = Command::new(python)
-                .args(["-c", "import cv2; cv2.aruco.ArucoDetector"])
-                .output()
-                .is_ok_and(|o| o.status.success());
-            if ok {
-                return Ok(Aruco {
-                    python: python.clone(),
-                    script,
-                });
-            }
-        }
-        Err(format!(
-            "no Python with cv2.aruco among {}; set up with `{SETUP}` (or point ARUCO_PYTHON at one)",
-            candidates
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))
+        let python = crate::rival::find_python(
+            "ARUCO_PYTHON",
+            "import cv2; cv2.aruco.ArucoDetector",
+            "cv2.aruco",
+            SETUP,
+        )?;
+        Ok(Aruco { python, script })
     }
 }
 

@@ -5,7 +5,7 @@
 //! same code as ours.
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use image::GrayImage;
@@ -152,4 +152,35 @@ fn write_pgm(path: &Path, image: &GrayImage) -> std::io::Result<()> {
     write!(out, "P5\n{} {}\n255\n", image.width(), image.height())?;
     out.write_all(image.as_raw())?;
     out.flush()
+}
+
+/// `$env_var`, else `target/bench-venv` of this checkout, else `python3`:
+/// the first Python that runs `check` (an import line). The error names
+/// every candidate tried, `what` was missing and how to set one up.
+pub fn find_python(env_var: &str, check: &str, what: &str, setup: &str) -> Result<PathBuf, String> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let candidates: Vec<PathBuf> = match std::env::var_os(env_var) {
+        Some(p) => vec![PathBuf::from(p)],
+        None => vec![
+            root.join("target/bench-venv/bin/python"),
+            PathBuf::from("python3"),
+        ],
+    };
+    for python in &candidates {
+        let ok = Command::new(python)
+            .args(["-c", check])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if ok {
+            return Ok(python.clone());
+        }
+    }
+    Err(format!(
+        "no Python with {what} among {}; set up with `{setup}` (or point {env_var} at one)",
+        candidates
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    ))
 }
