@@ -2,7 +2,11 @@
 //! megapixels, family files, manifests, page templates and camera files
 //! through the library's loaders, detector and validation.
 //!
-//!     cargo run --release --example fuzz -- [--minutes N] [--seed S]
+//!     cargo build --release && cargo run --release --example fuzz -- [--minutes N] [--seed S]
+//!
+//! The command-line targets (output streams closed or full, concurrent
+//! runs writing one output) run the `whycode` binary built beside this
+//! example (target/release/whycode); without it they are skipped, and say so.
 //!
 //! Prints how many inputs each target tried; exits 1 on a panic, a hang,
 //! detection slower than 1 s for a 2-megapixel image, or invalid JSON.
@@ -37,6 +41,7 @@ fn main() -> std::process::ExitCode {
         },
         hang_limit: Duration::from_secs(30),
         seed,
+        whycode: whycode_binary(),
     };
     let summaries = fuzz_support::run(&settings);
     print!("{}", fuzz_support::report(&summaries));
@@ -55,4 +60,14 @@ fn main() -> std::process::ExitCode {
     } else {
         std::process::ExitCode::SUCCESS
     }
+}
+
+/// target/<profile>/whycode, beside target/<profile>/examples/fuzz.
+fn whycode_binary() -> Option<std::path::PathBuf> {
+    let exe = std::env::current_exe().ok()?;
+    let binary = exe
+        .parent()?
+        .parent()?
+        .join(format!("whycode{}", std::env::consts::EXE_SUFFIX));
+    binary.is_file().then_some(binary)
 }

@@ -68,13 +68,7 @@ fn image_error(path: &Path, problem: LoadProblem) -> LoadError {
 /// decoding.
 pub fn load_gray(path: &Path) -> Result<GrayImage, LoadError> {
     let open = || std::fs::File::open(path).map(std::io::BufReader::new);
-    let (gray, format) = decode(path, open, SizeLimit::FILES)?;
-    if format == image::ImageFormat::Jpeg {
-        // Only now the whole file: the decoder has already read it once.
-        let bytes = std::fs::read(path).map_err(|e| image_error(path, LoadProblem::Read(e)))?;
-        check_jpeg_complete(path, &bytes)?;
-    }
-    Ok(gray)
+    Ok(decode(path, open, SizeLimit::FILES)?.0)
 }
 
 /// [`load_gray`] for a file's contents already in memory (an upload in the
@@ -83,11 +77,7 @@ pub fn load_gray(path: &Path) -> Result<GrayImage, LoadError> {
 /// the caller can hold.
 pub fn decode_gray(name: &Path, bytes: &[u8], limit: SizeLimit) -> Result<GrayImage, LoadError> {
     let open = || Ok(std::io::Cursor::new(bytes));
-    let (gray, format) = decode(name, open, limit)?;
-    if format == image::ImageFormat::Jpeg {
-        check_jpeg_complete(name, bytes)?;
-    }
-    Ok(gray)
+    Ok(decode(name, open, limit)?.0)
 }
 
 /// PNGs of more pixels than this are turned grey a row at a time: whole, a
@@ -132,6 +122,30 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
             },
         ));
     }
+    if format == image::ImageFormat::Jpeg {
+        let mut bytes = Vec::new();
+        open()
+            .and_then(|mut source| source.read_to_end(&mut bytes))
+            .map_err(io)?;
+        check_jpeg_complete(path, &bytes)?;
+        let decoded = decode_jpeg_strictly(&bytes)
+            .map_err(|problem| image_error(path, LoadProblem::Invalid(problem)))?;
+        let gray = to_gray(decoded);
+        if zeroed_scan(&bytes) && same_in_every_block(&gray) {
+            return Err(image_error(
+                path,
+                LoadProblem::Invalid(
+                    "damaged JPEG: its image data is zeros (every 8x8 block decodes the same)"
+                        .into(),
+                ),
+            ));
+        }
+        return Ok((gray, format));
+    }
+    if format == image::ImageFormat::Png {
+        check_palette_indices(open().map_err(io)?)
+            .map_err(|problem| image_error(path, LoadProblem::Invalid(problem)))?;
+    }
     if format == image::ImageFormat::Png
         && u64::from(width) * u64::from(height) > ROW_BY_ROW_PNG_PIXELS
     {
@@ -150,6 +164,117 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
     limits.max_alloc = Some(limit.max_pixels.saturating_mul(8));
     reader.limits(limits);
     Ok((to_gray(reader.decode().map_err(decode)?), format))
+}
+
+/// A JPEG decoded as the `image` crate decodes it (the same decoder,
+/// asked for the same colours), but in the decoder's strict mode: leniently,
+/// a scan of zeros or a corrupt Huffman stream decodes "without error" to
+/// grey or garbage, which would read as a photo with no markers in it.
+fn decode_jpeg_strictly(bytes: &[u8]) -> Result<image::DynamicImage, String> {
+    use zune_core::colorspace::ColorSpace;
+    let damaged = |e: zune_jpeg::errors::DecodeErrors| format!("damaged JPEG: {e}");
+    let options = zune_core::options::DecoderOptions::default()
+        .set_strict_mode(true)
+        .set_max_width(usize::MAX)
+        .set_max_height(usize::MAX);
+    let mut decoder = zune_jpeg::JpegDecoder::new_with_options(
+        zune_core::bytestream::ZCursor::new(bytes),
+        options,
+    );
+    decoder.decode_headers().map_err(damaged)?;
+    let (width, height) = decoder
+        .dimensions()
+        .ok_or_else(|| "damaged JPEG: no frame header".to_string())?;
+    let colours = match decoder.input_colorspace() {
+        Some(c @ (ColorSpace::RGB | ColorSpace::RGBA | ColorSpace::Luma | ColorSpace::LumaA)) => c,
+        _ => ColorSpace::RGB,
+    };
+    decoder.set_options(decoder.options().jpeg_set_out_colorspace(colours));
+    let pixels = decoder.decode().map_err(damaged)?;
+    let (w, h) = (width as u32, height as u32);
+    let short = || "damaged JPEG: fewer pixels than its header gives".to_string();
+    use image::DynamicImage as Dyn;
+    Ok(match colours {
+        ColorSpace::Luma => Dyn::ImageLuma8(ImageBuffer::from_raw(w, h, pixels).ok_or_else(short)?),
+        ColorSpace::LumaA => {
+            Dyn::ImageLumaA8(ImageBuffer::from_raw(w, h, pixels).ok_or_else(short)?)
+        }
+        ColorSpace::RGBA => Dyn::ImageRgba8(ImageBuffer::from_raw(w, h, pixels).ok_or_else(short)?),
+        _ => Dyn::ImageRgb8(ImageBuffer::from_raw(w, h, pixels).ok_or_else(short)?),
+    })
+}
+
+/// Whether the last scan's entropy-coded data is nearly all zero bytes,
+/// as a file whose data was wiped (or never written) is. The decoder reads
+/// zeros as valid codes and makes a grey picture of them without a word.
+fn zeroed_scan(bytes: &[u8]) -> bool {
+    let Some(sos) = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]) else {
+        return false;
+    };
+    let Some(header) = bytes.get(sos + 2..sos + 4) else {
+        return false;
+    };
+    let start = sos + 2 + usize::from(u16::from_be_bytes([header[0], header[1]]));
+    let end = bytes
+        .windows(2)
+        .rposition(|w| w == [0xFF, 0xD9])
+        .unwrap_or(bytes.len());
+    let Some(data) = bytes.get(start..end) else {
+        return false;
+    };
+    let zeros = data.iter().filter(|&&b| b == 0).count();
+    data.len() >= 64 && zeros * 10 >= data.len() * 9
+}
+
+/// Whether every 8x8 block of `gray` is the same as the first: what zeroed
+/// JPEG data decodes to (and a perfectly blank frame; no photo is either,
+/// so the scan stops at the first pixel that differs).
+fn same_in_every_block(gray: &GrayImage) -> bool {
+    let w = gray.width() as usize;
+    let pixels = gray.as_raw();
+    pixels.iter().enumerate().all(|(k, &value)| {
+        let (x, y) = (k % w, k / w);
+        pixels[(y % 8) * w + x % 8] == value
+    })
+}
+
+/// The PNG decoder turns a palette index past the palette's end into
+/// black without a word: a damaged file would read as a picture with dark
+/// blots. Only an indexed file is read (a second time, as raw indices).
+fn check_palette_indices<R: std::io::BufRead + std::io::Seek>(source: R) -> Result<(), String> {
+    let damaged = |e: png::DecodingError| format!("damaged PNG: {e}");
+    let mut decoder = png::Decoder::new(source);
+    decoder.set_transformations(png::Transformations::IDENTITY);
+    let mut reader = decoder.read_info().map_err(damaged)?;
+    let info = reader.info();
+    if info.color_type != png::ColorType::Indexed {
+        return Ok(());
+    }
+    let colours = info.palette.as_ref().map_or(0, |p| p.len() / 3);
+    let depth = info.bit_depth as u8;
+    if colours >= 1 << depth {
+        return Ok(());
+    }
+    let width = info.width as usize;
+    let per_byte = 8 / depth as usize;
+    let mask = (1u16 << depth) - 1;
+    let mut highest = 0u16;
+    while let Some(row) = reader.next_row().map_err(damaged)? {
+        // Interlaced passes are narrower than the image; count their own width.
+        let pixels = (row.data().len() * per_byte).min(width);
+        for k in 0..pixels {
+            let byte = u16::from(row.data()[k / per_byte]);
+            let shift = 8 - depth as usize * (k % per_byte + 1);
+            highest = highest.max((byte >> shift) & mask);
+        }
+    }
+    if usize::from(highest) >= colours {
+        return Err(format!(
+            "damaged PNG: pixel index {highest} runs past its palette of {colours} colour{}",
+            if colours == 1 { "" } else { "s" }
+        ));
+    }
+    Ok(())
 }
 
 /// A PNG turned grey a row at a time, each row converted exactly as
@@ -467,6 +592,47 @@ mod tests {
         let from_bytes = decode_gray(Path::new("ramp.png"), &bytes, SizeLimit::FILES).unwrap();
         assert_eq!(from_file, image);
         assert_eq!(from_bytes, image);
+    }
+
+    #[test]
+    fn a_jpeg_whose_data_was_zeroed_is_refused() {
+        let photo = GrayImage::from_fn(64, 48, |x, y| image::Luma([((x * 5 + y * 3) % 256) as u8]));
+        let mut bytes = encode_image(Path::new("a.jpg"), &photo, 90).unwrap();
+        assert!(decode_gray(Path::new("a.jpg"), &bytes, SizeLimit::FILES).is_ok());
+        let sos = bytes.windows(2).rposition(|w| w == [0xFF, 0xDA]).unwrap();
+        let start = sos + 2 + usize::from(u16::from_be_bytes([bytes[sos + 2], bytes[sos + 3]]));
+        let end = bytes.len() - 2;
+        bytes[start..end].fill(0);
+        let err = decode_gray(Path::new("z.jpg"), &bytes, SizeLimit::FILES).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "z.jpg: damaged JPEG: its image data is zeros (every 8x8 block decodes the same)"
+        );
+    }
+
+    #[test]
+    fn palette_indices_past_the_palette_are_refused() {
+        let indexed = |colours: usize| {
+            let mut bytes = Vec::new();
+            {
+                let mut encoder = png::Encoder::new(&mut bytes, 16, 4);
+                encoder.set_color(png::ColorType::Indexed);
+                encoder.set_depth(png::BitDepth::Eight);
+                encoder.set_palette((0..colours * 3).map(|k| k as u8).collect::<Vec<_>>());
+                let mut writer = encoder.write_header().unwrap();
+                writer
+                    .write_image_data(&(0..64u8).map(|k| k % 6).collect::<Vec<_>>())
+                    .unwrap();
+            }
+            bytes
+        };
+        let limit = SizeLimit::FILES;
+        let err = decode_gray(Path::new("blots.png"), &indexed(4), limit).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "blots.png: damaged PNG: pixel index 5 runs past its palette of 4 colours"
+        );
+        assert!(decode_gray(Path::new("fine.png"), &indexed(6), limit).is_ok());
     }
 
     #[test]

@@ -53,6 +53,7 @@ pub mod camera;
 pub mod detect;
 pub mod error;
 pub mod family;
+pub mod fileset;
 pub mod geometry;
 pub mod image_io;
 #[cfg(feature = "files")]

@@ -34,6 +34,12 @@ pub struct Manifest {
     pub page_size_mm: [f64; 2],
     /// Number of pages.
     pub pages: u32,
+    /// The page files written with this manifest, with their digests
+    /// (`fileset`): a reader can tell a PDF from another run beside it.
+    /// Absent in manifests from before it was recorded, and in those made
+    /// by hand.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub files: Vec<crate::fileset::FileDigest>,
     /// Every printed marker, in print order.
     pub markers: Vec<PrintedMarker>,
 }
@@ -119,6 +125,9 @@ impl Manifest {
         }
         if self.pages == 0 {
             return Err("pages is 0, but a sheet has at least one page".to_string());
+        }
+        if let Some(problem) = self.files.iter().find_map(|f| f.problem()) {
+            return Err(problem);
         }
         // Every page of a sheet holds a marker; a huge count (found by
         // fuzzing: 2147483647) made validation walk billions of empty pages.
@@ -249,6 +258,12 @@ impl Manifest {
         Ok(())
     }
 
+    /// A warning when page files beside `path` (where this manifest was
+    /// read) are not the ones it was written with; see [`crate::fileset`].
+    pub fn mixed_set_note(&self, path: &Path) -> Option<String> {
+        crate::fileset::mismatch_note(path, &self.files)
+    }
+
     /// The manifest as the JSON the `sheet` command writes (stable field order).
     pub fn to_json(&self) -> String {
         let mut s = serde_json::to_string_pretty(self).expect("manifest serialises");
@@ -318,6 +333,7 @@ mod tests {
             template: "a4".into(),
             page_size_mm: [210.0, 297.0],
             pages: 1,
+            files: Vec::new(),
             markers: vec![marker(1, 40.0), marker(2, 100.0)],
         }
     }

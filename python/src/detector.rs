@@ -332,6 +332,7 @@ impl PyMarker {
             boards: Vec::new(),
             timings: None,
             stream: None,
+            legacy_looking: 0,
         };
         crate::json_to_py(py, &frame.to_json())?
             .get_item("markers")?

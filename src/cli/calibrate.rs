@@ -9,7 +9,6 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use whycode::calibrate::calibrate;
 use whycode::camera::CalibrationFormat;
-use whycode::manifest::Manifest;
 use whycode::spec::CalibrateSpec;
 
 const AFTER_HELP: &str = "\
@@ -84,7 +83,7 @@ pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
     let mut inputs: Vec<&Path> = args.photos.iter().map(PathBuf::as_path).collect();
     inputs.push(&args.manifest);
     whycode::io::check_outputs(&inputs, &[&args.output])?;
-    let manifest = Manifest::load(&args.manifest)?;
+    let manifest = super::load_manifest(&args.manifest)?;
     let photos = args
         .photos
         .iter()

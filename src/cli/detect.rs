@@ -237,6 +237,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         match result {
             Ok(frame) => {
                 check.observe(&frame.markers);
+                check.legacy_looking += frame.legacy_looking;
                 if let Some(frame_timings) = &frame.timings {
                     timings += frame_timings;
                 }
@@ -478,6 +479,7 @@ fn detect_one(
         boards,
         timings: detector.last_timings(),
         stream: None,
+        legacy_looking: detector.last_legacy_looking(),
     })
 }
 

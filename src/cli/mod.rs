@@ -169,6 +169,20 @@ impl Cli {
 }
 
 /// The one line the command line prints for an error: its causes joined.
+/// A sheet manifest, with a warning when the page files beside it come
+/// from another run than it does (`whycode::fileset`).
+fn load_manifest(path: &std::path::Path) -> anyhow::Result<whycode::manifest::Manifest> {
+    let manifest = whycode::manifest::Manifest::load(path)?;
+    warn_if_mixed(&manifest, path);
+    Ok(manifest)
+}
+
+fn warn_if_mixed(manifest: &whycode::manifest::Manifest, path: &std::path::Path) {
+    if let Some(note) = manifest.mixed_set_note(path) {
+        output::say(format_args!("warning: {note}"));
+    }
+}
+
 pub fn one_line(err: &anyhow::Error) -> String {
     whycode::error::one_line(err.as_ref())
 }

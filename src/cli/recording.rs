@@ -183,6 +183,7 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
                 stamp_ns: frame.stamp_ns,
                 topic: frame.topic.clone(),
             }),
+            legacy_looking: detector.last_legacy_looking(),
         };
         progress.suspend(|| -> Result<()> {
             match run.format {

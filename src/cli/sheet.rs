@@ -64,16 +64,22 @@ pub struct SheetArgs {
 /// Page files beside `output` that an earlier run of the same sheet wrote
 /// and this run does not: the pages past the new count, as the manifest
 /// about to be replaced lists them (and only those: nothing is guessed
-/// from names alone).
+/// from names alone). Where that manifest kept its pages' digests, a page
+/// someone has since replaced with a file of their own is left alone.
 fn stale_pages(output: &Path, files: &[(PathBuf, Vec<u8>)]) -> Vec<PathBuf> {
     let manifest = output.with_extension("json");
     let Ok(old) = whycode::manifest::Manifest::load(&manifest) else {
         return Vec::new();
     };
     let new: Vec<&PathBuf> = files.iter().map(|(p, _)| p).collect();
+    let changed = whycode::fileset::mismatched(&manifest, &old.files);
     whycode::render::page_paths(output, old.pages as usize)
         .into_iter()
         .filter(|page| !new.contains(&page) && page.is_file())
+        .filter(|page| {
+            let name = page.file_name().map(|n| n.to_string_lossy().into_owned());
+            !changed.iter().any(|c| Some(c) == name.as_ref())
+        })
         .collect()
 }
 

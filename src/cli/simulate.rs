@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use whycode::camera::Camera;
 use whycode::family::parse_id_list;
+use whycode::fileset::FileDigest;
 use whycode::image_io::ImageFormat;
 use whycode::simulate;
 use whycode::spec::{BackgroundKind, Layout, SceneSpec};
@@ -183,6 +184,13 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
         .filter_map(|p| p.as_deref())
         .collect();
     whycode::io::check_outputs(&inputs, &[&args.output, &truth_path])?;
+    if let Some(path) = &args.manifest {
+        // Read here for the warning only; the scene reads it (and reports
+        // what is wrong with it) below.
+        if let Ok(manifest) = whycode::manifest::Manifest::load(path) {
+            super::warn_if_mixed(&manifest, path);
+        }
+    }
     let spec = SceneSpec {
         manifest: args.manifest.clone(),
         page: args.page,
@@ -225,9 +233,10 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
     };
     let scene = spec.build().map_err(spec_error)?;
 
-    let (image, truth) = simulate::render(&scene);
+    let (image, mut truth) = simulate::render(&scene);
     let image_bytes =
         whycode::image_io::encode_image(&args.output, &image, args.jpeg.unwrap_or(92))?;
+    truth.files = vec![FileDigest::of(&args.output, &image_bytes)];
     // The truth goes last: a reader that finds it finds its image beside it.
     whycode::io::write_all_atomic(&[
         (args.output.clone(), image_bytes),

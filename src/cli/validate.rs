@@ -6,7 +6,6 @@ use clap::ValueEnum;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use whycode::camera::Camera;
-use whycode::manifest::Manifest;
 use whycode::validate::{self, annotate};
 
 /// Exit status when the check ran but the sheet has problems.
@@ -45,7 +44,7 @@ enum Format {
 }
 
 pub fn run(args: ValidateArgs) -> Result<ExitCode> {
-    let manifest = Manifest::load(&args.manifest)?;
+    let manifest = super::load_manifest(&args.manifest)?;
     let mut detector =
         validate::detector_for(&manifest).with_context(|| args.manifest.display().to_string())?;
     let camera = args.camera.as_deref().map(Camera::load).transpose()?;

@@ -67,6 +67,18 @@ fn drawn(
     for d in detections {
         draw_detection(&mut pixmap, d, line);
     }
+    // Labels after every outline, each placed where it covers no marker
+    // and no earlier label: in a crowd, a label beside its own marker
+    // otherwise lands on its neighbour's outline.
+    let outlines: Vec<Bounds> = detections.iter().map(outline_bounds).collect();
+    let mut taken = outlines.clone();
+    for (d, own) in detections.iter().zip(&outlines) {
+        if let Some((text, cell, colour)) = label(d) {
+            let place = label_place(own, &text, cell, &taken, (f64::from(w), f64::from(h)));
+            draw_text(&mut pixmap, &text, place.x0, place.y0, cell, colour);
+            taken.push(place);
+        }
+    }
     let rgb: Vec<u8> = pixmap
         .data()
         .chunks_exact(4)
@@ -133,18 +145,97 @@ fn draw_detection(pixmap: &mut Pixmap, d: &Detection, line: f32) {
             pixmap.stroke_path(&path, &paint(AXIS), &stroke, Transform::identity(), None);
         }
     }
-    if d.status.is_some() {
-        let label = if d.id == 0 {
-            "?".to_string()
-        } else {
-            d.id.to_string()
-        };
-        // Digits about a third of the marker tall, right of the ellipse.
-        let cell = (d.axes[0] / 8.0).clamp(1.5, 12.0);
-        let x = d.u + d.axes[0] + cell;
-        let y = d.v - 2.5 * cell;
-        draw_text(pixmap, &label, x, y, cell, colour);
+}
+
+/// A marker's label (its ID, "?" when unknown; none for a legacy marker),
+/// the glyph cell size (digits about a third of the marker tall) and colour.
+fn label(d: &Detection) -> Option<(String, f64, [u8; 3])> {
+    d.status?;
+    let text = if d.id == 0 {
+        "?".to_string()
+    } else {
+        d.id.to_string()
+    };
+    let colour = if d.id == 0 { UNKNOWN } else { KNOWN };
+    Some((text, (d.axes[0] / 8.0).clamp(1.5, 12.0), colour))
+}
+
+/// An axis-aligned box, pixels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Bounds {
+    x0: f64,
+    y0: f64,
+    x1: f64,
+    y1: f64,
+}
+
+impl Bounds {
+    fn overlap(&self, other: &Bounds) -> f64 {
+        let w = (self.x1.min(other.x1) - self.x0.max(other.x0)).max(0.0);
+        let h = (self.y1.min(other.y1) - self.y0.max(other.y0)).max(0.0);
+        w * h
     }
+}
+
+/// The box round a marker's drawn outline (with the line's width).
+fn outline_bounds(d: &Detection) -> Bounds {
+    let (s, c) = d.angle.sin_cos();
+    let [a, b] = d.axes;
+    let half_w = ((a * c).powi(2) + (b * s).powi(2)).sqrt() + 2.0;
+    let half_h = ((a * s).powi(2) + (b * c).powi(2)).sqrt() + 2.0;
+    Bounds {
+        x0: d.u - half_w,
+        y0: d.v - half_h,
+        x1: d.u + half_w,
+        y1: d.v + half_h,
+    }
+}
+
+/// Where a label goes: the first of right, left, above, below and the
+/// four corners of its marker's box that lies in the image and covers no
+/// marker or earlier label; else the one covering least.
+fn label_place(own: &Bounds, text: &str, cell: f64, taken: &[Bounds], image: (f64, f64)) -> Bounds {
+    let (w, h) = (text.chars().count() as f64 * 4.0 * cell - cell, 5.0 * cell);
+    let gap = cell;
+    let (mid_x, mid_y) = ((own.x0 + own.x1) / 2.0, (own.y0 + own.y1) / 2.0);
+    let corners = [
+        (own.x1 + gap, mid_y - h / 2.0),
+        (own.x0 - gap - w, mid_y - h / 2.0),
+        (mid_x - w / 2.0, own.y0 - gap - h),
+        (mid_x - w / 2.0, own.y1 + gap),
+        (own.x1 + gap, own.y0 - gap - h),
+        (own.x0 - gap - w, own.y0 - gap - h),
+        (own.x1 + gap, own.y1 + gap),
+        (own.x0 - gap - w, own.y1 + gap),
+    ];
+    let boxes = corners.map(|(x0, y0)| Bounds {
+        x0,
+        y0,
+        x1: x0 + w,
+        y1: y0 + h,
+    });
+    let cost = |b: &Bounds| {
+        let outside = (b.x1 - b.x0) * (b.y1 - b.y0)
+            - b.overlap(&Bounds {
+                x0: 0.0,
+                y0: 0.0,
+                x1: image.0,
+                y1: image.1,
+            });
+        outside + taken.iter().map(|t| t.overlap(b)).sum::<f64>()
+    };
+    let mut best = boxes[0];
+    let mut best_cost = f64::INFINITY;
+    for b in boxes {
+        let c = cost(&b);
+        if c <= 0.0 {
+            return b;
+        }
+        if c < best_cost {
+            (best, best_cost) = (b, c);
+        }
+    }
+    best
 }
 
 /// 3x5 bitmap glyphs: rows top to bottom, bit 2 is the left column.
@@ -203,6 +294,51 @@ fn draw_text(pixmap: &mut Pixmap, text: &str, x: f64, y: f64, cell: f64, rgb: [u
                     pixmap.fill_rect(r, &ink, Transform::identity(), None);
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn marker(id: u32, u: f64, v: f64) -> Detection {
+        Detection {
+            id,
+            code: None,
+            u,
+            v,
+            yaw: Some(0.0),
+            axes: [20.0, 20.0],
+            angle: 0.0,
+            confidence: 1.0,
+            status: Some(crate::family::MatchStatus::Exact),
+            pose: None,
+            bits: Some(8),
+            unreadable: false,
+            track: None,
+        }
+    }
+
+    #[test]
+    fn labels_keep_clear_of_the_next_marker_and_of_each_other() {
+        // A row of markers with less room between them than a label needs,
+        // and one at the image's right edge.
+        let row: Vec<Detection> = (0..4)
+            .map(|k| marker(100 + k, 30.0 + 48.0 * f64::from(k), 100.0))
+            .collect();
+        let outlines: Vec<Bounds> = row.iter().map(outline_bounds).collect();
+        let mut taken = outlines.clone();
+        for (d, own) in row.iter().zip(&outlines) {
+            let (text, cell, _) = label(d).unwrap();
+            let place = label_place(own, &text, cell, &taken, (200.0, 200.0));
+            assert!(
+                taken.iter().all(|t| t.overlap(&place) == 0.0),
+                "label of {} at {place:?} covers a marker or a label",
+                d.id
+            );
+            assert!(place.x0 >= 0.0 && place.x1 <= 200.0 && place.y0 >= 0.0);
+            taken.push(place);
         }
     }
 }

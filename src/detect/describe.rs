@@ -36,6 +36,12 @@ impl Detector {
                 // A settled track whose ring blurs is still the marker.
                 let settled = c.track.is_some_and(|i| self.settled(i));
                 let not_marker = matches!(verdict, RingVerdict::NotAMarker(_));
+                if not_marker
+                    && c.track.is_none()
+                    && legacy::is_marker(image, gray, c, self.config.legacy_min_ink_px)
+                {
+                    self.legacy_looking += 1;
+                }
                 (
                     detection(c, verdict.read(), not_marker && !settled),
                     *verdict.read(),

@@ -24,6 +24,9 @@ pub struct FamilyCheck {
     pub corrected: usize,
     /// Markers whose ring shows another bit count, by count.
     pub other_bits: BTreeMap<u32, usize>,
+    /// Discs with WhyCon's plain white centre and no code ring, seen while
+    /// looking for WhyCode markers: a user who forgot `--legacy` gets told.
+    pub legacy_looking: usize,
 }
 
 impl FamilyCheck {
@@ -64,6 +67,7 @@ impl FamilyCheck {
     pub fn merge(&mut self, other: &FamilyCheck) {
         self.exact += other.exact;
         self.corrected += other.corrected;
+        self.legacy_looking += other.legacy_looking;
         for (&bits, &n) in &other.other_bits {
             *self.other_bits.entry(bits).or_default() += n;
         }
@@ -101,6 +105,14 @@ impl FamilyCheck {
             return Some(format!(
                 "{bits}-bit codes{family}: {}; pass --bits {bits} --distance D for IDs",
                 seen(&self.other_bits)
+            ));
+        }
+        if self.legacy_looking > 0 && self.exact + self.corrected == 0 {
+            let n = self.legacy_looking;
+            return Some(format!(
+                "{n} disc{} looked like legacy WhyCon markers (a white centre, no code ring); \
+                 --legacy reads them",
+                if n == 1 { "" } else { "s" }
             ));
         }
         if self.mostly_corrected() {

@@ -224,6 +224,8 @@ pub struct Detector {
     frame_camera: Option<crate::camera::Camera>,
     /// How this detector's markers decoded so far.
     check: family_check::FamilyCheck,
+    /// Discs of this frame that only a legacy WhyCon marker would explain.
+    legacy_looking: usize,
     search: ThresholdSearch,
     ratio: Adaptive,
     roundness: Adaptive,
@@ -290,6 +292,7 @@ impl Detector {
             next_track: 1,
             frame_camera: None,
             check,
+            legacy_looking: 0,
             search: ThresholdSearch::default(),
             frame: 0,
             stopwatch: Stopwatch::default(),
@@ -326,6 +329,13 @@ impl Detector {
     /// [`family_check::FamilyCheck::note`] for a warning to show).
     pub fn family_check(&self) -> &family_check::FamilyCheck {
         &self.check
+    }
+
+    /// How many discs of the last frame looked like legacy WhyCon markers
+    /// while this detector looked for WhyCode ones (see
+    /// [`family_check::FamilyCheck::legacy_looking`]).
+    pub fn last_legacy_looking(&self) -> usize {
+        self.legacy_looking
     }
 
     /// How long each stage of the last frame took, with
@@ -441,6 +451,7 @@ impl Detector {
             .and_then(|camera| camera.for_image(image.width(), image.height()).ok());
         self.labels.begin(width, height);
         self.follow_filled = false;
+        self.legacy_looking = 0;
         Some(Gray {
             pixels: image.as_raw(),
             width,
@@ -480,6 +491,7 @@ impl Detector {
         }
         detections.sort_by(|a, b| a.v.total_cmp(&b.v).then(a.u.total_cmp(&b.u)));
         self.check.observe(&detections);
+        self.check.legacy_looking += self.legacy_looking;
         detections
     }
 }

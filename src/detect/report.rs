@@ -25,6 +25,10 @@ pub struct FrameReport {
     pub timings: Option<super::timings::StageTimings>,
     /// Where the image sits in a recorded stream (a bag or a video).
     pub stream: Option<StreamPosition>,
+    /// Discs that looked like legacy WhyCon markers while WhyCode markers
+    /// were looked for ([`super::Detector::last_legacy_looking`]); feeds the
+    /// run's hint, not the frame's output.
+    pub legacy_looking: usize,
 }
 
 /// A frame's place in a recorded stream.
@@ -316,6 +320,7 @@ mod tests {
             boards: Vec::new(),
             timings: None,
             stream: None,
+            legacy_looking: 0,
         }
     }
 

@@ -11,6 +11,7 @@ use super::template::Template;
 use super::{encode_pages, Format};
 use crate::detect::Target;
 use crate::family::Family;
+use crate::fileset::FileDigest;
 use crate::geometry::Marker;
 use crate::spec::{limits, within, SpecError};
 use std::path::{Path, PathBuf};
@@ -207,7 +208,7 @@ impl SheetJob<'_> {
             family,
             legacy: self.family.is_none(),
         };
-        let sheet = layout(&spec)?;
+        let mut sheet = layout(&spec)?;
         let check = if !self.self_check {
             None
         } else if format == Format::Png {
@@ -216,6 +217,12 @@ impl SheetJob<'_> {
             Some(check_sheet(&sheet, &target(self.family))?)
         };
         let pages = encode_pages(&sheet.pages, output, &self.name, self.dpi)?;
+        // The manifest is renamed into place last and names the pages it
+        // belongs to, so a set mixed by an interrupted run is recognisable.
+        sheet.manifest.files = pages
+            .iter()
+            .map(|(path, bytes)| FileDigest::of(path, bytes))
+            .collect();
         Ok(PrintedSheet {
             pages,
             manifest: (output.with_extension("json"), sheet.manifest.to_json()),

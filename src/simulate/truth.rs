@@ -25,6 +25,11 @@ pub struct GroundTruth {
     /// the JSON when there are none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub squares: Vec<TrueSquare>,
+    /// The image written with this truth and its digest (`fileset`), so
+    /// an image and a truth from different runs are told apart; empty for
+    /// a truth not written beside an image.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub files: Vec<crate::fileset::FileDigest>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -180,6 +185,7 @@ pub(super) fn ground_truth(scene: &Scene) -> GroundTruth {
         markers,
         pages,
         squares,
+        files: Vec::new(),
     }
 }
 

@@ -217,6 +217,10 @@ pub struct PhotoReport {
     pub markers: Vec<MarkerCheck>,
     /// Detections on located pages where nothing was printed.
     pub stray: Vec<StrayDetection>,
+    /// Signs that the photo shows another sheet than the manifest's (rings
+    /// of another family, IDs the manifest does not list).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
 }
 
 /// Least point pairs that locate a page (a homography needs four); below
@@ -250,6 +254,7 @@ pub fn check_photo(
         pages: Vec::new(),
         markers: Vec::new(),
         stray: Vec::new(),
+        notes: Vec::new(),
     };
     let page_count = manifest
         .pages
@@ -584,10 +589,61 @@ pub fn check_image(
     detector: &mut crate::detect::Detector,
 ) -> PhotoReport {
     detector.reset();
-    let observations: Vec<Observation> = detector
-        .detect(image)
+    let detections = detector.detect(image);
+    let observations: Vec<Observation> = detections.iter().map(Observation::from).collect();
+    let mut report = check_photo(photo, manifest, &observations, image, camera);
+    report.notes = other_sheet_signs(manifest, &detections, &report);
+    report
+}
+
+/// What says the photo is of another sheet than `manifest` describes:
+/// without it, a wrong manifest reads as a sheet whose every marker is
+/// missing.
+fn other_sheet_signs(
+    manifest: &Manifest,
+    detections: &[crate::detect::Detection],
+    report: &PhotoReport,
+) -> Vec<String> {
+    let Some(family) = manifest.family.filter(|_| !manifest.legacy) else {
+        return Vec::new();
+    };
+    let name = format!("{}-bit d{}", family.bits, family.distance);
+    let mut check = crate::detect::family_check::FamilyCheck::new(Some(family.bits));
+    check.observe(detections);
+    let mut notes = Vec::new();
+    if let Some(bits) = check.dominant_other_bits() {
+        let n = check.other_bits.values().sum::<usize>();
+        notes.push(format!(
+            "{n} marker{} here carr{} {bits}-bit codes, but the manifest's family is {name}: \
+             it is not the manifest of the sheet photographed",
+            if n == 1 { "" } else { "s" },
+            if n == 1 { "ies" } else { "y" },
+        ));
+    } else if check.mostly_corrected() {
+        notes.push(format!(
+            "{} of {} IDs read only through error correction: the sheet was probably printed \
+             with another family than the manifest's {name}",
+            check.corrected,
+            check.exact + check.corrected
+        ));
+    }
+    let listed: std::collections::BTreeSet<u32> = manifest.markers.iter().map(|m| m.id).collect();
+    let unlisted: std::collections::BTreeSet<u32> = detections
         .iter()
-        .map(Observation::from)
+        .map(|d| d.id)
+        .filter(|id| *id != 0 && !listed.contains(id))
         .collect();
-    check_photo(photo, manifest, &observations, image, camera)
+    if report.pages.is_empty() && !unlisted.is_empty() {
+        let shown: Vec<String> = unlisted.iter().take(8).map(u32::to_string).collect();
+        notes.push(format!(
+            "{} ID{} read here {} not on the manifest ({}{}): is it the manifest of the sheet \
+             photographed?",
+            unlisted.len(),
+            if unlisted.len() == 1 { "" } else { "s" },
+            if unlisted.len() == 1 { "is" } else { "are" },
+            shown.join(", "),
+            if unlisted.len() > 8 { ", ..." } else { "" }
+        ));
+    }
+    notes
 }

@@ -271,6 +271,9 @@ impl Report {
                     );
                 }
             }
+            for note in &photo.notes {
+                let _ = writeln!(out, "note: {}: {note}", photo.photo);
+            }
             for stray in &photo.stray {
                 let _ = writeln!(
                     out,
@@ -356,6 +359,7 @@ mod tests {
             template: String::new(),
             page_size_mm: [100.0, 100.0],
             pages: 1,
+            files: Vec::new(),
             markers: vec![PrintedMarker {
                 id: 3,
                 code: 11,
@@ -376,6 +380,7 @@ mod tests {
                 ..not_in_view(&manifest.markers[0], (1.0, 1.0))
             }],
             stray: Vec::new(),
+            notes: Vec::new(),
         };
         let report = summarise(
             &manifest,

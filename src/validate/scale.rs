@@ -152,7 +152,7 @@ pub(crate) fn measure(
     for (side, line) in lines.iter_mut().enumerate() {
         match find_edge(image, model, homography, [w, h], markers, side) {
             Ok(l) => *line = Some(l),
-            Err(why) => failures.push(format!("{} edge {why}", SIDE_NAMES[side])),
+            Err(why) => failures.push((SIDE_NAMES[side], why)),
         }
     }
     let found_corners: Vec<(usize, (f64, f64))> = paper_corners([w, h], lines)
@@ -184,14 +184,18 @@ pub(crate) fn measure(
         (Some(x), Some(y)) => Some((x + y) / 2.0),
         (x, y) => x.or(y),
     };
+    let failures = grouped_failures(&failures);
     let Some(s) = scale else {
+        let hint = if failures.contains(NOT_WHERE_EXPECTED) {
+            "; if the paper's edges are plainly in view, the photo is of another sheet than \
+             this manifest's"
+        } else {
+            ""
+        };
         return ScaleMeasurement {
             edges,
             found_corners,
-            ..ScaleMeasurement::unknown(format!(
-                "needs two opposite paper edges: {}",
-                failures.join(", ")
-            ))
+            ..ScaleMeasurement::unknown(format!("needs two opposite paper edges: {failures}{hint}"))
         };
     };
     let mut notes = Vec::new();
@@ -205,9 +209,8 @@ pub(crate) fn measure(
         }
     } else {
         notes.push(format!(
-            "measured {} only ({})",
+            "measured {} only ({failures})",
             if scale_x.is_some() { "across" } else { "down" },
-            failures.join(", ")
         ));
     }
     // The worse of the two axes decides the status.
@@ -501,14 +504,49 @@ fn find_edge(
     }
     if points.len() < 6 {
         return Err(if out_of_view >= low_contrast && out_of_view > 0 {
-            "is not in the photo".to_string()
+            "not in the photo".to_string()
         } else if low_contrast > 0 {
-            "shows no contrast against the background".to_string()
+            NOT_WHERE_EXPECTED.to_string()
         } else {
-            "is hidden behind markers".to_string()
+            "hidden behind markers".to_string()
         });
     }
-    fit_edge_line(&points).ok_or_else(|| "is not straight (folded or occluded?)".to_string())
+    fit_edge_line(&points).ok_or_else(|| "not straight (folded or occluded?)".to_string())
+}
+
+/// Why a paper edge was not found where the page's markers put it. Said
+/// with where it was looked for: a paper edge plainly visible elsewhere
+/// means the manifest's page is not the one in the photo.
+const NOT_WHERE_EXPECTED: &str =
+    "no paper edge where the manifest's page puts it (searched from 12 % of the page inside \
+     to 20 % outside)";
+
+/// "top and right edges: not in the photo; bottom edge: ...": the sides
+/// that failed for one reason named together, so that a reason is said once.
+fn grouped_failures(failures: &[(&str, String)]) -> String {
+    let mut reasons: Vec<&String> = Vec::new();
+    for (_, why) in failures {
+        if !reasons.contains(&why) {
+            reasons.push(why);
+        }
+    }
+    reasons
+        .iter()
+        .map(|why| {
+            let sides: Vec<&str> = failures
+                .iter()
+                .filter(|(_, w)| w == *why)
+                .map(|(side, _)| *side)
+                .collect();
+            let named = match sides.as_slice() {
+                [one] => format!("{one} edge"),
+                [init @ .., last] => format!("{} and {last} edges", init.join(", ")),
+                [] => String::new(),
+            };
+            format!("{named}: {why}")
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 /// Robust straight-line fit offset = a + b·s: least squares, then again

@@ -71,6 +71,7 @@ pub fn a4_sheet() -> Manifest {
         template: "a4".into(),
         page_size_mm: PAGE_MM,
         pages: 1,
+        files: Vec::new(),
         markers,
     }
 }

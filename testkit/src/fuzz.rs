@@ -6,6 +6,13 @@
 //! input that takes too long, and on any JSON output that does not parse
 //! back or carries a non-finite number.
 //!
+//! With the `whycode` binary at hand it also runs the command line itself:
+//! with its standard output or error closed or full (it must not panic, and
+//! exits as it would have, 0 for a reader that went away, 1 for a full
+//! disk), and several runs at once writing one output (the files they
+//! leave must be one run's set, as the manifest's and the truth's digests
+//! tell, with no temporary file left over).
+//!
 //! Shared by the bounded run in the test suite (`tests/integration/fuzz_bounded.rs`)
 //! and the long run (`cargo run --release --example fuzz -- --minutes N`).
 
@@ -36,6 +43,9 @@ pub struct Settings {
     /// Longest any single input may take before it counts as a hang.
     pub hang_limit: Duration,
     pub seed: u64,
+    /// The `whycode` binary for the command-line targets; without it they
+    /// are reported as skipped.
+    pub whycode: Option<std::path::PathBuf>,
 }
 
 /// What one target did.
@@ -48,18 +58,25 @@ pub struct TargetSummary {
     /// Slowest detector run, scaled to 2 megapixels, milliseconds.
     pub slowest_ms_per_2mp: f64,
     pub failures: Vec<String>,
+    /// Why the target did not run, if it did not.
+    pub skipped: Option<&'static str>,
 }
 
 type FuzzTarget = fn(&mut Fuzzer, &mut TestRunner) -> Result<bool, String>;
 
-const TARGETS: [(&str, FuzzTarget); 6] = [
+const TARGETS: [(&str, FuzzTarget); 8] = [
     ("image files", Fuzzer::image_file),
     ("random images", Fuzzer::random_image),
     ("family files", Fuzzer::family_file),
     ("manifests", Fuzzer::manifest_file),
     ("templates", Fuzzer::template_file),
     ("camera files", Fuzzer::camera_file),
+    ("output streams", Fuzzer::output_streams),
+    ("concurrent runs", Fuzzer::concurrent_writers),
 ];
+
+/// Targets that run the `whycode` binary.
+const NEEDS_BINARY: [&str; 2] = ["output streams", "concurrent runs"];
 
 /// Runs every target for its share of the budget.
 pub fn run(settings: &Settings) -> Vec<TargetSummary> {
@@ -82,6 +99,10 @@ fn run_target(
         name,
         ..Default::default()
     };
+    if settings.whycode.is_none() && NEEDS_BINARY.contains(&name) {
+        summary.skipped = Some("no whycode binary (build it with cargo build --release)");
+        return summary;
+    }
     let seed = settings.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ index;
     let mut seed_bytes = [0u8; 32];
     seed_bytes[..8].copy_from_slice(&seed.to_le_bytes());
@@ -94,10 +115,11 @@ fn run_target(
     let (tx, rx) = mpsc::channel::<Progress>();
     let deadline = Instant::now() + share;
     let detect_limit = settings.detect_limit;
+    let whycode = settings.whycode.clone();
     let current = std::sync::Arc::new(std::sync::Mutex::new(None::<String>));
     let shared = current.clone();
     std::thread::spawn(move || {
-        let mut fuzzer = Fuzzer::new(detect_limit);
+        let mut fuzzer = Fuzzer::new(detect_limit, whycode);
         fuzzer.hung_input = Some(shared);
         let mut runner = runner;
         while Instant::now() < deadline {
@@ -308,6 +330,10 @@ struct Fuzzer {
     manifest_seed: Vec<u8>,
     template_seeds: Vec<Vec<u8>>,
     camera_seeds: Vec<(&'static str, Vec<u8>)>,
+    /// The command line's binary, for the targets that run it.
+    whycode: Option<std::path::PathBuf>,
+    /// Exit codes of the commands run with both streams working.
+    baseline: std::collections::HashMap<usize, i32>,
     /// The input being tried, for the failure report.
     last: String,
     /// The same, seen by the thread that watches for hangs.
@@ -315,7 +341,7 @@ struct Fuzzer {
 }
 
 impl Fuzzer {
-    fn new(detect_limit: Option<Duration>) -> Fuzzer {
+    fn new(detect_limit: Option<Duration>, whycode: Option<std::path::PathBuf>) -> Fuzzer {
         let family = Family::generate(8, 2).unwrap();
         let scene_image = seed_scene(&family);
         let encode = |format: image::ImageFormat, img: &image::DynamicImage| {
@@ -371,6 +397,8 @@ impl Fuzzer {
                 .iter()
                 .map(|(ext, text)| (*ext, text.as_bytes().to_vec()))
                 .collect(),
+            whycode,
+            baseline: std::collections::HashMap::new(),
             last: String::new(),
             hung_input: None,
         }
@@ -548,6 +576,231 @@ impl Fuzzer {
     }
 }
 
+/// Commands for the output-stream target, run in the fuzzer's folder
+/// (`seed.png` and `sheet.json` are written there first): each writes to
+/// standard output or standard error or both, on success and on failure.
+const STREAM_COMMANDS: [&[&str]; 10] = [
+    &["ids", "--bits", "8", "--distance", "2"],
+    &["ids", "--bits", "12", "--distance", "3", "--format", "json"],
+    &["sheet", "--list-templates"],
+    &["detect", "seed.png"],
+    &["detect", "--format", "json", "--timings", "seed.png"],
+    &["detect", "missing.png", "seed.png"],
+    &["validate", "--manifest", "sheet.json", "seed.png"],
+    &["marker", "--id", "3", "--no-check", "-o", "out.svg"],
+    &["simulate", "--ids", "1-3", "--size", "320x240", "-o", "sim.png"],
+    &["sheet", "--ids", "1-4", "--no-check", "-o", "sheet-out.pdf"],
+];
+
+/// What a standard stream of a child is connected to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Stream {
+    /// A pipe that is read to the end.
+    Read,
+    /// A pipe whose reader has already gone: every write fails (EPIPE).
+    Closed,
+    /// /dev/full: every write fails (ENOSPC).
+    Full,
+}
+
+impl Stream {
+    fn of(k: u8) -> Stream {
+        [Stream::Read, Stream::Closed, Stream::Full][usize::from(k % 3)]
+    }
+
+    /// The child's end, and the reader when it is read.
+    fn connect(self) -> Result<(std::process::Stdio, Option<std::io::PipeReader>), String> {
+        Ok(match self {
+            Stream::Read => {
+                let (reader, writer) = std::io::pipe().map_err(|e| e.to_string())?;
+                (writer.into(), Some(reader))
+            }
+            Stream::Closed => {
+                let (reader, writer) = std::io::pipe().map_err(|e| e.to_string())?;
+                drop(reader);
+                (writer.into(), None)
+            }
+            Stream::Full => (
+                std::fs::OpenOptions::new()
+                    .write(true)
+                    .open("/dev/full")
+                    .map_err(|e| format!("/dev/full: {e}"))?
+                    .into(),
+                None,
+            ),
+        })
+    }
+}
+
+/// Reads a child's pipe to the end on a thread (so that a child filling
+/// one pipe while the other is read does not stall).
+fn drain(reader: Option<std::io::PipeReader>) -> std::thread::JoinHandle<Vec<u8>> {
+    std::thread::spawn(move || {
+        let mut bytes = Vec::new();
+        if let Some(mut reader) = reader {
+            let _ = std::io::Read::read_to_end(&mut reader, &mut bytes);
+        }
+        bytes
+    })
+}
+
+impl Fuzzer {
+    /// Runs command `which` with its streams connected as asked; its exit
+    /// code, standard output and standard error (empty when not read).
+    fn run_streams(
+        &self,
+        which: usize,
+        out: Stream,
+        err: Stream,
+    ) -> Result<(i32, Vec<u8>, Vec<u8>), String> {
+        let binary = self.whycode.as_ref().ok_or("no whycode binary")?;
+        let (out_end, out_reader) = out.connect()?;
+        let (err_end, err_reader) = err.connect()?;
+        let mut child = std::process::Command::new(binary)
+            .args(STREAM_COMMANDS[which])
+            .current_dir(self.dir.path())
+            .stdin(std::process::Stdio::null())
+            .stdout(out_end)
+            .stderr(err_end)
+            .spawn()
+            .map_err(|e| format!("cannot run {}: {e}", binary.display()))?;
+        let (out_text, err_text) = (drain(out_reader), drain(err_reader));
+        let status = child.wait().map_err(|e| e.to_string())?;
+        let out_text = out_text.join().unwrap_or_default();
+        let err_text = err_text.join().unwrap_or_default();
+        let Some(code) = status.code() else {
+            return Err(format!("killed by a signal ({status})"));
+        };
+        Ok((code, out_text, err_text))
+    }
+
+    fn output_streams(&mut self, runner: &mut TestRunner) -> Result<bool, String> {
+        let (which, out_kind, err_kind) = draw((0..STREAM_COMMANDS.len(), 0u8..3, 0u8..3), runner);
+        let (out, err) = (Stream::of(out_kind), Stream::of(err_kind));
+        self.note_input(format!(
+            "whycode {} with stdout {out:?}, stderr {err:?}",
+            STREAM_COMMANDS[which].join(" ")
+        ));
+        if !self.dir.path().join("sheet.json").exists() {
+            self.write("sheet.json", &self.manifest_seed.clone());
+            self.write("seed.png", &self.image_seeds[0].1.clone());
+        }
+        let baseline = match self.baseline.get(&which) {
+            Some(&code) => code,
+            None => {
+                let (code, _, text) = self.run_streams(which, Stream::Read, Stream::Read)?;
+                if String::from_utf8_lossy(&text).contains("panicked") {
+                    return Err(format!("panicked: {}", String::from_utf8_lossy(&text)));
+                }
+                self.baseline.insert(which, code);
+                code
+            }
+        };
+        let (code, _, text) = self.run_streams(which, out, err)?;
+        let text = String::from_utf8_lossy(&text);
+        if code == 101 || text.contains("panicked") {
+            return Err(format!("panicked (exit {code}): {text}"));
+        }
+        // A reader that went away ends the run quietly (0); a full disk is
+        // an error (1); standard error failing changes nothing.
+        let allowed: &[i32] = match out {
+            Stream::Read => &[baseline],
+            Stream::Closed => &[baseline, 0],
+            Stream::Full => &[baseline, 1],
+        };
+        if !allowed.contains(&code) {
+            return Err(format!(
+                "exit {code}, expected one of {allowed:?} (exit {baseline} with both streams read); stderr: {text}"
+            ));
+        }
+        if out == Stream::Full && err == Stream::Read && code == 1 && baseline != 1 {
+            let lines: Vec<&str> = text.lines().collect();
+            if !lines.last().is_some_and(|l| l.starts_with("whycode: error: ")) {
+                return Err(format!("a full stdout was not reported in one error line: {text}"));
+            }
+        }
+        Ok(true)
+    }
+
+    fn concurrent_writers(&mut self, runner: &mut TestRunner) -> Result<bool, String> {
+        let (runs, sheet, ext, first) = draw((2usize..=4, any::<bool>(), 0usize..3, 1u32..=4), runner);
+        let binary = self.whycode.clone().ok_or("no whycode binary")?;
+        let dir = self.dir.path().join("concurrent");
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+        let ext = ["pdf", "png", "svg"][ext];
+        let commands: Vec<Vec<String>> = (0..runs as u32)
+            .map(|k| {
+                // Different IDs per run (the default family has 16).
+                let ids = format!("{}-{}", first + 3 * k, first + 3 * k + 2);
+                if sheet {
+                    ["sheet", "--ids", &ids, "--no-check", "--dpi", "40"]
+                        .iter()
+                        .map(|s| s.to_string())
+                        .chain(["-o".into(), format!("out.{ext}")])
+                        .collect()
+                } else {
+                    let image = if ext == "pdf" { "jpg" } else { "png" };
+                    ["simulate", "--ids", &ids, "--size", "320x240"]
+                        .iter()
+                        .map(|s| s.to_string())
+                        .chain(["-o".into(), format!("out.{image}")])
+                        .collect()
+                }
+            })
+            .collect();
+        self.note_input(format!("{runs} concurrent runs: {commands:?}"));
+        let children: Vec<_> = commands
+            .iter()
+            .map(|args| {
+                std::process::Command::new(&binary)
+                    .args(args)
+                    .current_dir(&dir)
+                    .stdout(std::process::Stdio::null())
+                    .stderr(std::process::Stdio::piped())
+                    .spawn()
+                    .map_err(|e| e.to_string())
+            })
+            .collect::<Result<_, _>>()?;
+        for child in children {
+            let out = child.wait_with_output().map_err(|e| e.to_string())?;
+            if !out.status.success() {
+                return Err(format!(
+                    "a run failed ({}): {}",
+                    out.status,
+                    String::from_utf8_lossy(&out.stderr)
+                ));
+            }
+        }
+        // The record written last names the files of its own run.
+        let record = dir.join("out.json");
+        let text = std::fs::read_to_string(&record).map_err(|e| format!("out.json: {e}"))?;
+        let value: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| format!("out.json: {e}"))?;
+        let files = value["files"].as_array().cloned().unwrap_or_default();
+        if files.is_empty() {
+            return Err("out.json lists no files".into());
+        }
+        for entry in files {
+            let name = entry["file"].as_str().unwrap_or_default();
+            let bytes = std::fs::read(dir.join(name)).map_err(|e| format!("{name}: {e}"))?;
+            if whycode::fileset::sha256_hex(&bytes) != entry["sha256"].as_str().unwrap_or_default() {
+                return Err(format!("{name} is not the file out.json was written with"));
+            }
+        }
+        let leftovers: Vec<String> = std::fs::read_dir(&dir)
+            .map_err(|e| e.to_string())?
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".whycode-"))
+            .collect();
+        if !leftovers.is_empty() {
+            return Err(format!("temporary files left: {leftovers:?}"));
+        }
+        Ok(true)
+    }
+}
+
 /// A 320x240 view of three markers, the seed of the image-file target.
 fn seed_scene(family: &Family) -> image::GrayImage {
     let mut scene = Scene::new(Camera::ideal(320, 240, 60.0));
@@ -658,8 +911,12 @@ const CAMERA_SEEDS: [(&str, &str); 3] = [
 pub fn report(summaries: &[TargetSummary]) -> String {
     let mut out = String::new();
     for s in summaries {
+        if let Some(why) = s.skipped {
+            out.push_str(&format!("{:<15} skipped: {why}\n", s.name));
+            continue;
+        }
         out.push_str(&format!(
-            "{:<14} {:>7} inputs, {:>7} accepted by the loader, slowest detection {:>6.1} ms per 2 MP, {} failure(s)\n",
+            "{:<15} {:>7} inputs, {:>7} accepted by the loader, slowest detection {:>6.1} ms per 2 MP, {} failure(s)\n",
             s.name,
             s.inputs,
             s.accepted,

@@ -14,6 +14,7 @@ fn loaders_and_detector_survive_mutated_and_random_inputs() {
         detect_limit: None,
         hang_limit: Duration::from_secs(60),
         seed: 20_26,
+        whycode: Some(env!("CARGO_BIN_EXE_whycode").into()),
     };
     let summaries = fuzz_support::run(&settings);
     let report = fuzz_support::report(&summaries);

@@ -39,6 +39,7 @@ mod sheet_self_check;
 mod simulate_detect;
 mod simulate_scene;
 mod spec_cli;
+mod user_hints;
 mod validate_cli;
 mod validate_matching;
 mod validate_photos;

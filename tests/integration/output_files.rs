@@ -205,3 +205,95 @@ fn new_files_honour_the_umask_and_replaced_ones_keep_their_mode() {
     assert_eq!(mode(&d.join("private.txt")), 0o600);
     assert_eq!(mode(&shared), 0o666);
 }
+
+/// A run killed between renaming its PDF and its manifest into place (or
+/// any other way a PDF and a manifest of different runs end up together)
+/// is told by the digests the manifest keeps of its pages: the commands
+/// that read the manifest warn, naming the file.
+#[test]
+fn a_manifest_knows_its_pages_and_tells_a_mixed_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sheet = |ids: &str, out: &str| ok(d, &["sheet", "--ids", ids, "--no-check", "-o", out]);
+    sheet("1-4", "x.pdf");
+    let manifest: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("x.json")).unwrap()).unwrap();
+    let pdf = std::fs::read(d.join("x.pdf")).unwrap();
+    assert_eq!(manifest["files"][0]["file"], "x.pdf");
+    assert_eq!(
+        manifest["files"][0]["sha256"],
+        whycode::fileset::sha256_hex(&pdf).as_str()
+    );
+    ok(d, &["simulate", "--manifest", "x.json", "-o", "photo.png"]);
+    let clean = whycode_in(d, &["validate", "--manifest", "x.json", "photo.png"]);
+    assert!(!stderr(&clean).contains("warning"), "{}", stderr(&clean));
+
+    // What a kill between the renames leaves: the new run's PDF beside the
+    // old run's manifest.
+    sheet("5-8", "y.pdf");
+    std::fs::copy(d.join("y.pdf"), d.join("x.pdf")).unwrap();
+    for args in [
+        &["validate", "--manifest", "x.json", "photo.png"][..],
+        &["simulate", "--manifest", "x.json", "-o", "again.png"][..],
+    ] {
+        let out = whycode_in(d, args);
+        let err = stderr(&out);
+        assert!(
+            err.contains("warning: x.json: x.pdf beside it is not the file it was written with"),
+            "whycode {}: {err}",
+            args.join(" ")
+        );
+    }
+    // A PDF moved away (to the printer) is not a mismatch.
+    std::fs::remove_file(d.join("x.pdf")).unwrap();
+    let moved = whycode_in(d, &["validate", "--manifest", "x.json", "photo.png"]);
+    assert!(!stderr(&moved).contains("warning"), "{}", stderr(&moved));
+}
+
+/// Concurrent runs writing one sheet leave one run's PDF with that run's
+/// manifest (the folder lock), as the manifest's digest proves.
+#[test]
+fn concurrent_sheets_to_one_path_leave_a_matching_set() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    for _round in 0..3 {
+        let runs: Vec<_> = ["1-4", "5-8", "9-12", "13-16"]
+            .iter()
+            .map(|ids| {
+                std::process::Command::new(env!("CARGO_BIN_EXE_whycode"))
+                    .current_dir(d)
+                    .args(["sheet", "--ids", ids, "--no-check", "-o", "x.pdf"])
+                    .stderr(std::process::Stdio::null())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        for mut run in runs {
+            assert!(run.wait().unwrap().success());
+        }
+        let manifest: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(d.join("x.json")).unwrap()).unwrap();
+        let pdf = std::fs::read(d.join("x.pdf")).unwrap();
+        assert_eq!(
+            manifest["files"][0]["sha256"],
+            whycode::fileset::sha256_hex(&pdf).as_str(),
+            "the PDF and the manifest come from different runs"
+        );
+    }
+}
+
+/// A simulated image's truth names the image it was written with.
+#[test]
+fn a_ground_truth_names_its_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    ok(d, &["simulate", "--ids", "1-3", "-o", "view.png"]);
+    let truth: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("view.json")).unwrap()).unwrap();
+    let image = std::fs::read(d.join("view.png")).unwrap();
+    assert_eq!(truth["files"][0]["file"], "view.png");
+    assert_eq!(
+        truth["files"][0]["sha256"],
+        whycode::fileset::sha256_hex(&image).as_str()
+    );
+}

@@ -46,6 +46,7 @@ fn a4_manifest() -> Manifest {
         template: "a4".into(),
         page_size_mm: [210.0, 297.0],
         pages: 1,
+        files: Vec::new(),
         markers,
     }
 }

@@ -289,6 +289,7 @@ pub fn layout(spec: &SheetSpec) -> Result<Sheet, RenderError> {
         template: template.name.clone(),
         page_size_mm: [template.page_width_mm, template.page_height_mm],
         pages: page_count as u32,
+        files: Vec::new(),
         markers: printed,
     };
     Ok(Sheet { pages, manifest })
