@@ -588,7 +588,9 @@ const STREAM_COMMANDS: [&[&str]; 10] = [
     &["detect", "missing.png", "seed.png"],
     &["validate", "--manifest", "sheet.json", "seed.png"],
     &["marker", "--id", "3", "--no-check", "-o", "out.svg"],
-    &["simulate", "--ids", "1-3", "--size", "320x240", "-o", "sim.png"],
+    &[
+        "simulate", "--ids", "1-3", "--size", "320x240", "-o", "sim.png",
+    ],
     &["sheet", "--ids", "1-4", "--no-check", "-o", "sheet-out.pdf"],
 ];
 
@@ -715,15 +717,21 @@ impl Fuzzer {
         }
         if out == Stream::Full && err == Stream::Read && code == 1 && baseline != 1 {
             let lines: Vec<&str> = text.lines().collect();
-            if !lines.last().is_some_and(|l| l.starts_with("whycode: error: ")) {
-                return Err(format!("a full stdout was not reported in one error line: {text}"));
+            if !lines
+                .last()
+                .is_some_and(|l| l.starts_with("whycode: error: "))
+            {
+                return Err(format!(
+                    "a full stdout was not reported in one error line: {text}"
+                ));
             }
         }
         Ok(true)
     }
 
     fn concurrent_writers(&mut self, runner: &mut TestRunner) -> Result<bool, String> {
-        let (runs, sheet, ext, first) = draw((2usize..=4, any::<bool>(), 0usize..3, 1u32..=4), runner);
+        let (runs, sheet, ext, first) =
+            draw((2usize..=4, any::<bool>(), 0usize..3, 1u32..=4), runner);
         let binary = self.whycode.clone().ok_or("no whycode binary")?;
         let dir = self.dir.path().join("concurrent");
         let _ = std::fs::remove_dir_all(&dir);
@@ -784,7 +792,8 @@ impl Fuzzer {
         for entry in files {
             let name = entry["file"].as_str().unwrap_or_default();
             let bytes = std::fs::read(dir.join(name)).map_err(|e| format!("{name}: {e}"))?;
-            if whycode::fileset::sha256_hex(&bytes) != entry["sha256"].as_str().unwrap_or_default() {
+            if whycode::fileset::sha256_hex(&bytes) != entry["sha256"].as_str().unwrap_or_default()
+            {
                 return Err(format!("{name} is not the file out.json was written with"));
             }
         }
