@@ -15,7 +15,10 @@ trap 'rm -rf "$VENV"' EXIT
 "$VENV/bin/python" -m pip install --quiet ./python
 
 # The binding crate is not a default workspace member: lint it here.
-cargo clippy --quiet -p whycode-python --all-targets -- -D warnings
+# .ci/run lints the whole workspace first and says so.
+if [ -z "${WHYCODE_LINTED:-}" ]; then
+    cargo clippy --quiet -p whycode-python --all-targets -- -D warnings
+fi
 
 # The tests compare with the CLI built from this checkout.
 cargo build --release --quiet --bin whycode

@@ -29,7 +29,10 @@ fi
 
 cargo build --release --quiet -p whycode-ros2 --bin whycode_node --example latency
 cargo build --release --quiet --bin whycode
-cargo clippy --quiet -p whycode-ros2 --all-targets -- -D warnings
+# .ci/run lints the whole workspace first and says so.
+if [ -z "${WHYCODE_LINTED:-}" ]; then
+    cargo clippy --quiet -p whycode-ros2 --all-targets -- -D warnings
+fi
 cargo test --release --quiet -p whycode-ros2
 
 export WHYCODE_NODE="$TARGET/release/whycode_node"

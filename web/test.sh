@@ -28,7 +28,10 @@ if ! "$venv/bin/python" -c "import playwright" 2>/dev/null; then
 fi
 
 # The binding crate is not a default member, so the workspace lint skips it.
-cargo clippy -p whycode-web --all-targets -- -D warnings
+# .ci/run lints the whole workspace first and says so.
+if [ -z "${WHYCODE_LINTED:-}" ]; then
+    cargo clippy -p whycode-web --all-targets -- -D warnings
+fi
 "$here/build.sh"
 cargo build --release --bin whycode
 "$venv/bin/python" "$here/test_web.py" --dist "$here/dist" --whycode "$target_dir/release/whycode" \
