@@ -12,6 +12,9 @@
 //! that disagree with the rest (a wrong ID, a moved marker) are left out
 //! and named.
 
+mod smooth;
+pub(crate) use smooth::BoardFilter;
+
 use std::path::Path;
 
 use nalgebra::{DVector, Matrix3, Rotation3, UnitQuaternion, Vector3};

@@ -226,6 +226,8 @@ pub struct Detector {
     check: family_check::FamilyCheck,
     /// Discs of this frame that only a legacy WhyCon marker would explain.
     legacy_looking: usize,
+    /// Each configured board's pose across tracked frames.
+    board_filters: Vec<crate::board::BoardFilter>,
     search: ThresholdSearch,
     ratio: Adaptive,
     roundness: Adaptive,
@@ -274,6 +276,7 @@ impl Detector {
     pub fn new(config: DetectorConfig) -> Detector {
         let white = config.target.design().white_fraction();
         let check = family_check::FamilyCheck::new(config.target.family().map(Family::bits));
+        let board_filters = vec![crate::board::BoardFilter::default(); config.boards.len()];
         Detector {
             ratio: Adaptive::new(white, config.ratio_tolerance),
             roundness: Adaptive::new(0.0, config.roundness_tolerance),
@@ -293,6 +296,7 @@ impl Detector {
             frame_camera: None,
             check,
             legacy_looking: 0,
+            board_filters,
             search: ThresholdSearch::default(),
             frame: 0,
             stopwatch: Stopwatch::default(),
@@ -347,15 +351,25 @@ impl Detector {
 
     /// The pose of every configured board seen in `detections` (this
     /// detector's last frame), through the configured camera; none
-    /// without a camera and a diameter.
-    pub fn locate_boards(&self, detections: &[Detection]) -> Vec<crate::board::BoardPose> {
+    /// without a camera and a diameter. With tracking on, each board's pose
+    /// is smoothed over the frames it was seen in (`board::smooth`).
+    pub fn locate_boards(&mut self, detections: &[Detection]) -> Vec<crate::board::BoardPose> {
         let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) else {
             return Vec::new();
         };
+        let tracking = self.config.tracking;
         self.config
             .boards
             .iter()
-            .filter_map(|board| crate::board::locate(board, detections, &camera, diameter))
+            .zip(&mut self.board_filters)
+            .filter_map(|(board, filter)| {
+                let measured = crate::board::locate(board, detections, &camera, diameter);
+                if tracking {
+                    filter.update(measured)
+                } else {
+                    measured
+                }
+            })
             .collect()
     }
 

@@ -187,3 +187,87 @@ fn a_bundle_on_a_cube_gives_the_cube_pose() {
         "position off by {position_error} m: {pose:?}"
     );
 }
+
+/// A cube moving steadily past a noisy camera: each frame's own fit
+/// jitters, the tracked stream's board pose (smoothed over the frames)
+/// stays closer to the truth once the filter has learnt the motion.
+#[test]
+fn a_tracked_board_is_smoothed_over_the_frames() {
+    let truth = calibration::lens();
+    let family = Family::generate(10, 2).unwrap();
+    let side = 0.06;
+    let faces = [
+        (
+            1,
+            Vector3::new(0.0, 0.0, side / 2.0),
+            UnitQuaternion::identity(),
+        ),
+        (
+            2,
+            Vector3::new(side / 2.0, 0.0, 0.0),
+            UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2),
+        ),
+    ];
+    let bundle: String = std::iter::once("bundles:\n  - name: cube\n    layout:\n".to_string())
+        .chain(faces.iter().map(|(id, p, q)| {
+            format!(
+                "      - {{id: {id}, diameter: 0.04, x: {}, y: {}, z: {}, qw: {}, qx: {}, qy: {}, qz: {}}}\n",
+                p.x, p.y, p.z, q.w, q.i, q.j, q.k
+            )
+        }))
+        .collect();
+    let boards = Board::parse_bundles(&bundle).unwrap();
+    let cube_rotation = *Rotation3::rotation_between(
+        &Vector3::new(1.0, 0.2, 1.0),
+        &Vector3::new(0.15, -0.1, -1.0),
+    )
+    .unwrap()
+    .matrix();
+    let detector = |tracking: bool| {
+        Detector::new(DetectorConfig {
+            target: Target::WhyCode(family.clone()),
+            camera: Some(truth),
+            diameter_m: Some(0.04),
+            boards: boards.clone(),
+            tracking,
+            ..Default::default()
+        })
+    };
+    let (mut tracked, mut single) = (detector(true), detector(false));
+    let (mut smoothed_sq, mut raw_sq, mut counted) = (0.0, 0.0, 0);
+    for frame in 0u32..40 {
+        let cube_position = Vector3::new(-0.02 + 0.0003 * f64::from(frame), -0.02, 0.7);
+        let mut scene = Scene::new(truth);
+        for (id, p, q) in &faces {
+            let marker = Marker::whycode(10, family.code(*id).unwrap(), 40.0);
+            let placement = Placement::new(
+                cube_position + cube_rotation * p,
+                cube_rotation * q.to_rotation_matrix().matrix(),
+            );
+            let mut loose = LooseMarker::new(marker, *id, placement);
+            loose.card_half_mm = 29.0;
+            scene.objects.push(SceneObject::Marker(loose));
+        }
+        scene.focus_blur_px = 1.0;
+        scene.noise = 6.0;
+        scene.seed = u64::from(frame) + 7;
+        let image = simulate::render(&scene).0;
+        let found = tracked.detect(&image);
+        let smoothed = tracked.locate_boards(&found);
+        let found = single.detect(&image);
+        let raw = single.locate_boards(&found);
+        assert_eq!((smoothed.len(), raw.len()), (1, 1), "frame {frame}");
+        if frame >= 20 {
+            smoothed_sq += (smoothed[0].position - cube_position).norm_squared();
+            raw_sq += (raw[0].position - cube_position).norm_squared();
+            counted += 1;
+        }
+    }
+    let rms = |sq: f64| (sq / f64::from(counted)).sqrt() * 1000.0;
+    assert!(
+        rms(smoothed_sq) < 0.8 * rms(raw_sq),
+        "smoothed {:.3} mm RMS, each frame alone {:.3} mm",
+        rms(smoothed_sq),
+        rms(raw_sq)
+    );
+}
