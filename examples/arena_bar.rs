@@ -44,8 +44,7 @@ impl Row {
         self.position_mm
             .push(1000.0 * (x - robot.position.x).hypot(y - robot.position.y));
         if let Some(yaw) = yaw {
-            let turn = (yaw - robot.yaw + std::f64::consts::PI)
-                .rem_euclid(std::f64::consts::TAU)
+            let turn = (yaw - robot.yaw + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
                 - std::f64::consts::PI;
             self.yaw_deg.push(turn.abs().to_degrees());
         }
@@ -82,7 +81,14 @@ fn detect(camera: Option<whycode::camera::Camera>, image: &image::GrayImage) -> 
 
 /// Ours: the arena measured from this image's corners, then every robot
 /// located through it.
-fn ours(found: &[Detection], camera: Option<&whycode::camera::Camera>, height: f64, robots: &[Robot], size: (u32, u32), row: &mut Row) {
+fn ours(
+    found: &[Detection],
+    camera: Option<&whycode::camera::Camera>,
+    height: f64,
+    robots: &[Robot],
+    size: (u32, u32),
+    row: &mut Row,
+) {
     let arena = match Arena::measure(
         Corners::Ids(arena::CORNER_IDS),
         arena::SIZE_M,
@@ -173,7 +179,10 @@ fn main() {
         "{:<34} {:>5} {:>6} {:>8} {:>8}  {:>8} {:>8}",
         "", "found", "missed", "pos_med", "pos_max", "yaw_med", "yaw_max"
     );
-    println!("{:<34} {:>5} {:>6} {:>8} {:>8}  {:>8} {:>8}", "", "", "", "mm", "mm", "deg", "deg");
+    println!(
+        "{:<34} {:>5} {:>6} {:>8} {:>8}  {:>8} {:>8}",
+        "", "", "", "mm", "mm", "deg", "deg"
+    );
     with_camera.print("ours, camera (lens removed)");
     without_camera.print("ours, no camera (plane map)");
     by_hand.print("naive: ellipse centres, homography");

@@ -76,7 +76,9 @@ impl PyArena {
         };
         let options = guard(|| spec.build().map_err(crate::spec_error))?;
         let arena = crate::pixels::with_gray(py, image, |view| {
-            Ok(options.measure(view).map_err(|e| Error::value(e.to_string()))?)
+            Ok(options
+                .measure(view)
+                .map_err(|e| Error::value(e.to_string()))?)
         })?;
         Ok(PyArena { arena })
     }
@@ -118,7 +120,9 @@ impl PyArena {
     /// The camera it was measured with; None for a plane-to-image map.
     #[getter]
     fn camera(&self) -> Option<PyCamera> {
-        self.arena.camera().map(|camera| PyCamera { camera: *camera })
+        self.arena
+            .camera()
+            .map(|camera| PyCamera { camera: *camera })
     }
 
     fn __repr__(&self) -> String {

@@ -157,7 +157,9 @@ pub enum ArenaError {
         found: Vec<u32>,
     },
     /// A corner's ID found on several markers.
-    #[error("corner ID {id} was found on {count} markers: a corner's ID must be on one marker only")]
+    #[error(
+        "corner ID {id} was found on {count} markers: a corner's ID must be on one marker only"
+    )]
     SeenTwice {
         /// The corner's ID.
         id: u32,
@@ -165,7 +167,7 @@ pub enum ArenaError {
         count: usize,
     },
     /// Fewer than four markers to take the outermost of.
-    #[error("only {0} marker{} found: four corner markers are needed", if *.0 == 1 { "" } else { "s" })]
+    #[error("only {0} marker{plural} found: four corner markers are needed", plural = if *.0 == 1 { "" } else { "s" })]
     TooFew(usize),
     /// The outermost picks name one marker for two corners.
     #[error("the four outermost markers are not four different markers (one is outermost two ways): give the corners with --ids")]
@@ -455,10 +457,8 @@ impl Arena {
                         // A step along the marker's +x in the image, onto
                         // the plane.
                         let step = 0.5;
-                        let ahead = camera.ray(
-                            d.u + step * image_yaw.cos(),
-                            d.v + step * image_yaw.sin(),
-                        );
+                        let ahead =
+                            camera.ray(d.u + step * image_yaw.cos(), d.v + step * image_yaw.sin());
                         let q = intersect(rotation, translation, &ahead, h)?;
                         Some((q.y - p.y).atan2(q.x - p.x))
                     }
@@ -744,12 +744,8 @@ impl Arena {
     /// An arena file's text, checked: every number in its plausible range,
     /// the rotation a rotation, the map invertible.
     pub fn parse(text: &str) -> Result<Arena, String> {
-        let file: ArenaFile = serde_yaml::from_str(text).map_err(|e| {
-            format!(
-                "not an arena file: {}",
-                crate::error::one_line(&e)
-            )
-        })?;
+        let file: ArenaFile = serde_yaml::from_str(text)
+            .map_err(|e| format!("not an arena file: {}", crate::error::one_line(&e)))?;
         if file.format != FORMAT || file.version != 1 {
             return Err(format!(
                 "format {} version {} is not {FORMAT} version 1",
@@ -880,6 +876,8 @@ mod tests {
         assert!(Arena::parse(&singular).unwrap_err().contains("invertible"));
         let other = text.replace("whycode-arena", "whycode-sheet");
         assert!(Arena::parse(&other).unwrap_err().contains("version"));
-        assert!(Arena::parse("ids: [1]").unwrap_err().starts_with("not an arena file"));
+        assert!(Arena::parse("ids: [1]")
+            .unwrap_err()
+            .starts_with("not an arena file"));
     }
 }

@@ -50,7 +50,7 @@ pub struct ArenaArgs {
     /// Height above the floor of the markers `detect` will locate (on
     /// robots): 0.12 (metres), 12cm [default: 0, on the floor]; needs
     /// --camera
-    #[arg(long, value_name = "LENGTH", value_parser = super::detect::parse_diameter, allow_hyphen_values = true)]
+    #[arg(long, value_name = "LENGTH", value_parser = super::detect::parse_height, allow_hyphen_values = true)]
     marker_height: Option<Length>,
     #[command(flatten)]
     kind: MarkerKindArgs,

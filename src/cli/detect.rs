@@ -90,7 +90,7 @@ pub struct DetectArgs {
     #[arg(
         long,
         value_name = "LENGTH",
-        value_parser = parse_diameter,
+        value_parser = parse_height,
         requires = "arena",
         allow_hyphen_values = true
     )]
@@ -156,6 +156,17 @@ pub struct DetectArgs {
     /// line, and milliseconds per stage over all images on standard error
     #[arg(long)]
     timings: bool,
+}
+
+/// A height above a floor: a length whose bare numbers are metres, or 0
+/// (on the floor) with or without a unit.
+pub(super) fn parse_height(text: &str) -> Result<Length, String> {
+    let t = text.trim();
+    let number = t.trim_end_matches(|c: char| c.is_ascii_alphabetic());
+    if number.parse::<f64>().is_ok_and(|v| v == 0.0) {
+        return Ok(Length::from_mm(0.0));
+    }
+    parse_diameter(text)
 }
 
 /// A length whose bare numbers are metres.

@@ -313,11 +313,7 @@ impl FrameReport {
                 let yaw = a
                     .yaw
                     .map_or("-".to_string(), |y| format!("{:.1}", y.to_degrees()));
-                let _ = write!(
-                    out,
-                    " {:>28}",
-                    format!("{:.4}, {:.4}, {yaw}", a.x, a.y)
-                );
+                let _ = write!(out, " {:>28}", format!("{:.4}, {:.4}, {yaw}", a.x, a.y));
             }
             out.push('\n');
         }

@@ -107,7 +107,9 @@ mod tests {
             ..ArenaSpec::default()
         };
         assert_eq!(
-            spec.build().unwrap_err().message_with(super::super::cli_option),
+            spec.build()
+                .unwrap_err()
+                .message_with(super::super::cli_option),
             "--size: 0.0015 m is outside 0.05 to 500 m"
         );
         let three = ArenaSpec {

@@ -20,11 +20,12 @@ pub const CORNER_DIAMETER_MM: f64 = 120.0;
 /// Robots' markers' diameter, mm.
 pub const ROBOT_DIAMETER_MM: f64 = 80.0;
 
-/// The camera: 1920×1080, about 69° across, barrel distortion k1 = −0.26.
+/// The camera: 1920×1080, about 72° across (fx 1500 with the barrel
+/// distortion), k1 = −0.26: the arena fills 1150 × 890 pixels of it.
 pub fn lens() -> Camera {
     Camera {
-        fx: 1400.0,
-        fy: 1401.2,
+        fx: 1500.0,
+        fy: 1501.3,
         cx: 962.4,
         cy: 537.3,
         distortion: [-0.26, 0.085, 0.0007, -0.0004, -0.012],
@@ -35,15 +36,15 @@ pub fn lens() -> Camera {
 
 /// The floor's pose in the camera frame (floor → camera rotation, floor
 /// origin in the camera frame): the camera 2.5 m above a point near the
-/// arena's middle, looking down, tilted 6° and turned 4° about the
-/// vertical so that nothing lines up with the image's axes.
+/// arena's middle, looking down, tilted 8° about the arena's y and turned
+/// 2° about the vertical so that nothing lines up with the image's axes.
 pub fn floor_pose() -> (Matrix3<f64>, Vector3<f64>) {
-    let eye = Vector3::new(1.04, 0.71, 2.5);
+    let eye = Vector3::new(1.1, 0.75, 2.5);
     // Camera axes in the floor frame looking straight down, image x along
     // the floor's +x: x = +x, y = −y, z = −z.
     let down = Matrix3::from_diagonal(&Vector3::new(1.0, -1.0, -1.0));
-    let camera_to_floor = Rotation3::from_axis_angle(&Vector3::z_axis(), 4f64.to_radians())
-        * Rotation3::from_axis_angle(&Vector3::x_axis(), 6f64.to_radians());
+    let camera_to_floor = Rotation3::from_axis_angle(&Vector3::z_axis(), 2f64.to_radians())
+        * Rotation3::from_axis_angle(&Vector3::y_axis(), 8f64.to_radians());
     let camera_to_floor = camera_to_floor.matrix() * down;
     let rotation = camera_to_floor.transpose();
     (rotation, -(rotation * eye))

