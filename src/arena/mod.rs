@@ -302,11 +302,7 @@ fn projected_centre(floor_to_image: &Matrix3<f64>, outline: &Ellipse) -> Option<
 /// The centre, on the floor, of the image conic `outline` mapped back
 /// through `floor_to_image`.
 fn floor_conic_centre(floor_to_image: &Matrix3<f64>, outline: &Ellipse) -> Option<Vector2<f64>> {
-    let conic = floor_to_image.transpose() * outline.conic() * floor_to_image;
-    let quadratic = Matrix2::new(conic[(0, 0)], conic[(0, 1)], conic[(1, 0)], conic[(1, 1)]);
-    let linear = Vector2::new(conic[(0, 2)], conic[(1, 2)]);
-    let centre = -quadratic.try_inverse()? * linear;
-    (centre.x.is_finite() && centre.y.is_finite()).then_some(centre)
+    conic_centre(&(floor_to_image.transpose() * outline.conic() * floor_to_image))
 }
 
 fn outline(d: &Detection) -> Ellipse {
@@ -442,25 +438,31 @@ impl Arena {
             } => {
                 let camera = camera?;
                 let h = self.marker_height_m;
-                let ray = match &d.pose {
-                    Some(pose) => pose.position,
-                    None => camera.ray(d.u, d.v),
-                };
-                let p = intersect(rotation, translation, &ray, h)?;
-                let yaw = match (&d.pose, d.yaw) {
-                    (_, None) => None,
-                    (Some(pose), Some(_)) => {
-                        let x = rotation.transpose() * pose.rotation.column(0);
-                        Some(x.y.atan2(x.x))
+                // The pose's centre is the projected centre fitted to the
+                // marker's edge points, unless the pose stage picked the
+                // wrong one of the outline's two normals (seen on markers
+                // near the image's edges through a strong lens): then the
+                // outline is read on the plane the arena knows instead.
+                let floor_normal = rotation.column(2).into_owned();
+                let p = match &d.pose {
+                    Some(pose) if pose.rotation.column(2).angle(&floor_normal) < MAX_NORMAL_OFF => {
+                        intersect(rotation, translation, &pose.position, h)?
                     }
-                    (None, Some(image_yaw)) => {
-                        // A step along the marker's +x in the image, onto
-                        // the plane.
+                    _ => centre_on_plane(camera, &outline(d), rotation, translation, h)
+                        .or_else(|| intersect(rotation, translation, &camera.ray(d.u, d.v), h))?,
+                };
+                // The heading from the image direction of the marker's +x
+                // at its centre, carried onto the plane: it needs only the
+                // plane, not the marker's own normal.
+                let yaw = match d.yaw {
+                    None => None,
+                    Some(image_yaw) => {
                         let step = 0.5;
+                        let here = intersect(rotation, translation, &camera.ray(d.u, d.v), h)?;
                         let ahead =
                             camera.ray(d.u + step * image_yaw.cos(), d.v + step * image_yaw.sin());
                         let q = intersect(rotation, translation, &ahead, h)?;
-                        Some((q.y - p.y).atan2(q.x - p.x))
+                        Some((q.y - here.y).atan2(q.x - here.x))
                     }
                 };
                 Some(ArenaPosition {
@@ -527,6 +529,45 @@ impl Arena {
             Mapping::Homography { .. } => None,
         }
     }
+}
+
+/// How far a marker's pose normal may lie from the arena's before its
+/// pose is taken for the wrong candidate (markers lie flat on the floor
+/// or on robots' tops; the poses' normals agree with the floor's to a
+/// fraction of a degree when right, and are off by several when wrong).
+const MAX_NORMAL_OFF: f64 = 3.0 * std::f64::consts::PI / 180.0;
+
+/// The centre, in floor coordinates, of the circle whose image outline is
+/// `outline`, on the floor-frame plane z = `height`: the outline's points
+/// taken through the lens to the ideal image plane, their conic mapped
+/// onto the plane (where it is the circle itself).
+fn centre_on_plane(
+    camera: &Camera,
+    outline: &Ellipse,
+    rotation: &Matrix3<f64>,
+    translation: &Vector3<f64>,
+    height: f64,
+) -> Option<Vector3<f64>> {
+    let points: Vec<(f64, f64)> = outline
+        .boundary_points(32)
+        .into_iter()
+        .map(|(u, v)| camera.undistort(u, v))
+        .collect();
+    let conic = crate::math::ellipse::fit_conic(&points)?;
+    let plane_to_image = Matrix3::from_columns(&[
+        rotation.column(0).into_owned(),
+        rotation.column(1).into_owned(),
+        rotation.column(2) * height + translation,
+    ]);
+    let centre = conic_centre(&(plane_to_image.transpose() * conic * plane_to_image))?;
+    Some(Vector3::new(centre.x, centre.y, height))
+}
+
+fn conic_centre(conic: &Matrix3<f64>) -> Option<Vector2<f64>> {
+    let quadratic = Matrix2::new(conic[(0, 0)], conic[(0, 1)], conic[(1, 0)], conic[(1, 1)]);
+    let linear = Vector2::new(conic[(0, 2)], conic[(1, 2)]);
+    let centre = -quadratic.try_inverse()? * linear;
+    (centre.x.is_finite() && centre.y.is_finite()).then_some(centre)
 }
 
 fn apply(m: &Matrix3<f64>, x: f64, y: f64) -> Option<Vector2<f64>> {

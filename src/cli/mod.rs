@@ -4,8 +4,8 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
-mod args;
 mod arena;
+mod args;
 mod calibrate;
 mod detect;
 mod ids;

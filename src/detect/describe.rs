@@ -79,6 +79,6 @@ fn detection(c: &Candidate, read: &RingRead, unreadable: bool) -> Detection {
         bits: read.bits,
         unreadable,
         track: None,
-            arena: None,
+        arena: None,
     }
 }
