@@ -76,9 +76,9 @@ impl PyArena {
         };
         let options = guard(|| spec.build().map_err(crate::spec_error))?;
         let arena = crate::pixels::with_gray(py, image, |view| {
-            Ok(options
+            options
                 .measure(view)
-                .map_err(|e| Error::value(e.to_string()))?)
+                .map_err(|e| Error::value(e.to_string()))
         })?;
         Ok(PyArena { arena })
     }

@@ -224,10 +224,10 @@ fn corner_points([w, h]: [f64; 2]) -> [Vector2<f64>; 4] {
 }
 
 /// The corners' detections among `detections`.
-fn pick_corners<'a>(
+fn pick_corners(
     corners: Corners,
-    detections: &'a [Detection],
-) -> Result<[&'a Detection; 4], ArenaError> {
+    detections: &[Detection],
+) -> Result<[&Detection; 4], ArenaError> {
     let read = |d: &&Detection| {
         d.status.is_none() || matches!(d.status, Some(MatchStatus::Exact | MatchStatus::Corrected))
     };
@@ -361,12 +361,12 @@ impl Arena {
                 for ((ray, point), id) in rays.iter().zip(&floor).zip(ids) {
                     let hit = intersect(&rotation, &translation, ray, 0.0)
                         .map_or(f64::INFINITY, |p| (p.xy() - point).norm());
-                    if !(hit <= worst.0) {
+                    if hit.is_nan() || hit > worst.0 {
                         worst = (hit, id);
                     }
                 }
                 let tolerance_m = CORNER_TOLERANCE * size_m[0].hypot(size_m[1]);
-                if !(worst.0 <= tolerance_m) {
+                if worst.0.is_nan() || worst.0 > tolerance_m {
                     return Err(ArenaError::NotTheRectangle {
                         size_m,
                         id: worst.1,
