@@ -224,10 +224,7 @@ fn corner_points([w, h]: [f64; 2]) -> [Vector2<f64>; 4] {
 }
 
 /// The corners' detections among `detections`.
-fn pick_corners(
-    corners: Corners,
-    detections: &[Detection],
-) -> Result<[&Detection; 4], ArenaError> {
+fn pick_corners(corners: Corners, detections: &[Detection]) -> Result<[&Detection; 4], ArenaError> {
     let read = |d: &&Detection| {
         d.status.is_none() || matches!(d.status, Some(MatchStatus::Exact | MatchStatus::Corrected))
     };
