@@ -18,6 +18,8 @@ pub enum FileKind {
     Template,
     /// A board: a sheet's manifest or a marker bundle.
     Board,
+    /// An arena file (`whycode arena`).
+    Arena,
 }
 
 impl FileKind {
@@ -30,6 +32,7 @@ impl FileKind {
             FileKind::Camera => "camera calibration",
             FileKind::Template => "template",
             FileKind::Board => "board",
+            FileKind::Arena => "arena file",
         }
     }
 }

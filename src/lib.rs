@@ -47,6 +47,7 @@
 //! [`Manifest`], against which [`validate`] checks photos of the print
 //! (its [`Report`]).
 
+pub mod arena;
 pub mod board;
 pub mod calibrate;
 pub mod camera;

@@ -66,9 +66,13 @@ impl PyDetector {
     /// default Family(8, 2). `diameter` (metres, or text like "122mm") and
     /// `camera` together give each marker a pose. `tracking` follows markers
     /// from frame to frame (calls are then one sequence). `timings` times
-    /// each stage of every frame (see `last_timings()`).
+    /// each stage of every frame (see `last_timings()`). `arena` (an
+    /// `Arena` or an arena file's path) gives each marker its place on the
+    /// floor (`Marker.arena`); one measured with a camera brings that camera
+    /// and needs `diameter`.
     #[new]
-    #[pyo3(signature = (family = None, *, legacy = false, diameter = None, camera = None, tracking = false, max_markers = None, timings = false))]
+    #[pyo3(signature = (family = None, *, legacy = false, diameter = None, camera = None, tracking = false, max_markers = None, timings = false, arena = None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         family: Option<PyRef<'_, PyFamily>>,
         legacy: bool,
@@ -77,6 +81,7 @@ impl PyDetector {
         tracking: bool,
         max_markers: Option<usize>,
         timings: bool,
+        arena: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyDetector> {
         let spec = DetectSpec {
             target: match family {
@@ -89,6 +94,7 @@ impl PyDetector {
             max_markers,
             tracking,
             timings,
+            arena: arena.map(crate::arena::arena_of).transpose()?,
             ..DetectSpec::default()
         };
         if legacy && spec.target.family.is_some() {
@@ -317,6 +323,24 @@ impl PyMarker {
                 p.quaternion[3],
             )
         })
+    }
+
+    /// With a `Detector(arena=...)`: where the marker lies on the arena, a
+    /// dict of x, y, z (metres, floor frame) and yaw (radians, the marker's
+    /// +x from the arena's +x, counter-clockwise; None for legacy circles).
+    #[getter]
+    fn arena<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, pyo3::types::PyDict>>> {
+        self.detection
+            .arena
+            .map(|a| {
+                let dict = pyo3::types::PyDict::new(py);
+                dict.set_item("x", a.x)?;
+                dict.set_item("y", a.y)?;
+                dict.set_item("z", a.z)?;
+                dict.set_item("yaw", a.yaw)?;
+                Ok(dict)
+            })
+            .transpose()
     }
 
     /// The marker as `whycode detect --format json` prints it.

@@ -9,6 +9,7 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
+mod arena;
 mod camera;
 mod detector;
 mod family;
@@ -232,6 +233,7 @@ fn _whycode(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     family::register(m)?;
     camera::register(m)?;
+    arena::register(m)?;
     detector::register(m)?;
     render::register(m)?;
     validate::register(m)?;

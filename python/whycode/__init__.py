@@ -7,6 +7,7 @@ Fields and messages are those of the ``whycode`` command line: a marker's
 """
 
 from ._whycode import (
+    Arena,
     Camera,
     Code,
     Decoded,
@@ -31,6 +32,7 @@ from ._whycode import (
 )
 
 __all__ = [
+    "Arena",
     "Camera",
     "Code",
     "Decoded",

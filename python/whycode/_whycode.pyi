@@ -1,7 +1,7 @@
 """Type stubs of the compiled whycode module."""
 
 import os
-from typing import Any, Iterator, Literal, Optional, Sequence, Tuple, Union, overload
+from typing import Any, Iterator, Literal, Optional, Sequence, Tuple, TypedDict, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -109,8 +109,49 @@ class Camera:
     def to_ros_yaml(self, camera_name: str = "camera") -> str: ...
     def __eq__(self, other: object) -> bool: ...
 
+class Arena:
+    """A floor frame from four corner markers (``whycode arena``)."""
+
+    @staticmethod
+    def load(path: StrPath) -> Arena: ...
+    @staticmethod
+    def from_yaml(text: str) -> Arena: ...
+    @staticmethod
+    def measure(
+        image: ImageArray,
+        size: tuple[Length, Length],
+        *,
+        ids: Optional[Sequence[int]] = None,
+        camera: Optional[Camera] = None,
+        marker_height: Optional[Length] = None,
+        family: Optional[Family] = None,
+        legacy: bool = False,
+    ) -> Arena:
+        """The arena in one photo, as ``whycode arena`` measures it."""
+    def to_yaml(self) -> str: ...
+    def save(self, path: StrPath) -> None: ...
+    @property
+    def ids(self) -> tuple[int, int, int, int]:
+        """Origin, +x corner, far corner, +y corner."""
+    @property
+    def size(self) -> tuple[float, float]: ...
+    @property
+    def marker_height(self) -> float: ...
+    @property
+    def camera(self) -> Optional[Camera]: ...
+
+class ArenaPosition(TypedDict):
+    x: float
+    y: float
+    z: float
+    yaw: Optional[float]
+
 class Marker:
     """One marker found in a frame (attributes at full precision)."""
+
+    @property
+    def arena(self) -> Optional[ArenaPosition]:
+        """With ``Detector(arena=...)``: x, y, z (metres) and yaw on the floor."""
 
     @property
     def id(self) -> int:
@@ -163,6 +204,7 @@ class Detector:
         tracking: bool = False,
         max_markers: Optional[int] = None,
         timings: bool = False,
+        arena: Optional[Union[Arena, StrPath]] = None,
     ) -> None: ...
     def detect(self, image: ImageArray) -> list[Marker]: ...
     def last_timings(self) -> Optional[dict[str, Any]]:

@@ -26,6 +26,7 @@ Examples:
   whycode detect --bits auto photo.jpg               # each ring's bit count and code
   whycode detect --bits auto --distance 2 photo.jpg  # and its ID in that family
   whycode detect --timings frames/                   # where the detector's time goes
+  whycode detect --arena arena.yaml --diameter 8cm --format json frames/   # floor x, y, yaw
   whycode detect --diameter 122mm --output found.mcap run.mcap   # a ROS 2 bag
   whycode detect --every 2 --start 1:00 --annotate out.mp4 run.mp4  # a video
 
@@ -77,6 +78,23 @@ pub struct DetectArgs {
     /// its pose in `boards`. Repeatable; needs --camera
     #[arg(long, value_name = "FILE", requires = "camera")]
     board: Vec<PathBuf>,
+
+    /// An arena file (`whycode arena`): each marker gets `arena` {x, y, z,
+    /// yaw}, its place on the floor in metres. One measured with a camera
+    /// brings that camera and needs --diameter
+    #[arg(long, value_name = "FILE")]
+    arena: Option<PathBuf>,
+
+    /// Height above the arena's floor of the markers located (markers on
+    /// robots), in place of the arena file's: 0.12 (metres), 12cm
+    #[arg(
+        long,
+        value_name = "LENGTH",
+        value_parser = parse_height,
+        requires = "arena",
+        allow_hyphen_values = true
+    )]
+    marker_height: Option<Length>,
 
     #[command(flatten)]
     format: FormatArg,
@@ -140,7 +158,19 @@ pub struct DetectArgs {
     timings: bool,
 }
 
-fn parse_diameter(text: &str) -> Result<Length, String> {
+/// A height above a floor: a length whose bare numbers are metres, or 0
+/// (on the floor) with or without a unit.
+pub(super) fn parse_height(text: &str) -> Result<Length, String> {
+    let t = text.trim();
+    let number = t.trim_end_matches(|c: char| c.is_ascii_alphabetic());
+    if number.parse::<f64>().is_ok_and(|v| v == 0.0) {
+        return Ok(Length::from_mm(0.0));
+    }
+    parse_diameter(text)
+}
+
+/// A length whose bare numbers are metres.
+pub(super) fn parse_diameter(text: &str) -> Result<Length, String> {
     Length::parse_with_default_unit(text, "m")
 }
 
@@ -300,6 +330,12 @@ fn detector_config(args: &DetectArgs, recording: bool) -> Result<DetectorConfig>
         timings: args.timings,
         scan_every_frame: recording,
         camera_later: recording && args.camera.is_none(),
+        arena: args
+            .arena
+            .as_deref()
+            .map(whycode::arena::Arena::load)
+            .transpose()?,
+        marker_height: args.marker_height,
     }
     .build()
     .map_err(spec_error)

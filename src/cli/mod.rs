@@ -4,6 +4,7 @@
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
+mod arena;
 mod args;
 mod calibrate;
 mod detect;
@@ -42,6 +43,8 @@ enum Command {
     Simulate(simulate::SimulateArgs),
     /// Calibrate a camera (intrinsics, lens distortion) from photos of a printed sheet
     Calibrate(calibrate::CalibrateArgs),
+    /// Measure an arena's floor frame from four corner markers in one photo
+    Arena(arena::ArenaArgs),
 }
 
 /// An interrupted run (Ctrl-C, `kill`, a closed terminal) removes the
@@ -75,6 +78,7 @@ pub fn main() -> ExitCode {
         Command::Validate(args) => validate::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Calibrate(args) => calibrate::run(args),
+        Command::Arena(args) => arena::run(args),
     };
     match result {
         Ok(code) => code,

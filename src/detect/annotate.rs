@@ -317,6 +317,7 @@ mod tests {
             bits: Some(8),
             unreadable: false,
             track: None,
+            arena: None,
         }
     }
 

@@ -85,5 +85,6 @@ fn detection(c: &Candidate, read: &RingRead, unreadable: bool) -> Detection {
         bits: read.bits,
         unreadable,
         track: None,
+        arena: None,
     }
 }

@@ -99,6 +99,9 @@ pub struct DetectorConfig {
     /// Rigid sets of markers whose poses [`Detector::locate_boards`]
     /// reports (with a camera).
     pub boards: Vec<crate::board::Board>,
+    /// A floor frame every detection is placed in ([`Detection::arena`]);
+    /// one measured with a camera needs that camera and a diameter here.
+    pub arena: Option<crate::arena::Arena>,
 }
 
 impl Default for DetectorConfig {
@@ -118,6 +121,7 @@ impl Default for DetectorConfig {
             timings: false,
             scan_every_frame: false,
             boards: Vec::new(),
+            arena: None,
         }
     }
 }
@@ -196,6 +200,8 @@ pub struct Detection {
     /// while it is followed, so markers of one ID (legacy circles are all
     /// ID 0) can be told apart. Numbers start at 1 and are not reused.
     pub track: Option<u32>,
+    /// Where it lies on the configured arena ([`DetectorConfig::arena`]).
+    pub arena: Option<crate::arena::ArenaPosition>,
 }
 
 /// The detector: configuration, tracking state and reusable buffers.
@@ -432,7 +438,15 @@ impl Detector {
                 // no track either).
                 finds.drop_unreadable();
             }
-            d.end_frame(finds)
+            let mut detections = d.end_frame(finds);
+            if let Some(arena) = &d.config.arena {
+                arena.locate_all(
+                    &mut detections,
+                    d.frame_camera.as_ref(),
+                    (image.width(), image.height()),
+                );
+            }
+            detections
         });
         self.timings = self.stopwatch.stop();
         detections

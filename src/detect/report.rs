@@ -103,14 +103,26 @@ struct MarkerRecord {
     position: Option<[f64; 3]>,
     rotation: Option<[[f64; 3]; 3]>,
     quaternion: Option<[f64; 4]>,
+    /// With an arena: where the marker lies on it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    arena: Option<ArenaRecord>,
+}
+
+#[derive(serde::Serialize)]
+struct ArenaRecord {
+    x: f64,
+    y: f64,
+    z: f64,
+    yaw: Option<f64>,
 }
 
 impl FrameReport {
     /// One JSON object on one line (no newline): image (and for a frame
     /// of a recording: frame, stamp_ns and a bag's topic), width, height,
     /// elapsed_ms and the markers with id, code, u, v, yaw, axes,
-    /// confidence, position, rotation and quaternion; then the stage
-    /// timings, when measured.
+    /// confidence, position, rotation, quaternion and, with an arena,
+    /// `arena` (x, y, z in metres, yaw in radians); then the boards and
+    /// the stage timings, when asked for.
     pub fn to_json(&self) -> String {
         let markers = self
             .markers
@@ -141,6 +153,12 @@ impl FrameReport {
                         })
                     }),
                     quaternion: pose.map(|p| p.quaternion.map(|q| round(q, 6))),
+                    arena: m.arena.map(|a| ArenaRecord {
+                        x: round(a.x, 6),
+                        y: round(a.y, 6),
+                        z: round(a.z, 6),
+                        yaw: a.yaw.map(|y| round(y, 6)),
+                    }),
                 }
             })
             .collect();
@@ -245,6 +263,10 @@ impl FrameReport {
         if has_pose {
             let _ = write!(out, " {:>26}", "position_m (x, y, z)");
         }
+        let has_arena = self.markers.iter().any(|m| m.arena.is_some());
+        if has_arena {
+            let _ = write!(out, " {:>28}", "arena_m (x, y), yaw_deg");
+        }
         out.push('\n');
         // Sorted by ID for reading (unknown IDs last, then left to right);
         // csv and json keep the detector's order.
@@ -288,6 +310,14 @@ impl FrameReport {
                         p.position.x, p.position.y, p.position.z
                     )
                 );
+            } else if has_pose && has_arena {
+                let _ = write!(out, " {:>26}", "-");
+            }
+            if let Some(a) = m.arena {
+                let yaw = a
+                    .yaw
+                    .map_or("-".to_string(), |y| format!("{:.1}", y.to_degrees()));
+                let _ = write!(out, " {:>28}", format!("{:.4}, {:.4}, {yaw}", a.x, a.y));
             }
             out.push('\n');
         }
@@ -339,6 +369,7 @@ mod tests {
             bits: (id > 0).then_some(8),
             unreadable: false,
             track: None,
+            arena: None,
         }
     }
 

@@ -128,6 +128,7 @@ mod tests {
                 bits: None,
                 unreadable: false,
                 track: None,
+                arena: None,
             })
             .collect()
     }

@@ -39,6 +39,13 @@ pub struct DetectSpec {
     /// The camera comes with the frames (a bag's camera_info), so a
     /// diameter without `camera` waits in the configuration for it.
     pub camera_later: bool,
+    /// A floor frame (`whycode arena`) every marker is placed in. One
+    /// measured with a camera brings that camera (`camera`, if given, must
+    /// be the same) and needs `diameter`.
+    pub arena: Option<crate::arena::Arena>,
+    /// Height above the arena's floor of the markers located, in place of
+    /// the arena file's (with an arena measured with a camera).
+    pub marker_height: Option<Length>,
 }
 
 impl DetectSpec {
@@ -49,8 +56,20 @@ impl DetectSpec {
             .diameter
             .map(|d| within("diameter", d.mm(), limits::MARKER_DIAMETER_MM).map(|mm| mm / 1000.0))
             .transpose()?;
+        let mut camera = self.camera;
+        let arena = self
+            .arena
+            .as_ref()
+            .map(|arena| self.arena_with(arena, &mut camera, diameter_m))
+            .transpose()?;
+        if arena.is_none() && self.marker_height.is_some() {
+            return Err(SpecError::of(
+                "marker_height",
+                Problem::Conflict("applies to markers located on an arena: give arena too".into()),
+            ));
+        }
         if !self.boards.is_empty() {
-            if self.camera.is_none() {
+            if camera.is_none() {
                 return Err(SpecError::of(
                     "board",
                     Problem::Conflict("a board's pose needs the camera: give camera too".into()),
@@ -64,7 +83,7 @@ impl DetectSpec {
                     .next()
             });
         }
-        match (diameter_m.is_some(), self.camera.is_some()) {
+        match (diameter_m.is_some(), camera.is_some()) {
             (true, false) if !self.camera_later => {
                 return Err(pose_needs_both("diameter", "camera"))
             }
@@ -81,12 +100,13 @@ impl DetectSpec {
         let mut config = DetectorConfig {
             target,
             diameter_m,
-            camera: self.camera,
+            camera,
             tracking: self.tracking,
             report_unreadable: self.unreadable,
             boards: self.boards.clone(),
             timings: self.timings,
             scan_every_frame: self.scan_every_frame,
+            arena,
             ..DetectorConfig::default()
         };
         if let Some(n) = self.max_markers {
@@ -103,6 +123,73 @@ impl DetectSpec {
         }
         Ok(config)
     }
+}
+
+impl DetectSpec {
+    /// The arena as the detector uses it (at the height asked for), the
+    /// camera it was measured with put in `camera` or checked against it.
+    fn arena_with(
+        &self,
+        arena: &crate::arena::Arena,
+        camera: &mut Option<Camera>,
+        diameter_m: Option<f64>,
+    ) -> Result<crate::arena::Arena, SpecError> {
+        let mut arena = arena.clone();
+        let Some(measured_with) = arena.camera().copied() else {
+            if self.marker_height.is_some_and(|h| h.mm() != 0.0) {
+                return Err(SpecError::of(
+                    "marker_height",
+                    Problem::Conflict(
+                        "this arena was measured without a camera and maps the floor only: measure it with the camera for markers above the floor".into(),
+                    ),
+                ));
+            }
+            return Ok(arena);
+        };
+        if let Some(height) = self.marker_height {
+            arena.marker_height_m = within("marker_height", height.m(), limits::MARKER_HEIGHT_M)?;
+        }
+        match *camera {
+            None => *camera = Some(measured_with),
+            Some(given) if !same_camera(&given, &measured_with) => {
+                return Err(SpecError::of(
+                    "arena",
+                    Problem::Conflict(format!(
+                        "was measured with another camera (fx {:.1} px at {}x{}): give that camera, or none to use the arena's",
+                        measured_with.fx, measured_with.width, measured_with.height
+                    )),
+                ))
+            }
+            Some(_) => {}
+        }
+        if diameter_m.is_none() {
+            return Err(SpecError::of(
+                "arena",
+                Problem::Conflict(
+                    "measured with a camera, it places markers by their poses: give diameter too (any diameter gives the same arena coordinates)".into(),
+                ),
+            ));
+        }
+        Ok(arena)
+    }
+}
+
+/// Whether `given` is the calibration `measured_with` (at that one's
+/// resolution): focal lengths within 0.1 %, principal points within half
+/// a pixel, distortion within 0.001.
+fn same_camera(given: &Camera, measured_with: &Camera) -> bool {
+    let Ok(given) = given.for_image(measured_with.width, measured_with.height) else {
+        return false;
+    };
+    (given.fx / measured_with.fx - 1.0).abs() < 1e-3
+        && (given.fy / measured_with.fy - 1.0).abs() < 1e-3
+        && (given.cx - measured_with.cx).abs() < 0.5
+        && (given.cy - measured_with.cy).abs() < 0.5
+        && given
+            .distortion
+            .iter()
+            .zip(&measured_with.distortion)
+            .all(|(a, b)| (a - b).abs() < 1e-3)
 }
 
 fn pose_needs_both(given: &'static str, missing: &str) -> SpecError {

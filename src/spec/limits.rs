@@ -152,6 +152,22 @@ pub const LEGACY_MIN_INK_PX: Limit = Limit {
     unit: "px",
 };
 
+/// A side of an arena's rectangle of corner markers, metres: from a
+/// tabletop maze to a sports hall.
+pub const ARENA_SIDE_M: Limit = Limit {
+    min: 0.05,
+    max: 500.0,
+    unit: "m",
+};
+
+/// Height of the markers located on an arena above its floor (markers on
+/// robots, drones hovering low), metres.
+pub const MARKER_HEIGHT_M: Limit = Limit {
+    min: 0.0,
+    max: 100.0,
+    unit: "m",
+};
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -13,6 +13,7 @@
 //! command line prints `--camera-distance: …` where Python prints
 //! `camera_distance: …` for the same mistake.
 
+mod arena;
 mod calibrate;
 mod detect;
 pub mod limits;
@@ -21,6 +22,7 @@ mod recording;
 mod scene;
 mod target;
 
+pub use arena::ArenaSpec;
 pub use calibrate::CalibrateSpec;
 pub use detect::DetectSpec;
 pub use limits::{Limit, OutOfRange};

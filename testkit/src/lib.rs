@@ -5,6 +5,8 @@
 //! (`simulate::Placement::at_pixel`) and scoring detections against the
 //! ground truth (`simulate::match_reports`). This kit holds the rest:
 //!
+//! - [`arena`]: a floor with corner and robots' markers under a
+//!   distorting lens, for arena coordinates;
 //! - [`scenes`]: markers at pixels of a plain camera on white paper, for
 //!   round trips and benchmarks;
 //! - [`scenario`]: seeded series of frames with a row's look, as the
@@ -16,6 +18,7 @@
 //! - [`fuzz`]: the fuzz harness (the test suite's bounded run and
 //!   `examples/fuzz`'s long one).
 
+pub mod arena;
 pub mod aruco4x4;
 pub mod calibration;
 pub mod desk;

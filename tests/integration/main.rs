@@ -7,6 +7,7 @@
 
 mod support;
 
+mod arena_roundtrip;
 mod board_roundtrip;
 mod calibrate_roundtrip;
 mod defects_cli;
