@@ -3,13 +3,15 @@ detection with 6-DoF pose, validation of printed sheets and simulation.
 
 Fields and messages are those of the ``whycode`` command line: a marker's
 ``as_dict()`` is the object ``whycode detect --format json`` prints, and
-``validate()`` returns the report ``whycode validate --format json`` prints.
+``validate()`` returns the report ``whycode validate --format json`` prints;
+``calibrate()`` writes through ``Camera.save`` what ``whycode calibrate`` writes.
 """
 
 from ._whycode import (
     Camera,
     Code,
     Decoded,
+    Detections,
     Detector,
     Family,
     FrameReader,
@@ -18,6 +20,7 @@ from ._whycode import (
     WhycodeOSError,
     WhycodeValueError,
     __version__,
+    calibrate,
     draw,
     family_counts,
     load_image,
@@ -34,6 +37,7 @@ __all__ = [
     "Camera",
     "Code",
     "Decoded",
+    "Detections",
     "Detector",
     "Family",
     "FrameReader",
@@ -42,6 +46,7 @@ __all__ = [
     "WhycodeOSError",
     "WhycodeValueError",
     "__version__",
+    "calibrate",
     "draw",
     "family_counts",
     "load_image",
