@@ -280,17 +280,17 @@ class Tests:
         self.shot("check")
 
     def calibration_photos(self):
-        """A 35-marker sheet and ten photos of it through a distorting lens,
+        """A 24-marker sheet and ten photos of it through a distorting lens,
         all made by the command line (as in python/tests/test_calibrate.py)."""
         (self.work / "lens.yaml").write_text(
             "image_width: 1280\nimage_height: 960\ncamera_name: lens\n"
             "camera_matrix:\n  rows: 3\n  cols: 3\n  data: [1000.0, 0.0, 643.0, 0.0, 1001.0, 478.0, 0.0, 0.0, 1.0]\n"
             "distortion_model: plumb_bob\n"
             "distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [-0.26, 0.085, 0.0004, -0.0003, -0.012]\n")
-        self.cli("sheet", "--ids", "1-35", "--diameter", "30mm", "--no-check", "-o", "calsheet.svg")
-        views = [(25, 0, 0, 0.42), (-25, 5, 10, 0.42), (0, 28, -5, 0.42), (5, -28, 15, 0.42),
-                 (20, 20, 30, 0.45), (-20, -20, -30, 0.45), (30, -15, 60, 0.5), (-15, 30, -60, 0.5),
-                 (32, 10, 90, 0.48), (10, -32, -90, 0.48)]
+        self.cli("sheet", "--bits", 10, "--ids", "1-24", "--diameter", "30mm", "--no-check", "-o", "calsheet.svg")
+        views = [(25, 0, 35, 0.3), (-25, 5, -35, 0.3), (0, 28, 55, 0.31), (5, -28, -55, 0.31),
+                 (20, 20, 30, 0.33), (-20, -20, -30, 0.33), (30, -15, 60, 0.35), (-15, 30, -60, 0.35),
+                 (32, 10, 90, 0.38), (10, -32, -90, 0.38)]
         photos = []
         for k, (tilt, pan, roll, distance) in enumerate(views):
             name = f"cal{k:02}.png"
@@ -344,7 +344,7 @@ class Tests:
         self.page.wait_for_selector("#cal-msg.error", timeout=60000)
         text = self.page.inner_text("#cal-msg")
         want_line = refused.stderr.strip()
-        assert refused.returncode != 0 and want_line == f"error: {text}", f"{text!r} vs {want_line!r}"
+        assert refused.returncode != 0 and want_line == f"whycode: error: {text}", f"{text!r} vs {want_line!r}"
         assert "\n" not in text and self.page.is_disabled("#cal-download")
         self.shot("calibrate-refused")
 

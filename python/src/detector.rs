@@ -6,8 +6,8 @@ use crate::{guard, Error};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::Mutex;
-use whycode::detect::report::FrameReport;
 use whycode::board::{Board, BoardPose};
+use whycode::detect::report::FrameReport;
 use whycode::detect::{Detection, Detector, DetectorConfig, StageTimings, Target};
 use whycode::spec::{DetectSpec, TargetSpec};
 

@@ -25,10 +25,10 @@ static OS_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static DETECTIONS: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 
 /// `whycode.Detections`, the list `Detector.detect` returns.
-pub(crate) fn detections_type(py: Python<'_>) -> PyResult<&Bound<'_, PyType>> {
+pub(crate) fn detections_type<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyType>> {
     DETECTIONS
         .get(py)
-        .map(|ty| ty.bind(py))
+        .map(|ty| ty.bind(py).clone())
         .ok_or_else(|| pyo3::exceptions::PyRuntimeError::new_err("whycode is not initialised"))
 }
 

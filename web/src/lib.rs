@@ -10,13 +10,13 @@ use anyhow::{Context, Result};
 use image::GrayImage;
 use serde::Deserialize;
 use wasm_bindgen::prelude::*;
+use whycode::calibrate;
 use whycode::detect::{Detector, Target};
 use whycode::family::{parse_id_list, CountTable, Family};
 use whycode::image_io;
 use whycode::manifest::Manifest;
 use whycode::render::job::{MarkerJob, PrintError, SheetJob};
 use whycode::render::template::{builtin_names, Template};
-use whycode::calibrate;
 use whycode::spec::{cli_option, Bits, CalibrateSpec, DetectSpec, SpecError, TargetSpec};
 use whycode::units::{trim_float, Length};
 use whycode::validate::{self, annotate, PhotoReport};
@@ -496,13 +496,7 @@ impl Calibration {
             .photos
             .iter()
             .flat_map(|(name, _, detections)| {
-                calibrate::observe(
-                    &self.manifest,
-                    name,
-                    detections,
-                    options.print_scale,
-                    false,
-                )
+                calibrate::observe(&self.manifest, name, detections, options.print_scale, false)
             })
             .collect();
         let Some((_, first, _)) = self.photos.first() else {
@@ -545,8 +539,8 @@ impl Calibration {
             .iter()
             .map(|(name, image, _)| (name.clone(), image.clone()))
             .collect();
-        let result =
-            calibrate::calibrate(&self.manifest, &photos, &options).map_err(|e| js_error(e.into()))?;
+        let result = calibrate::calibrate(&self.manifest, &photos, &options)
+            .map_err(|e| js_error(e.into()))?;
         let json = result.to_json();
         self.result = Some(result);
         Ok(json)
