@@ -576,6 +576,15 @@ let calCamera = null;
 
 const CAMERA_FILE = "camera.yaml";
 
+// One calibration step at a time: a manifest chosen while photos are still
+// being read (or the other way round) waits for the step before it.
+let calQueue = Promise.resolve();
+function calSerial(step) {
+  const next = calQueue.then(step, step);
+  calQueue = next.catch(() => {});
+  return next;
+}
+
 function calOptions() {
   return {
     fix_principal_point: $("cal-fix-pp").checked,
@@ -659,11 +668,9 @@ async function calAddOne(file) {
   calPhotos.push({ name: file.name, size: file.size, markers, file });
 }
 
-async function calAddPhotos(input) {
+async function calAddPhotos(files) {
   const msg = $("cal-msg");
   clearMsg(msg);
-  const files = [...input.files];
-  input.value = "";
   try {
     if (!calManifest && !(await calStart())) {
       showMsg(msg, "error", "Choose the sheet's manifest (the .json file saved with the sheet) first.");
@@ -689,9 +696,15 @@ async function calAddPhotos(input) {
   calList();
 }
 
-$("cal-camera").addEventListener("change", (e) => calAddPhotos(e.target));
-$("cal-photos").addEventListener("change", (e) => calAddPhotos(e.target));
-$("cal-manifest").addEventListener("change", async () => {
+function calPhotosChosen(input) {
+  // The files are taken now: the input is cleared for the next choice.
+  const files = [...input.files];
+  input.value = "";
+  calSerial(() => calAddPhotos(files));
+}
+$("cal-camera").addEventListener("change", (e) => calPhotosChosen(e.target));
+$("cal-photos").addEventListener("change", (e) => calPhotosChosen(e.target));
+$("cal-manifest").addEventListener("change", () => calSerial(async () => {
   const msg = $("cal-msg");
   clearMsg(msg);
   calForget();
@@ -703,17 +716,19 @@ $("cal-manifest").addEventListener("change", async () => {
     showMsg(msg, "error", err.message);
   }
   calList();
-  calPreview();
-});
-$("cal-list").addEventListener("click", async (e) => {
+  await calPreview();
+}));
+$("cal-list").addEventListener("click", (e) => {
   const button = e.target.closest("button.remove");
   if (!button) return;
   const index = Number(button.dataset.index);
-  calPhotos.splice(index, 1);
-  await engine.call("calibrateRemove", { index });
-  calForget();
-  calList();
-  calPreview();
+  calSerial(async () => {
+    calPhotos.splice(index, 1);
+    await engine.call("calibrateRemove", { index });
+    calForget();
+    calList();
+    await calPreview();
+  });
 });
 for (const id of ["cal-fix-pp", "cal-fix-aspect", "cal-no-tangential", "cal-no-k3", "cal-scale"]) {
   $(id).addEventListener(id === "cal-scale" ? "input" : "change", debounce(() => { calForget(); calList(); calPreview(); }, 300));
@@ -735,9 +750,13 @@ $("cal-download").addEventListener("click", () => {
 // found so far: allow for a few rounds of every photo.
 const CALIBRATE_TIMEOUT_MS = 600000;
 
-$("cal-run").addEventListener("click", async (event) => {
-  const msg = $("cal-msg");
+$("cal-run").addEventListener("click", (event) => {
   const button = event.currentTarget;
+  calSerial(() => calRun(button));
+});
+
+async function calRun(button) {
+  const msg = $("cal-msg");
   if (!calManifest) { showMsg(msg, "error", "Choose the sheet's manifest (the .json file saved with the sheet) first."); return; }
   if (!calPhotos.length) { showMsg(msg, "error", "Add photos of the printed sheet: 10-20, tilted different ways."); return; }
   calForget();
@@ -763,7 +782,7 @@ $("cal-run").addEventListener("click", async (event) => {
     button.disabled = false;
     button.classList.remove("busy");
   }
-});
+}
 
 // ---------- Live ----------
 
