@@ -26,6 +26,7 @@ impl From<CalibrationError> for Error {
 #[pyfunction(name = "calibrate")]
 #[pyo3(signature = (manifest, images, *, fix_principal_point = false, fix_aspect = false,
     no_tangential = false, no_k3 = false, print_scale = None))]
+#[allow(clippy::too_many_arguments)]
 fn calibrate_photos<'py>(
     py: Python<'py>,
     manifest: PathBuf,
