@@ -684,19 +684,20 @@ pub fn calibrate(
 }
 
 /// The camera at the precision calibration files carry: 1e-4 px for the
-/// focal lengths and principal point, 1e-7 for the distortion terms. That
+/// focal lengths and principal point, 1e-6 for the distortion terms. That
 /// is a hundred times finer than the fit's spread, and coarse enough
 /// that the command line, Python and the browser page write the same
 /// bytes for the same photos (WebAssembly rounds the last bits of sin, cos
 /// and atan2 its own way, and those bits reach the fit's last digits: at
-/// 1e-6 px the page's fy and the command line's were seen one digit apart).
+/// 1e-6 px the page's fy, and at 1e-7 its k3, were seen one digit apart
+/// from the command line's).
 fn to_written_precision(camera: Camera) -> Camera {
     Camera {
         fx: rounded(camera.fx, 4),
         fy: rounded(camera.fy, 4),
         cx: rounded(camera.cx, 4),
         cy: rounded(camera.cy, 4),
-        distortion: camera.distortion.map(|d| rounded(d, 7)),
+        distortion: camera.distortion.map(|d| rounded(d, 6)),
         ..camera
     }
 }
