@@ -331,7 +331,7 @@ class Tests:
         seconds = time.time() - t0
         got = self.downloads(lambda: self.page.click("#cal-download"), 1)
         assert got["camera.yaml"] == want, f"camera.yaml differs from whycode calibrate:\n{got['camera.yaml'].decode()}\nvs\n{want.decode()}"
-        assert "overall RMS" in self.page.inner_text("#cal-table")
+        assert "overall RMS" in self.page.text_content("#cal-table")
         self.figures[f"calibrate {len(photos)} photos"] = f"{seconds:.1f} s in the page"
         self.shot("calibrate")
 
