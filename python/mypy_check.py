@@ -16,6 +16,17 @@ def ids_in(image: npt.NDArray[np.uint8], family: whycode.Family) -> list[int]:
     return [m.id for m in markers]
 
 
+def calibrated(photos: list[str]) -> dict[str, Any]:
+    camera, report = whycode.calibrate("sheet.json", photos, no_k3=True, print_scale=0.97)
+    camera.save("camera.yaml")
+    camera.save("camera.xml", format="opencv-xml", camera_name="left")
+    detector = whycode.Detector(camera=camera, boards=["sheet.json"])
+    found: whycode.Detections = detector.detect(whycode.load_image(photos[0]))
+    markers: list[whycode.Marker] = found
+    boards: list[dict[str, Any]] = found.boards
+    return {"report": report, "markers": len(markers), "boards": boards}
+
+
 def summary() -> dict[str, object]:
     family = whycode.Family(bits=8, distance=2)
     codes: list[str] = [c.binary for c in family]

@@ -200,6 +200,17 @@ pub fn trim_float(v: f64) -> String {
     }
 }
 
+/// A printer's scale as people write it: 0.97 or 97% (the command line's
+/// `--print-scale`, the browser page's field).
+pub fn parse_scale(text: &str) -> Result<f64, String> {
+    let t = text.trim();
+    match t.strip_suffix('%') {
+        Some(p) => p.trim().parse::<f64>().map(|p| p / 100.0),
+        None => t.parse::<f64>(),
+    }
+    .map_err(|_| format!("'{text}' is not a scale (write e.g. 0.97 or 97%)"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -279,6 +279,77 @@ class Tests:
                 assert report["pages"][0]["scale"] is not None and abs(report["pages"][0]["scale"] - 0.97) < 0.005
         self.shot("check")
 
+    def calibration_photos(self):
+        """A 24-marker sheet and ten photos of it through a distorting lens,
+        all made by the command line (as in python/tests/test_calibrate.py)."""
+        (self.work / "lens.yaml").write_text(
+            "image_width: 1280\nimage_height: 960\ncamera_name: lens\n"
+            "camera_matrix:\n  rows: 3\n  cols: 3\n  data: [1000.0, 0.0, 643.0, 0.0, 1001.0, 478.0, 0.0, 0.0, 1.0]\n"
+            "distortion_model: plumb_bob\n"
+            "distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [-0.26, 0.085, 0.0004, -0.0003, -0.012]\n")
+        self.cli("sheet", "--bits", 10, "--ids", "1-24", "--diameter", "30mm", "--no-check", "-o", "calsheet.svg")
+        views = [(25, 0, 35, 0.3), (-25, 5, -35, 0.3), (0, 28, 55, 0.31), (5, -28, -55, 0.31),
+                 (20, 20, 30, 0.33), (-20, -20, -30, 0.33), (30, -15, 60, 0.35), (-15, 30, -60, 0.35),
+                 (32, 10, 90, 0.38), (10, -32, -90, 0.38)]
+        photos = []
+        for k, (tilt, pan, roll, distance) in enumerate(views):
+            name = f"cal{k:02}.png"
+            self.cli("simulate", "--manifest", "calsheet.json", "--camera", "lens.yaml",
+                     "--camera-distance", f"{distance}m", "--tilt", f"{tilt}deg", "--pan", f"{pan}deg",
+                     "--roll", f"{roll}deg", "--blur", "0.6px", "--noise", "1.5", "--seed", k + 1, "-o", name)
+            photos.append(name)
+        return photos
+
+    def test_calibrate_matches_cli(self):
+        photos = self.calibration_photos()
+        self.cli("calibrate", "--manifest", "calsheet.json", *photos, "-o", "camera.yaml")
+        want = (self.work / "camera.yaml").read_bytes()
+        self.open("calibrate")
+        self.page.click("#cal-clear")
+        self.page.set_input_files("#cal-manifest", str(self.work / "calsheet.json"))
+        # Photos one at a time, as a phone takes them: coverage and the
+        # first fit follow each.
+        self.page.set_input_files("#cal-photos", [str(self.work / p) for p in photos[:2]])
+        self.page.wait_for_function("document.querySelectorAll('#cal-list li').length === 2", timeout=60000)
+        # Two views: no fit yet, and the reason is the CLI's.
+        self.page.wait_for_function(
+            "document.querySelector('#cal-fit').textContent.includes('no fit yet: only 2 usable views (3 needed)')",
+            timeout=60000)
+        self.page.set_input_files("#cal-camera", str(self.work / photos[2]))
+        self.page.wait_for_function("document.querySelector('#cal-fit').textContent.includes('first fit')", timeout=60000)
+        self.page.set_input_files("#cal-photos", [str(self.work / p) for p in photos[3:]])
+        self.page.wait_for_function(f"document.querySelectorAll('#cal-list li').length === {len(photos)}", timeout=120000)
+        self.page.wait_for_function(f"document.querySelector('#cal-fit').textContent.startsWith('{len(photos)} views')", timeout=60000)
+        counts = self.page.eval_on_selector_all("#cal-coverage td", "cells => cells.map(c => Number(c.textContent))")
+        listed = self.page.eval_on_selector_all("#cal-list li span:nth-child(2)", "s => s.map(x => parseInt(x.textContent))")
+        assert len(counts) == 9 and sum(counts) == sum(listed) and all(n >= 6 for n in listed), (counts, listed)
+        cli_line = self.page.inner_text("#cal-cli")
+        assert cli_line == f"whycode calibrate --manifest calsheet.json {' '.join(photos)} -o camera.yaml", cli_line
+        t0 = time.time()
+        self.page.click("#cal-run")
+        self.page.wait_for_selector("#cal-download:not([disabled])", timeout=600000)
+        seconds = time.time() - t0
+        got = self.downloads(lambda: self.page.click("#cal-download"), 1)
+        assert got["camera.yaml"] == want, f"camera.yaml differs from whycode calibrate:\n{got['camera.yaml'].decode()}\nvs\n{want.decode()}"
+        assert "overall RMS" in self.page.text_content("#cal-table")
+        self.figures[f"calibrate {len(photos)} photos"] = f"{seconds:.1f} s in the page"
+        self.shot("calibrate")
+
+        # A refusal is the command line's one line, and nothing to download.
+        refused = subprocess.run([self.args.whycode, "calibrate", "--manifest", "calsheet.json", *photos[:2],
+                                  "-o", "two.yaml"], cwd=self.work, capture_output=True, text=True)
+        self.page.click("#cal-clear")
+        self.page.set_input_files("#cal-manifest", str(self.work / "calsheet.json"))
+        self.page.set_input_files("#cal-photos", [str(self.work / p) for p in photos[:2]])
+        self.page.wait_for_function("document.querySelectorAll('#cal-list li').length === 2", timeout=60000)
+        self.page.click("#cal-run")
+        self.page.wait_for_selector("#cal-msg.error", timeout=60000)
+        text = self.page.inner_text("#cal-msg")
+        want_line = refused.stderr.strip()
+        assert refused.returncode != 0 and want_line == f"whycode: error: {text}", f"{text!r} vs {want_line!r}"
+        assert "\n" not in text and self.page.is_disabled("#cal-download")
+        self.shot("calibrate-refused")
+
     def test_bad_input_gives_messages(self):
         (self.work / "notes.png").write_text("these are notes, not a photo\n")
         (self.work / "family.json").write_bytes(self.cli("ids", "--format", "json"))
@@ -464,6 +535,7 @@ class Tests:
             order = ["test_size_first_paint_and_offline", "test_ids_family_json_matches_cli",
                      "test_print_sheet_downloads_match_cli", "test_print_multi_page_svg_and_custom_layout_match_cli",
                      "test_print_marker_matches_cli", "test_check_matches_cli_validate",
+                     "test_calibrate_matches_cli",
                      "test_bad_input_gives_messages", "test_phone_width_screenshots", "test_live_fake_camera"]
             tests = [t for t in order if t in tests] + [t for t in tests if t not in order]
             if self.args.only:

@@ -144,6 +144,36 @@ impl PyCamera {
         self.camera.to_ros_yaml(camera_name)
     }
 
+    /// Writes the calibration in the format `whycode calibrate` picks for
+    /// the same name: `.xml` OpenCV XML, `.yml` OpenCV YAML, anything else
+    /// ROS camera_info YAML; or `format` ("ros", "opencv-yaml",
+    /// "opencv-xml", the CLI's `--output-format`). Written whole or not at
+    /// all; `whycode detect --camera` and `Camera.load` read it back.
+    #[pyo3(signature = (path, *, format = None, camera_name = "camera"))]
+    fn save(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        format: Option<&str>,
+        camera_name: &str,
+    ) -> PyResult<()> {
+        use whycode::camera::CalibrationFormat;
+        let format = match format {
+            None => CalibrationFormat::for_path(&path),
+            Some("ros") => CalibrationFormat::RosYaml,
+            Some("opencv-yaml") => CalibrationFormat::OpenCvYaml,
+            Some("opencv-xml") => CalibrationFormat::OpenCvXml,
+            Some(other) => {
+                return Err(Error::value(format!(
+                    "format '{other}' is not 'ros', 'opencv-yaml' or 'opencv-xml'"
+                ))
+                .into())
+            }
+        };
+        let text = self.camera.to_file_text(format, camera_name);
+        Ok(py.detach(|| guard(|| Ok(whycode::io::write_atomic(&path, text.as_bytes())?)))?)
+    }
+
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
         other
             .cast::<PyCamera>()

@@ -4,7 +4,9 @@ use crate::camera::PyCamera;
 use crate::family::PyFamily;
 use crate::{guard, Error};
 use pyo3::prelude::*;
+use std::path::PathBuf;
 use std::sync::Mutex;
+use whycode::board::{Board, BoardPose};
 use whycode::detect::report::FrameReport;
 use whycode::detect::{Detection, Detector, DetectorConfig, StageTimings, Target};
 use whycode::spec::{DetectSpec, TargetSpec};
@@ -26,8 +28,25 @@ pub struct PyDetector {
     last_timings: Mutex<Option<StageTimings>>,
 }
 
+/// The markers of one frame and the poses of the configured boards.
+type Found = (Vec<Detection>, Vec<BoardPose>);
+
+/// Detects in `view` with `detector`, then places the boards through the
+/// camera fitted to the frame's size, as `whycode detect --board` does.
+fn detect_with_boards(detector: &mut Detector, view: &crate::pixels::GrayView<'_>) -> Found {
+    let found = detector.detect(view);
+    let boards = if detector.config().boards.is_empty() {
+        Vec::new()
+    } else {
+        // The frame's size was checked against the camera before.
+        let _ = detector.fit_camera(view.width(), view.height());
+        detector.locate_boards(&found)
+    };
+    (found, boards)
+}
+
 impl PyDetector {
-    fn run(&self, view: &crate::pixels::GrayView<'_>) -> Vec<Detection> {
+    fn run(&self, view: &crate::pixels::GrayView<'_>) -> Found {
         if self.config.tracking {
             let mut state = self
                 .tracking_state
@@ -36,14 +55,14 @@ impl PyDetector {
             let detector = state.get_or_insert_with(|| self.fresh.clone());
             // A panic below leaves `state` empty, never half-updated.
             let mut taken = std::mem::replace(detector, self.fresh.clone());
-            let found = taken.detect(view);
+            let found = detect_with_boards(&mut taken, view);
             self.keep_timings(&taken);
             *detector = taken;
             found
         } else {
             let worker = self.idle.lock().unwrap_or_else(|p| p.into_inner()).pop();
             let mut worker = worker.unwrap_or_else(|| self.fresh.clone());
-            let found = worker.detect(view);
+            let found = detect_with_boards(&mut worker, view);
             self.keep_timings(&worker);
             self.idle
                 .lock()
@@ -69,11 +88,15 @@ impl PyDetector {
     /// each stage of every frame (see `last_timings()`). `arena` (an
     /// `Arena` or an arena file's path) gives each marker its place on the
     /// floor (`Marker.arena`); one measured with a camera brings that camera
-    /// and needs `diameter`.
+    /// and needs `diameter`. `boards`: sheet manifests (each page a board)
+    /// and bundle files whose poses every frame's result carries in
+    /// `boards` (needs `camera`; without `diameter` the first board's first
+    /// marker gives it).
     #[new]
-    #[pyo3(signature = (family = None, *, legacy = false, diameter = None, camera = None, tracking = false, max_markers = None, timings = false, arena = None))]
+    #[pyo3(signature = (family = None, *, legacy = false, diameter = None, camera = None, tracking = false, max_markers = None, timings = false, arena = None, boards = Vec::new()))]
     #[allow(clippy::too_many_arguments)]
     fn new(
+        py: Python<'_>,
         family: Option<PyRef<'_, PyFamily>>,
         legacy: bool,
         diameter: Option<&Bound<'_, PyAny>>,
@@ -82,7 +105,17 @@ impl PyDetector {
         max_markers: Option<usize>,
         timings: bool,
         arena: Option<&Bound<'_, PyAny>>,
+        boards: Vec<PathBuf>,
     ) -> PyResult<PyDetector> {
+        let boards = py.detach(|| {
+            guard(|| {
+                let mut all = Vec::new();
+                for path in &boards {
+                    all.extend(Board::load(path)?);
+                }
+                Ok(all)
+            })
+        })?;
         let spec = DetectSpec {
             target: match family {
                 Some(f) => TargetSpec::of_family(Some(&f.family)),
@@ -95,6 +128,7 @@ impl PyDetector {
             tracking,
             timings,
             arena: arena.map(crate::arena::arena_of).transpose()?,
+            boards,
             ..DetectSpec::default()
         };
         if legacy && spec.target.family.is_some() {
@@ -102,7 +136,16 @@ impl PyDetector {
                 Error::value("legacy markers have no family: pass one or the other").into(),
             );
         }
-        let config = guard(|| spec.build().map_err(crate::spec_error))?;
+        let config = guard(|| {
+            spec.build().map_err(|err| {
+                // Spelled as the keyword is here: `boards`, not `board`.
+                if err.option == Some("board") {
+                    Error::value(err.message_with(|_| "boards".to_string()))
+                } else {
+                    crate::spec_error(err)
+                }
+            })
+        })?;
         let fresh = guard(|| Ok(Detector::new(config.clone())))?;
         Ok(PyDetector {
             config,
@@ -115,8 +158,15 @@ impl PyDetector {
 
     /// Finds the markers in one frame: a numpy array, uint8 or uint16, HxW
     /// grey, HxWx3 BGR or HxWx4 BGRA. The GIL is released meanwhile.
-    fn detect(&self, py: Python<'_>, image: &Bound<'_, PyAny>) -> PyResult<Vec<PyMarker>> {
-        let found = crate::pixels::with_gray(py, image, |view| {
+    /// Returns a `Detections`: the list of markers, with the configured
+    /// boards' poses in its `boards` attribute (dicts with the fields of
+    /// `whycode detect --board`'s JSON `boards` list).
+    fn detect<'py>(
+        &self,
+        py: Python<'py>,
+        image: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (found, boards) = crate::pixels::with_gray(py, image, |view| {
             // The detector rescales a calibration made for another
             // resolution of the same sensor by itself; another aspect ratio
             // is another camera, refused here rather than left without pose.
@@ -125,7 +175,10 @@ impl PyDetector {
             }
             Ok(self.run(view))
         })?;
-        Ok(found.into_iter().map(PyMarker::from).collect())
+        let markers: Vec<PyMarker> = found.into_iter().map(PyMarker::from).collect();
+        let result = crate::detections_type(py)?.call1((markers,))?;
+        result.setattr("boards", boards_to_py(py, boards)?)?;
+        Ok(result)
     }
 
     /// Benchmark baseline: median nanoseconds of the Rust `detect` alone on
@@ -377,6 +430,26 @@ impl PyMarker {
             if d.pose.is_some() { ", with pose" } else { "" }
         )
     }
+}
+
+/// Board poses as `whycode detect --board` writes them in JSON: through
+/// detect's own report writer, one source for fields and rounding.
+fn boards_to_py(py: Python<'_>, boards: Vec<BoardPose>) -> PyResult<Bound<'_, PyAny>> {
+    if boards.is_empty() {
+        return Ok(pyo3::types::PyList::empty(py).into_any());
+    }
+    let frame = FrameReport {
+        image: String::new(),
+        width: 0,
+        height: 0,
+        elapsed_ms: 0.0,
+        markers: Vec::new(),
+        boards,
+        timings: None,
+        stream: None,
+        legacy_looking: 0,
+    };
+    crate::json_to_py(py, &frame.to_json())?.get_item("boards")
 }
 
 /// The markers drawn over the image as `whycode detect --annotate` draws

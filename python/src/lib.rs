@@ -10,6 +10,7 @@ use pyo3::types::{PyDict, PyTuple, PyType};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 mod arena;
+mod calibrate;
 mod camera;
 mod detector;
 mod family;
@@ -22,6 +23,15 @@ mod validate;
 static WHYCODE_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static VALUE_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static OS_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+static DETECTIONS: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+
+/// `whycode.Detections`, the list `Detector.detect` returns.
+pub(crate) fn detections_type<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyType>> {
+    DETECTIONS
+        .get(py)
+        .map(|ty| ty.bind(py).clone())
+        .ok_or_else(|| pyo3::exceptions::PyRuntimeError::new_err("whycode is not initialised"))
+}
 
 /// An error on its way to Python: bad input (ValueError) or a file that
 /// could not be read or written (OSError), with its one-line message.
@@ -179,7 +189,9 @@ pub(crate) fn length(value: &Bound<'_, PyAny>, what: &str) -> PyResult<whycode::
     Ok(length)
 }
 
-fn exception_type<'py>(
+/// A class made at run time, `type(name, bases, {...})`: the exceptions
+/// and `Detections`, which derive from Python's own types.
+fn derived_type<'py>(
     py: Python<'py>,
     name: &str,
     bases: Vec<Bound<'py, PyAny>>,
@@ -199,13 +211,13 @@ fn exception_type<'py>(
 #[pymodule]
 fn _whycode(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
-    let base = exception_type(
+    let base = derived_type(
         py,
         "WhycodeError",
         vec![py.get_type::<pyo3::exceptions::PyException>().into_any()],
         "Base of every error whycode raises.",
     )?;
-    let value = exception_type(
+    let value = derived_type(
         py,
         "WhycodeValueError",
         vec![
@@ -214,7 +226,7 @@ fn _whycode(m: &Bound<'_, PyModule>) -> PyResult<()> {
         ],
         "Bad input: an argument, an array or a file's contents.",
     )?;
-    let os = exception_type(
+    let os = derived_type(
         py,
         "WhycodeOSError",
         vec![
@@ -230,10 +242,24 @@ fn _whycode(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let _ = VALUE_ERROR.set(py, value.unbind());
     let _ = OS_ERROR.set(py, os.unbind());
 
+    // A plain list, so that code written for `detect()`'s list keeps
+    // working, with the frame's board poses beside the markers.
+    let detections = derived_type(
+        py,
+        "Detections",
+        vec![py.get_type::<pyo3::types::PyList>().into_any()],
+        "The markers of one frame (a list of Marker), with the poses of the \
+         Detector's boards in `boards` (dicts as `whycode detect --board` \
+         writes them; empty without boards).",
+    )?;
+    m.add("Detections", &detections)?;
+    let _ = DETECTIONS.set(py, detections.unbind());
+
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     family::register(m)?;
     camera::register(m)?;
     arena::register(m)?;
+    calibrate::register(m)?;
     detector::register(m)?;
     render::register(m)?;
     validate::register(m)?;

@@ -3,7 +3,8 @@ detection with 6-DoF pose, validation of printed sheets and simulation.
 
 Fields and messages are those of the ``whycode`` command line: a marker's
 ``as_dict()`` is the object ``whycode detect --format json`` prints, and
-``validate()`` returns the report ``whycode validate --format json`` prints.
+``validate()`` returns the report ``whycode validate --format json`` prints;
+``calibrate()`` writes through ``Camera.save`` what ``whycode calibrate`` writes.
 """
 
 from ._whycode import (
@@ -11,6 +12,7 @@ from ._whycode import (
     Camera,
     Code,
     Decoded,
+    Detections,
     Detector,
     Family,
     FrameReader,
@@ -19,6 +21,7 @@ from ._whycode import (
     WhycodeOSError,
     WhycodeValueError,
     __version__,
+    calibrate,
     draw,
     family_counts,
     load_image,
@@ -36,6 +39,7 @@ __all__ = [
     "Camera",
     "Code",
     "Decoded",
+    "Detections",
     "Detector",
     "Family",
     "FrameReader",
@@ -44,6 +48,7 @@ __all__ = [
     "WhycodeOSError",
     "WhycodeValueError",
     "__version__",
+    "calibrate",
     "draw",
     "family_counts",
     "load_image",

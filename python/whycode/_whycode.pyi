@@ -107,6 +107,14 @@ class Camera:
     @property
     def camera_matrix(self) -> npt.NDArray[np.float64]: ...
     def to_ros_yaml(self, camera_name: str = "camera") -> str: ...
+    def save(
+        self,
+        path: StrPath,
+        *,
+        format: Optional[Literal["ros", "opencv-yaml", "opencv-xml"]] = None,
+        camera_name: str = "camera",
+    ) -> None:
+        """Writes the calibration as ``whycode calibrate -o path`` would (format from the extension)."""
     def __eq__(self, other: object) -> bool: ...
 
 class Arena:
@@ -145,6 +153,17 @@ class ArenaPosition(TypedDict):
     y: float
     z: float
     yaw: Optional[float]
+def calibrate(
+    manifest: StrPath,
+    images: Sequence[Union[StrPath, ImageArray]],
+    *,
+    fix_principal_point: bool = False,
+    fix_aspect: bool = False,
+    no_tangential: bool = False,
+    no_k3: bool = False,
+    print_scale: Optional[float] = None,
+) -> tuple[Camera, dict[str, Any]]:
+    """A camera from photos of a printed sheet, as ``whycode calibrate``: (camera, report)."""
 
 class Marker:
     """One marker found in a frame (attributes at full precision)."""
@@ -191,6 +210,12 @@ class Marker:
     def as_dict(self) -> dict[str, Any]:
         """The object ``whycode detect --format json`` prints for this marker."""
 
+class Detections(list[Marker]):
+    """The markers of one frame, with the poses of the Detector's boards."""
+
+    boards: list[dict[str, Any]]
+    """One dict per board seen, as ``whycode detect --board`` writes it in JSON."""
+
 class Detector:
     """Finds WhyCode markers (or legacy WhyCon circles) in frames."""
 
@@ -205,8 +230,9 @@ class Detector:
         max_markers: Optional[int] = None,
         timings: bool = False,
         arena: Optional[Union[Arena, StrPath]] = None,
+        boards: Sequence[StrPath] = (),
     ) -> None: ...
-    def detect(self, image: ImageArray) -> list[Marker]: ...
+    def detect(self, image: ImageArray) -> Detections: ...
     def last_timings(self) -> Optional[dict[str, Any]]:
         """Milliseconds per stage of the frame detected last (``timings=True``)."""
     def reset(self) -> None: ...

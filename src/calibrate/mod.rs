@@ -196,6 +196,22 @@ pub struct Coverage {
     pub counts: [[usize; 3]; 3],
 }
 
+impl Coverage {
+    /// The markers of `views` per ninth of a `width` x `height` image.
+    pub fn of(views: &[ViewPoints], width: u32, height: u32) -> Coverage {
+        let (w, h) = (f64::from(width), f64::from(height));
+        let mut counts = [[0usize; 3]; 3];
+        for view in views {
+            for p in &view.pixels {
+                let col = ((3.0 * (p[0] + 0.5) / w).floor().max(0.0) as usize).min(2);
+                let row = ((3.0 * (p[1] + 0.5) / h).floor().max(0.0) as usize).min(2);
+                counts[row][col] += 1;
+            }
+        }
+        Coverage { counts }
+    }
+}
+
 /// A calibration and how far to trust it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Calibration {
@@ -476,15 +492,8 @@ fn report(
     freedom: &Freedom,
 ) -> Calibration {
     let camera = fit.camera;
-    let (w, h) = (f64::from(camera.width), f64::from(camera.height));
-    let mut counts = [[0usize; 3]; 3];
-    for view in &views {
-        for p in &view.pixels {
-            let col = ((3.0 * (p[0] + 0.5) / w).floor().max(0.0) as usize).min(2);
-            let row = ((3.0 * (p[1] + 0.5) / h).floor().max(0.0) as usize).min(2);
-            counts[row][col] += 1;
-        }
-    }
+    let coverage = Coverage::of(&views, camera.width, camera.height);
+    let counts = coverage.counts;
     let all: Vec<[f64; 2]> = fit.residuals.iter().flatten().copied().collect();
     let reports: Vec<ViewReport> = views
         .iter()
@@ -571,15 +580,19 @@ fn report(
         skipped,
         std_devs: fit.std_devs,
         fitted,
-        coverage: Coverage { counts },
+        coverage,
         advice,
         rounds: 1,
     }
 }
 
-/// A detector for the manifest's family that reports the markers' centres
-/// through `camera` when one is given.
-fn detector_config(
+/// The detector every round of [`calibrate`] reads the photos with: the
+/// manifest's family, reporting the markers' centres through `camera` when
+/// one is given (the ellipses' centres without). A front end that takes
+/// photos one at a time detects each with it (no camera) and shows, as it
+/// goes, the views [`observe`] finds, their [`Coverage`] and a first fit
+/// by [`calibrate_views`], before it calibrates them all.
+pub fn sheet_detector(
     manifest: &Manifest,
     camera: Option<Camera>,
 ) -> Result<DetectorConfig, CalibrationError> {
@@ -601,6 +614,23 @@ fn detector_config(
         diameter_m: camera.and(diameter),
         ..Default::default()
     })
+}
+
+fn views_in(
+    config: &DetectorConfig,
+    manifest: &Manifest,
+    name: &str,
+    image: &image::GrayImage,
+    print_scale: f64,
+) -> Vec<ViewPoints> {
+    let detections = Detector::new(config.clone()).detect(image);
+    observe(
+        manifest,
+        name,
+        &detections,
+        print_scale,
+        config.camera.is_some(),
+    )
 }
 
 /// Calibrates a camera from photos (name, grey image) of the sheet
@@ -630,19 +660,10 @@ pub fn calibrate(
         });
     }
     let views_through = |camera: Option<Camera>| -> Result<Vec<ViewPoints>, CalibrationError> {
-        let config = detector_config(manifest, camera)?;
+        let config = sheet_detector(manifest, camera)?;
         let per_photo: Vec<Vec<ViewPoints>> = photos
             .par_iter()
-            .map(|(name, image)| {
-                let detections = Detector::new(config.clone()).detect(image);
-                observe(
-                    manifest,
-                    name,
-                    &detections,
-                    options.print_scale,
-                    camera.is_some(),
-                )
-            })
+            .map(|(name, image)| views_in(&config, manifest, name, image, options.print_scale))
             .collect();
         Ok(per_photo.into_iter().flatten().collect())
     };
@@ -658,10 +679,125 @@ pub fn calibrate(
         }
     }
     result.rounds = rounds;
+    result.camera = to_written_precision(result.camera);
     Ok(result)
 }
 
+/// The camera at the precision calibration files carry: 1e-4 px for the
+/// focal lengths and principal point, 1e-6 for the distortion terms. That
+/// is a hundred times finer than the fit's spread, and coarse enough
+/// that the command line, Python and the browser page write the same
+/// bytes for the same photos (WebAssembly rounds the last bits of sin, cos
+/// and atan2 its own way, and those bits reach the fit's last digits: at
+/// 1e-6 px the page's fy, and at 1e-7 its k3, were seen one digit apart
+/// from the command line's).
+fn to_written_precision(camera: Camera) -> Camera {
+    Camera {
+        fx: rounded(camera.fx, 4),
+        fy: rounded(camera.fy, 4),
+        cx: rounded(camera.cx, 4),
+        cy: rounded(camera.cy, 4),
+        distortion: camera.distortion.map(|d| rounded(d, 6)),
+        ..camera
+    }
+}
+
+/// A calibration's report as JSON writes it (see [`Calibration::to_json`]).
+#[derive(serde::Serialize)]
+struct Written<'a> {
+    rms_px: f64,
+    rounds: usize,
+    views: Vec<WrittenView<'a>>,
+    skipped: &'a [String],
+    parameters: Vec<WrittenParameter>,
+    coverage: [[usize; 3]; 3],
+    advice: &'a [String],
+}
+
+#[derive(serde::Serialize)]
+struct WrittenView<'a> {
+    label: &'a str,
+    markers: usize,
+    rejected: &'a [u32],
+    rms_px: f64,
+    tilt_deg: f64,
+    position: [f64; 3],
+    rotation: [[f64; 3]; 3],
+}
+
+#[derive(serde::Serialize)]
+struct WrittenParameter {
+    name: &'static str,
+    value: f64,
+    /// None when the parameter was held.
+    std_dev: Option<f64>,
+}
+
+/// Rounded for the report: far finer than the fit's spread, and coarse
+/// enough that the command line and the browser page (whose WebAssembly
+/// rounds the last bits of sin and cos its own way) write the same text.
+fn rounded(value: f64, decimals: i32) -> f64 {
+    let scale = 10f64.powi(decimals);
+    (value * scale).round() / scale
+}
+
 impl Calibration {
+    /// The report as JSON, for programs (Python's `calibrate`, the browser
+    /// page): overall and per-view RMS (pixels), each view's tilt (degrees)
+    /// and pose (board → camera, metres), the photos skipped, every
+    /// parameter with its standard deviation (`null` when held), markers
+    /// per ninth of the image (rows from the top) and the advice. The camera
+    /// itself is the calibration file's.
+    pub fn to_json(&self) -> String {
+        let c = &self.camera;
+        let values = [
+            c.fx,
+            c.fy,
+            c.cx,
+            c.cy,
+            c.distortion[0],
+            c.distortion[1],
+            c.distortion[2],
+            c.distortion[3],
+            c.distortion[4],
+        ];
+        let written = Written {
+            rms_px: rounded(self.rms, 4),
+            rounds: self.rounds,
+            views: self
+                .views
+                .iter()
+                .map(|v| WrittenView {
+                    label: &v.label,
+                    markers: v.markers,
+                    rejected: &v.rejected,
+                    rms_px: rounded(v.rms, 4),
+                    tilt_deg: rounded(v.tilt_deg, 3),
+                    position: std::array::from_fn(|k| rounded(v.position[k], 6)),
+                    rotation: std::array::from_fn(|r| {
+                        std::array::from_fn(|col| rounded(v.rotation[(r, col)], 6))
+                    }),
+                })
+                .collect(),
+            skipped: &self.skipped,
+            parameters: PARAMETER_NAMES
+                .iter()
+                .enumerate()
+                .map(|(k, &name)| {
+                    let decimals = if k < 4 { 6 } else { 9 };
+                    WrittenParameter {
+                        name,
+                        value: rounded(values[k], decimals),
+                        std_dev: self.fitted[k].then(|| rounded(self.std_devs[k], decimals)),
+                    }
+                })
+                .collect(),
+            coverage: self.coverage.counts,
+            advice: &self.advice,
+        };
+        serde_json::to_string_pretty(&written).expect("a calibration report serialises")
+    }
+
     /// The report as text for people: each view, the fit, its spread,
     /// where the points were and what the photos lack.
     pub fn to_table(&self) -> String {

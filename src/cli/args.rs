@@ -164,18 +164,10 @@ pub fn print_error(err: PrintError) -> anyhow::Error {
     }
 }
 
+pub use whycode::units::parse_scale;
+
 /// A library spec's error in the command line's words (`--camera-distance`
 /// where the spec says `camera_distance`).
-/// A printer's scale as people write it: 0.97 or 97%.
-pub fn parse_scale(text: &str) -> Result<f64, String> {
-    let t = text.trim();
-    match t.strip_suffix('%') {
-        Some(p) => p.trim().parse::<f64>().map(|p| p / 100.0),
-        None => t.parse::<f64>(),
-    }
-    .map_err(|_| format!("'{text}' is not a scale (write e.g. 0.97 or 97%)"))
-}
-
 pub fn spec_error(err: SpecError) -> anyhow::Error {
     anyhow::anyhow!(err.message_with(cli_option))
 }

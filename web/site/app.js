@@ -566,6 +566,224 @@ function showReport(r, table) {
   $("c-table").textContent = table;
 }
 
+// ---------- Calibrate ----------
+
+// The photos in the engine's calibration, in order: { name, size, markers }.
+let calPhotos = [];
+// The manifest the engine's calibration was started with (a File).
+let calManifest = null;
+let calCamera = null;
+
+const CAMERA_FILE = "camera.yaml";
+
+// One calibration step at a time: a manifest chosen while photos are still
+// being read (or the other way round) waits for the step before it.
+let calQueue = Promise.resolve();
+function calSerial(step) {
+  const next = calQueue.then(step, step);
+  calQueue = next.catch(() => {});
+  return next;
+}
+
+function calOptions() {
+  return {
+    fix_principal_point: $("cal-fix-pp").checked,
+    fix_aspect: $("cal-fix-aspect").checked,
+    no_tangential: $("cal-no-tangential").checked,
+    no_k3: $("cal-no-k3").checked,
+    print_scale: $("cal-scale").value.trim() || null,
+  };
+}
+
+function calFlags() {
+  const o = calOptions();
+  return [o.fix_principal_point && "--fix-principal-point", o.fix_aspect && "--fix-aspect",
+    o.no_tangential && "--no-tangential", o.no_k3 && "--no-k3",
+    o.print_scale && `--print-scale ${o.print_scale}`].filter(Boolean).join(" ");
+}
+
+function calList() {
+  $("cal-list").innerHTML = calPhotos.map((p, k) =>
+    `<li><span>${escapeHtml(p.name)}</span><span>${p.markers} marker${p.markers === 1 ? "" : "s"}</span><button type="button" class="remove" data-index="${k}" aria-label="Remove ${escapeHtml(p.name)}">×</button></li>`).join("");
+  const names = calPhotos.length ? calPhotos.map((p) => p.name).join(" ") : "PHOTO…";
+  const flags = calFlags();
+  $("cal-cli").textContent = `whycode calibrate --manifest ${calManifest ? calManifest.name : "SHEET.json"} ${names}${flags ? ` ${flags}` : ""} -o ${CAMERA_FILE}`;
+}
+
+function calForget() {
+  calCamera = null;
+  $("cal-download").disabled = true;
+  $("cal-table").textContent = "";
+}
+
+function showCoverage(counts) {
+  const rows = counts || [[0, 0, 0], [0, 0, 0], [0, 0, 0]];
+  $("cal-coverage").innerHTML = `<tbody>${rows.map((row) =>
+    `<tr>${row.map((n) => `<td class="${n ? "" : "empty"}">${n}</td>`).join("")}</tr>`).join("")}</tbody>`;
+}
+
+// Coverage and a first fit over the photos so far (the calibration itself
+// re-reads the centres through the camera it finds, and ends lower).
+async function calPreview() {
+  if (!calManifest || !calPhotos.length) {
+    showCoverage(null);
+    $("cal-fit").textContent = calPhotos.length ? "" : "Add photos to see which parts of the image they cover.";
+    $("cal-advice").innerHTML = "";
+    return;
+  }
+  try {
+    const p = await engine.call("calibratePreview", { options: calOptions() });
+    showCoverage(p.coverage);
+    const views = p.views.length;
+    if (p.fit.refusal) {
+      $("cal-fit").textContent = `${views} view${views === 1 ? "" : "s"} of the sheet; no fit yet: ${p.fit.refusal}`;
+      $("cal-advice").innerHTML = "";
+    } else {
+      $("cal-fit").textContent = `${views} views; first fit (on the ellipses' centres): RMS ${p.fit.rms_px.toFixed(3)} px, fx ${p.fit.fx.toFixed(1)}, fy ${p.fit.fy.toFixed(1)}`;
+      $("cal-advice").innerHTML = p.fit.advice.map((a) => `<li>${escapeHtml(a)}</li>`).join("");
+    }
+  } catch (err) {
+    showMsg($("cal-msg"), "error", err.message);
+  }
+}
+
+// Starts the engine's calibration for the chosen manifest and reads every
+// listed photo into it again.
+async function calStart() {
+  const file = $("cal-manifest").files[0];
+  if (!file) return false;
+  if (file.size > MAX_MANIFEST_BYTES) throw new Error(`${file.name}: too large to be a sheet manifest.`);
+  await engine.call("calibrateStart", { name: file.name, text: await file.text() });
+  calManifest = file;
+  const files = calPhotos.map((p) => p.file);
+  calPhotos = [];
+  for (const f of files) await calAddOne(f);
+  return true;
+}
+
+async function calAddOne(file) {
+  const bytes = await file.arrayBuffer();
+  const markers = await withTimeout(engine.call("calibratePhoto", { name: file.name, bytes }, [bytes]),
+    PHOTO_TIMEOUT_MS, `Reading ${file.name}`);
+  calPhotos.push({ name: file.name, size: file.size, markers, file });
+}
+
+async function calAddPhotos(files) {
+  const msg = $("cal-msg");
+  clearMsg(msg);
+  try {
+    if (!calManifest && !(await calStart())) {
+      showMsg(msg, "error", "Choose the sheet's manifest (the .json file saved with the sheet) first.");
+      return;
+    }
+    let k = 0;
+    for (const file of files) {
+      k++;
+      if (file.size > MAX_PHOTO_BYTES) {
+        showMsg(msg, "error", `${file.name}: ${(file.size / 1e6).toFixed(0)} MB is too large a file for the page (at most ${MAX_PHOTO_BYTES / 1e6} MB); scale the photo down or use the whycode command.`);
+        continue;
+      }
+      showMsg(msg, "info", `Reading ${file.name} (${k} of ${files.length})…`);
+      await calAddOne(file);
+      calForget();
+      calList();
+      await calPreview();
+    }
+    if (msg.classList.contains("info")) clearMsg(msg);
+  } catch (err) {
+    showMsg(msg, "error", err.message);
+  }
+  calList();
+}
+
+function calPhotosChosen(input) {
+  // The files are taken now: the input is cleared for the next choice.
+  const files = [...input.files];
+  input.value = "";
+  calSerial(() => calAddPhotos(files));
+}
+$("cal-camera").addEventListener("change", (e) => calPhotosChosen(e.target));
+$("cal-photos").addEventListener("change", (e) => calPhotosChosen(e.target));
+$("cal-manifest").addEventListener("change", () => calSerial(async () => {
+  const msg = $("cal-msg");
+  clearMsg(msg);
+  calForget();
+  calManifest = null;
+  try {
+    await calStart();
+  } catch (err) {
+    calManifest = null;
+    showMsg(msg, "error", err.message);
+  }
+  calList();
+  await calPreview();
+}));
+$("cal-list").addEventListener("click", (e) => {
+  const button = e.target.closest("button.remove");
+  if (!button) return;
+  const index = Number(button.dataset.index);
+  calSerial(async () => {
+    calPhotos.splice(index, 1);
+    await engine.call("calibrateRemove", { index });
+    calForget();
+    calList();
+    await calPreview();
+  });
+});
+for (const id of ["cal-fix-pp", "cal-fix-aspect", "cal-no-tangential", "cal-no-k3", "cal-scale"]) {
+  $(id).addEventListener(id === "cal-scale" ? "input" : "change", debounce(() => { calForget(); calList(); calPreview(); }, 300));
+}
+$("cal-clear").addEventListener("click", () => {
+  calPhotos = [];
+  calManifest = null;
+  $("cal-manifest").value = "";
+  calForget();
+  clearMsg($("cal-msg"));
+  calList();
+  calPreview();
+});
+$("cal-download").addEventListener("click", () => {
+  if (calCamera) download(CAMERA_FILE, calCamera, "application/x-yaml");
+});
+
+// Each photo's markers are read once more per round, through the camera
+// found so far: allow for a few rounds of every photo.
+const CALIBRATE_TIMEOUT_MS = 600000;
+
+$("cal-run").addEventListener("click", (event) => {
+  const button = event.currentTarget;
+  calSerial(() => calRun(button));
+});
+
+async function calRun(button) {
+  const msg = $("cal-msg");
+  if (!calManifest) { showMsg(msg, "error", "Choose the sheet's manifest (the .json file saved with the sheet) first."); return; }
+  if (!calPhotos.length) { showMsg(msg, "error", "Add photos of the printed sheet: 10-20, tilted different ways."); return; }
+  calForget();
+  button.disabled = true;
+  button.classList.add("busy");
+  showMsg(msg, "info", `Calibrating from ${calPhotos.length} photo${calPhotos.length === 1 ? "" : "s"} (the markers are read again through each camera found until it settles)…`);
+  try {
+    const out = await withTimeout(engine.call("calibrateRun", { options: calOptions(), output: CAMERA_FILE }),
+      CALIBRATE_TIMEOUT_MS, "The calibration");
+    const r = JSON.parse(out.json);
+    calCamera = out.camera;
+    $("cal-table").textContent = out.table;
+    const p = Object.fromEntries(r.parameters.map((q) => [q.name, q]));
+    const sd = (q) => (q.std_dev == null ? "held" : `± ${q.std_dev.toPrecision(2)}`);
+    $("cal-fit").textContent = `Calibrated from ${r.views.length} views: RMS ${r.rms_px.toFixed(3)} px; fx ${p.fx.value.toFixed(2)} ${sd(p.fx)}, fy ${p.fy.value.toFixed(2)} ${sd(p.fy)}, cx ${p.cx.value.toFixed(2)} ${sd(p.cx)}, cy ${p.cy.value.toFixed(2)} ${sd(p.cy)}, k1 ${p.k1.value.toFixed(4)}`;
+    $("cal-advice").innerHTML = r.advice.map((a) => `<li>${escapeHtml(a)}</li>`).join("");
+    showCoverage(r.coverage);
+    $("cal-download").disabled = false;
+    showMsg(msg, "ok", `Done: download ${CAMERA_FILE} for whycode detect --camera.`);
+  } catch (err) {
+    showMsg(msg, "error", err.message);
+  } finally {
+    button.disabled = false;
+    button.classList.remove("busy");
+  }
+}
+
 // ---------- Live ----------
 
 const live = { stream: null, running: false, stride: 8, frames: 0, t0: 0, ms: 0, seen: new Map() };
@@ -763,6 +981,7 @@ async function start() {
     idsUpdate();
     idsCounts();
     listPhotos();
+    calList();
     syncPrintForm();
     printPreview();
   } catch (err) {
@@ -772,7 +991,7 @@ async function start() {
 }
 
 const initial = location.hash.slice(1);
-showPanel(["ids", "print", "check", "live"].includes(initial) ? initial : "ids");
+showPanel(["ids", "print", "check", "calibrate", "live"].includes(initial) ? initial : "ids");
 start();
 
 if ("serviceWorker" in navigator && location.protocol !== "file:") {

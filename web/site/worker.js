@@ -6,6 +6,7 @@ import init, * as wc from "./pkg/whycode_web.js";
 
 const ready = init({ module_or_path: new URL("./pkg/whycode_web_bg.wasm", import.meta.url) });
 let validation = null;
+let calibration = null;
 
 // PDF output lives in a module of its own (printpdf, with its fonts and
 // colour profile, is as large as the rest of the library): fetched on the
@@ -53,6 +54,19 @@ const handlers = {
   },
   validatePhoto: ({ name, bytes }) => validation.addPhoto(name, new Uint8Array(bytes)),
   validateReport: () => ({ json: validation.reportJson(), table: validation.reportTable() }),
+  calibrateStart: ({ name, text }) => {
+    if (calibration) calibration.free();
+    calibration = null;
+    calibration = new wc.Calibration(name, text);
+    return true;
+  },
+  calibratePhoto: ({ name, bytes }) => calibration.addPhoto(name, new Uint8Array(bytes)),
+  calibrateRemove: ({ index }) => calibration.removePhoto(index),
+  calibratePreview: ({ options }) => JSON.parse(calibration.preview(JSON.stringify(options))),
+  calibrateRun: ({ options, output }) => {
+    const json = calibration.calibrate(JSON.stringify(options));
+    return { json, table: calibration.reportTable(), camera: calibration.cameraFile(output) };
+  },
   liveStart: ({ bits, distance, legacy }) => {
     if (live) live.free();
     live = null;

@@ -10,13 +10,14 @@ use anyhow::{Context, Result};
 use image::GrayImage;
 use serde::Deserialize;
 use wasm_bindgen::prelude::*;
+use whycode::calibrate;
 use whycode::detect::{Detector, Target};
 use whycode::family::{parse_id_list, CountTable, Family};
 use whycode::image_io;
 use whycode::manifest::Manifest;
 use whycode::render::job::{MarkerJob, PrintError, SheetJob};
 use whycode::render::template::{builtin_names, Template};
-use whycode::spec::{cli_option, Bits, DetectSpec, SpecError, TargetSpec};
+use whycode::spec::{cli_option, Bits, CalibrateSpec, DetectSpec, SpecError, TargetSpec};
 use whycode::units::{trim_float, Length};
 use whycode::validate::{self, annotate, PhotoReport};
 
@@ -378,6 +379,192 @@ impl Validation {
     #[wasm_bindgen(js_name = reportTable)]
     pub fn report_table(&self) -> String {
         validate::summarise(&self.manifest, self.photos.clone()).to_table()
+    }
+}
+
+/// The options of `whycode calibrate`, as the page's form sends them.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CalibrateOptions {
+    #[serde(default)]
+    fix_principal_point: bool,
+    #[serde(default)]
+    fix_aspect: bool,
+    #[serde(default)]
+    no_tangential: bool,
+    #[serde(default)]
+    no_k3: bool,
+    /// As typed: "0.97" or "97%"; empty for 100 %.
+    print_scale: Option<String>,
+}
+
+impl CalibrateOptions {
+    fn parse(options: &str) -> Result<calibrate::CalibrationOptions> {
+        let args: CalibrateOptions =
+            serde_json::from_str(options).context("calibration options")?;
+        let print_scale = match args.print_scale.as_deref().map(str::trim) {
+            Some(text) if !text.is_empty() => Some(
+                whycode::units::parse_scale(text)
+                    .map_err(|e| anyhow::anyhow!("--print-scale: {e}"))?,
+            ),
+            _ => None,
+        };
+        CalibrateSpec {
+            fix_principal_point: args.fix_principal_point,
+            fix_aspect: args.fix_aspect,
+            no_tangential: args.no_tangential,
+            no_k3: args.no_k3,
+            print_scale,
+        }
+        .build()
+        .map_err(spec_error)
+    }
+}
+
+/// `whycode calibrate`: a manifest, then photos one at a time (each read at
+/// once, so the page shows coverage and a first fit as they come), then
+/// the calibration over all of them and its camera file.
+#[wasm_bindgen]
+pub struct Calibration {
+    manifest: Manifest,
+    detector: Detector,
+    /// Each photo's name, grey image and first-round detections.
+    photos: Vec<(String, GrayImage, Vec<whycode::Detection>)>,
+    result: Option<calibrate::Calibration>,
+}
+
+#[wasm_bindgen]
+impl Calibration {
+    /// `name` is the manifest's file name, used in error messages.
+    #[wasm_bindgen(constructor)]
+    pub fn new(name: &str, text: &str) -> Result<Calibration, JsError> {
+        let manifest = Manifest::from_json(name, text).map_err(|e| js_error(e.into()))?;
+        let config = calibrate::sheet_detector(&manifest, None)
+            .with_context(|| name.to_string())
+            .map_err(js_error)?;
+        Ok(Calibration {
+            manifest,
+            detector: Detector::new(config),
+            photos: Vec::new(),
+            result: None,
+        })
+    }
+
+    /// Reads one photo's markers; returns how many it has of the sheet.
+    /// A photo of another size than the first is refused with the command
+    /// line's words.
+    #[wasm_bindgen(js_name = addPhoto)]
+    pub fn add_photo(&mut self, name: &str, bytes: &[u8]) -> Result<usize, JsError> {
+        let image = decode_gray(name, bytes).map_err(js_error)?;
+        if let Some((first, first_image, _)) = self.photos.first() {
+            if first_image.dimensions() != image.dimensions() {
+                let err = calibrate::CalibrationError::ImageSizes {
+                    first: first.clone(),
+                    first_size: [first_image.width(), first_image.height()],
+                    name: name.to_string(),
+                    size: [image.width(), image.height()],
+                };
+                return Err(js_error(err.into()));
+            }
+        }
+        self.detector.reset();
+        let detections = self.detector.detect(&image);
+        let views = calibrate::observe(&self.manifest, name, &detections, 1.0, false);
+        self.photos.push((name.to_string(), image, detections));
+        self.result = None;
+        Ok(views.iter().map(|v| v.ids.len()).max().unwrap_or(0))
+    }
+
+    /// Forgets the photo added `index`-th (from 0).
+    #[wasm_bindgen(js_name = removePhoto)]
+    pub fn remove_photo(&mut self, index: usize) {
+        if index < self.photos.len() {
+            self.photos.remove(index);
+            self.result = None;
+        }
+    }
+
+    /// What the photos so far show, as JSON: `coverage` (markers per ninth
+    /// of the image, rows from the top), `views` ({label, markers}) and a
+    /// first fit on the markers' ellipse centres (`rms_px`, `fx`, `fy`,
+    /// `advice`) or the reason there is none yet (`refusal`, the command
+    /// line's line). The calibration itself re-reads the centres through
+    /// the camera found, so its RMS comes out lower.
+    pub fn preview(&self, options: &str) -> Result<String, JsError> {
+        let options = CalibrateOptions::parse(options).map_err(js_error)?;
+        let views: Vec<calibrate::ViewPoints> = self
+            .photos
+            .iter()
+            .flat_map(|(name, _, detections)| {
+                calibrate::observe(&self.manifest, name, detections, options.print_scale, false)
+            })
+            .collect();
+        let Some((_, first, _)) = self.photos.first() else {
+            return Ok(serde_json::json!({ "views": [], "coverage": null }).to_string());
+        };
+        let (width, height) = first.dimensions();
+        let coverage = calibrate::Coverage::of(&views, width, height);
+        let listed: Vec<serde_json::Value> = views
+            .iter()
+            .map(|v| serde_json::json!({ "label": v.label, "markers": v.ids.len() }))
+            .collect();
+        let fit = match calibrate::calibrate_views(views, width, height, &options) {
+            Ok(c) => serde_json::json!({
+                "rms_px": c.rms,
+                "fx": c.camera.fx,
+                "fy": c.camera.fy,
+                "advice": c.advice,
+            }),
+            Err(err) => serde_json::json!({ "refusal": err.to_string() }),
+        };
+        Ok(serde_json::json!({
+            "width": width,
+            "height": height,
+            "views": listed,
+            "coverage": coverage.counts,
+            "fit": fit,
+        })
+        .to_string())
+    }
+
+    /// Calibrates from every photo added, as `whycode calibrate` with the
+    /// same options; returns the report as JSON (see the library's
+    /// `Calibration::to_json`). A calibration the photos cannot support is
+    /// refused with the command line's one line.
+    pub fn calibrate(&mut self, options: &str) -> Result<String, JsError> {
+        let options = CalibrateOptions::parse(options).map_err(js_error)?;
+        self.result = None;
+        let photos: Vec<(String, GrayImage)> = self
+            .photos
+            .iter()
+            .map(|(name, image, _)| (name.clone(), image.clone()))
+            .collect();
+        let result = calibrate::calibrate(&self.manifest, &photos, &options)
+            .map_err(|e| js_error(e.into()))?;
+        let json = result.to_json();
+        self.result = Some(result);
+        Ok(json)
+    }
+
+    /// The last calibration's report as the command line prints it.
+    #[wasm_bindgen(js_name = reportTable)]
+    pub fn report_table(&self) -> String {
+        self.result
+            .as_ref()
+            .map(calibrate::Calibration::to_table)
+            .unwrap_or_default()
+    }
+
+    /// The last calibration's camera file, as `whycode calibrate -o
+    /// <output>` writes it (the format follows the name's extension).
+    #[wasm_bindgen(js_name = cameraFile)]
+    pub fn camera_file(&self, output: &str) -> Result<String, JsError> {
+        let result = self
+            .result
+            .as_ref()
+            .ok_or_else(|| JsError::new("no calibration yet: calibrate first"))?;
+        let format = whycode::camera::CalibrationFormat::for_path(Path::new(output));
+        Ok(result.camera.to_file_text(format, "camera"))
     }
 }
 
