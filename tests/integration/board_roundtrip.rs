@@ -109,13 +109,11 @@ fn a_sheet_with_half_its_markers_covered_gives_the_page_pose() {
     );
 }
 
-#[test]
-fn a_bundle_on_a_cube_gives_the_cube_pose() {
-    let truth = calibration::lens();
-    let family = Family::generate(10, 2).unwrap();
+/// A marker on each of the first `faces` of a 6 cm cube (+z, +x, +y faces;
+/// each marker's +z out of its face) and the bundle describing them.
+fn cube(faces: usize) -> (Vec<(u32, Vector3<f64>, UnitQuaternion<f64>)>, Vec<Board>) {
     let side = 0.06;
-    // Three faces: +z, +x, +y; each marker's +z out of its face.
-    let faces = [
+    let faces: Vec<_> = [
         (
             1,
             Vector3::new(0.0, 0.0, side / 2.0),
@@ -131,7 +129,10 @@ fn a_bundle_on_a_cube_gives_the_cube_pose() {
             Vector3::new(0.0, side / 2.0, 0.0),
             UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -std::f64::consts::FRAC_PI_2),
         ),
-    ];
+    ]
+    .into_iter()
+    .take(faces)
+    .collect();
     let bundle: String = std::iter::once("bundles:\n  - name: cube\n    layout:\n".to_string())
         .chain(faces.iter().map(|(id, p, q)| {
             format!(
@@ -140,7 +141,14 @@ fn a_bundle_on_a_cube_gives_the_cube_pose() {
             )
         }))
         .collect();
-    let boards = Board::parse_bundles(&bundle).unwrap();
+    (faces, Board::parse_bundles(&bundle).unwrap())
+}
+
+#[test]
+fn a_bundle_on_a_cube_gives_the_cube_pose() {
+    let truth = calibration::lens();
+    let family = Family::generate(10, 2).unwrap();
+    let (faces, boards) = cube(3);
 
     let cube_rotation = *Rotation3::rotation_between(
         &Vector3::new(1.0, 1.0, 1.0),
@@ -195,28 +203,7 @@ fn a_bundle_on_a_cube_gives_the_cube_pose() {
 fn a_tracked_board_is_smoothed_over_the_frames() {
     let truth = calibration::lens();
     let family = Family::generate(10, 2).unwrap();
-    let side = 0.06;
-    let faces = [
-        (
-            1,
-            Vector3::new(0.0, 0.0, side / 2.0),
-            UnitQuaternion::identity(),
-        ),
-        (
-            2,
-            Vector3::new(side / 2.0, 0.0, 0.0),
-            UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2),
-        ),
-    ];
-    let bundle: String = std::iter::once("bundles:\n  - name: cube\n    layout:\n".to_string())
-        .chain(faces.iter().map(|(id, p, q)| {
-            format!(
-                "      - {{id: {id}, diameter: 0.04, x: {}, y: {}, z: {}, qw: {}, qx: {}, qy: {}, qz: {}}}\n",
-                p.x, p.y, p.z, q.w, q.i, q.j, q.k
-            )
-        }))
-        .collect();
-    let boards = Board::parse_bundles(&bundle).unwrap();
+    let (faces, boards) = cube(2);
     let cube_rotation = *Rotation3::rotation_between(
         &Vector3::new(1.0, 0.2, 1.0),
         &Vector3::new(0.15, -0.1, -1.0),
