@@ -109,9 +109,12 @@ fn a_sheet_with_half_its_markers_covered_gives_the_page_pose() {
     );
 }
 
+/// A marker's ID, its centre in the cube's frame and its orientation there.
+type Face = (u32, Vector3<f64>, UnitQuaternion<f64>);
+
 /// A marker on each of the first `faces` of a 6 cm cube (+z, +x, +y faces;
 /// each marker's +z out of its face) and the bundle describing them.
-fn cube(faces: usize) -> (Vec<(u32, Vector3<f64>, UnitQuaternion<f64>)>, Vec<Board>) {
+fn cube(faces: usize) -> (Vec<Face>, Vec<Board>) {
     let side = 0.06;
     let faces: Vec<_> = [
         (
