@@ -204,6 +204,8 @@ class Tests:
             name = f"swarm.{ext}"
             assert set(got) == {name}, f"page saved {sorted(got)}, expected {name}"
             assert got[name] == (self.work / name).read_bytes(), f"{name} differs from whycode sheet"
+        # The manifest names the pages of the format saved last (PNG), as the
+        # CLI's last run above wrote it.
         assert manifest["swarm.json"] == (self.work / "swarm.json").read_bytes(), "manifest differs"
         self.figures["sheet bytes checked"] = "PDF, SVG, PNG, manifest"
 

@@ -441,11 +441,17 @@ async function printDownload(button, format, manifestOnly) {
   }
 }
 
+// The manifest names the page files it was written with (and their
+// digests), as `whycode sheet` writes it beside them: it belongs to the
+// format downloaded last. Before any download, SVG's (no PDF module needed).
+let lastSheetFormat = "svg";
 for (const button of document.querySelectorAll("#print-form button[data-format]")) {
-  button.addEventListener("click", () => printDownload(button, button.dataset.format, false));
+  button.addEventListener("click", () => {
+    lastSheetFormat = button.dataset.format;
+    printDownload(button, button.dataset.format, false);
+  });
 }
-// The manifest is the same for every format; SVG needs no PDF module.
-$("p-manifest").addEventListener("click", (event) => printDownload(event.currentTarget, "svg", true));
+$("p-manifest").addEventListener("click", (event) => printDownload(event.currentTarget, lastSheetFormat, true));
 
 // ---------- Check ----------
 
