@@ -13,6 +13,12 @@ use crate::math::homography::Homography;
 /// Intrinsic parameters in [`Camera`] order: fx, fy, cx, cy, k1, k2, p1, p2, k3.
 pub const NAMES: [&str; 9] = ["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"];
 
+/// A camera's parameters in [`NAMES`]' order.
+pub(crate) fn values(c: &Camera) -> [f64; 9] {
+    let [k1, k2, p1, p2, k3] = c.distortion;
+    [c.fx, c.fy, c.cx, c.cy, k1, k2, p1, p2, k3]
+}
+
 /// One view's pose: rotation vector and translation, board → camera.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ViewPose {

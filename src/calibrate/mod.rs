@@ -749,18 +749,7 @@ impl Calibration {
     /// per ninth of the image (rows from the top) and the advice. The camera
     /// itself is the calibration file's.
     pub fn to_json(&self) -> String {
-        let c = &self.camera;
-        let values = [
-            c.fx,
-            c.fy,
-            c.cx,
-            c.cy,
-            c.distortion[0],
-            c.distortion[1],
-            c.distortion[2],
-            c.distortion[3],
-            c.distortion[4],
-        ];
+        let values = fit::values(&self.camera);
         let written = Written {
             rms_px: rounded(self.rms, 4),
             rounds: self.rounds,
@@ -834,18 +823,7 @@ impl Calibration {
             self.views.len(),
             self.rounds
         );
-        let c = &self.camera;
-        let values = [
-            c.fx,
-            c.fy,
-            c.cx,
-            c.cy,
-            c.distortion[0],
-            c.distortion[1],
-            c.distortion[2],
-            c.distortion[3],
-            c.distortion[4],
-        ];
+        let values = fit::values(&self.camera);
         for (k, name) in PARAMETER_NAMES.iter().enumerate() {
             let precision = if k < 4 { 3 } else { 6 };
             if self.fitted[k] {
