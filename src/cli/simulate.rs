@@ -184,13 +184,6 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
         .filter_map(|p| p.as_deref())
         .collect();
     whycode::io::check_outputs(&inputs, &[&args.output, &truth_path])?;
-    if let Some(path) = &args.manifest {
-        // Read here for the warning only; the scene reads it (and reports
-        // what is wrong with it) below.
-        if let Ok(manifest) = whycode::manifest::Manifest::load(path) {
-            super::warn_if_mixed(&manifest, path);
-        }
-    }
     let spec = SceneSpec {
         manifest: args.manifest.clone(),
         page: args.page,
@@ -232,6 +225,15 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
         seed: args.seed,
     };
     let scene = spec.build().map_err(spec_error)?;
+    if let Some(path) = &args.manifest {
+        // The scene read the manifest; its copy tells whether the pages
+        // beside it are the ones it was written with.
+        for object in &scene.objects {
+            if let simulate::SceneObject::Page(page) = object {
+                super::warn_if_mixed(&page.manifest, path);
+            }
+        }
+    }
 
     let (image, mut truth) = simulate::render(&scene);
     let image_bytes =
