@@ -33,7 +33,20 @@ def main():
             flags=cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE,
         )
         if found:
-            corners = cv2.cornerSubPix(gray, corners, (11, 11), (-1, -1), criteria)
+            # The refinement window must stay inside the squares around a
+            # corner, or it reaches the next corners and pulls towards
+            # them: steep or distant views make squares of 15-20 px, where
+            # OpenCV's usual 11 (a 23 px window) does. Half the shortest
+            # side between neighbouring corners, at most 11.
+            grid = corners.reshape(rows, cols, 2)
+            sides = np.concatenate(
+                [
+                    np.linalg.norm(np.diff(grid, axis=0), axis=2).ravel(),
+                    np.linalg.norm(np.diff(grid, axis=1), axis=2).ravel(),
+                ]
+            )
+            half = int(max(3, min(11, sides.min() / 2)))
+            corners = cv2.cornerSubPix(gray, corners, (half, half), (-1, -1), criteria)
             image_points.append(corners)
             object_sets.append(object_points)
             corners_out.append(corners.reshape(-1, 2).tolist())

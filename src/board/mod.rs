@@ -26,6 +26,7 @@ use crate::error::{FileKind, LoadError, LoadProblem};
 use crate::family::MatchStatus;
 use crate::manifest::Manifest;
 use crate::math::least_squares::{levenberg_marquardt, numeric_jacobian};
+use crate::pose::{self, Pose};
 
 /// One marker of a board.
 #[derive(Debug, Clone, PartialEq)]
@@ -251,10 +252,13 @@ const ORIENTATION_PX_PER_RAD: f64 = 2.0;
 /// (pixels, and at least six times the median) disagrees.
 const DISAGREE_PX: f64 = 1.0;
 
-/// One marker's sighting: its board entry and the detection.
+/// One marker's sighting: its board entry, and the projected centre
+/// (pixels) and pose the detection gave, or those of the pose's twin once
+/// the board's own plane showed the detector picked the wrong one.
 struct Sighting<'a> {
     marker: &'a BoardMarker,
-    detection: &'a Detection,
+    centre: (f64, f64),
+    pose: Option<Pose>,
 }
 
 /// The board's pose from the image's detections, made with `camera` (the
@@ -274,7 +278,11 @@ pub fn locate(
     for marker in &board.markers {
         let mut found = detections.iter().filter(read).filter(|d| d.id == marker.id);
         if let (Some(detection), None) = (found.next(), found.next()) {
-            sightings.push(Sighting { marker, detection });
+            sightings.push(Sighting {
+                marker,
+                centre: (detection.u, detection.v),
+                pose: detection.pose,
+            });
         }
     }
     let seen: Vec<u32> = sightings.iter().map(|s| s.marker.id).collect();
@@ -283,7 +291,7 @@ pub fn locate(
     let starts: Vec<(Matrix3<f64>, Vector3<f64>)> = sightings
         .iter()
         .filter_map(|s| {
-            let pose = s.detection.pose.as_ref()?;
+            let pose = s.pose.as_ref()?;
             let to_board = s.marker.rotation?;
             let position = pose.position * (s.marker.diameter_m / detector_diameter_m);
             let rotation = pose.rotation * to_board.transpose();
@@ -303,6 +311,9 @@ pub fn locate(
         }
     }
     let (_, mut x) = best?;
+    if face_the_board(&mut sightings, camera, detector_diameter_m, &x) {
+        x = fit(&sightings, &active, camera, detector_diameter_m, x)?;
+    }
     let mut rejected = Vec::new();
     for _ in 0..3 {
         let residuals: Vec<f64> = sightings
@@ -339,7 +350,7 @@ pub fn locate(
         .filter_map(|(s, _)| centre_residual(s, camera, &x).map(|r| r.norm_squared()))
         .collect();
     let rms_px = (squares.iter().sum::<f64>() / squares.len().max(1) as f64).sqrt();
-    let pose = crate::pose::Pose::new(position, rotation);
+    let pose = Pose::new(position, rotation);
     rejected.sort_unstable();
     Some(BoardPose {
         name: board.name.clone(),
@@ -351,6 +362,39 @@ pub fn locate(
         rejected,
         rms_px,
     })
+}
+
+/// Each marker whose own pose faces away from where the board's pose `x`
+/// turns it takes the other solution of its two-fold ambiguity, when that
+/// one faces nearer: on a small or nearly face-on marker the detector's
+/// pick is close to a coin toss, and the wrong one's centre is off by a
+/// few tenths of a pixel. True when any marker changed.
+fn face_the_board(
+    sightings: &mut [Sighting],
+    camera: &Camera,
+    detector_diameter_m: f64,
+    x: &DVector<f64>,
+) -> bool {
+    let (rotation, _) = from_params(x);
+    let mut changed = false;
+    for s in sightings.iter_mut() {
+        let (Some(pose), Some(to_board)) = (s.pose, s.marker.rotation) else {
+            continue;
+        };
+        let normal = (rotation * to_board).column(2).into_owned();
+        let Some((twin, true)) = pose::facing_plane(&pose, detector_diameter_m / 2.0, &normal)
+        else {
+            continue;
+        };
+        let (Some(centre), Some(yaw)) = (camera.project(&twin.center), pose.image_yaw(camera))
+        else {
+            continue;
+        };
+        s.centre = centre;
+        s.pose = Some(pose::full_pose_from_yaw(camera, &twin, yaw));
+        changed = true;
+    }
+    changed
 }
 
 fn params(rotation: &Matrix3<f64>, translation: &Vector3<f64>) -> DVector<f64> {
@@ -379,7 +423,7 @@ fn centre_residual(
 ) -> Option<nalgebra::Vector2<f64>> {
     let (rotation, translation) = from_params(x);
     let (u, v) = camera.project(&(rotation * s.marker.position + translation))?;
-    Some(nalgebra::Vector2::new(s.detection.u - u, s.detection.v - v))
+    Some(nalgebra::Vector2::new(s.centre.0 - u, s.centre.1 - v))
 }
 
 fn median_residual(sightings: &[Sighting], camera: &Camera, x: &DVector<f64>) -> f64 {
@@ -406,7 +450,7 @@ fn fit(
         for (s, _) in sightings.iter().zip(active).filter(|(_, &a)| a) {
             let r = centre_residual(s, camera, x)?;
             out.extend([r.x, r.y]);
-            if let (Some(pose), Some(to_board)) = (&s.detection.pose, s.marker.rotation) {
+            if let (Some(pose), Some(to_board)) = (&s.pose, s.marker.rotation) {
                 let predicted = rotation * to_board;
                 let error =
                     Rotation3::from_matrix(&(predicted.transpose() * pose.rotation)).scaled_axis();

@@ -25,6 +25,7 @@ use crate::detect::{Detection, Detector, DetectorConfig, Target};
 use crate::family::MatchStatus;
 use crate::manifest::Manifest;
 use crate::parallel::prelude::*;
+use crate::pose::{self, Pose};
 
 pub use fit::NAMES as PARAMETER_NAMES;
 
@@ -252,23 +253,49 @@ pub fn board_points(manifest: &Manifest, page: u32, print_scale: f64) -> Vec<(u3
         .collect()
 }
 
+/// How a round of [`calibrate`] read the markers' centres: through a
+/// camera, with the markers posed at one diameter.
+#[derive(Debug, Clone, Copy)]
+pub struct Posed<'a> {
+    /// The camera the detector posed the markers with.
+    pub camera: &'a Camera,
+    /// The diameter it posed them at, metres.
+    pub diameter_m: f64,
+}
+
 /// The views in one photo's detections: its markers matched to the
 /// manifest by ID, page by page. An ID read twice in one photo is left out.
-/// With `posed_only`, detections without a pose (whose centre is the
-/// ellipse's) are left out too.
+///
+/// With `posed`, detections without a pose (whose centre is the ellipse's)
+/// are left out, and each marker's centre is that of whichever of its two
+/// pose solutions faces the page: every marker of a page lies in its
+/// plane, and the page's normal is the one most of its markers agree on.
+/// On a small marker seen nearly face-on the detector's own pick is close
+/// to a coin toss, and the wrong one's centre is off by a few tenths of a
+/// pixel, enough to bend the lens found.
 pub fn observe(
     manifest: &Manifest,
     photo: &str,
     detections: &[Detection],
     print_scale: f64,
-    posed_only: bool,
+    posed: Option<Posed<'_>>,
 ) -> Vec<ViewPoints> {
     let read = |d: &&Detection| {
         matches!(d.status, Some(MatchStatus::Exact | MatchStatus::Corrected))
-            && (!posed_only || d.pose.is_some())
+            && (posed.is_none() || d.pose.is_some())
     };
     let mut views = Vec::new();
     for page in 1..=manifest.pages {
+        let mut found: Vec<(u32, [f64; 2], &Detection)> = Vec::new();
+        for (id, plane) in board_points(manifest, page, print_scale) {
+            let mut seen = detections.iter().filter(read).filter(|d| d.id == id);
+            if let (Some(d), None) = (seen.next(), seen.next()) {
+                found.push((id, plane, d));
+            }
+        }
+        if found.is_empty() {
+            continue;
+        }
         let mut view = ViewPoints {
             label: if manifest.pages > 1 {
                 format!("{photo} page {page}")
@@ -280,19 +307,57 @@ pub fn observe(
             plane: Vec::new(),
             pixels: Vec::new(),
         };
-        for (id, plane) in board_points(manifest, page, print_scale) {
-            let mut seen = detections.iter().filter(read).filter(|d| d.id == id);
-            if let (Some(d), None) = (seen.next(), seen.next()) {
+        let centres: Vec<Option<(f64, f64)>> = match posed {
+            Some(posed) => {
+                let poses: Vec<&Pose> = found
+                    .iter()
+                    .filter_map(|(_, _, d)| d.pose.as_ref())
+                    .collect();
+                centres_on_one_plane(posed, &poses)
+            }
+            None => found.iter().map(|(_, _, d)| Some((d.u, d.v))).collect(),
+        };
+        for ((id, plane, _), centre) in found.into_iter().zip(centres) {
+            if let Some((u, v)) = centre {
                 view.ids.push(id);
                 view.plane.push(plane);
-                view.pixels.push([d.u, d.v]);
+                view.pixels.push([u, v]);
             }
         }
-        if !view.ids.is_empty() {
-            views.push(view);
-        }
+        views.push(view);
     }
     views
+}
+
+/// The projected centres of markers printed on one plane, from their
+/// poses: each takes whichever of its two pose solutions faces the plane,
+/// whose normal is the one most of the markers agree on.
+fn centres_on_one_plane(posed: Posed<'_>, poses: &[&Pose]) -> Vec<Option<(f64, f64)>> {
+    const AGREE_RAD: f64 = 0.05;
+    let normals: Vec<Vector3<f64>> = poses
+        .iter()
+        .map(|p| p.rotation.column(2).into_owned())
+        .collect();
+    let score = |n: &Vector3<f64>| {
+        let angles = normals.iter().map(|m| m.angle(n));
+        let agreeing = angles.clone().filter(|&a| a < AGREE_RAD).count();
+        (agreeing, -angles.sum::<f64>())
+    };
+    let Some(plane_normal) = normals
+        .iter()
+        .map(|n| (score(n), n))
+        .max_by(|(a, _), (b, _)| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)))
+        .map(|(_, n)| *n)
+    else {
+        return Vec::new();
+    };
+    poses
+        .iter()
+        .map(|p| {
+            let (circle, _) = pose::facing_plane(p, posed.diameter_m / 2.0, &plane_normal)?;
+            posed.camera.project(&circle.center)
+        })
+        .collect()
 }
 
 /// Mean and worst distance, pixels, between where two cameras put the
@@ -624,13 +689,12 @@ fn views_in(
     print_scale: f64,
 ) -> Vec<ViewPoints> {
     let detections = Detector::new(config.clone()).detect(image);
-    observe(
-        manifest,
-        name,
-        &detections,
-        print_scale,
-        config.camera.is_some(),
-    )
+    let posed = config
+        .camera
+        .as_ref()
+        .zip(config.diameter_m)
+        .map(|(camera, diameter_m)| Posed { camera, diameter_m });
+    observe(manifest, name, &detections, print_scale, posed)
 }
 
 /// Calibrates a camera from photos (name, grey image) of the sheet

@@ -68,9 +68,10 @@ pub struct DetectArgs {
     )]
     diameter: Option<Length>,
 
-    /// Camera calibration (ROS camera_info or OpenCV YAML), for pose; a
+    /// Camera calibration (ROS camera_info or OpenCV YAML), for pose with
+    /// --diameter or a --board (whose markers give their diameters); a
     /// bag's camera_info gives it without this
-    #[arg(long, value_name = "FILE", requires = "diameter")]
+    #[arg(long, value_name = "FILE")]
     camera: Option<PathBuf>,
 
     /// A board (a sheet's manifest: each page a plane) or a bundle file

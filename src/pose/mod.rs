@@ -55,6 +55,47 @@ impl CirclePose {
     pub fn view_angle(&self) -> f64 {
         (-self.normal).angle(&self.center)
     }
+
+    /// The other solution of the two-fold ambiguity: the circle of radius
+    /// `radius_m` that casts the same cone as this one. A front end that
+    /// knows the plane a marker lies in (a calibration sheet, a board)
+    /// takes whichever of the two faces that plane, where the detector
+    /// alone, on a small or nearly face-on marker, may have picked by a
+    /// coin toss. `None` when the circle is not in front of the camera.
+    pub fn twin(&self, radius_m: f64) -> Option<CirclePose> {
+        // Rays x meet the plane n·X = n·C at X = (n·C / n·x) x; that point
+        // lies on the circle when |X − C|² = r². Multiplied by (n·x)² this
+        // is a quadratic form in x: the cone.
+        let (c, n) = (self.center, self.normal.normalize());
+        let d = n.dot(&c);
+        let cone = Matrix3::identity() * (d * d) - (c * n.transpose() + n * c.transpose()) * d
+            + n * n.transpose() * (c.norm_squared() - radius_m * radius_m);
+        let [a, b] = circle_poses_from_cone(&cone, radius_m)?;
+        let nearer_first = a.normal.dot(&n) >= b.normal.dot(&n);
+        Some(if nearer_first { b } else { a })
+    }
+}
+
+/// Of a marker's pose and its twin ([`CirclePose::twin`]), the circle
+/// whose plane is nearer to `plane_normal` (either sign), and whether that
+/// is the twin. Markers printed on one plane share its normal, so this
+/// undoes the detector's wrong picks on it.
+pub fn facing_plane(
+    pose: &Pose,
+    radius_m: f64,
+    plane_normal: &Vector3<f64>,
+) -> Option<(CirclePose, bool)> {
+    let own = CirclePose {
+        center: pose.position,
+        normal: pose.rotation.column(2).into_owned(),
+    };
+    let twin = own.twin(radius_m)?;
+    let alignment = |c: &CirclePose| c.normal.dot(plane_normal).abs();
+    Some(if alignment(&twin) > alignment(&own) {
+        (twin, true)
+    } else {
+        (own, false)
+    })
 }
 
 /// The two circle poses consistent with an image ellipse of a circle of
@@ -234,4 +275,37 @@ pub(crate) fn intersect_plane(
     }
     let t = circle.normal.dot(&circle.center) / denominator;
     (t > 0.0 && t.is_finite()).then(|| ray * t)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_circles_twin_casts_the_same_ellipse_and_its_twin_is_the_circle() {
+        let camera = Camera::ideal(1280, 960, 1000.0);
+        let circle = CirclePose {
+            center: Vector3::new(0.08, -0.05, 0.5),
+            normal: Vector3::new(0.3, 0.2, -1.0).normalize(),
+        };
+        let radius = 0.015;
+        let twin = circle.twin(radius).unwrap();
+        assert!(twin.normal.angle(&circle.normal) > 0.2, "{twin:?}");
+        let (a, b) = (
+            project_circle(&camera, &circle, radius).unwrap(),
+            project_circle(&camera, &twin, radius).unwrap(),
+        );
+        assert!((a.u - b.u).abs() < 1e-6 && (a.v - b.v).abs() < 1e-6);
+        assert!((a.semi_major - b.semi_major).abs() < 1e-6);
+        assert!((a.semi_minor - b.semi_minor).abs() < 1e-6);
+        // Their centres project apart: the point of choosing between them.
+        let (pa, pb) = (
+            projected_center(&camera, &circle).unwrap(),
+            projected_center(&camera, &twin).unwrap(),
+        );
+        assert!((pa.0 - pb.0).hypot(pa.1 - pb.1) > 0.05);
+        let back = twin.twin(radius).unwrap();
+        assert!((back.center - circle.center).norm() < 1e-9);
+        assert!(back.normal.angle(&circle.normal) < 1e-9);
+    }
 }

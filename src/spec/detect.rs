@@ -87,7 +87,12 @@ impl DetectSpec {
             (true, false) if !self.camera_later => {
                 return Err(pose_needs_both("diameter", "camera"))
             }
-            (false, true) => return Err(pose_needs_both("camera", "diameter")),
+            (false, true) => {
+                return Err(pose_needs_both(
+                    "camera",
+                    "diameter (or a board, whose markers give theirs)",
+                ))
+            }
             _ => {}
         }
         let legacy = target == Target::WhyCon;

@@ -97,10 +97,10 @@ pub fn views(camera: &Camera, count: usize, seed: u64) -> Vec<Placement> {
         let distance = rng.range(0.35, 0.6);
         // Aim at a corner, an edge or the middle in turn.
         let aims = [
-            (0.2, 0.2),
-            (0.8, 0.8),
-            (0.8, 0.2),
-            (0.2, 0.8),
+            (0.12, 0.12),
+            (0.88, 0.88),
+            (0.88, 0.12),
+            (0.12, 0.88),
             (0.5, 0.5),
             (0.5, 0.25),
             (0.25, 0.5),

@@ -52,8 +52,7 @@ fn a_sheet_with_half_its_markers_covered_gives_the_page_pose() {
         "10",
         "--distance",
         "2",
-        "--diameter",
-        "30mm",
+        // No --diameter: the board's markers give theirs.
         "--camera",
         camera.to_str().unwrap(),
         "--board",

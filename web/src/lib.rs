@@ -469,7 +469,7 @@ impl Calibration {
         }
         self.detector.reset();
         let detections = self.detector.detect(&image);
-        let views = calibrate::observe(&self.manifest, name, &detections, 1.0, false);
+        let views = calibrate::observe(&self.manifest, name, &detections, 1.0, None);
         self.photos.push((name.to_string(), image, detections));
         self.result = None;
         Ok(views.iter().map(|v| v.ids.len()).max().unwrap_or(0))
@@ -496,7 +496,7 @@ impl Calibration {
             .photos
             .iter()
             .flat_map(|(name, _, detections)| {
-                calibrate::observe(&self.manifest, name, detections, options.print_scale, false)
+                calibrate::observe(&self.manifest, name, detections, options.print_scale, None)
             })
             .collect();
         let Some((_, first, _)) = self.photos.first() else {
