@@ -29,20 +29,30 @@ pub struct PyDetector {
 }
 
 /// The markers of one frame and the poses of the configured boards.
-type Found = (Vec<Detection>, Vec<BoardPose>);
+/// What one frame gave: the markers, the boards' poses, and how many discs
+/// looked like legacy WhyCon markers (the CLI's "--legacy reads them" note).
+struct Found {
+    markers: Vec<Detection>,
+    boards: Vec<BoardPose>,
+    legacy_looking: usize,
+}
 
 /// Detects in `view` with `detector`, then places the boards through the
 /// camera fitted to the frame's size, as `whycode detect --board` does.
 fn detect_with_boards(detector: &mut Detector, view: &crate::pixels::GrayView<'_>) -> Found {
-    let found = detector.detect(view);
+    let markers = detector.detect(view);
     let boards = if detector.config().boards.is_empty() {
         Vec::new()
     } else {
         // The frame's size was checked against the camera before.
         let _ = detector.fit_camera(view.width(), view.height());
-        detector.locate_boards(&found)
+        detector.locate_boards(&markers)
     };
-    (found, boards)
+    Found {
+        markers,
+        boards,
+        legacy_looking: detector.last_legacy_looking(),
+    }
 }
 
 impl PyDetector {
@@ -160,13 +170,15 @@ impl PyDetector {
     /// grey, HxWx3 BGR or HxWx4 BGRA. The GIL is released meanwhile.
     /// Returns a `Detections`: the list of markers, with the configured
     /// boards' poses in its `boards` attribute (dicts with the fields of
-    /// `whycode detect --board`'s JSON `boards` list).
+    /// `whycode detect --board`'s JSON `boards` list) and, in
+    /// `legacy_looking`, how many discs looked like legacy WhyCon markers
+    /// while WhyCode ones were looked for (`legacy=True` reads them).
     fn detect<'py>(
         &self,
         py: Python<'py>,
         image: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let (found, boards) = crate::pixels::with_gray(py, image, |view| {
+        let found = crate::pixels::with_gray(py, image, |view| {
             // The detector rescales a calibration made for another
             // resolution of the same sensor by itself; another aspect ratio
             // is another camera, refused here rather than left without pose.
@@ -175,9 +187,10 @@ impl PyDetector {
             }
             Ok(self.run(view))
         })?;
-        let markers: Vec<PyMarker> = found.into_iter().map(PyMarker::from).collect();
+        let markers: Vec<PyMarker> = found.markers.into_iter().map(PyMarker::from).collect();
         let result = crate::detections_type(py)?.call1((markers,))?;
-        result.setattr("boards", boards_to_py(py, boards)?)?;
+        result.setattr("boards", boards_to_py(py, found.boards)?)?;
+        result.setattr("legacy_looking", found.legacy_looking)?;
         Ok(result)
     }
 

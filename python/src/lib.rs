@@ -250,7 +250,9 @@ fn _whycode(m: &Bound<'_, PyModule>) -> PyResult<()> {
         vec![py.get_type::<pyo3::types::PyList>().into_any()],
         "The markers of one frame (a list of Marker), with the poses of the \
          Detector's boards in `boards` (dicts as `whycode detect --board` \
-         writes them; empty without boards).",
+         writes them; empty without boards) and in `legacy_looking` the \
+         number of discs that looked like legacy WhyCon markers while \
+         WhyCode ones were looked for (Detector(legacy=True) reads them).",
     )?;
     m.add("Detections", &detections)?;
     let _ = DETECTIONS.set(py, detections.unbind());

@@ -215,6 +215,10 @@ class Detections(list[Marker]):
 
     boards: list[dict[str, Any]]
     """One dict per board seen, as ``whycode detect --board`` writes it in JSON."""
+    legacy_looking: int
+    """Discs that looked like legacy WhyCon markers (a white centre, no code
+    ring) while WhyCode markers were looked for: ``Detector(legacy=True)``
+    reads them (``whycode detect`` says so in a note)."""
 
 class Detector:
     """Finds WhyCode markers (or legacy WhyCon circles) in frames."""
