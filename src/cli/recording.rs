@@ -9,7 +9,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use whycode::detect::report::{FrameReport, StreamPosition, CSV_HEADER};
+use whycode::detect::report::{CsvColumns, FrameReport, StreamPosition};
 use whycode::detect::{Detector, DetectorConfig};
 use whycode::recording::output::{AnnotatedVideo, DetectionsBag};
 use whycode::recording::{Kind, ReadOptions, Recording, Summary};
@@ -188,7 +188,7 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
         progress.suspend(|| -> Result<()> {
             match run.format {
                 Format::Json => out.line(report.to_json()),
-                Format::Csv => out.write(&report.to_csv_rows()),
+                Format::Csv => out.write(&report.to_csv_rows(CsvColumns::of(&run.config))),
                 Format::Table => out.write(&report.to_table(true)),
             }
         })?;
@@ -225,9 +225,9 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
 }
 
 /// The CSV header, when the format has one.
-pub fn header(format: Format, out: &mut output::Stdout) -> Result<()> {
-    if format == Format::Csv {
-        out.line(CSV_HEADER)?;
+pub fn header(run: &Run, out: &mut output::Stdout) -> Result<()> {
+    if run.format == Format::Csv {
+        out.line(CsvColumns::of(&run.config).header())?;
     }
     Ok(())
 }
