@@ -67,16 +67,26 @@ const handlers = {
     const json = calibration.calibrate(JSON.stringify(options));
     return { json, table: calibration.reportTable(), camera: calibration.cameraFile(output) };
   },
-  liveStart: ({ bits, distance, legacy }) => {
+  liveStart: ({ options }) => {
     if (live) live.free();
     live = null;
-    live = new wc.Live(bits, distance, legacy);
+    live = new wc.Live(JSON.stringify(options));
     return wc.liveStride();
   },
-  liveFrame: ({ data, width, height }) => {
+  liveFrame: ({ data, width, height, framed }) => {
     const t0 = performance.now();
     const out = live.detectRgba(new Uint8Array(data), width, height);
-    return { detections: out, ms: performance.now() - t0, buffer: data };
+    const ms = performance.now() - t0;
+    return { detections: out, ms, buffer: data, frame: framed ? live.frameJson() : null };
+  },
+  // A photo has a detector of its own, so a running camera's tracks stay.
+  livePhoto: ({ options, name, bytes }) => {
+    const photo = new wc.Live(JSON.stringify(options));
+    try {
+      return photo.detectPhoto(name, new Uint8Array(bytes));
+    } finally {
+      photo.free();
+    }
   },
 };
 
