@@ -442,7 +442,8 @@ class Tests:
         self.page.set_input_files("#l-boards", str(self.work / "board.json"))
         self.page.set_input_files("#l-arena", str(self.work / "arena.yaml"))
         self.page.set_input_files("#l-photo", str(self.work / photo))
-        got_line = self.message("#l-json")
+        self.page.wait_for_function("document.querySelector('#l-json').textContent.length > 0", timeout=60000)
+        got_line = self.page.text_content("#l-json")
         got = json.loads(got_line)
         # The page has no clock in the library; everything else is the
         # command's, field for field, at the precision it writes.

@@ -827,7 +827,8 @@ function liveCli(options, photo) {
   return words.join(" ");
 }
 
-const fixed = (x, digits) => (x === null || x === undefined || Number.isNaN(x) ? "–" : x.toFixed(digits));
+// "-0.0000" reads as a sign that is not there.
+const fixed = (x, digits) => (x === null || x === undefined || Number.isNaN(x) ? "–" : x.toFixed(digits).replace(/^-(0\.?0*)$/, "$1"));
 const degrees = (rad, digits = 1) => (rad === null || rad === undefined ? "–" : ((rad * 180) / Math.PI).toFixed(digits));
 
 // A frame as `whycode detect --format json` writes it: each marker's ID
