@@ -116,3 +116,109 @@ pub fn describe(
         duplicate_frames,
     }
 }
+
+fn transform(
+    header: &Header,
+    child: &str,
+    position: nalgebra::Vector3<f64>,
+    [x, y, z, w]: [f64; 4],
+) -> TransformStamped {
+    TransformStamped {
+        header: header.clone(),
+        child_frame_id: child.to_string(),
+        transform: Transform {
+            translation: Vector3 {
+                x: position.x,
+                y: position.y,
+                z: position.z,
+            },
+            rotation: super::msg::Quaternion { x, y, z, w },
+        },
+    }
+}
+
+/// Each board's pose as a transform from the camera frame (`header`'s) to
+/// a frame named after the board; they join the markers' in one TFMessage.
+pub fn board_transforms(
+    boards: &[crate::board::BoardPose],
+    header: &Header,
+) -> Vec<TransformStamped> {
+    boards
+        .iter()
+        .map(|b| transform(header, &b.name, b.position, b.quaternion))
+        .collect()
+}
+
+/// The arena's floor frame as a transform from the camera frame to
+/// `frame`, for an arena measured with a camera (one measured without
+/// maps the image to the floor and has no pose in the camera's frame).
+pub fn arena_transform(
+    arena: &crate::arena::Arena,
+    header: &Header,
+    frame: &str,
+) -> Option<TransformStamped> {
+    let crate::arena::Mapping::Floor {
+        rotation,
+        translation,
+        ..
+    } = &arena.mapping
+    else {
+        return None;
+    };
+    let q = nalgebra::UnitQuaternion::from_matrix(rotation);
+    let w_sign = if q.w < 0.0 { -1.0 } else { 1.0 };
+    let q = [q.i, q.j, q.k, q.w].map(|c| c * w_sign);
+    Some(transform(header, frame, *translation, q))
+}
+
+/// The markers of `described` placed on the arena: the same markers in the
+/// same order, each with its pose in the arena's floor frame (`frame`,
+/// z up): position x, y, z in metres and the orientation a turn of its
+/// yaw about z (identity for a marker without a heading); `has_pose`
+/// false for a marker not placed. The camera-frame pose of `~/markers`
+/// stays there, so this is a second array of the same type.
+pub fn arena_markers(
+    described: &MarkerArray,
+    detections: &[Detection],
+    frame: &str,
+) -> MarkerArray {
+    let markers = described
+        .markers
+        .iter()
+        .zip(detections)
+        .map(|(marker, d)| {
+            let mut marker = marker.clone();
+            match d.arena {
+                Some(at) => {
+                    let half = at.yaw.unwrap_or(0.0) / 2.0;
+                    marker.pose = Pose {
+                        position: Vector3 {
+                            x: at.x,
+                            y: at.y,
+                            z: at.z,
+                        },
+                        orientation: super::msg::Quaternion {
+                            x: 0.0,
+                            y: 0.0,
+                            z: half.sin(),
+                            w: half.cos(),
+                        },
+                    };
+                    marker.has_pose = true;
+                }
+                None => {
+                    marker.pose = Pose::default();
+                    marker.has_pose = false;
+                }
+            }
+            marker
+        })
+        .collect();
+    MarkerArray {
+        header: Header {
+            stamp: described.header.stamp,
+            frame_id: frame.to_string(),
+        },
+        markers,
+    }
+}

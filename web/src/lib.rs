@@ -16,6 +16,7 @@ use whycode::calibrate;
 use whycode::camera::Camera;
 use whycode::detect::report::FrameReport;
 use whycode::detect::{Detector, Target};
+#[cfg(feature = "files")]
 use whycode::error::{FileKind, LoadError, LoadProblem};
 use whycode::family::{parse_id_list, CountTable, Family};
 use whycode::image_io;
@@ -577,6 +578,8 @@ impl Calibration {
 /// and errors, as a path does on the command line) and its text.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
+// Read only where the files are (the `files` feature's module).
+#[cfg_attr(not(feature = "files"), allow(dead_code))]
 struct Upload {
     name: String,
     text: String,
@@ -625,26 +628,7 @@ impl LiveOptions {
                 ..TargetSpec::default()
             }
         };
-        let camera = args
-            .camera
-            .map(|file| Camera::parse(&file.text).map_err(|e| e.in_file(Path::new(&file.name))))
-            .transpose()?;
-        let mut boards = Vec::new();
-        for file in &args.boards {
-            boards.extend(Board::from_text(Path::new(&file.name), &file.text)?);
-        }
-        let arena = args
-            .arena
-            .map(|file| {
-                Arena::parse(&file.text).map_err(|problem| {
-                    LoadError::new(
-                        Path::new(&file.name),
-                        FileKind::Arena,
-                        LoadProblem::Invalid(problem),
-                    )
-                })
-            })
-            .transpose()?;
+        let (camera, boards, arena) = args.files()?;
         DetectSpec {
             target,
             diameter: diameter(args.diameter.as_deref())?,
@@ -656,6 +640,46 @@ impl LiveOptions {
         }
         .build()
         .map_err(spec_error)
+    }
+}
+
+impl LiveOptions {
+    /// The camera, boards and arena the files give.
+    #[cfg(feature = "files")]
+    fn files(&self) -> Result<(Option<Camera>, Vec<Board>, Option<Arena>)> {
+        let camera = self
+            .camera
+            .as_ref()
+            .map(|file| Camera::parse(&file.text).map_err(|e| e.in_file(Path::new(&file.name))))
+            .transpose()?;
+        let mut boards = Vec::new();
+        for file in &self.boards {
+            boards.extend(Board::from_text(Path::new(&file.name), &file.text)?);
+        }
+        let arena = self
+            .arena
+            .as_ref()
+            .map(|file| {
+                Arena::parse(&file.text).map_err(|problem| {
+                    LoadError::new(
+                        Path::new(&file.name),
+                        FileKind::Arena,
+                        LoadProblem::Invalid(problem),
+                    )
+                })
+            })
+            .transpose()?;
+        Ok((camera, boards, arena))
+    }
+
+    /// This module reads no files: the page sends options with files to
+    /// the module built with them (web/build.sh).
+    #[cfg(not(feature = "files"))]
+    fn files(&self) -> Result<(Option<Camera>, Vec<Board>, Option<Arena>)> {
+        if self.camera.is_some() || !self.boards.is_empty() || self.arena.is_some() {
+            anyhow::bail!("camera, board and arena files are read by the page's second module");
+        }
+        Ok((None, Vec::new(), None))
     }
 }
 
