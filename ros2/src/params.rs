@@ -685,6 +685,43 @@ mod tests {
     }
 
     #[test]
+    fn boards_and_an_arena_come_from_their_files() {
+        let dir = std::env::temp_dir().join(format!("whycode-ros2-params-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bundle = dir.join("cube.yaml");
+        std::fs::write(
+            &bundle,
+            "bundles:\n  - name: cube\n    layout:\n      - {id: 1, diameter: 0.05, x: 0, y: 0, z: 0}\n",
+        )
+        .unwrap();
+        let s = Settings::default()
+            .with(
+                "boards",
+                &ParameterValue::StringArray(vec![bundle.display().to_string()]),
+            )
+            .unwrap();
+        // The camera comes with camera_info: boards wait for it.
+        let config = detector_config(&s, None).unwrap();
+        assert_eq!(config.boards.len(), 1);
+        assert_eq!(config.boards[0].name, "cube");
+        let missing = dir.join("arena.yaml");
+        let s = s
+            .with("arena_file", &text(&missing.display().to_string()))
+            .unwrap();
+        let err = detector_config(&s, None).unwrap_err();
+        assert!(
+            err.starts_with(&format!(
+                "parameter arena_file: {}: cannot read arena file",
+                missing.display()
+            )),
+            "{err}"
+        );
+        let err = s.with("arena_frame", &text("")).unwrap_err();
+        assert!(err.starts_with("parameter arena_frame: "), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
     fn impossible_families_and_foreign_ids_are_refused() {
         let s = Settings::default().with("bits", &int(4)).unwrap();
         let s = s.with("distance", &int(5)).unwrap();
