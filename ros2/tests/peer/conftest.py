@@ -162,7 +162,7 @@ def sheet_scene(whycode_bin, tmp_path_factory) -> SheetScene:
     arena = out / "arena.yaml"
     (out / "sheetview.png").write_bytes(scene.png)
     subprocess.run(
-        [str(whycode_bin), "arena", "--ids", ",".join(map(str, corners)), "--size", size, "--camera", str(camera),
+        [str(whycode_bin), "arena", *FAMILY, "--ids", ",".join(map(str, corners)), "--size", size, "--camera", str(camera),
          str(out / "sheetview.png"), "-o", str(arena)],
         check=True, capture_output=True,
     )

@@ -568,7 +568,7 @@ other_node:
         (["--ros-args", "-p", "bits:=4", "-p", "distance:=9"], "parameter distance:"),
         (["--ros-args", "-p", "tag.ids:=[1, 1]"], "parameter tag.ids: ID 1 is listed twice"),
         (["--ros-args", "-p", "boards:=[/nonexistent/board.json]"],
-         "parameter boards: /nonexistent/board.json: cannot read board file"),
+         "parameter boards: /nonexistent/board.json: cannot read board: No such file"),
         (["--ros-args", "-p", "arena_file:=/nonexistent/arena.yaml"],
          "parameter arena_file: /nonexistent/arena.yaml: cannot read arena file"),
         (["--ros-args", "--params-file", "/nonexistent.yaml"], "/nonexistent.yaml"),
