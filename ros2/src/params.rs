@@ -115,7 +115,7 @@ impl Default for Settings {
             compat_markers: false,
             boards: Vec::new(),
             arena_file: String::new(),
-            arena_frame: "arena".into(),
+            arena_frame: whycode::ros::DEFAULT_ARENA_FRAME.into(),
         }
     }
 }
