@@ -78,12 +78,12 @@ module() {
     mv "$staging/raw/$name.js" "$staging/pkg/"
 }
 module whycode_web
-module whycode_pdf --features pdf
+module whycode_pdf --features pdf,files
 
 # The PDF module keeps only what worker.js calls on it (see wasm_exports.py:
 # printpdf's own JavaScript API goes, and all it alone reaches).
 python3 "$here/wasm_exports.py" "$staging/raw/whycode_pdf_bg.wasm" "$staging/raw/graph.json" \
-    sheet marker 'files_*' __wbg_files_free
+    sheet marker 'files_*' __wbg_files_free 'live_*' __wbg_live_free liveStride
 "$wasm_metadce" "$staging/raw/whycode_pdf_bg.wasm" --graph-file "$staging/raw/graph.json" \
     -o "$staging/raw/whycode_pdf_bg.wasm" >/dev/null
 pids=()

@@ -409,6 +409,77 @@ class Tests:
                 f.write(b"FRAME\n" + luma + chroma + chroma)
         return path
 
+    def frames_of_reference_photo(self):
+        """A 12-marker sheet photographed through a distorting lens, the
+        sheet as a board, and an arena whose corners are the sheet's corner
+        markers, all made by the command line."""
+        (self.work / "ref-camera.yaml").write_text(
+            "image_width: 1280\nimage_height: 960\ncamera_name: lens\n"
+            "camera_matrix:\n  rows: 3\n  cols: 3\n  data: [1000.0, 0.0, 643.0, 0.0, 1001.0, 478.0, 0.0, 0.0, 1.0]\n"
+            "distortion_model: plumb_bob\n"
+            "distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [-0.26, 0.085, 0.0004, -0.0003, -0.012]\n")
+        self.cli("sheet", "--bits", 8, "--distance", 2, "--ids", "1-12", "--diameter", "40mm", "--template", "a4",
+                 "--no-check", "-o", "board.svg")
+        self.cli("simulate", "--manifest", "board.json", "--camera", "ref-camera.yaml", "--camera-distance", "0.45m",
+                 "--tilt", "20deg", "--pan", "5deg", "--roll", "10deg", "--noise", 1.5, "--seed", 3, "-o", "boardview.png")
+        # The sheet's corner markers as an arena: origin bottom left (ID 10),
+        # +x bottom right (12), +y top left (1), sides from the manifest.
+        place = {m["id"]: (m["x_mm"], m["y_mm"]) for m in json.loads((self.work / "board.json").read_text())["markers"]}
+        size = f"{place[12][0] - place[10][0]:g}mm,{place[10][1] - place[1][1]:g}mm"
+        self.cli("arena", "--ids", "10,12,3,1", "--size", size, "--camera", "ref-camera.yaml", "boardview.png",
+                 "-o", "arena.yaml")
+        return "boardview.png"
+
+    def test_live_photo_boards_and_arena_match_cli(self):
+        photo = self.frames_of_reference_photo()
+        want_line = self.cli("detect", "--bits", 8, "--distance", 2, "--camera", "ref-camera.yaml", "--diameter", "40mm",
+                             "--board", "board.json", "--arena", "arena.yaml", "--format", "json", photo).decode().strip()
+        want = json.loads(want_line)
+        self.open("live")
+        self.page.click("#l-frames summary")
+        self.page.set_input_files("#l-camera-file", str(self.work / "ref-camera.yaml"))
+        self.page.fill("#l-diameter", "40mm")
+        self.page.set_input_files("#l-boards", str(self.work / "board.json"))
+        self.page.set_input_files("#l-arena", str(self.work / "arena.yaml"))
+        self.page.set_input_files("#l-photo", str(self.work / photo))
+        self.page.wait_for_function("document.querySelector('#l-json').textContent.length > 0", timeout=60000)
+        got_line = self.page.text_content("#l-json")
+        got = json.loads(got_line)
+        # The page has no clock in the library; everything else is the
+        # command's, field for field, at the precision it writes.
+        assert got.pop("elapsed_ms") == 0
+        want.pop("elapsed_ms")
+        differences = report_differences(got, want)
+        assert not differences, f"the page's frame differs from whycode detect: {differences[:5]}"
+        assert [b["name"] for b in got["boards"]] == ["board"] and len(got["boards"][0]["used"]) == 12, got["boards"]
+        assert all(m["arena"] is not None for m in got["markers"]) and len(got["markers"]) == 12
+        # What the page shows: each marker's arena x, y, yaw beside its ID,
+        # the board's pose, and the command that gives the same numbers.
+        rows = self.page.eval_on_selector_all(
+            "#l-markers tr", "rows => rows.slice(1).map(r => [...r.cells].map(c => c.textContent))")
+        head = self.page.eval_on_selector_all("#l-markers th", "cells => cells.map(c => c.textContent)")
+        shown = {int(r[0]): r for r in rows}
+        for m in want["markers"]:
+            row = shown[m["id"]]
+            assert float(row[head.index("arena x m")]) == round(m["arena"]["x"], 4), (row, m["arena"])
+            assert float(row[head.index("arena y m")]) == round(m["arena"]["y"], 4), (row, m["arena"])
+        board_row = self.page.eval_on_selector_all("#l-boards-table td", "cells => cells.map(c => c.textContent)")
+        assert board_row[0] == "board" and float(board_row[3]) == round(want["boards"][0]["position"][2], 4), board_row
+        cli_line = self.page.inner_text("#l-cli")
+        assert cli_line == ("whycode detect --bits 8 --distance 2 --camera ref-camera.yaml --diameter 40mm "
+                            f"--board board.json --arena arena.yaml --format json {photo}"), cli_line
+        self.shot("live-photo-frames")
+
+        # A file that is not an arena is refused in the command's words.
+        self.page.set_input_files("#l-arena", str(self.work / "board.json"))
+        self.page.set_input_files("#l-photo", str(self.work / photo))
+        self.page.wait_for_selector("#live-msg.error", timeout=60000)
+        text = self.page.inner_text("#live-msg")
+        refused = subprocess.run([self.args.whycode, "detect", "--arena", "board.json", photo],
+                                 cwd=self.work, capture_output=True, text=True)
+        assert refused.returncode != 0 and refused.stderr.strip() == f"whycode: error: {text}", \
+            f"{text!r} vs {refused.stderr.strip()!r}"
+
     def test_live_fake_camera(self):
         # Run in its own browser: the fake camera is a launch flag.
         y4m = self.make_y4m()
@@ -537,7 +608,7 @@ class Tests:
             order = ["test_size_first_paint_and_offline", "test_ids_family_json_matches_cli",
                      "test_print_sheet_downloads_match_cli", "test_print_multi_page_svg_and_custom_layout_match_cli",
                      "test_print_marker_matches_cli", "test_check_matches_cli_validate",
-                     "test_calibrate_matches_cli",
+                     "test_calibrate_matches_cli", "test_live_photo_boards_and_arena_match_cli",
                      "test_bad_input_gives_messages", "test_phone_width_screenshots", "test_live_fake_camera"]
             tests = [t for t in order if t in tests] + [t for t in tests if t not in order]
             if self.args.only:

@@ -162,6 +162,7 @@ struct Topics {
     tf: String,
     markers: String,
     markers_compat: String,
+    arena_markers: String,
     debug_image: String,
     debug_compressed: String,
 }
@@ -185,6 +186,7 @@ impl Topics {
             tf: r("/tf")?,
             markers: r("~/markers")?,
             markers_compat: r("~/markers_compat")?,
+            arena_markers: r("~/arena_markers")?,
             debug_compressed: format!("{debug_image}/compressed"),
             debug_image,
         })
@@ -217,6 +219,8 @@ struct Pipeline {
     tf: Publisher<TfMessage>,
     markers: Publisher<MarkerArray>,
     compat: Option<Publisher<CompatMarkerArray>>,
+    /// `~/arena_markers`, while an arena is set.
+    arena_markers: Option<Publisher<MarkerArray>>,
     debug: Option<(Publisher<Image>, Publisher<CompressedImage>)>,
     /// Last sequence number seen per writer, to count dropped frames.
     last_sequence: Option<(ros2_client::Gid, i64)>,
@@ -226,10 +230,9 @@ struct Pipeline {
 /// One frame's output.
 struct Described {
     markers: MarkerArray,
-    /// Everything the frame puts on /tf, sent as one TFMessage: today one
-    /// transform per identified marker. Boards (several markers, one pose)
-    /// and the arena frame join them here once the library finds them,
-    /// each from its own describing step next to [`Pipeline::describe`].
+    /// Everything the frame puts on /tf, sent as one TFMessage: one
+    /// transform per identified marker; the boards' poses and the arena's
+    /// floor frame join them in the frame loop (`whycode::ros::describe`).
     transforms: Vec<TransformStamped>,
     /// Each marker's pose at its own diameter, in the markers' order.
     poses: Vec<Option<whycode::Pose>>,
@@ -372,6 +375,7 @@ pub fn run(
         tf,
         markers,
         compat: None,
+        arena_markers: None,
         debug: None,
         last_sequence: None,
         stats: Stats::default(),
@@ -698,6 +702,14 @@ impl Pipeline {
     /// The optional publishers exist while their parameter is on, so that
     /// subscribers match before the first frame.
     fn sync_publishers(&mut self) {
+        if self.settings.arena_file.is_empty() {
+            self.arena_markers = None;
+        } else if self.arena_markers.is_none() {
+            match create_publisher(&mut self.node, &self.topics.arena_markers, MARKERS_QOS) {
+                Ok(p) => self.arena_markers = Some(p),
+                Err(e) => self.log.error(&e),
+            }
+        }
         if !self.settings.compat_markers {
             self.compat = None;
         } else if self.compat.is_none() {
@@ -762,8 +774,20 @@ impl Pipeline {
     /// `width` x `height`: rescaled for another resolution of the same
     /// sensor, refused for another aspect ratio.
     fn fit_camera(&mut self, width: u32, height: u32) -> Result<(), String> {
+        // Until camera_info comes, an arena measured with a camera brings it.
+        let arena_camera = self
+            .detector
+            .config()
+            .arena
+            .as_ref()
+            .and_then(|a| a.camera().copied());
         let wanted = match self.camera_info {
-            None => None,
+            None => arena_camera
+                .map(|camera| camera.for_image(width, height))
+                .transpose()
+                .map_err(|e| {
+                    format!("the arena file's calibration does not fit this image: {e}")
+                })?,
             Some(camera) => Some(camera.for_image(width, height).map_err(|e| {
                 format!(
                     "the calibration from {} does not fit this image: {e}",
@@ -843,9 +867,18 @@ impl Pipeline {
         };
         let Described {
             markers,
-            transforms,
+            mut transforms,
             poses,
         } = self.describe(&detections, &stamped);
+        let boards = self.detector.locate_boards(&detections);
+        transforms.extend(whycode::ros::describe::board_transforms(&boards, &stamped));
+        if let Some(arena) = &self.detector.config().arena {
+            transforms.extend(whycode::ros::describe::arena_transform(
+                arena,
+                &stamped,
+                &self.settings.arena_frame,
+            ));
+        }
         if self.settings.publish_tf && !transforms.is_empty() {
             if parent.is_empty() {
                 self.log.once(
@@ -876,6 +909,20 @@ impl Pipeline {
 
         if self.settings.compat_markers {
             self.publish_compat(&markers, &poses);
+        }
+        if let Some(publisher) = &self.arena_markers {
+            let placed = whycode::ros::describe::arena_markers(
+                &markers,
+                &detections,
+                &self.settings.arena_frame,
+            );
+            if let Err(e) = publisher.publish(placed) {
+                self.log.once(
+                    LogLevel::Warn,
+                    "arena markers publish",
+                    &format!("{}: publish failed: {e}", self.topics.arena_markers),
+                );
+            }
         }
         if let Err(e) = self.markers.publish(markers) {
             self.log.once(

@@ -7,7 +7,9 @@
 
 use ros2_client::ParameterValue;
 use std::borrow::Cow;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use whycode::arena::Arena;
+use whycode::board::Board;
 use whycode::detect::{DetectorConfig, Target};
 use whycode::family::{DEFAULT_BITS, DEFAULT_DISTANCE};
 use whycode::spec::{limits, DetectSpec, TargetSpec};
@@ -80,6 +82,15 @@ pub struct Settings {
     /// `compat_markers`: also publish the original whycode-ros2 node's
     /// `whycode_interfaces/MarkerArray` on `~/markers_compat`.
     pub compat_markers: bool,
+    /// `boards`: board files (sheet manifests, bundle YAML): each board's
+    /// pose goes on /tf as a frame named after it.
+    pub boards: Vec<String>,
+    /// `arena_file`: an arena file (`whycode arena`): markers placed on the
+    /// floor on `~/arena_markers`, the floor frame on /tf; empty: none.
+    pub arena_file: String,
+    /// `arena_frame`: the floor frame's name on /tf and in
+    /// `~/arena_markers`.
+    pub arena_frame: String,
 }
 
 impl Default for Settings {
@@ -102,12 +113,15 @@ impl Default for Settings {
             publish_tf: true,
             debug_image: false,
             compat_markers: false,
+            boards: Vec::new(),
+            arena_file: String::new(),
+            arena_frame: whycode::ros::DEFAULT_ARENA_FRAME.into(),
         }
     }
 }
 
 /// Every parameter's name, in the order the README documents them.
-pub const NAMES: [&str; 17] = [
+pub const NAMES: [&str; 20] = [
     "bits",
     "distance",
     "family_file",
@@ -125,6 +139,9 @@ pub const NAMES: [&str; 17] = [
     "publish_tf",
     "debug_image",
     "compat_markers",
+    "boards",
+    "arena_file",
+    "arena_frame",
 ];
 
 /// Parameters the ROS client library keeps itself.
@@ -160,7 +177,7 @@ impl Settings {
     pub fn change_of(name: &str) -> Change {
         match name {
             "bits" | "distance" | "family_file" | "legacy" | "diameter" | "max_markers"
-            | "tracking" | "tag.ids" | "tag.sizes" => Change::Detector,
+            | "tracking" | "tag.ids" | "tag.sizes" | "boards" | "arena_file" => Change::Detector,
             "image_transport" => Change::Transport,
             _ => Change::Output,
         }
@@ -238,6 +255,13 @@ impl Settings {
             "publish_tf" => self.publish_tf = boolean(value)?,
             "debug_image" => self.debug_image = boolean(value)?,
             "compat_markers" => self.compat_markers = boolean(value)?,
+            "boards" => self.boards = strings(value)?,
+            "arena_file" => self.arena_file = string(value)?,
+            "arena_frame" => {
+                let frame = string(value)?;
+                check_frame(&frame)?;
+                self.arena_frame = frame;
+            }
             _ => {
                 return Err(format!(
                     "no such parameter (there are: {})",
@@ -295,6 +319,9 @@ impl Settings {
             "publish_tf" => ParameterValue::Boolean(self.publish_tf),
             "debug_image" => ParameterValue::Boolean(self.debug_image),
             "compat_markers" => ParameterValue::Boolean(self.compat_markers),
+            "boards" => ParameterValue::StringArray(self.boards.clone()),
+            "arena_file" => ParameterValue::String(self.arena_file.clone()),
+            "arena_frame" => ParameterValue::String(self.arena_frame.clone()),
             _ => return None,
         })
     }
@@ -334,6 +361,17 @@ pub fn detector_config(
 ) -> Result<DetectorConfig, String> {
     let family_file = !settings.family_file.is_empty();
     let names_family = !settings.legacy && !family_file;
+    let in_parameter = |name: &str, err: whycode::LoadError| {
+        format!("parameter {name}: {}", whycode::error::one_line(&err))
+    };
+    let mut boards = Vec::new();
+    for path in &settings.boards {
+        boards.extend(Board::load(Path::new(path)).map_err(|e| in_parameter("boards", e))?);
+    }
+    let arena = (!settings.arena_file.is_empty())
+        .then(|| Arena::load(Path::new(&settings.arena_file)))
+        .transpose()
+        .map_err(|e| in_parameter("arena_file", e))?;
     let spec = DetectSpec {
         target: TargetSpec {
             legacy: settings.legacy,
@@ -349,11 +387,21 @@ pub fn detector_config(
         // The camera comes from camera_info (the node fits it to each
         // frame); the diameter waits in the configuration until then.
         camera_later: true,
+        boards,
+        arena,
         ..DetectSpec::default()
     };
-    let config = spec
-        .build()
-        .map_err(|e| e.message_with(|option| format!("parameter {option}")))?;
+    let config = spec.build().map_err(|e| {
+        e.message_with(|option| {
+            // The spec's names for what this node's parameters call so.
+            let name = match option {
+                "arena" => "arena_file",
+                "board" => "boards",
+                other => other,
+            };
+            format!("parameter {name}")
+        })
+    })?;
     if let Target::WhyCode(family) = &config.target {
         if let Some(id) = settings
             .tag_ids
@@ -634,6 +682,43 @@ mod tests {
             detector_config(&auto, None).unwrap().target,
             Target::AnyBits { distance: Some(3) }
         );
+    }
+
+    #[test]
+    fn boards_and_an_arena_come_from_their_files() {
+        let dir = std::env::temp_dir().join(format!("whycode-ros2-params-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bundle = dir.join("cube.yaml");
+        std::fs::write(
+            &bundle,
+            "bundles:\n  - name: cube\n    layout:\n      - {id: 1, diameter: 0.05, x: 0, y: 0, z: 0}\n",
+        )
+        .unwrap();
+        let s = Settings::default()
+            .with(
+                "boards",
+                &ParameterValue::StringArray(vec![bundle.display().to_string()]),
+            )
+            .unwrap();
+        // The camera comes with camera_info: boards wait for it.
+        let config = detector_config(&s, None).unwrap();
+        assert_eq!(config.boards.len(), 1);
+        assert_eq!(config.boards[0].name, "cube");
+        let missing = dir.join("arena.yaml");
+        let s = s
+            .with("arena_file", &text(&missing.display().to_string()))
+            .unwrap();
+        let err = detector_config(&s, None).unwrap_err();
+        assert!(
+            err.starts_with(&format!(
+                "parameter arena_file: {}: cannot read arena file",
+                missing.display()
+            )),
+            "{err}"
+        );
+        let err = s.with("arena_frame", &text("")).unwrap_err();
+        assert!(err.starts_with("parameter arena_frame: "), "{err}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

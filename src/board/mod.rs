@@ -119,10 +119,16 @@ impl Board {
     pub fn load(path: &Path) -> Result<Vec<Board>, LoadError> {
         let text =
             std::fs::read_to_string(path).map_err(|e| LoadError::read(path, FileKind::Board, e))?;
+        Board::from_text(path, &text)
+    }
+
+    /// The boards of a file already read (the page's uploads): `path` names
+    /// the boards and the errors as [`Board::load`] does.
+    pub fn from_text(path: &Path, text: &str) -> Result<Vec<Board>, LoadError> {
         let invalid =
             |problem: String| LoadError::new(path, FileKind::Board, LoadProblem::Invalid(problem));
         if text.trim_start().starts_with('{') {
-            let manifest = Manifest::from_json(&path.display().to_string(), &text)
+            let manifest = Manifest::from_json(&path.display().to_string(), text)
                 .map_err(|e| invalid(e.problem.to_string()))?;
             let stem = path
                 .file_stem()
@@ -139,7 +145,7 @@ impl Board {
                 })
                 .collect());
         }
-        Board::parse_bundles(&text).map_err(invalid)
+        Board::parse_bundles(text).map_err(invalid)
     }
 
     /// The bundles of a bundle file's text (see [`Board::load`]).

@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 use whycode::camera::Camera;
 use whycode::detect::family_check::FamilyCheck;
-use whycode::detect::report::{FrameReport, CSV_HEADER};
+use whycode::detect::report::{CsvColumns, FrameReport};
 use whycode::detect::{Detector, DetectorConfig, StageTimings, Target};
 use whycode::image_io::load_gray;
 use whycode::spec::{DetectSpec, RecordingSpec};
@@ -259,8 +259,9 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     let mut out = output::Stdout::new();
     let mut failures = 0;
     let several = total > 1;
+    let columns = CsvColumns::of(&config);
     if args.format.format == Format::Csv {
-        out.line(CSV_HEADER)?;
+        out.line(columns.header())?;
     }
     let mut check = FamilyCheck::new(family_bits);
     let mut timings = StageTimings::default();
@@ -274,7 +275,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
                 }
                 match args.format.format {
                     Format::Json => out.line(frame.to_json())?,
-                    Format::Csv => out.write(&frame.to_csv_rows())?,
+                    Format::Csv => out.write(&frame.to_csv_rows(columns))?,
                     Format::Table => out.write(&frame.to_table(several))?,
                 }
             }
@@ -391,7 +392,7 @@ fn run_recordings(args: DetectArgs) -> Result<ExitCode> {
         output: args.output.as_deref(),
     };
     let mut out = output::Stdout::new();
-    recording::header(run.format, &mut out)?;
+    recording::header(&run, &mut out)?;
     for input in &args.inputs {
         if let Err(err) = recording::run(input, &run, &mut out) {
             out.flush()?;

@@ -9,7 +9,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use whycode::detect::report::{FrameReport, StreamPosition, CSV_HEADER};
+use whycode::detect::report::{CsvColumns, FrameReport, StreamPosition};
 use whycode::detect::{Detector, DetectorConfig};
 use whycode::recording::output::{AnnotatedVideo, DetectionsBag};
 use whycode::recording::{Kind, ReadOptions, Recording, Summary};
@@ -134,6 +134,7 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
             sec: frame.stamp_ns.div_euclid(1_000_000_000) as i32,
             nanosec: frame.stamp_ns.rem_euclid(1_000_000_000) as u32,
         };
+        let boards = detector.locate_boards(&markers);
         if let Some(bag) = &mut bag {
             let header = Header {
                 stamp,
@@ -144,12 +145,26 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
                 },
             };
             let computed_for = detector.config().diameter_m;
-            let described = describe(&markers, &header, computed_for, |id| {
+            let mut described = describe(&markers, &header, computed_for, |id| {
                 (
                     Some(format!("{}{id}", whycode::ros::DEFAULT_FRAME_PREFIX)),
                     computed_for,
                 )
             });
+            // The boards' and the arena's frames join the markers' as the
+            // node sends them.
+            described
+                .transforms
+                .extend(whycode::ros::describe::board_transforms(&boards, &header));
+            if let Some(arena) = &detector.config().arena {
+                described
+                    .transforms
+                    .extend(whycode::ros::describe::arena_transform(
+                        arena,
+                        &header,
+                        whycode::ros::DEFAULT_ARENA_FRAME,
+                    ));
+            }
             bag.add(frame.stamp_ns, &described)
                 .context("cannot write the detections bag")?;
         }
@@ -169,7 +184,6 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
                 }
             }
         }
-        let boards = detector.locate_boards(&markers);
         let report = FrameReport {
             image: shown.clone(),
             width,
@@ -188,7 +202,7 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
         progress.suspend(|| -> Result<()> {
             match run.format {
                 Format::Json => out.line(report.to_json()),
-                Format::Csv => out.write(&report.to_csv_rows()),
+                Format::Csv => out.write(&report.to_csv_rows(CsvColumns::of(&run.config))),
                 Format::Table => out.write(&report.to_table(true)),
             }
         })?;
@@ -225,9 +239,9 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
 }
 
 /// The CSV header, when the format has one.
-pub fn header(format: Format, out: &mut output::Stdout) -> Result<()> {
-    if format == Format::Csv {
-        out.line(CSV_HEADER)?;
+pub fn header(run: &Run, out: &mut output::Stdout) -> Result<()> {
+    if run.format == Format::Csv {
+        out.line(CsvColumns::of(&run.config).header())?;
     }
     Ok(())
 }

@@ -42,10 +42,39 @@ pub struct StreamPosition {
     pub topic: Option<String>,
 }
 
-/// The CSV header line (without its newline); [`FrameReport::to_csv_rows`]
-/// writes the rows under it.
+/// The CSV header line (without its newline) of a run without an arena;
+/// [`FrameReport::to_csv_rows`] writes the rows under it.
 pub const CSV_HEADER: &str =
     "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw,bits,unreadable";
+
+/// The columns a run's CSV has. They are fixed for the whole run (the header
+/// comes before any frame), so the arena columns follow the configuration,
+/// not whether a frame happened to place a marker.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct CsvColumns {
+    /// An arena is configured: each row ends in arena_x, arena_y, arena_z
+    /// (metres) and arena_yaw (radians), empty for a marker not placed.
+    /// Without one the columns are absent, so such output is unchanged.
+    pub arena: bool,
+}
+
+impl CsvColumns {
+    /// The columns of a detector with this configuration.
+    pub fn of(config: &super::DetectorConfig) -> Self {
+        Self {
+            arena: config.arena.is_some(),
+        }
+    }
+
+    /// The header line, without its newline.
+    pub fn header(self) -> String {
+        if self.arena {
+            format!("{CSV_HEADER},arena_x,arena_y,arena_z,arena_yaw")
+        } else {
+            CSV_HEADER.to_string()
+        }
+    }
+}
 
 fn round(x: f64, decimals: i32) -> f64 {
     let k = 10f64.powi(decimals);
@@ -198,14 +227,14 @@ impl FrameReport {
     }
 
     /// One CSV row per marker, each ending in a newline, in the columns of
-    /// [`CSV_HEADER`].
-    pub fn to_csv_rows(&self) -> String {
+    /// [`CsvColumns::header`].
+    pub fn to_csv_rows(&self, columns: CsvColumns) -> String {
         let opt = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
         let image = csv_field(&self.image);
         let mut out = String::new();
         for m in &self.markers {
             let pose = m.pose.as_ref();
-            let _ = writeln!(
+            let _ = write!(
                 out,
                 "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 m.id,
@@ -226,6 +255,19 @@ impl FrameReport {
                 m.bits.map_or(String::new(), |b| b.to_string()),
                 u8::from(m.unreadable),
             );
+            if columns.arena {
+                // Same rounding as the JSON's `arena`.
+                let a = m.arena.as_ref();
+                let _ = write!(
+                    out,
+                    ",{},{},{},{}",
+                    opt(a.map(|a| round(a.x, 6))),
+                    opt(a.map(|a| round(a.y, 6))),
+                    opt(a.map(|a| round(a.z, 6))),
+                    opt(a.and_then(|a| a.yaw).map(|y| round(y, 6))),
+                );
+            }
+            out.push('\n');
         }
         out
     }
@@ -265,7 +307,7 @@ impl FrameReport {
         }
         let has_arena = self.markers.iter().any(|m| m.arena.is_some());
         if has_arena {
-            let _ = write!(out, " {:>28}", "arena_m (x, y), yaw_deg");
+            let _ = write!(out, " {:>36}", "arena_m (x, y, z), yaw_deg");
         }
         out.push('\n');
         // Sorted by ID for reading (unknown IDs last, then left to right);
@@ -317,7 +359,11 @@ impl FrameReport {
                 let yaw = a
                     .yaw
                     .map_or("-".to_string(), |y| format!("{:.1}", y.to_degrees()));
-                let _ = write!(out, " {:>28}", format!("{:.4}, {:.4}, {yaw}", a.x, a.y));
+                let _ = write!(
+                    out,
+                    " {:>36}",
+                    format!("{:.4}, {:.4}, {:.4}, {yaw}", a.x, a.y, a.z)
+                );
             }
             out.push('\n');
         }
@@ -386,11 +432,28 @@ mod tests {
 
     #[test]
     fn csv_quotes_awkward_names_and_leaves_unknowns_empty() {
-        let rows = frame("a,\"b\".png", vec![marker(0)]).to_csv_rows();
+        let rows = frame("a,\"b\".png", vec![marker(0)]).to_csv_rows(CsvColumns::default());
         assert_eq!(
             rows,
             "\"a,\"\"b\"\".png\",0,,10.123,20.5,,30,29,0.988,,,,,,,,,0\n"
         );
+    }
+
+    #[test]
+    fn csv_arena_columns_follow_the_configuration_not_the_marker() {
+        let mut placed = marker(3);
+        placed.arena = Some(crate::arena::ArenaPosition {
+            x: 1.23456789,
+            y: 0.5,
+            z: 0.12,
+            yaw: None,
+        });
+        let rows = frame("a.png", vec![placed, marker(4)]).to_csv_rows(CsvColumns { arena: true });
+        let lines: Vec<&str> = rows.lines().collect();
+        assert!(lines[0].ends_with(",1.234568,0.5,0.12,"), "{rows}");
+        assert!(lines[1].ends_with(",,,,"), "{rows}");
+        let columns = CsvColumns { arena: true }.header().split(',').count();
+        assert!(lines.iter().all(|l| l.split(',').count() == columns));
     }
 
     #[test]

@@ -116,3 +116,219 @@ pub fn describe(
         duplicate_frames,
     }
 }
+
+fn transform(
+    header: &Header,
+    child: &str,
+    position: nalgebra::Vector3<f64>,
+    [x, y, z, w]: [f64; 4],
+) -> TransformStamped {
+    TransformStamped {
+        header: header.clone(),
+        child_frame_id: child.to_string(),
+        transform: Transform {
+            translation: Vector3 {
+                x: position.x,
+                y: position.y,
+                z: position.z,
+            },
+            rotation: super::msg::Quaternion { x, y, z, w },
+        },
+    }
+}
+
+/// Each board's pose as a transform from the camera frame (`header`'s) to
+/// a frame named after the board; they join the markers' in one TFMessage.
+pub fn board_transforms(
+    boards: &[crate::board::BoardPose],
+    header: &Header,
+) -> Vec<TransformStamped> {
+    boards
+        .iter()
+        .map(|b| transform(header, &b.name, b.position, b.quaternion))
+        .collect()
+}
+
+/// The arena's floor frame as a transform from the camera frame to
+/// `frame`, for an arena measured with a camera (one measured without
+/// maps the image to the floor and has no pose in the camera's frame).
+pub fn arena_transform(
+    arena: &crate::arena::Arena,
+    header: &Header,
+    frame: &str,
+) -> Option<TransformStamped> {
+    let crate::arena::Mapping::Floor {
+        rotation,
+        translation,
+        ..
+    } = &arena.mapping
+    else {
+        return None;
+    };
+    let q = nalgebra::UnitQuaternion::from_matrix(rotation);
+    let w_sign = if q.w < 0.0 { -1.0 } else { 1.0 };
+    let q = [q.i, q.j, q.k, q.w].map(|c| c * w_sign);
+    Some(transform(header, frame, *translation, q))
+}
+
+/// The markers of `described` placed on the arena: the same markers in the
+/// same order, each with its pose in the arena's floor frame (`frame`,
+/// z up): position x, y, z in metres and the orientation a turn of its
+/// yaw about z (identity for a marker without a heading); `has_pose`
+/// false for a marker not placed. The camera-frame pose of `~/markers`
+/// stays there, so this is a second array of the same type.
+pub fn arena_markers(
+    described: &MarkerArray,
+    detections: &[Detection],
+    frame: &str,
+) -> MarkerArray {
+    let markers = described
+        .markers
+        .iter()
+        .zip(detections)
+        .map(|(marker, d)| {
+            let mut marker = marker.clone();
+            match d.arena {
+                Some(at) => {
+                    let half = at.yaw.unwrap_or(0.0) / 2.0;
+                    marker.pose = Pose {
+                        position: Vector3 {
+                            x: at.x,
+                            y: at.y,
+                            z: at.z,
+                        },
+                        orientation: super::msg::Quaternion {
+                            x: 0.0,
+                            y: 0.0,
+                            z: half.sin(),
+                            w: half.cos(),
+                        },
+                    };
+                    marker.has_pose = true;
+                }
+                None => {
+                    marker.pose = Pose::default();
+                    marker.has_pose = false;
+                }
+            }
+            marker
+        })
+        .collect();
+    MarkerArray {
+        header: Header {
+            stamp: described.header.stamp,
+            frame_id: frame.to_string(),
+        },
+        markers,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::arena::{Arena, ArenaPosition, Mapping};
+    use nalgebra::{Matrix3, Vector3 as V3};
+
+    fn detection(id: u32, arena: Option<ArenaPosition>) -> Detection {
+        Detection {
+            id,
+            code: Some(7),
+            u: 10.0,
+            v: 20.0,
+            yaw: Some(0.5),
+            axes: [30.0, 29.0],
+            angle: 0.0,
+            confidence: 0.9,
+            status: None,
+            pose: None,
+            bits: Some(8),
+            unreadable: false,
+            track: None,
+            arena,
+        }
+    }
+
+    fn header() -> Header {
+        Header {
+            stamp: super::super::msg::Time { sec: 5, nanosec: 6 },
+            frame_id: "camera_optical".into(),
+        }
+    }
+
+    #[test]
+    fn arena_markers_keep_the_order_and_put_the_place_in_the_floor_frame() {
+        let placed = ArenaPosition {
+            x: 1.5,
+            y: 0.25,
+            z: 0.12,
+            yaw: Some(std::f64::consts::FRAC_PI_2),
+        };
+        let detections = [detection(3, Some(placed)), detection(4, None)];
+        let described = describe(&detections, &header(), None, |_| (None, None));
+        let on_floor = arena_markers(&described.markers, &detections, "arena");
+        assert_eq!(on_floor.header.frame_id, "arena");
+        assert_eq!(on_floor.header.stamp, described.markers.header.stamp);
+        assert_eq!(on_floor.markers.len(), 2);
+        let first = &on_floor.markers[0];
+        assert!(first.has_pose && first.id == 3);
+        assert_eq!(
+            (
+                first.pose.position.x,
+                first.pose.position.y,
+                first.pose.position.z
+            ),
+            (1.5, 0.25, 0.12)
+        );
+        // A quarter turn about z.
+        let q = first.pose.orientation;
+        assert!((q.z - 0.5f64.sqrt()).abs() < 1e-12 && (q.w - 0.5f64.sqrt()).abs() < 1e-12);
+        assert!(!on_floor.markers[1].has_pose && on_floor.markers[1].id == 4);
+    }
+
+    #[test]
+    fn the_floor_frame_is_a_transform_only_with_a_camera() {
+        // A camera looking straight down at the floor 2.5 m below: the
+        // floor's z (up) is the camera's −z, its x the camera's x.
+        let rotation = Matrix3::from_diagonal(&V3::new(1.0, -1.0, -1.0));
+        let camera = crate::Camera {
+            fx: 1000.0,
+            fy: 1000.0,
+            cx: 640.0,
+            cy: 480.0,
+            distortion: [0.0; 5],
+            width: 1280,
+            height: 960,
+        };
+        let mut arena = Arena {
+            ids: [1, 2, 3, 4],
+            size_m: [2.0, 1.5],
+            marker_height_m: 0.0,
+            corner_error_m: 0.0,
+            mapping: Mapping::Floor {
+                camera,
+                rotation,
+                translation: V3::new(-1.0, 0.75, 2.5),
+            },
+        };
+        let t = arena_transform(&arena, &header(), "arena").unwrap();
+        assert_eq!(t.child_frame_id, "arena");
+        assert_eq!(t.header, header());
+        assert_eq!(
+            (
+                t.transform.translation.x,
+                t.transform.translation.y,
+                t.transform.translation.z
+            ),
+            (-1.0, 0.75, 2.5)
+        );
+        // Half a turn about x.
+        let q = t.transform.rotation;
+        assert!((q.x.abs() - 1.0).abs() < 1e-12 && q.w.abs() < 1e-12);
+        arena.mapping = Mapping::Homography {
+            width: 1280,
+            height: 960,
+            floor_to_image: Matrix3::identity(),
+        };
+        assert!(arena_transform(&arena, &header(), "arena").is_none());
+    }
+}

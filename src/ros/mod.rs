@@ -12,6 +12,9 @@ pub mod msg;
 /// A marker's /tf frame is this followed by its ID, unless named otherwise.
 pub const DEFAULT_FRAME_PREFIX: &str = "whycode_";
 
+/// The arena's floor frame on /tf (`whycode arena`'s arena), unless named.
+pub const DEFAULT_ARENA_FRAME: &str = "arena";
+
 /// The camera_info topic of an image topic, by image_transport's rule: the
 /// compressed topic hangs below the image topic, and camera_info sits
 /// beside the image topic (`/cam/image_raw/compressed` → `/cam/camera_info`).

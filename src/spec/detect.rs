@@ -37,7 +37,7 @@ pub struct DetectSpec {
     /// (a recording read offline): a marker is found in the frame it comes.
     pub scan_every_frame: bool,
     /// The camera comes with the frames (a bag's camera_info), so a
-    /// diameter without `camera` waits in the configuration for it.
+    /// diameter or boards without `camera` wait in the configuration for it.
     pub camera_later: bool,
     /// A floor frame (`whycode arena`) every marker is placed in. One
     /// measured with a camera brings that camera (`camera`, if given, must
@@ -69,7 +69,7 @@ impl DetectSpec {
             ));
         }
         if !self.boards.is_empty() {
-            if camera.is_none() {
+            if camera.is_none() && !self.camera_later {
                 return Err(SpecError::of(
                     "board",
                     Problem::Conflict("a board's pose needs the camera: give camera too".into()),

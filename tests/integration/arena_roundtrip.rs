@@ -3,7 +3,7 @@
 //! --arena`), markers on the floor and raised on robots, the lens-blind
 //! plane mapping, and each refusal in one line.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::support::{run_err, run_ok};
 use whycode::arena::{Arena, ArenaError, Corners};
@@ -48,28 +48,57 @@ fn path(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-#[test]
-fn robots_are_placed_on_the_floor_through_a_distorting_lens() {
+/// A ceiling camera's photo of `robots` on the arena in a fresh folder,
+/// and the camera's calibration file beside it.
+fn photographed(robots: &[Robot], seed: u64) -> (tempfile::TempDir, PathBuf, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let lens = arena::lens();
-    let robots = arena::robots(12, 0.0, 1);
     let photo = dir.path().join("floor.png");
-    arena::view(&lens, &robots, 1).save(&photo).unwrap();
+    arena::view(&lens, robots, seed).save(&photo).unwrap();
     let camera = dir.path().join("camera.yaml");
     std::fs::write(&camera, lens.to_ros_yaml("ceiling")).unwrap();
+    (dir, photo, camera)
+}
+
+/// The photo, and the arena file `whycode arena` measures from it (corners
+/// by ID, through the lens, `size` as typed).
+struct Scene {
+    dir: tempfile::TempDir,
+    photo: PathBuf,
+    arena_file: PathBuf,
+}
+
+fn measured_scene(robots: &[Robot], seed: u64, size: &str) -> Scene {
+    let (dir, photo, camera) = photographed(robots, seed);
     let arena_file = dir.path().join("arena.yaml");
     run_ok(&[
         "arena",
         "--ids",
         "1,2,3,4",
         "--size",
-        "2m,1.5m",
+        size,
         "--camera",
         path(&camera),
         path(&photo),
         "-o",
         path(&arena_file),
     ]);
+    Scene {
+        dir,
+        photo,
+        arena_file,
+    }
+}
+
+#[test]
+fn robots_are_placed_on_the_floor_through_a_distorting_lens() {
+    let robots = arena::robots(12, 0.0, 1);
+    let Scene {
+        dir,
+        photo,
+        arena_file,
+        ..
+    } = measured_scene(&robots, 1, "2m,1.5m");
     let out = run_ok(&[
         "detect",
         "--arena",
@@ -116,26 +145,12 @@ fn robots_are_placed_on_the_floor_through_a_distorting_lens() {
 
 #[test]
 fn markers_raised_on_robots_are_placed_at_their_height() {
-    let dir = tempfile::tempdir().unwrap();
-    let lens = arena::lens();
     let robots = arena::robots(8, 0.12, 2);
-    let photo = dir.path().join("robots.png");
-    arena::view(&lens, &robots, 2).save(&photo).unwrap();
-    let camera = dir.path().join("camera.yaml");
-    std::fs::write(&camera, lens.to_ros_yaml("ceiling")).unwrap();
-    let arena_file = dir.path().join("arena.yaml");
-    run_ok(&[
-        "arena",
-        "--ids",
-        "1,2,3,4",
-        "--size",
-        "2000mm,1500mm",
-        "--camera",
-        path(&camera),
-        path(&photo),
-        "-o",
-        path(&arena_file),
-    ]);
+    let Scene {
+        dir: _dir,
+        photo,
+        arena_file,
+    } = measured_scene(&robots, 2, "2000mm,1500mm");
     let json = |height: &str| {
         run_ok(&[
             "detect",
@@ -156,6 +171,62 @@ fn markers_raised_on_robots_are_placed_at_their_height() {
     // 5 % further out from under the camera.
     let floor: Vec<f64> = errors(&json("0"), &robots).iter().map(|e| e.0).collect();
     assert!(median(floor) > 0.01);
+}
+
+#[test]
+fn csv_and_table_carry_the_arena_columns_only_with_an_arena() {
+    let robots = arena::robots(6, 0.0, 6);
+    let scene = measured_scene(&robots, 6, "2m,1.5m");
+    let detect = |extra: &[&str], format: &str| {
+        let mut args = vec!["detect", "--format", format];
+        args.extend_from_slice(extra);
+        args.push(path(&scene.photo));
+        run_ok(&args)
+    };
+    // An arena measured through the lens places markers by their poses.
+    let with_arena = ["--arena", path(&scene.arena_file), "--diameter", "80mm"];
+    let csv = detect(&with_arena, "csv");
+    let json: serde_json::Value = serde_json::from_str(detect(&with_arena, "json").trim()).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(
+        header[header.len() - 4..],
+        ["arena_x", "arena_y", "arena_z", "arena_yaw"]
+    );
+    let column = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let markers = json["markers"].as_array().unwrap();
+    assert_eq!(rows.len(), markers.len());
+    // Row by row the CSV says what the JSON says (both in the detector's
+    // order), and every robot is placed.
+    for (row, marker) in rows.iter().zip(markers) {
+        assert_eq!(row.len(), header.len(), "{row:?}");
+        assert_eq!(row[column("id")], marker["id"].to_string());
+        for name in ["x", "y", "z", "yaw"] {
+            let cell: f64 = row[column(&format!("arena_{name}"))].parse().unwrap();
+            assert_eq!(cell, marker["arena"][name].as_f64().unwrap(), "{row:?}");
+        }
+    }
+    for r in &robots {
+        let row = rows
+            .iter()
+            .find(|row| row[column("id")] == r.id.to_string())
+            .unwrap();
+        let x: f64 = row[column("arena_x")].parse().unwrap();
+        let y: f64 = row[column("arena_y")].parse().unwrap();
+        assert!((x - r.position.x).hypot(y - r.position.y) < 3e-3, "{row:?}");
+    }
+    let table = detect(&with_arena, "table");
+    assert!(table.contains("arena_m (x, y, z), yaw_deg"), "{table}");
+
+    // Without --arena: the columns of every earlier release.
+    let plain = detect(&[], "csv");
+    assert_eq!(
+        plain.lines().next().unwrap(),
+        whycode::detect::report::CSV_HEADER
+    );
+    assert!(plain.lines().all(|l| l.split(',').count() == 18), "{plain}");
+    assert!(!detect(&[], "table").contains("arena"));
 }
 
 #[test]
@@ -193,14 +264,7 @@ fn without_a_lens_the_plane_mapping_removes_the_perspective_bias() {
 
 #[test]
 fn each_refusal_is_one_line() {
-    let dir = tempfile::tempdir().unwrap();
-    let lens = arena::lens();
-    let photo = dir.path().join("floor.png");
-    arena::view(&lens, &arena::robots(3, 0.0, 4), 4)
-        .save(&photo)
-        .unwrap();
-    let camera = dir.path().join("camera.yaml");
-    std::fs::write(&camera, lens.to_ros_yaml("ceiling")).unwrap();
+    let (dir, photo, camera) = photographed(&arena::robots(3, 0.0, 4), 4);
     let out = dir.path().join("arena.yaml");
     let arena_cmd = |ids: &str, size: &str| {
         run_err(&[

@@ -792,14 +792,114 @@ async function calRun(button) {
 
 // ---------- Live ----------
 
-const live = { stream: null, running: false, stride: 8, frames: 0, t0: 0, ms: 0, seen: new Map() };
+const live = { stream: null, running: false, stride: 11, frames: 0, t0: 0, ms: 0, seen: new Map(), framed: false, shown: 0 };
+
+// The detector's options as the binding takes them (web/src/lib.rs,
+// LiveOptions): the marker kind and the frames of reference, files as
+// {name, text}.
+async function liveOptions() {
+  const legacy = document.querySelector("input[name=live-style]:checked").value === "legacy";
+  const upload = async (file) => ({ name: file.name, text: await file.text() });
+  const camera = $("l-camera-file").files[0];
+  const arena = $("l-arena").files[0];
+  const diameter = $("l-diameter").value.trim();
+  return {
+    legacy,
+    bits: legacy ? null : intOf($("l-bits")),
+    distance: legacy ? null : intOf($("l-distance")),
+    diameter: diameter || null,
+    camera: camera ? await upload(camera) : null,
+    boards: await Promise.all([...$("l-boards").files].map(upload)),
+    arena: arena ? await upload(arena) : null,
+  };
+}
+
+// The command line that gives the same numbers for a photo.
+function liveCli(options, photo) {
+  const words = ["whycode", "detect"];
+  if (options.legacy) words.push("--legacy");
+  else words.push("--bits", options.bits, "--distance", options.distance);
+  if (options.camera) words.push("--camera", options.camera.name);
+  if (options.diameter) words.push("--diameter", options.diameter);
+  for (const b of options.boards) words.push("--board", b.name);
+  if (options.arena) words.push("--arena", options.arena.name);
+  words.push("--format", "json", photo);
+  return words.join(" ");
+}
+
+// "-0.0000" reads as a sign that is not there.
+const fixed = (x, digits) => (x === null || x === undefined || Number.isNaN(x) ? "–" : x.toFixed(digits).replace(/^-(0\.?0*)$/, "$1"));
+const degrees = (rad, digits = 1) => (rad === null || rad === undefined ? "–" : ((rad * 180) / Math.PI).toFixed(digits));
+
+// A frame as `whycode detect --format json` writes it: each marker's ID
+// with its arena place (or its pose), and each board's pose.
+function showFrame(frame) {
+  $("l-results").hidden = false;
+  const markers = [...frame.markers].sort((a, b) => (a.id === 0) - (b.id === 0) || a.id - b.id || a.u - b.u);
+  const arena = markers.some((m) => m.arena);
+  const pose = markers.some((m) => m.position);
+  const head = ["ID", "u", "v", "yaw°"];
+  if (pose) head.push("x m", "y m", "z m");
+  if (arena) head.push("arena x m", "arena y m", "arena yaw°");
+  const rows = markers.map((m) => {
+    const cells = [m.id || "?", fixed(m.u, 1), fixed(m.v, 1), degrees(m.yaw)];
+    if (pose) cells.push(...(m.position ? m.position.map((x) => fixed(x, 3)) : ["–", "–", "–"]));
+    if (arena) cells.push(...(m.arena ? [fixed(m.arena.x, 4), fixed(m.arena.y, 4), degrees(m.arena.yaw, 2)] : ["–", "–", "–"]));
+    return cells;
+  });
+  table($("l-markers"), head, rows);
+  $("l-markers").dataset.ids = markers.map((m) => m.id).join(",");
+  const boards = frame.boards || [];
+  table($("l-boards-table"), ["board", "x m", "y m", "z m", "quaternion x, y, z, w", "markers used / seen", "rejected", "RMS px"],
+    boards.map((b) => [b.name, ...b.position.map((x) => fixed(x, 4)), b.quaternion.map((q) => fixed(q, 4)).join(", "),
+      `${b.used.length} / ${b.seen.length}`, b.rejected.join(", ") || "–", fixed(b.rms_px, 3)]));
+  $("l-boards-table").hidden = boards.length === 0;
+  $("l-results-title").textContent = `${frame.image}: ${markers.length} marker${markers.length === 1 ? "" : "s"}${boards.length ? `, ${boards.length} board pose${boards.length === 1 ? "" : "s"}` : ""}`;
+}
+
+function table(el, head, rows) {
+  el.replaceChildren();
+  const tr = document.createElement("tr");
+  for (const h of head) {
+    const th = document.createElement("th");
+    th.textContent = h;
+    tr.append(th);
+  }
+  el.append(tr);
+  for (const row of rows) {
+    const r = document.createElement("tr");
+    row.forEach((c, k) => {
+      const td = document.createElement("td");
+      if (k === 0) td.className = "text";
+      td.textContent = c;
+      r.append(td);
+    });
+    el.append(r);
+  }
+}
+
+async function livePhoto(input) {
+  const msg = $("live-msg");
+  const file = input.files[0];
+  input.value = "";
+  if (!file) return;
+  clearMsg(msg);
+  if (!liveEngine) liveEngine = new Engine("live");
+  try {
+    const options = await liveOptions();
+    const bytes = await file.arrayBuffer();
+    const json = await liveEngine.call("livePhoto", { options, name: file.name, bytes }, [bytes]);
+    $("l-json").textContent = json;
+    $("l-cli").textContent = liveCli(options, file.name);
+    showFrame(JSON.parse(json));
+  } catch (err) {
+    showMsg(msg, "error", err.message);
+  }
+}
 
 async function liveStart() {
   const msg = $("live-msg");
   clearMsg(msg);
-  const legacy = document.querySelector("input[name=live-style]:checked").value === "legacy";
-  const bits = intOf($("l-bits"));
-  const distance = intOf($("l-distance"));
   const [width, height] = $("l-size").value.split("x").map(Number);
   if (!navigator.mediaDevices || !navigator.mediaDevices.getUserMedia) {
     showMsg(msg, "error", "This browser gives the page no camera (a camera needs https or localhost).");
@@ -807,7 +907,10 @@ async function liveStart() {
   }
   if (!liveEngine) liveEngine = new Engine("live");
   try {
-    live.stride = await liveEngine.call("liveStart", { bits, distance, legacy });
+    const options = await liveOptions();
+    // Board poses and arena places come as the frame's JSON, only when asked for.
+    live.framed = options.boards.length > 0 || options.arena !== null || options.camera !== null;
+    live.stride = await liveEngine.call("liveStart", { options });
   } catch (err) {
     showMsg(msg, "error", err.message);
     return;
@@ -891,7 +994,7 @@ async function liveLoop() {
     const data = gctx.getImageData(0, 0, w, h).data.buffer;
     let result;
     try {
-      result = await liveEngine.call("liveFrame", { data, width: w, height: h }, [data]);
+      result = await liveEngine.call("liveFrame", { data, width: w, height: h, framed: live.framed }, [data]);
     } catch (err) {
       showMsg($("live-msg"), "error", err.message);
       liveStop();
@@ -900,6 +1003,13 @@ async function liveLoop() {
     if (!live.running) return;
     octx.drawImage(grab, 0, 0);
     drawDetections(octx, w, h, result.detections);
+    // The tables follow at a readable pace, not every frame.
+    if (result.frame && performance.now() - live.shown > 250) {
+      live.shown = performance.now();
+      $("l-json").textContent = result.frame;
+      $("l-cli").textContent = "";
+      showFrame(JSON.parse(result.frame));
+    }
     windowFrames++;
     live.ms = live.ms ? live.ms * 0.9 + result.ms * 0.1 : result.ms;
     const now = performance.now();
@@ -939,7 +1049,7 @@ function drawDetections(ctx, w, h, d) {
     ctx.fillText(text, tx, y);
   };
   for (let k = 0; k + stride <= d.length; k += stride) {
-    const [id, u, v, a, b, angle, yaw] = d.subarray(k, k + 8);
+    const [id, u, v, a, b, angle, yaw, , ax, ay] = d.subarray(k, k + stride);
     // Detector coordinates put the first pixel's centre at 0; the canvas at 0.5.
     const x = u + 0.5;
     const y = v + 0.5;
@@ -957,7 +1067,11 @@ function drawDetections(ctx, w, h, d) {
       ctx.stroke();
     }
     const top = y - Math.max(a, b) - line;
-    if (known && !Number.isNaN(yaw)) {
+    if (!Number.isNaN(ax)) {
+      // On an arena: the floor place (metres) in place of the image yaw.
+      label(`${ax.toFixed(3)}, ${ay.toFixed(3)} m`, small, x, top);
+      label(known ? `ID ${id}` : legacy ? "WhyCon" : "unknown", big, x, top - small - 4);
+    } else if (known && !Number.isNaN(yaw)) {
       label(`${Math.round((yaw * 180) / Math.PI)}°`, small, x, top);
       label(`ID ${id}`, big, x, top - small - 4);
     } else {
@@ -971,6 +1085,11 @@ function drawDetections(ctx, w, h, d) {
 }
 
 $("l-start").addEventListener("click", liveStart);
+$("l-photo").addEventListener("change", (e) => livePhoto(e.target));
+$("l-frames-clear").addEventListener("click", () => {
+  for (const id of ["l-camera-file", "l-boards", "l-arena"]) $(id).value = "";
+  $("l-diameter").value = "";
+});
 $("l-stop").addEventListener("click", liveStop);
 document.addEventListener("visibilitychange", () => { if (document.hidden && live.running) liveStop(); });
 

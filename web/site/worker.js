@@ -11,23 +11,28 @@ let calibration = null;
 // PDF output lives in a module of its own (printpdf, with its fonts and
 // colour profile, is as large as the rest of the library): fetched on the
 // first PDF, so the page's first load stays small.
+// The Live panel's camera, board and arena files are read by the same
+// second module (their YAML and XML readers are as large).
 let pdfModule = null;
-function pdf() {
+function second(what, offlineHint) {
   if (!pdfModule) {
-    pdfModule = import("./pkg/whycode_pdf.js")
-      .then(async (m) => {
-        await m.default({ module_or_path: new URL("./pkg/whycode_pdf_bg.wasm", import.meta.url) });
-        return m;
-      })
-      .catch((err) => {
-        pdfModule = null;
-        const offline = self.navigator && self.navigator.onLine === false;
-        throw new Error(`the PDF writer did not load (${err.message || err})${offline ? "; it is fetched the first time a PDF is made online, SVG and PNG work offline" : ""}`);
-      });
+    pdfModule = import("./pkg/whycode_pdf.js").then(async (m) => {
+      await m.default({ module_or_path: new URL("./pkg/whycode_pdf_bg.wasm", import.meta.url) });
+      return m;
+    });
+    pdfModule.catch(() => { pdfModule = null; });
   }
-  return pdfModule;
+  return pdfModule.catch((err) => {
+    const offline = self.navigator && self.navigator.onLine === false;
+    throw new Error(`${what} did not load (${err.message || err})${offline ? `; ${offlineHint}` : ""}`);
+  });
 }
+const pdf = () => second("the PDF writer", "it is fetched the first time a PDF is made online, SVG and PNG work offline");
 const engineFor = async (options) => (options.output.toLowerCase().endsWith(".pdf") ? pdf() : wc);
+const liveEngineFor = async (options) =>
+  (options.camera || options.arena || options.boards.length
+    ? second("the reader of camera, board and arena files", "it is fetched the first time such a file is given online")
+    : wc);
 let live = null;
 
 function files(out) {
@@ -67,16 +72,27 @@ const handlers = {
     const json = calibration.calibrate(JSON.stringify(options));
     return { json, table: calibration.reportTable(), camera: calibration.cameraFile(output) };
   },
-  liveStart: ({ bits, distance, legacy }) => {
+  liveStart: async ({ options }) => {
     if (live) live.free();
     live = null;
-    live = new wc.Live(bits, distance, legacy);
-    return wc.liveStride();
+    const engine = await liveEngineFor(options);
+    live = new engine.Live(JSON.stringify(options));
+    return engine.liveStride();
   },
-  liveFrame: ({ data, width, height }) => {
+  liveFrame: ({ data, width, height, framed }) => {
     const t0 = performance.now();
     const out = live.detectRgba(new Uint8Array(data), width, height);
-    return { detections: out, ms: performance.now() - t0, buffer: data };
+    const ms = performance.now() - t0;
+    return { detections: out, ms, buffer: data, frame: framed ? live.frameJson() : null };
+  },
+  // A photo has a detector of its own, so a running camera's tracks stay.
+  livePhoto: async ({ options, name, bytes }) => {
+    const photo = new (await liveEngineFor(options)).Live(JSON.stringify(options));
+    try {
+      return photo.detectPhoto(name, new Uint8Array(bytes));
+    } finally {
+      photo.free();
+    }
   },
 };
 

@@ -10,8 +10,14 @@ use anyhow::{Context, Result};
 use image::GrayImage;
 use serde::Deserialize;
 use wasm_bindgen::prelude::*;
+use whycode::arena::Arena;
+use whycode::board::Board;
 use whycode::calibrate;
+use whycode::camera::Camera;
+use whycode::detect::report::FrameReport;
 use whycode::detect::{Detector, Target};
+#[cfg(feature = "files")]
+use whycode::error::{FileKind, LoadError, LoadProblem};
 use whycode::family::{parse_id_list, CountTable, Family};
 use whycode::image_io;
 use whycode::manifest::Manifest;
@@ -568,49 +574,174 @@ impl Calibration {
     }
 }
 
-/// Live detection on camera frames, with tracking between frames.
+/// A file the page read from a file input: its name (which names boards
+/// and errors, as a path does on the command line) and its text.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+// Read only where the files are (the `files` feature's module).
+#[cfg_attr(not(feature = "files"), allow(dead_code))]
+struct Upload {
+    name: String,
+    text: String,
+}
+
+/// The Live panel's options: `whycode detect`'s marker kind, and the
+/// frames of reference `detect --diameter --camera --board --arena` take,
+/// with the files' texts in place of their paths (the markers' height is
+/// the arena file's).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LiveOptions {
+    bits: Option<u32>,
+    distance: Option<u32>,
+    #[serde(default)]
+    legacy: bool,
+    diameter: Option<String>,
+    camera: Option<Upload>,
+    #[serde(default)]
+    boards: Vec<Upload>,
+    arena: Option<Upload>,
+}
+
+/// `--diameter` as typed (a bare number is metres,
+/// as there); empty means not given.
+fn diameter(text: Option<&str>) -> Result<Option<Length>> {
+    match text.map(str::trim) {
+        Some(text) if !text.is_empty() => Length::parse_with_default_unit(text, "m")
+            .map(Some)
+            .map_err(|e| anyhow::anyhow!("--diameter: {e}")),
+        _ => Ok(None),
+    }
+}
+
+impl LiveOptions {
+    /// The detector `whycode detect` builds from the same options (tracked
+    /// frame to frame).
+    fn parse(options: &str) -> Result<whycode::detect::DetectorConfig> {
+        let args: LiveOptions = serde_json::from_str(options).context("live options")?;
+        let target = if args.legacy {
+            TargetSpec::legacy()
+        } else {
+            TargetSpec {
+                bits: args.bits.map(Bits::Count),
+                distance: args.distance,
+                ..TargetSpec::default()
+            }
+        };
+        let (camera, boards, arena) = args.files()?;
+        DetectSpec {
+            target,
+            diameter: diameter(args.diameter.as_deref())?,
+            camera,
+            tracking: true,
+            boards,
+            arena,
+            ..DetectSpec::default()
+        }
+        .build()
+        .map_err(spec_error)
+    }
+}
+
+impl LiveOptions {
+    /// The camera, boards and arena the files give.
+    #[cfg(feature = "files")]
+    fn files(&self) -> Result<(Option<Camera>, Vec<Board>, Option<Arena>)> {
+        let camera = self
+            .camera
+            .as_ref()
+            .map(|file| Camera::parse(&file.text).map_err(|e| e.in_file(Path::new(&file.name))))
+            .transpose()?;
+        let mut boards = Vec::new();
+        for file in &self.boards {
+            boards.extend(Board::from_text(Path::new(&file.name), &file.text)?);
+        }
+        let arena = self
+            .arena
+            .as_ref()
+            .map(|file| {
+                Arena::parse(&file.text).map_err(|problem| {
+                    LoadError::new(
+                        Path::new(&file.name),
+                        FileKind::Arena,
+                        LoadProblem::Invalid(problem),
+                    )
+                })
+            })
+            .transpose()?;
+        Ok((camera, boards, arena))
+    }
+
+    /// This module reads no files: the page sends options with files to
+    /// the module built with them (web/build.sh).
+    #[cfg(not(feature = "files"))]
+    fn files(&self) -> Result<(Option<Camera>, Vec<Board>, Option<Arena>)> {
+        if self.camera.is_some() || !self.boards.is_empty() || self.arena.is_some() {
+            anyhow::bail!("camera, board and arena files are read by the page's second module");
+        }
+        Ok((None, Vec::new(), None))
+    }
+}
+
+/// Live detection on camera frames, with tracking between frames, and
+/// single photos detected as `whycode detect` reads an image file.
 #[wasm_bindgen]
 pub struct Live {
     detector: Detector,
     grey: GrayImage,
+    /// The last camera frame's markers and board poses.
+    last: FrameReport,
 }
 
 /// Numbers per detection in [`Live::detect_rgba`]'s result.
 #[wasm_bindgen(js_name = liveStride)]
 pub fn live_stride() -> usize {
-    8
+    11
+}
+
+fn frame_report(image: String, grey: &GrayImage) -> FrameReport {
+    FrameReport {
+        image,
+        width: grey.width(),
+        height: grey.height(),
+        // The library has no clock here; the page shows its own timing.
+        elapsed_ms: 0.0,
+        markers: Vec::new(),
+        boards: Vec::new(),
+        timings: None,
+        stream: None,
+        legacy_looking: 0,
+    }
+}
+
+/// A camera calibrated at another size than the frames, in the command
+/// line's words.
+fn fit_camera(detector: &mut Detector, name: &str, grey: &GrayImage) -> Result<()> {
+    detector
+        .fit_camera(grey.width(), grey.height())
+        .map_err(|problem| anyhow::anyhow!("{name}: {problem}"))
 }
 
 #[wasm_bindgen]
 impl Live {
-    /// A detector for a family (`legacy` for WhyCon circles without IDs).
+    /// A detector for the options (JSON, see [`LiveOptions`]): the marker
+    /// kind, and optionally the diameter, camera file, boards and arena
+    /// file, refused as the command line refuses them.
     #[wasm_bindgen(constructor)]
-    pub fn new(bits: u32, distance: u32, legacy: bool) -> Result<Live, JsError> {
-        let target = if legacy {
-            TargetSpec::legacy()
-        } else {
-            TargetSpec {
-                bits: Some(Bits::Count(bits)),
-                distance: Some(distance),
-                ..TargetSpec::default()
-            }
-        };
-        let config = DetectSpec {
-            target,
-            tracking: true,
-            ..DetectSpec::default()
-        }
-        .build()
-        .map_err(|e| js_error(spec_error(e)))?;
+    pub fn new(options: &str) -> Result<Live, JsError> {
+        let config = LiveOptions::parse(options).map_err(js_error)?;
+        let grey = GrayImage::new(0, 0);
         Ok(Live {
             detector: Detector::new(config),
-            grey: GrayImage::new(0, 0),
+            last: frame_report("camera".into(), &grey),
+            grey,
         })
     }
 
     /// Detects markers in an RGBA frame (a canvas's ImageData). Returns
     /// [`live_stride`] numbers per marker: id, u, v, semi-major, semi-minor,
-    /// angle, yaw (NaN when unknown), confidence.
+    /// angle, yaw, confidence, then arena x, y (metres) and yaw (NaN when
+    /// unknown or without an arena).
     #[wasm_bindgen(js_name = detectRgba)]
     pub fn detect_rgba(
         &mut self,
@@ -629,6 +760,7 @@ impl Live {
         if self.grey.dimensions() != (width, height) {
             self.grey = GrayImage::new(width, height);
             self.detector.reset();
+            fit_camera(&mut self.detector, "the camera's frames", &self.grey).map_err(js_error)?;
         }
         // Rec. 709 weights, as the image crate's grey conversion of files.
         for (g, px) in self.grey.iter_mut().zip(rgba.chunks_exact(4)) {
@@ -638,6 +770,7 @@ impl Live {
         let detections = self.detector.detect(&self.grey);
         let mut out = Vec::with_capacity(detections.len() * live_stride());
         for d in &detections {
+            let arena = d.arena.as_ref();
             out.extend_from_slice(&[
                 f64::from(d.id),
                 d.u,
@@ -647,9 +780,42 @@ impl Live {
                 d.angle,
                 d.yaw.unwrap_or(f64::NAN),
                 d.confidence,
+                arena.map_or(f64::NAN, |a| a.x),
+                arena.map_or(f64::NAN, |a| a.y),
+                arena.and_then(|a| a.yaw).unwrap_or(f64::NAN),
             ]);
         }
+        self.last = frame_report("camera".into(), &self.grey);
+        self.last.boards = self.detector.locate_boards(&detections);
+        self.last.markers = detections;
         Ok(out)
+    }
+
+    /// The last camera frame as `whycode detect --format json` writes a
+    /// frame (markers with poses and arena places, the boards' poses).
+    #[wasm_bindgen(js_name = frameJson)]
+    pub fn frame_json(&self) -> String {
+        self.last.to_json()
+    }
+
+    /// One photo, read as `whycode detect` reads an image file with the
+    /// same options (its own untracked detector: the camera's tracks are
+    /// kept); returns the command's JSON line, with `elapsed_ms` 0.
+    #[wasm_bindgen(js_name = detectPhoto)]
+    pub fn detect_photo(&self, name: &str, bytes: &[u8]) -> Result<String, JsError> {
+        let inner = || -> Result<String> {
+            let grey = decode_gray(name, bytes)?;
+            let mut detector = Detector::new(whycode::detect::DetectorConfig {
+                tracking: false,
+                ..self.detector.config().clone()
+            });
+            fit_camera(&mut detector, name, &grey)?;
+            let mut report = frame_report(name.to_string(), &grey);
+            report.markers = detector.detect(&grey);
+            report.boards = detector.locate_boards(&report.markers);
+            Ok(report.to_json())
+        };
+        inner().map_err(js_error)
     }
 
     /// Forgets tracked markers (after a pause or a camera switch).

@@ -6,7 +6,10 @@ the end of the run."""
 from __future__ import annotations
 
 import itertools
+import json
 import os
+import subprocess
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
@@ -115,6 +118,55 @@ def big_scene(whycode_bin, tmp_path_factory) -> P.Scene:
         ["--size", "1920x1080", *FAMILY, "--ids", "3,17,42", "--diameter", "50mm",
          "--camera-distance", "0.8m", "--tilt", "20deg"],
     )
+
+
+@dataclass
+class SheetScene:
+    """A printed sheet seen through the lens, with the files the node's
+    boards and arena parameters take (all made by the command line)."""
+
+    scene: P.Scene
+    manifest: Path
+    arena: Path
+    # Each marker's centre on the page, metres (x right, y down the page).
+    on_page: dict[int, tuple[float, float]]
+    corners: tuple[int, int, int, int]
+
+
+@pytest.fixture(scope="session")
+def sheet_scene(whycode_bin, tmp_path_factory) -> SheetScene:
+    out = tmp_path_factory.mktemp("sheet")
+    manifest = out / "sheet.json"
+    subprocess.run(
+        [str(whycode_bin), "sheet", *FAMILY, "--ids", "1-12", "--diameter", "40mm", "--template", "a4",
+         "--no-check", "-o", str(out / "sheet.svg")],
+        check=True, capture_output=True,
+    )
+    scene = P.simulate(
+        whycode_bin, out, "sheetview",
+        ["--manifest", str(manifest), "--size", "640x480", "--fov", "60deg", "--camera-distance", "0.45m",
+         "--tilt", "15deg", "--pan", "-5deg", "--roll", "10deg", "--noise", "1.5", "--seed", "9"],
+    )
+    cam = scene.truth["camera"]
+    camera = out / "camera.yaml"
+    camera.write_text(
+        f"image_width: {scene.width}\nimage_height: {scene.height}\ncamera_name: sim\n"
+        f"camera_matrix:\n  rows: 3\n  cols: 3\n  data: [{cam['fx']}, 0.0, {cam['cx']}, 0.0, {cam['fy']}, {cam['cy']}, 0.0, 0.0, 1.0]\n"
+        f"distortion_model: plumb_bob\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n  data: {list(cam['distortion'])}\n"
+    )
+    on_page = {m["id"]: (m["x_mm"] / 1000, m["y_mm"] / 1000) for m in json.loads(manifest.read_text())["markers"]}
+    # The sheet's corner markers as the arena: origin bottom left, +x bottom
+    # right, +y top left (z up, out of the page, towards the camera).
+    corners = (10, 12, 3, 1)
+    size = f"{on_page[12][0] - on_page[10][0]:.6f},{on_page[10][1] - on_page[1][1]:.6f}"
+    arena = out / "arena.yaml"
+    (out / "sheetview.png").write_bytes(scene.png)
+    subprocess.run(
+        [str(whycode_bin), "arena", *FAMILY, "--ids", ",".join(map(str, corners)), "--size", size, "--camera", str(camera),
+         str(out / "sheetview.png"), "-o", str(arena)],
+        check=True, capture_output=True,
+    )
+    return SheetScene(scene, manifest, arena, on_page, corners)
 
 
 @pytest.fixture

@@ -339,6 +339,74 @@ def tf_of(peer, stamp, timeout=5.0):
     return [x for x in message.transforms if P.stamp_of(x.header) == stamp]
 
 
+def apply(transform: t.Transform, point) -> np.ndarray:
+    """`point` carried by `transform` (rotation, then translation)."""
+    q = transform.rotation
+    x, y, z, w = q.x, q.y, q.z, q.w
+    rotation = np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+    p = transform.translation
+    return rotation @ np.asarray(point, dtype=float) + np.array([p.x, p.y, p.z])
+
+
+def test_boards_and_arena_on_tf_and_arena_markers(start_node, peer, sheet_scene):
+    """A sheet as a board and its corner markers as an arena: the board's
+    pose and the floor frame join the markers' transforms in one TFMessage,
+    and ~/arena_markers places every marker on the floor."""
+    scene = sheet_scene.scene
+    start_node(
+        *node_args(
+            "-p", "diameter:=0.04",
+            "-p", f"boards:=[{sheet_scene.manifest}]",
+            "-p", f"arena_file:={sheet_scene.arena}",
+            "-p", "arena_frame:=floor",
+        )
+    )
+    rig = P.Rig(peer).ready(scene)
+    placed_reader = peer.reader("rt/whycode/arena_markers", t.MarkerArray)
+    peer.wait_matched(placed_reader)
+    answer = rig.send(scene, (8000, 0))
+    tf = answer.tf()
+    truth = scene.markers()
+    assert set(truth) == set(range(1, 13))
+    assert {"sheet", "floor"} | {f"whycode_{i}" for i in truth} == set(tf), sorted(tf)
+    assert all(x.header.frame_id == "camera_optical" for x in tf.values())
+    board_errors = [
+        float(np.linalg.norm(apply(tf["sheet"].transform, (*sheet_scene.on_page[i], 0.0)) - truth[i]["position"]))
+        for i in truth
+    ]
+    origin = sheet_scene.on_page[sheet_scene.corners[0]]
+
+    def on_floor(i):
+        x, y = sheet_scene.on_page[i]
+        return (x - origin[0], origin[1] - y)
+
+    arena_errors = [
+        float(np.linalg.norm(apply(tf["floor"].transform, (*on_floor(i), 0.0)) - truth[i]["position"]))
+        for i in truth
+    ]
+    placed = peer.find("rt/whycode/arena_markers", t.MarkerArray, lambda m: P.stamp_of(m.header) == (8000, 0), 5.0)
+    assert placed is not None, "no ~/arena_markers for the frame"
+    assert placed.header.frame_id == "floor"
+    assert [m.id for m in placed.markers] == [m.id for m in answer.markers.markers], "same markers, same order"
+    floor_errors = [
+        math.dist((m.pose.position.x, m.pose.position.y), on_floor(m.id)) for m in placed.markers
+    ]
+    assert all(m.has_pose and abs(m.pose.position.z) < 1e-9 for m in placed.markers)
+    # The sheet lies square to the arena: every marker's +x is the floor's.
+    yaw_deg = [math.degrees(2 * math.atan2(m.pose.orientation.z, m.pose.orientation.w)) for m in placed.markers]
+    print(f"board: worst marker {max(board_errors) * 1e3:.2f} mm off; floor frame: worst "
+          f"{max(arena_errors) * 1e3:.2f} mm; ~/arena_markers: worst {max(floor_errors) * 1e3:.2f} mm, "
+          f"yaw worst {max(map(abs, yaw_deg)):.2f} deg")
+    assert max(board_errors) < 2e-3, board_errors
+    assert max(arena_errors) < 2e-3, arena_errors
+    assert max(floor_errors) < 1e-3, floor_errors
+    assert max(map(abs, yaw_deg)) < 0.5, yaw_deg
+
+
 def test_compat_topic_carries_the_original_interface(start_node, peer, scene):
     node = start_node(*node_args("-p", "compat_markers:=true"))
     rig = P.Rig(peer).ready(scene)
@@ -499,6 +567,10 @@ other_node:
         (["--ros-args", "-p", "diameter:=-3"], "parameter diameter: -3 m is not a plausible"),
         (["--ros-args", "-p", "bits:=4", "-p", "distance:=9"], "parameter distance:"),
         (["--ros-args", "-p", "tag.ids:=[1, 1]"], "parameter tag.ids: ID 1 is listed twice"),
+        (["--ros-args", "-p", "boards:=[/nonexistent/board.json]"],
+         "parameter boards: /nonexistent/board.json: cannot read board: No such file"),
+        (["--ros-args", "-p", "arena_file:=/nonexistent/arena.yaml"],
+         "parameter arena_file: /nonexistent/arena.yaml: cannot read arena file"),
         (["--ros-args", "--params-file", "/nonexistent.yaml"], "/nonexistent.yaml"),
         (["--ros-args", "-r", "__node:=2fast"], "node name '2fast'"),
         (["--ros-args", "--frobnicate"], "unknown ROS argument '--frobnicate'"),
