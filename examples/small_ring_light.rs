@@ -123,7 +123,14 @@ fn main() {
                         scene.seed = (100 * k + j) as u64;
                         let (mut image, _) = render(&scene);
                         let text = "O O O 0 0 o o o";
-                        desk::stroke_letters(&mut image, text, (100.0, 400.0), size_pt, weight, ink);
+                        desk::stroke_letters(
+                            &mut image,
+                            text,
+                            (100.0, 400.0),
+                            size_pt,
+                            weight,
+                            ink,
+                        );
                         let found = Detector::new(DetectorConfig {
                             target: Target::WhyCode(fam8.clone()),
                             report_unreadable: true,

@@ -402,7 +402,14 @@ fn a_bold_letter_o_of_eleven_px_is_no_marker() {
     scene.noise = 2.0;
     scene.seed = 208;
     let (mut image, _) = render(&scene);
-    desk::stroke_letters(&mut image, "O O O 0 0 o o o", (100.0, 400.0), 10.0, 2.4, 50.0);
+    desk::stroke_letters(
+        &mut image,
+        "O O O 0 0 o o o",
+        (100.0, 400.0),
+        10.0,
+        2.4,
+        50.0,
+    );
     let family = Family::generate(8, 2).unwrap();
     let found = with_family(&family).detect(&image);
     assert!(found.is_empty(), "{found:?}");

@@ -206,10 +206,13 @@ pub fn read_defocused_ring<C: Deref<Target = [u8]>>(
 
 /// Most elongation of a small ring's light along its outline's major axis
 /// ([`light_elongation`]) for a ring the model vouches for without naming
-/// it. The light of real 8-14 px rings (the detector bar's rows 7 and 9,
-/// 447 rings) spans -0.20 to +0.19, the code's second harmonic turned any
-/// way; the hole of a bold stroke-font 'O' 10.7 px across reads +0.28, and
-/// 1757 letter candidates of 8-15 px have a median of +0.21.
+/// it. The light of real small rings (446 reported on the detector bar's
+/// row 7, 8-14 px, and row 9, minor axis under 14 px) spans -0.22 to
+/// +0.19, the code's second harmonic turned any way; the hole of a bold
+/// stroke-font 'O' 10.7 px across reads +0.28, and 1757 letter candidates
+/// of 8-15 px have a median of +0.21 (`examples/small_ring_light`). Rings
+/// the model names are left alone: a member explaining them with a clear
+/// margin over every other is what no letter earned.
 pub const MAX_LIGHT_ELONGATION: f64 = 0.23;
 
 /// How much more the light inside the ring's outer edge (radius 0.6 of
