@@ -646,6 +646,46 @@ mod tests {
     }
 
     #[test]
+    fn a_markers_light_is_round_and_a_pen_drawn_hole_is_not() {
+        let family = Family::generate(8, 2).unwrap();
+        for id in 1..=family.len() as u32 {
+            for turn in [0.0, 0.7, 1.9] {
+                let marker = Marker::whycode(8, family.code(id).unwrap(), 50.0);
+                let (image, outline) = draw(&marker, 10.0, 24, (12.3, 11.6), turn);
+                let e = light_elongation(&image, &outline).unwrap();
+                assert!(e.abs() <= MAX_LIGHT_ELONGATION, "ID {id}, turn {turn}: {e}");
+            }
+        }
+        // An 'O' drawn with a pen 3 px wide, 10.7 x 8.4 px outside (the
+        // stroke-font 'O' of issue 25: a hole 2 x 5 px).
+        let outline = ImageEllipse {
+            u: 12.2,
+            v: 11.7,
+            semi_major: 5.35,
+            semi_minor: 4.2,
+            angle: 0.0,
+        };
+        let inside = |x: f64, y: f64, a: f64, b: f64| {
+            let (dx, dy) = (x - outline.u, y - outline.v);
+            (dx / a).powi(2) + (dy / b).powi(2) <= 1.0
+        };
+        let letter = image::GrayImage::from_fn(24, 24, |x, y| {
+            let ink = (0..16)
+                .filter(|k| {
+                    let (sx, sy) = (
+                        f64::from(x) + (f64::from(k % 4) - 1.5) / 4.0,
+                        f64::from(y) + (f64::from(k / 4) - 1.5) / 4.0,
+                    );
+                    inside(sx, sy, 5.35, 4.2) && !inside(sx, sy, 2.35, 1.2)
+                })
+                .count();
+            Luma([(200 - 10 * ink) as u8])
+        });
+        let e = light_elongation(&letter, &outline).unwrap();
+        assert!(e > MAX_LIGHT_ELONGATION, "{e}");
+    }
+
+    #[test]
     fn a_disc_without_a_code_ring_is_no_small_ring() {
         let family = Family::generate(8, 2).unwrap();
         let (image, outline) = draw(&Marker::whycon(50.0), 14.0, 24, (12.0, 12.0), 0.0);
