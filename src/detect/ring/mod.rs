@@ -230,7 +230,15 @@ impl Rings {
                             && outer.semi_major > model::MAX_AFFINE_SEMI_MAJOR;
                     }
                     Some(ring) if ring.id != 0 => read = read.named_by_model(&ring),
-                    Some(_) => {}
+                    // Vouched for without a member to name, the ring's
+                    // light must be as round as a marker's: the lopsided
+                    // hole of a bold letter 'O' passes the structure ratio
+                    // (the best of a thousand member rotations fits some of
+                    // any hole's asymmetry) but not this.
+                    Some(_) => {
+                        marker = model::light_elongation(image, &c.outer)
+                            .is_none_or(|e| e <= model::MAX_LIGHT_ELONGATION);
+                    }
                     None => {
                         let reading = read_sectors(reader, image, c, false);
                         // A ring the structure test could not look at (cut
