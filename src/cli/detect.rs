@@ -76,8 +76,9 @@ pub struct DetectArgs {
 
     /// A board (a sheet's manifest: each page a plane) or a bundle file
     /// (YAML: markers' IDs, diameters and poses): each frame's JSON gets
-    /// its pose in `boards`. Repeatable; needs --camera
-    #[arg(long, value_name = "FILE", requires = "camera")]
+    /// its pose in `boards`. Repeatable; needs --camera (or a bag's
+    /// camera_info)
+    #[arg(long, value_name = "FILE")]
     board: Vec<PathBuf>,
 
     /// An arena file (`whycode arena`): each marker gets `arena` {x, y, z,

@@ -187,6 +187,60 @@ fn a_bag_is_read_as_one_stream_and_its_detections_written_as_the_node_would() {
         assert_eq!(tf[k]["schema"], "tf2_msgs/msg/TFMessage");
     }
 
+    // A board needs no --camera or --diameter from a bag: its camera_info
+    // gives the camera, the board's markers their diameter. A one-marker
+    // bundle's pose is that marker's (smoothed over the frames).
+    let id = ids(&frames[0])
+        .into_iter()
+        .find(|&id| id != VISITOR)
+        .unwrap();
+    std::fs::write(
+        d.join("one.yaml"),
+        format!(
+            "bundles:\n  - name: one\n    layout:\n      - {{id: {id}, diameter: 0.04, x: 0, y: 0, z: 0, qw: 1, qx: 0, qy: 0, qz: 0}}\n"
+        ),
+    )
+    .unwrap();
+    let out = whycode_in(
+        d,
+        &[
+            "detect",
+            "--format",
+            "json",
+            "--topic",
+            "/cam/image_raw",
+            "--board",
+            "one.yaml",
+            "swarm.mcap",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    for (line, posed) in lines(&stdout(&out)).iter().zip(&frames) {
+        let board = &line["boards"][0];
+        assert_eq!(board["name"], "one", "{line}");
+        assert_eq!(board["used"], json!([id]), "{line}");
+        let marker = posed["markers"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|m| m["id"] == id)
+            .unwrap();
+        let distance = |v: &Value| {
+            (0..3)
+                .map(|i| v[i].as_f64().unwrap().powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        let (b, m) = (distance(&board["position"]), distance(&marker["position"]));
+        assert!((b - m).abs() < 0.02 * m, "board at {b} m, marker at {m} m");
+    }
+    // Without a bag's camera_info, a board still needs --camera.
+    std::fs::write(d.join("still.png"), b"").unwrap();
+    let out = whycode_in(d, &["detect", "--board", "one.yaml", "still.png"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert!(err.contains("--board") && err.contains("camera"), "{err}");
+
     // The compressed topic: the frame that does not decode is skipped and
     // counted, the stream goes on.
     let out = whycode_in(
