@@ -243,15 +243,7 @@ fn without_a_lens_the_plane_mapping_removes_the_perspective_bias() {
         ..DetectorConfig::default()
     });
     let found = detector.detect(&image);
-    let plane = Arena::measure(
-        Corners::Ids(arena::CORNER_IDS),
-        arena::SIZE_M,
-        0.0,
-        None,
-        &found,
-        (image.width(), image.height()),
-    )
-    .unwrap();
+    let plane = measured_without_camera(&found, &image).unwrap();
     for r in &robots {
         let d = found.iter().find(|d| d.id == r.id).unwrap();
         let at = plane
@@ -315,18 +307,26 @@ fn a_corner_id_on_two_markers_is_refused() {
         ..DetectorConfig::default()
     })
     .detect(&image);
-    let err = Arena::measure(
-        Corners::Ids(arena::CORNER_IDS),
-        arena::SIZE_M,
-        0.0,
-        None,
-        &found,
-        (image.width(), image.height()),
-    )
-    .unwrap_err();
+    let err = measured_without_camera(&found, &image).unwrap_err();
     assert_eq!(err, ArenaError::SeenTwice { id: 3, count: 2 });
     assert_eq!(
         err.to_string(),
         "corner ID 3 was found on 2 markers: a corner's ID must be on one marker only"
     );
+}
+
+/// The test arena measured from one photo's detections by its corner IDs,
+/// on the floor, without a camera (a plane-to-image mapping).
+fn measured_without_camera(
+    found: &[whycode::detect::Detection],
+    image: &image::GrayImage,
+) -> Result<Arena, ArenaError> {
+    Arena::measure(
+        Corners::Ids(arena::CORNER_IDS),
+        arena::SIZE_M,
+        0.0,
+        None,
+        found,
+        (image.width(), image.height()),
+    )
 }

@@ -111,6 +111,29 @@ fn a_sheet_with_half_its_markers_covered_gives_the_page_pose() {
 /// A marker's ID, its centre in the cube's frame and its orientation there.
 type Face = (u32, Vector3<f64>, UnitQuaternion<f64>);
 
+/// The cube's faces as 40 mm markers on cards, the cube's centre at
+/// `position` turned by `rotation`, seen by `camera`.
+fn cube_scene(
+    camera: whycode::camera::Camera,
+    family: &Family,
+    faces: &[Face],
+    rotation: &Matrix3<f64>,
+    position: Vector3<f64>,
+) -> Scene {
+    let mut scene = Scene::new(camera);
+    for (id, p, q) in faces {
+        let marker = Marker::whycode(10, family.code(*id).unwrap(), 40.0);
+        let placement = Placement::new(
+            position + rotation * p,
+            rotation * q.to_rotation_matrix().matrix(),
+        );
+        let mut loose = LooseMarker::new(marker, *id, placement);
+        loose.card_half_mm = 29.0;
+        scene.objects.push(SceneObject::Marker(loose));
+    }
+    scene
+}
+
 /// A marker on each of the first `faces` of a 6 cm cube (+z, +x, +y faces;
 /// each marker's +z out of its face) and the bundle describing them.
 fn cube(faces: usize) -> (Vec<Face>, Vec<Board>) {
@@ -159,17 +182,7 @@ fn a_bundle_on_a_cube_gives_the_cube_pose() {
     .unwrap()
     .matrix();
     let cube_position = Vector3::new(0.03, -0.02, 0.45);
-    let mut scene = Scene::new(truth);
-    for (id, p, q) in &faces {
-        let marker = Marker::whycode(10, family.code(*id).unwrap(), 40.0);
-        let placement = Placement::new(
-            cube_position + cube_rotation * p,
-            cube_rotation * q.to_rotation_matrix().matrix(),
-        );
-        let mut loose = LooseMarker::new(marker, *id, placement);
-        loose.card_half_mm = 29.0;
-        scene.objects.push(SceneObject::Marker(loose));
-    }
+    let mut scene = cube_scene(truth, &family, &faces, &cube_rotation, cube_position);
     scene.focus_blur_px = 0.6;
     scene.noise = 1.5;
     let image = simulate::render(&scene).0;
@@ -226,17 +239,7 @@ fn a_tracked_board_is_smoothed_over_the_frames() {
     let (mut smoothed_sq, mut raw_sq, mut counted) = (0.0, 0.0, 0);
     for frame in 0u32..40 {
         let cube_position = Vector3::new(-0.02 + 0.0003 * f64::from(frame), -0.02, 0.7);
-        let mut scene = Scene::new(truth);
-        for (id, p, q) in &faces {
-            let marker = Marker::whycode(10, family.code(*id).unwrap(), 40.0);
-            let placement = Placement::new(
-                cube_position + cube_rotation * p,
-                cube_rotation * q.to_rotation_matrix().matrix(),
-            );
-            let mut loose = LooseMarker::new(marker, *id, placement);
-            loose.card_half_mm = 29.0;
-            scene.objects.push(SceneObject::Marker(loose));
-        }
+        let mut scene = cube_scene(truth, &family, &faces, &cube_rotation, cube_position);
         scene.focus_blur_px = 1.0;
         scene.noise = 6.0;
         scene.seed = u64::from(frame) + 7;
