@@ -677,6 +677,8 @@ pub fn sheet_detector(
         tracking: false,
         camera,
         diameter_m: camera.and(diameter),
+        // A calibration is only as good as the centres it is fitted to.
+        fine_edges: true,
         ..Default::default()
     })
 }

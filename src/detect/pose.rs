@@ -262,12 +262,18 @@ impl Detector {
         let mut points = std::mem::take(&mut self.pose_points);
         points.clear();
         let min_rise = 0.5 * (c.white - c.black);
+        let rays = if self.config.fine_edges {
+            ellipse::EdgeRays::FINE
+        } else {
+            ellipse::EdgeRays::POSE
+        };
         let everywhere = |_: (f64, f64)| true;
         ellipse::concentric_edge_points(
             gray,
             &c.outer,
             1.0,
             min_rise,
+            rays,
             everywhere,
             &mut self.spokes,
             &mut self.inner_scratch,
@@ -289,6 +295,7 @@ impl Detector {
                     &c.outer,
                     ratio,
                     min_rise,
+                    rays,
                     wanted,
                     &mut self.spokes,
                     &mut self.inner_scratch,
