@@ -248,6 +248,20 @@ impl Rings {
                         read.take(&reading);
                     }
                 }
+                // Out of focus by more than the small-ring model's own
+                // blurs, the ring may still be named by the members
+                // rendered through the blur its outline shows.
+                if read.id == 0 {
+                    if let Some(ring) = family.and_then(|f| defocused_small_ring(image, gray, c, f))
+                    {
+                        marker = true;
+                        read = RingRead {
+                            axis_point: None,
+                            centre_estimate: None,
+                            ..read.named_by_model(&ring)
+                        };
+                    }
+                }
             }
         }
         if let (Some(bits), RingEvidence::TooSmall, true) = (family_bits, evidence, read.id != 0) {
@@ -374,6 +388,29 @@ fn small_ring<C: Deref<Target = [u8]>>(
     })
 }
 
+/// A ring too small to sample named through the focus blur its outline
+/// shows, when that blur is past the small-ring model's own: the member
+/// [`model::read_defocused_ring`] names, unless a ring of a neighbouring
+/// count explains the pixels better. `None` under a motion blur, a blur
+/// the small-ring model covers, or without a member named.
+fn defocused_small_ring<C: Deref<Target = [u8]>>(
+    image: &ImageBuffer<Luma<u8>, C>,
+    gray: Gray<'_>,
+    c: &Candidate,
+    family: &Family,
+) -> Option<SmallRing> {
+    let outer = &c.outer;
+    if ellipse::linear_blur(gray, outer).is_some_and(|b| b.length >= ellipse::MIN_MOTION_BLUR_PX) {
+        return None;
+    }
+    let sigma = ellipse::defocus(gray, outer).filter(|&s| s >= MIN_SMALL_RING_DEFOCUS_PX)?;
+    let ring = model::read_defocused_ring(image, outer, family, sigma)?;
+    let named = ring.structured
+        && ring.id != 0
+        && !model::neighbour_count_fits_better_defocused(image, outer, family, &ring, sigma);
+    named.then_some(ring)
+}
+
 /// The reading as the blurred ring model judges it: None when the model
 /// sees no code ring (no opinion); else the model vouches for the ring (a
 /// marker even when the structure test saw no Manchester structure) and
@@ -436,6 +473,11 @@ fn coarser_ring<C: Deref<Target = [u8]>>(
 /// Focus blur (Gaussian sigma, pixels) from which a ring that the
 /// structure test or the reader could not settle is read through it.
 const MIN_DEFOCUS_PX: f64 = 0.5;
+
+/// Focus blur (Gaussian sigma, pixels) from which a ring too small to
+/// sample is also read through it: past the small-ring model's blurs
+/// (its widest is 1.05 px with the pixel's own area).
+const MIN_SMALL_RING_DEFOCUS_PX: f64 = 0.8;
 
 /// Focus blur, relative to the half-sector's width, from which the sectors'
 /// edges are too soft for the structure test and the reader.
