@@ -24,7 +24,6 @@ fn centre_errors(
 ) -> (f64, f64) {
     let truth = calibration::lens();
     let manifest = calibration::a4_sheet();
-    let [w, h] = calibration::PAGE_MM;
     let posed = Posed {
         camera: &truth,
         diameter_m: config.diameter_m.expect("the sheet detector poses"),
@@ -44,8 +43,7 @@ fn centre_errors(
                     .iter()
                     .find(|m| m.id == *id)
                     .expect("an ID");
-                let (tu, tv) = truth
-                    .project(&placement.to_camera_mm(m.x_mm - w / 2.0, h / 2.0 - m.y_mm))
+                let (tu, tv) = calibration::projected_centre(&truth, placement, m)
                     .expect("in front of the camera");
                 errors.push((u - tu).hypot(v - tv));
             }

@@ -18,7 +18,7 @@
 //! (OpenCV optical: x right, y down, z forward).
 
 mod background;
-mod effects;
+pub(crate) mod effects;
 pub mod layout;
 mod matching;
 mod raster;

@@ -82,6 +82,18 @@ fn page_frame((x, y): (f64, f64)) -> (f64, f64) {
     (x - PAGE_MM[0] / 2.0, PAGE_MM[1] / 2.0 - y)
 }
 
+/// Where `camera` sees the centre of `marker` (printed on the sheet, mm
+/// from the page's top-left corner) when the page's centre is at
+/// `placement`: the truth a detected centre is held against.
+pub fn projected_centre(
+    camera: &Camera,
+    placement: &Placement,
+    marker: &PrintedMarker,
+) -> Option<(f64, f64)> {
+    let (x, y) = page_frame((marker.x_mm, marker.y_mm));
+    camera.project(&placement.to_camera_mm(x, y))
+}
+
 /// `count` poses of the page's centre, seeded: 0.35-0.6 m away, tilted up
 /// to 45° about varied axes, placed so the whole page (and so the whole
 /// chessboard) is inside the image, spread over the image so that its
@@ -164,7 +176,7 @@ pub fn scene(camera: &Camera, object: SceneObject, seed: u64) -> Scene {
     scene.seed = seed;
     // These views measure centres to thousandths of a pixel. With 4×4
     // samples a pixel the rendered edges alone moved noise-free marker
-    // centres by 0.0070 px rms, more than the detector's own error (8×8:
+    // centres by 0.0069 px rms, more than the detector's own error (8×8:
     // 0.0043, 16×16: 0.0036; docs/calibration.md); a camera integrates
     // its pixels exactly.
     scene.supersampling = 8;

@@ -125,12 +125,9 @@ fn the_page_decides_which_of_its_two_poses_a_marker_has() {
         ..Default::default()
     });
     let found = detector.detect(&image);
-    let [w, h] = calibration::PAGE_MM;
     let true_centre = |id: u32| {
         let m = manifest.markers.iter().find(|m| m.id == id).unwrap();
-        truth
-            .project(&placement.to_camera_mm(m.x_mm - w / 2.0, h / 2.0 - m.y_mm))
-            .unwrap()
+        calibration::projected_centre(&truth, &placement, m).unwrap()
     };
     let normal = placement.normal();
     let wrong: Vec<u32> = found
@@ -191,7 +188,6 @@ fn calibration_reads_centres_nearer_the_truth_than_live_detection() {
         fine_edges: false,
         ..fine.clone()
     };
-    let [w, h] = calibration::PAGE_MM;
     let placements = calibration::views(&truth, 4, 9);
     let images: Vec<_> = placements
         .iter()
@@ -210,9 +206,7 @@ fn calibration_reads_centres_nearer_the_truth_than_live_detection() {
             assert_eq!(views[0].ids.len(), 35);
             for (id, [u, v]) in views[0].ids.iter().zip(&views[0].pixels) {
                 let m = manifest.markers.iter().find(|m| m.id == *id).unwrap();
-                let (tu, tv) = truth
-                    .project(&placement.to_camera_mm(m.x_mm - w / 2.0, h / 2.0 - m.y_mm))
-                    .unwrap();
+                let (tu, tv) = calibration::projected_centre(&truth, placement, m).unwrap();
                 squares.push((u - tu).powi(2) + (v - tv).powi(2));
             }
         }

@@ -962,34 +962,13 @@ mod tests {
         }
     }
 
-    /// `image` blurred by a Gaussian of `sigma` pixels out to three sigma,
-    /// edges clamped (as the simulator's focus blur).
+    /// `image` through the simulator's focus blur of `sigma` pixels.
     fn defocused(image: &image::GrayImage, sigma: f64) -> image::GrayImage {
-        let (w, h) = (image.width() as i64, image.height() as i64);
-        let reach = (3.0 * sigma).ceil() as i64;
-        let kernel: Vec<f64> = (-reach..=reach)
-            .map(|k| (-((k * k) as f64) / (2.0 * sigma * sigma)).exp())
-            .collect();
-        let total: f64 = kernel.iter().sum();
-        let at = |x: i64, y: i64| f64::from(image.get_pixel(x as u32, y as u32).0[0]);
-        let rows: Vec<f64> = (0..w * h)
-            .map(|k| {
-                let (x, y) = (k % w, k / w);
-                (-reach..=reach)
-                    .map(|d| kernel[(d + reach) as usize] * at((x + d).clamp(0, w - 1), y))
-                    .sum::<f64>()
-                    / total
-            })
-            .collect();
-        image::GrayImage::from_fn(w as u32, h as u32, |x, y| {
-            let (x, y) = (i64::from(x), i64::from(y));
-            let grey: f64 = (-reach..=reach)
-                .map(|d| {
-                    kernel[(d + reach) as usize] * rows[((y + d).clamp(0, h - 1) * w + x) as usize]
-                })
-                .sum::<f64>()
-                / total;
-            Luma([grey.round() as u8])
+        let (w, h) = image.dimensions();
+        let grey: Vec<f32> = image.pixels().map(|p| f32::from(p.0[0])).collect();
+        let blurred = crate::simulate::effects::gaussian_blur(&grey, w as usize, h as usize, sigma);
+        image::GrayImage::from_fn(w, h, |x, y| {
+            Luma([blurred[(y * w + x) as usize].round().clamp(0.0, 255.0) as u8])
         })
     }
 
