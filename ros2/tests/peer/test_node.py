@@ -445,18 +445,26 @@ def test_debug_image(start_node, peer, scene):
 
 
 def test_the_newest_frame_wins_over_a_queue(start_node, peer, big_scene, figures):
-    # Drawing the debug image of a 1920x1080 frame makes the node slower
-    # than the peer can write frames.
-    node = start_node(*node_args("-p", "debug_image:=true", "-p", "tracking:=false"))
-    rig = P.Rig(peer).ready(big_scene)
-    warm = rig.send(big_scene, (7900, 0))
+    # The peer writes a small JPEG every millisecond or so, while the node
+    # decodes each 1920x1080 frame, detects and draws a debug image of it
+    # (many milliseconds): on any machine, frames come several times faster
+    # than the node answers, also while it is busy with one.
+    node = start_node(
+        *node_args(
+            "-p", "image_transport:=compressed", "-p", "debug_image:=true", "-p", "tracking:=false"
+        )
+    )
+    rig = P.Rig(peer, compressed=True).ready(big_scene)
+    warm = rig.send(big_scene, (7900, 0), "jpeg")
     assert warm.markers is not None
     info = big_scene.camera_info(rig.frame_id)
     rig.infos.write(info)
     sent = 40
+    frames = [P.compressed_message(big_scene, (8000 + k, 0), "jpeg", rig.frame_id) for k in range(sent)]
     started = time.monotonic()
-    for k in range(sent):
-        rig.images.write(P.image_message(big_scene, (8000 + k, 0), rig.frame_id))
+    for frame in frames:
+        rig.images.write(frame)
+        time.sleep(0.001)
     burst_ms = (time.monotonic() - started) * 1e3
     last = (8000 + sent - 1, 0)
     # Answered frames come in order, and the newest is among the last few.
@@ -468,11 +476,11 @@ def test_the_newest_frame_wins_over_a_queue(start_node, peer, big_scene, figures
     )
     node.stop()
     figures.append(
-        f"burst of {sent} 1920x1080 frames in {burst_ms:.0f} ms to a node drawing debug images: "
-        f"{len(answered)} answered, newest answered {answered[-1][0] - 8000 if answered else None} "
-        f"of 0..{sent - 1}"
+        f"burst of {sent} 1920x1080 JPEG frames ({len(big_scene.jpeg) // 1024} KiB) in {burst_ms:.0f} ms "
+        f"to a node drawing debug images: {len(answered)} answered, newest answered "
+        f"{answered[-1][0] - 8000 if answered else None} of 0..{sent - 1}"
     )
-    assert 0 < len(answered) < 0.75 * sent, answered
+    assert 0 < len(answered) < 0.5 * sent, answered
     assert answered[-1][0] >= last[0] - 2, answered
     # The node counts the frames it never read (gaps in the writer's
     # sequence numbers, and frames a newer one replaced before it was read).
