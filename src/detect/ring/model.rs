@@ -18,7 +18,8 @@
 //!
 //! Each pixel's model value is linear in the 2n half-sector colours, so the
 //! pixel sums that the least-squares comparison needs are formed once per
-//! blur and phase; each member rotation then costs O(n²).
+//! blur and phase; each member rotation then costs a table lookup per bit
+//! ([`PatternTables`]).
 
 use std::f64::consts::PI;
 
@@ -29,7 +30,6 @@ use image::{ImageBuffer, Luma};
 use crate::detect::ellipse::LinearBlur;
 use crate::family::{necklace, Family};
 use crate::geometry::{RING_INNER_RATIO, WHYCODE_WHITE_RATIO};
-use crate::math::angle;
 use crate::math::Ellipse as ImageEllipse;
 
 /// Semi-major axis (pixels) up to which a steep view of the marker is
@@ -66,9 +66,6 @@ const MIN_ID_MARGIN: f64 = 1.6;
 /// reads about 0.85 of the true length: its ends are rounded by the focus
 /// blur and the pixels).
 const BLURRED_LENGTHS: [f64; 3] = [1.0, 1.15, 1.3];
-
-/// Patterns whose sums are accumulated side by side.
-const LANES: usize = 4;
 
 /// Pixels compared on a blurred ring (a subset, evenly spread, on large ones).
 const COMPARED_PIXELS: f64 = 1200.0;
@@ -164,6 +161,9 @@ fn neighbour_count_fits_better_through<C: Deref<Target = [u8]>>(
     footprints: &[Footprint],
     stride: u32,
 ) -> bool {
+    let Some(ring) = RingPixels::read(image, outer, footprints, stride) else {
+        return false;
+    };
     let bits = family.bits();
     [
         bits.saturating_sub(2),
@@ -174,7 +174,7 @@ fn neighbour_count_fits_better_through<C: Deref<Target = [u8]>>(
     .into_iter()
     .filter(|n| super::manchester::BITS.contains(n))
     .filter_map(|n| Family::generate(n, 1).ok())
-    .filter_map(|every| compare(image, outer, &every, footprints, stride, Thresholds::SMALL))
+    .filter_map(|every| ring.compare(&every, Thresholds::SMALL))
     .any(|other| other.residual < read.residual)
 }
 
@@ -406,232 +406,417 @@ fn compare<C: Deref<Target = [u8]>>(
     stride: u32,
     thresholds: Thresholds,
 ) -> Option<SmallRing> {
-    let bits = family.bits();
-    let members = family.len();
-    if members == 0 || members * bits as usize > MAX_MODELS {
-        return None;
-    }
-    let sectors = 2 * bits as usize;
-    let sector = PI / f64::from(bits);
-    let (s, c) = outer.angle.sin_cos();
-    let (a, b) = (outer.semi_major, outer.semi_minor);
-    if !(a.is_finite() && b > 1.0 && outer.u.is_finite() && outer.v.is_finite()) {
-        return None;
-    }
-    // Marker coordinates of an image point: p along the major axis, q along
-    // the minor one turned so that the parameter runs visually
-    // counter-clockwise (as in the ring reader's frame).
-    let to_marker = |x: f64, y: f64| {
-        let (dx, dy) = (x - outer.u, y - outer.v);
-        ((dx * c + dy * s) / a, (dx * s - dy * c) / b)
-    };
-    let (width, height) = image.dimensions();
-    let reach = a * COMPARED_RADIUS + 1.0;
-    let (x0, x1) = ((outer.u - reach).floor(), (outer.u + reach).ceil());
-    let (y0, y1) = ((outer.v - reach).floor(), (outer.v + reach).ceil());
-    if x0 < 0.0 || y0 < 0.0 || x1 >= f64::from(width) || y1 >= f64::from(height) {
-        return None;
-    }
-    let mut pixels: Vec<(f64, f64, f64)> = Vec::new();
-    for y in (y0 as u32..=y1 as u32).step_by(stride as usize) {
-        for x in (x0 as u32..=x1 as u32).step_by(stride as usize) {
-            let (p, q) = to_marker(f64::from(x), f64::from(y));
-            if radius(p, q) <= COMPARED_RADIUS {
-                pixels.push((
-                    f64::from(x),
-                    f64::from(y),
-                    f64::from(image.get_pixel(x, y).0[0]),
-                ));
-            }
+    RingPixels::read(image, outer, footprints, stride)?.compare(family, thresholds)
+}
+
+/// An image point in the marker's frame: p along the outline's major axis,
+/// q along the minor one turned so that the parameter runs visually
+/// counter-clockwise (as in the ring reader's frame), both in radii.
+#[derive(Debug, Clone, Copy)]
+struct MarkerFrame {
+    u: f64,
+    v: f64,
+    sin: f64,
+    cos: f64,
+    a: f64,
+    b: f64,
+}
+
+impl MarkerFrame {
+    fn of(outer: &ImageEllipse) -> MarkerFrame {
+        let (sin, cos) = outer.angle.sin_cos();
+        MarkerFrame {
+            u: outer.u,
+            v: outer.v,
+            sin,
+            cos,
+            a: outer.semi_major,
+            b: outer.semi_minor,
         }
     }
-    let count = pixels.len() as f64;
-    if count < 12.0 {
-        return None;
-    }
-    let sum_y: f64 = pixels.iter().map(|p| p.2).sum();
-    let syy = pixels.iter().map(|p| p.2 * p.2).sum::<f64>() - sum_y * sum_y / count;
-    if syy <= 0.0 {
-        return None;
-    }
-    let codes: Vec<u32> = (1..=members as u32)
-        .filter_map(|id| family.code(id))
-        .collect();
-    // Sector colours of every member rotation: bit i owns sectors 2i, 2i+1;
-    // a 1 is white then black.
-    let patterns: Vec<(u32, u32, Vec<usize>)> = codes
-        .iter()
-        .enumerate()
-        .flat_map(|(k, &code)| {
-            (0..bits).map(move |r| {
-                let word = necklace::rotl(code, bits, r);
-                let white: Vec<usize> = (0..bits as usize)
-                    .map(|i| {
-                        let bit = word >> (bits as usize - 1 - i) & 1;
-                        if bit == 1 {
-                            2 * i
-                        } else {
-                            2 * i + 1
-                        }
-                    })
-                    .collect();
-                (k as u32 + 1, r, white)
-            })
-        })
-        .collect();
 
-    struct Best {
-        sse: f64,
-        id: u32,
-        rotation: u32,
-        phase: f64,
+    #[inline]
+    fn marker_point(&self, x: f64, y: f64) -> (f64, f64) {
+        let (dx, dy) = (x - self.u, y - self.v);
+        (
+            (dx * self.cos + dy * self.sin) / self.a,
+            (dx * self.sin - dy * self.cos) / self.b,
+        )
     }
-    let mut best: Option<Best> = None;
-    // Best residual of every member (any rotation, phase and blur).
-    let mut per_member = vec![f64::INFINITY; codes.len() + 1];
-    let mut best_null = f64::INFINITY;
-    let mut weights = vec![0.0f64; sectors];
-    let mut touched: Vec<usize> = Vec::with_capacity(sectors);
-    // The pixels' coverage of the marker, formed once for every Gaussian
-    // tried, out to the widest one's reach.
-    let widest = footprints
-        .iter()
-        .filter_map(|f| match f {
-            Footprint::Gaussian(sigma) => Some(gaussian_kernel(*sigma).1),
-            Footprint::Points(_) => None,
-        })
-        .max()
-        .unwrap_or(0);
-    let mut coverage: Option<Coverage> = None;
-    for footprint in footprints {
-        // Per pixel: white weight outside the ring, and (angle, weight) of
-        // sub-samples inside it.
-        let (fixed, ring_samples) = match footprint {
-            Footprint::Gaussian(sigma) => {
-                let coverage = coverage
-                    .get_or_insert_with(|| Coverage::of(&pixels, widest, &to_marker, sectors));
-                rendered_through_gaussian(&pixels, *sigma, coverage)
+}
+
+/// The pixels of one ring that the model is compared with, and what each
+/// footprint samples of the marker at them: read once, then compared with
+/// the family and with rings of the neighbouring bit counts
+/// ([`neighbour_count_fits_better`]), whose sectors differ but whose
+/// samples do not.
+struct RingPixels {
+    frame: MarkerFrame,
+    /// (x, y, grey) of each pixel compared.
+    pixels: Vec<(f64, f64, f64)>,
+    sum_y: f64,
+    /// Σ (y − ȳ)².
+    syy: f64,
+    footprints: Vec<Sampled>,
+    /// What every pixel's area covers of the marker, for the Gaussians.
+    subsamples: Option<SubSamples>,
+}
+
+/// A footprint's samples of the marker at the compared pixels.
+enum Sampled {
+    /// Per pixel: the weight on white outside the code ring, and the
+    /// (angle, weight) of each sample inside the ring.
+    #[allow(clippy::type_complexity)]
+    Points(Vec<f64>, Vec<Vec<(f64, f64)>>),
+    /// The pixel's area seen through a Gaussian of this sigma, pixels.
+    Gaussian(f64),
+}
+
+impl RingPixels {
+    /// `None` when the ring leaves the image or shows too few pixels (or
+    /// none but one grey) to compare.
+    fn read<C: Deref<Target = [u8]>>(
+        image: &ImageBuffer<Luma<u8>, C>,
+        outer: &ImageEllipse,
+        footprints: &[Footprint],
+        stride: u32,
+    ) -> Option<RingPixels> {
+        let (a, b) = (outer.semi_major, outer.semi_minor);
+        if !(a.is_finite() && b > 1.0 && outer.u.is_finite() && outer.v.is_finite()) {
+            return None;
+        }
+        let frame = MarkerFrame::of(outer);
+        let (width, height) = image.dimensions();
+        let reach = a * COMPARED_RADIUS + 1.0;
+        let (x0, x1) = ((outer.u - reach).floor(), (outer.u + reach).ceil());
+        let (y0, y1) = ((outer.v - reach).floor(), (outer.v + reach).ceil());
+        if x0 < 0.0 || y0 < 0.0 || x1 >= f64::from(width) || y1 >= f64::from(height) {
+            return None;
+        }
+        let mut pixels: Vec<(f64, f64, f64)> = Vec::new();
+        for y in (y0 as u32..=y1 as u32).step_by(stride as usize) {
+            for x in (x0 as u32..=x1 as u32).step_by(stride as usize) {
+                let (p, q) = frame.marker_point(f64::from(x), f64::from(y));
+                if radius(p, q) <= COMPARED_RADIUS {
+                    pixels.push((
+                        f64::from(x),
+                        f64::from(y),
+                        f64::from(image.get_pixel(x, y).0[0]),
+                    ));
+                }
             }
-            Footprint::Points(offsets) => sampled_through(&pixels, offsets, &to_marker),
-        };
-        // Structureless ring: y ≈ α + β·fixed + γ·ring coverage.
-        let coverage: Vec<f64> = ring_samples
+        }
+        let count = pixels.len() as f64;
+        if count < 12.0 {
+            return None;
+        }
+        let sum_y: f64 = pixels.iter().map(|p| p.2).sum();
+        let syy = pixels.iter().map(|p| p.2 * p.2).sum::<f64>() - sum_y * sum_y / count;
+        if syy <= 0.0 {
+            return None;
+        }
+        // The pixels' coverage of the marker is formed once for every
+        // Gaussian tried, out to the widest one's reach.
+        let widest = footprints
             .iter()
-            .map(|v| v.iter().map(|s| s.1).sum())
+            .filter_map(|f| match f {
+                Footprint::Gaussian(sigma) => Some(gaussian_kernel(*sigma).1),
+                Footprint::Points(_) => None,
+            })
+            .max();
+        let subsamples = widest.map(|reach| SubSamples::of(&pixels, reach, &frame));
+        let footprints = footprints
+            .iter()
+            .map(|f| match f {
+                Footprint::Gaussian(sigma) => Sampled::Gaussian(*sigma),
+                Footprint::Points(offsets) => {
+                    let (fixed, ring) = sampled_through(&pixels, offsets, &frame);
+                    Sampled::Points(fixed, ring)
+                }
+            })
             .collect();
-        best_null = best_null.min(residual_of_two(&pixels, &fixed, &coverage));
-        let sum_fixed: f64 = fixed.iter().sum();
-        let ff: f64 = fixed.iter().map(|f| f * f).sum();
-        let yf: f64 = pixels.iter().zip(&fixed).map(|(p, f)| p.2 * f).sum();
-        for step in 0..PHASE_STEPS {
-            let phase = 2.0 * sector * step as f64 / PHASE_STEPS as f64;
-            // Sums over pixels of W (pixel x sector weights).
-            let mut gram = vec![0.0f64; sectors * sectors];
-            let mut w_sum = vec![0.0f64; sectors];
-            let mut w_fixed = vec![0.0f64; sectors];
-            let mut w_y = vec![0.0f64; sectors];
-            for (k, samples) in ring_samples.iter().enumerate() {
-                if samples.is_empty() {
-                    continue;
+        Some(RingPixels {
+            frame,
+            pixels,
+            sum_y,
+            syy,
+            footprints,
+            subsamples,
+        })
+    }
+
+    /// Compares the pixels with every member of `family` at every rotation.
+    /// `None` when the family is too large to compare.
+    fn compare(&self, family: &Family, thresholds: Thresholds) -> Option<SmallRing> {
+        let bits = family.bits();
+        let members = family.len();
+        if members == 0 || members * bits as usize > MAX_MODELS {
+            return None;
+        }
+        let sectors = 2 * bits as usize;
+        let sector = PI / f64::from(bits);
+        let (pixels, sum_y, syy) = (&self.pixels, self.sum_y, self.syy);
+        let count = pixels.len() as f64;
+        let codes: Vec<u32> = (1..=members as u32)
+            .filter_map(|id| family.code(id))
+            .collect();
+        // Every member rotation as the word seen, bit i (least significant
+        // first) owning sectors 2i, 2i+1; a 1 is white then black.
+        let patterns: Vec<(u32, u32, u64)> = codes
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &code)| {
+                (0..bits).map(move |r| {
+                    let word = necklace::rotl(code, bits, r);
+                    let seen = (0..bits).fold(0u64, |seen, i| {
+                        seen | u64::from(word >> (bits - 1 - i) & 1) << i
+                    });
+                    (k as u32 + 1, r, seen)
+                })
+            })
+            .collect();
+        let mut tables = PatternTables::new(bits as usize);
+        struct Best {
+            sse: f64,
+            id: u32,
+            rotation: u32,
+            phase: f64,
+        }
+        let mut best: Option<Best> = None;
+        // Best residual of every member (any rotation, phase and blur).
+        let mut per_member = vec![f64::INFINITY; codes.len() + 1];
+        let mut best_null = f64::INFINITY;
+        // The Gaussians' coverage of the ring's wedges, binned once for all.
+        let coverage = self
+            .subsamples
+            .as_ref()
+            .map(|subsamples| subsamples.binned(sectors));
+        for footprint in &self.footprints {
+            // Per pixel: white weight outside the ring, and (wedge, weight) of
+            // its footprint inside it.
+            let (fixed_through, wedge_samples);
+            let (fixed, ring_samples) = match footprint {
+                Sampled::Gaussian(sigma) => {
+                    let coverage = coverage.as_ref()?;
+                    (fixed_through, wedge_samples) =
+                        rendered_through_gaussian(pixels, *sigma, coverage);
+                    (&fixed_through, &wedge_samples)
                 }
-                // A footprint covers a few sectors: keep only those.
-                touched.clear();
-                for &(t, w) in samples {
-                    let index = angle::wrap_index(
-                        angle::floor_to_int((t - phase) / sector),
-                        sectors as i64,
-                    );
-                    if weights[index] == 0.0 {
-                        touched.push(index);
-                    }
-                    weights[index] += w;
+                Sampled::Points(fixed, angles) => {
+                    wedge_samples = in_wedges(angles, sectors);
+                    (fixed, &wedge_samples)
                 }
-                let y = pixels[k].2;
-                for &i in &touched {
-                    let wi = weights[i];
-                    w_sum[i] += wi;
-                    w_fixed[i] += wi * fixed[k];
-                    w_y[i] += wi * y;
-                    for &j in &touched {
-                        gram[i * sectors + j] += wi * weights[j];
-                    }
-                }
-                for &i in &touched {
-                    weights[i] = 0.0;
-                }
-            }
-            // Four patterns at a time, each summed in its own order: a
-            // pattern's sums are chains of dependent additions, which leave
-            // the adder idle between them; four independent chains do not.
-            for group in patterns.chunks(LANES) {
-                let white: [&[usize]; LANES] =
-                    std::array::from_fn(|k| group[k.min(group.len() - 1)].2.as_slice());
-                let mut sm = [sum_fixed; LANES];
-                let mut smm = [ff; LANES];
-                let mut sym = [yf; LANES];
-                for b in 0..bits as usize {
-                    for k in 0..LANES {
-                        let i = white[k][b];
-                        sm[k] += w_sum[i];
-                        smm[k] += 2.0 * w_fixed[i];
-                        sym[k] += w_y[i];
-                    }
-                    for b2 in 0..bits as usize {
-                        for k in 0..LANES {
-                            smm[k] += gram[white[k][b] * sectors + white[k][b2]];
-                        }
-                    }
-                }
-                for (k, (id, rotation, _)) in group.iter().enumerate() {
-                    let (sm, smm, sym) = (sm[k], smm[k], sym[k]);
+            };
+            // Structureless ring: y ≈ α + β·fixed + γ·ring coverage.
+            let coverage: Vec<f64> = ring_samples
+                .iter()
+                .map(|v| v.iter().map(|s| s.1).sum())
+                .collect();
+            best_null = best_null.min(residual_of_two(pixels, fixed, &coverage));
+            let sum_fixed: f64 = fixed.iter().sum();
+            let ff: f64 = fixed.iter().map(|f| f * f).sum();
+            let yf: f64 = pixels.iter().zip(fixed).map(|(p, f)| p.2 * f).sum();
+            // A phase a whole sector on reads every pixel's sectors one index
+            // down: only the phases within the first sector are summed.
+            let within: Vec<PhaseSums> = (0..WEDGES_PER_SECTOR)
+                .map(|step| PhaseSums::of(pixels, fixed, ring_samples, sectors, step))
+                .collect();
+            for step in 0..PHASE_STEPS {
+                let phase = 2.0 * sector * step as f64 / PHASE_STEPS as f64;
+                let shifted;
+                let sums = if step < WEDGES_PER_SECTOR {
+                    &within[step]
+                } else {
+                    shifted = within[step - WEDGES_PER_SECTOR].next_sector();
+                    &shifted
+                };
+                let PhaseSums {
+                    gram,
+                    w_sum,
+                    w_fixed,
+                    w_y,
+                } = sums;
+                tables.fill(gram, w_sum, w_fixed, w_y);
+                for &(id, rotation, seen) in &patterns {
+                    let (sm, smm, sym) = tables.sums(seen);
+                    let (sm, smm, sym) = (sum_fixed + sm, ff + smm, yf + sym);
                     let sym_c = sym - sum_y * sm / count;
                     let smm_c = smm - sm * sm / count;
                     if sym_c <= 0.0 || smm_c <= 0.0 {
                         continue;
                     }
+                    // The residual syy − sym_c²/smm_c beats the member's best
+                    // so far only if sym_c² exceeds (syy − best)·smm_c: most
+                    // rotations are refused without a division.
+                    let slot = &mut per_member[id as usize];
+                    if sym_c * sym_c <= (syy - *slot) * smm_c {
+                        continue;
+                    }
                     let sse = syy - sym_c * sym_c / smm_c;
-                    let slot = &mut per_member[*id as usize];
                     *slot = slot.min(sse);
                     if best.as_ref().is_none_or(|b| sse < b.sse) {
                         best = Some(Best {
                             sse,
-                            id: *id,
-                            rotation: *rotation,
+                            id,
+                            rotation,
                             phase,
                         });
                     }
                 }
             }
         }
+        let best = best?;
+        let runner_up = per_member
+            .iter()
+            .enumerate()
+            .filter(|&(id, _)| id as u32 != best.id)
+            .map(|(_, &sse)| sse)
+            .fold(f64::INFINITY, f64::min);
+        let floor = 1e-6 * syy;
+        let margin = runner_up.max(floor) / best.sse.max(floor);
+        let structure_ratio = best.sse / best_null.max(floor);
+        let structured = structure_ratio <= thresholds.max_structure_ratio;
+        let named = structured && margin >= thresholds.min_id_margin;
+        let code = codes[best.id as usize - 1];
+        // Sector 0 of the word seen sits at `phase`; the word is the code
+        // rotated left by `rotation`, so the code's own bit 0 (the +x axis)
+        // lies `rotation` bits earlier.
+        let x_axis_t = best.phase - 2.0 * sector * f64::from(best.rotation);
+        let (st, ct) = x_axis_t.sin_cos();
+        let MarkerFrame {
+            sin: s,
+            cos: c,
+            a,
+            b,
+            ..
+        } = self.frame;
+        let (ax, ay) = (a * ct * c + b * st * s, a * ct * s - b * st * c);
+        Some(SmallRing {
+            structured,
+            id: if named { best.id } else { 0 },
+            code,
+            yaw: named.then(|| ay.atan2(ax)),
+            margin,
+            structure_ratio,
+            residual: best.sse,
+        })
     }
-    let best = best?;
-    let runner_up = per_member
-        .iter()
-        .enumerate()
-        .filter(|&(id, _)| id as u32 != best.id)
-        .map(|(_, &sse)| sse)
-        .fold(f64::INFINITY, f64::min);
-    let floor = 1e-6 * syy;
-    let margin = runner_up.max(floor) / best.sse.max(floor);
-    let structure_ratio = best.sse / best_null.max(floor);
-    let structured = structure_ratio <= thresholds.max_structure_ratio;
-    let named = structured && margin >= thresholds.min_id_margin;
-    let code = codes[best.id as usize - 1];
-    // Sector 0 of the word seen sits at `phase`; the word is the code
-    // rotated left by `rotation`, so the code's own bit 0 (the +x axis)
-    // lies `rotation` bits earlier.
-    let x_axis_t = best.phase - 2.0 * sector * f64::from(best.rotation);
-    let (st, ct) = x_axis_t.sin_cos();
-    let (ax, ay) = (a * ct * c + b * st * s, a * ct * s - b * st * c);
-    Some(SmallRing {
-        structured,
-        id: if named { best.id } else { 0 },
-        code,
-        yaw: named.then(|| ay.atan2(ax)),
-        margin,
-        structure_ratio,
-        residual: best.sse,
-    })
+}
+
+/// The sums a member rotation's least-squares fit needs at one phase,
+/// read from tables instead of summed sector by sector. A rotation is the
+/// word seen, bit i white in sector 2i when set, else in 2i + 1. Its sums
+/// over the sectors it whitens are linear per bit, except the model's
+/// squared norm, a sum over pairs of bits of the Gram matrix. A pixel's
+/// footprint covers a few neighbouring sectors, so bits further apart than
+/// the Gram matrix's band never pair; the pairs of bit b with the next
+/// `reach` bits are one entry of a table indexed by those reach + 1 bits.
+/// A rotation then costs a lookup per bit, not one per pair of bits (the
+/// neighbouring bit counts' thousand rotations made the pairs most of a
+/// small ring's cost).
+struct PatternTables {
+    bits: usize,
+    reach: usize,
+    /// Per bit, 2^(reach + 1) entries: its pairs with the next `reach`
+    /// bits (and its own square and linear norm term).
+    pairs: Vec<f64>,
+    /// Per group of [`LINEAR_GROUP`] bits, per value of the group: the sum
+    /// of the whitened sectors' weights and of their weighted greys.
+    linear: Vec<[f64; 2]>,
+}
+
+/// Bits per entry of [`PatternTables::linear`].
+const LINEAR_GROUP: usize = 4;
+
+impl PatternTables {
+    fn new(bits: usize) -> PatternTables {
+        PatternTables {
+            bits,
+            reach: 0,
+            pairs: Vec::new(),
+            linear: vec![[0.0; 2]; bits.div_ceil(LINEAR_GROUP) << LINEAR_GROUP],
+        }
+    }
+
+    /// Tables of the sums over pixels of the sector weights `w_sum`, their
+    /// products with the white outside the ring `w_fixed` and with the
+    /// grey `w_y`, and of products of sector weights `gram` (2n × 2n).
+    fn fill(&mut self, gram: &[f64], w_sum: &[f64], w_fixed: &[f64], w_y: &[f64]) {
+        let n = self.bits;
+        let sectors = 2 * n;
+        let sector = |bit: usize, set: usize| 2 * (bit % n) + 1 - set;
+        // Widest cyclic distance between two sectors one pixel covers; bits
+        // b and b + d own sectors at least 2d - 1 apart.
+        let mut band = 0;
+        for i in 0..sectors {
+            for j in i + 1..sectors {
+                if gram[i * sectors + j] != 0.0 {
+                    band = band.max((j - i).min(sectors - (j - i)));
+                }
+            }
+        }
+        self.reach = (band.div_ceil(2)).min(n / 2);
+        let size = 1usize << (self.reach + 1);
+        self.pairs.clear();
+        self.pairs.resize(n * size, 0.0);
+        // Each unordered pair once: twice its entry, except the pair of
+        // opposite bits of an even count, which both of its bits reach.
+        let factor = |d: usize| if 2 * d == n { 1.0 } else { 2.0 };
+        for b in 0..n {
+            let table = &mut self.pairs[b * size..(b + 1) * size];
+            for own in 0..2 {
+                let s = sector(b, own);
+                let row = &gram[s * sectors..(s + 1) * sectors];
+                // Every further bit clear, then each one set in turn.
+                let mut clear = row[s] + 2.0 * w_fixed[s];
+                let mut step = [0.0; 32];
+                for d in 1..=self.reach {
+                    let f = factor(d);
+                    clear += f * row[sector(b + d, 0)];
+                    step[d] = f * (row[sector(b + d, 1)] - row[sector(b + d, 0)]);
+                }
+                table[own] = clear;
+                for further in 1..size >> 1 {
+                    let lowest = further & further.wrapping_neg();
+                    let d = lowest.trailing_zeros() as usize + 1;
+                    table[own | further << 1] = table[own | (further ^ lowest) << 1] + step[d];
+                }
+            }
+        }
+        for (group, table) in self.linear.chunks_mut(1 << LINEAR_GROUP).enumerate() {
+            let first = group * LINEAR_GROUP;
+            for (value, entry) in table.iter_mut().enumerate() {
+                *entry = [0.0; 2];
+                for bit in first..(first + LINEAR_GROUP).min(n) {
+                    let s = sector(bit, value >> (bit - first) & 1);
+                    entry[0] += w_sum[s];
+                    entry[1] += w_y[s];
+                }
+            }
+        }
+    }
+
+    /// The ring's part of the rotation `seen`'s sums over the pixels: of
+    /// its model, of its model squared, and of its model times the grey
+    /// (the white outside the ring adds its own terms to each).
+    fn sums(&self, seen: u64) -> (f64, f64, f64) {
+        let n = self.bits;
+        let size = 1usize << (self.reach + 1);
+        let mask = (size - 1) as u64;
+        let twice = seen | seen << n;
+        let mut norm = 0.0;
+        for (b, table) in self.pairs.chunks_exact(size).enumerate() {
+            norm += table[(twice >> b & mask) as usize];
+        }
+        let (mut sum, mut grey) = (0.0, 0.0);
+        for (group, table) in self.linear.chunks_exact(1 << LINEAR_GROUP).enumerate() {
+            let entry =
+                table[(seen >> (group * LINEAR_GROUP)) as usize & ((1 << LINEAR_GROUP) - 1)];
+            sum += entry[0];
+            grey += entry[1];
+        }
+        (sum, norm, grey)
+    }
 }
 
 /// Per pixel of `pixels`: the weight of its footprint `offsets` on white
@@ -641,7 +826,7 @@ fn compare<C: Deref<Target = [u8]>>(
 fn sampled_through(
     pixels: &[(f64, f64, f64)],
     offsets: &[(f64, f64, f64)],
-    to_marker: &impl Fn(f64, f64) -> (f64, f64),
+    frame: &MarkerFrame,
 ) -> (Vec<f64>, Vec<Vec<(f64, f64)>>) {
     let mut fixed = Vec::with_capacity(pixels.len());
     let mut ring_samples: Vec<Vec<(f64, f64)>> = Vec::with_capacity(pixels.len());
@@ -649,7 +834,7 @@ fn sampled_through(
         let mut white = 0.0;
         let mut inside = Vec::new();
         for &(dx, dy, w) in offsets {
-            let (p, q) = to_marker(x + dx, y + dy);
+            let (p, q) = frame.marker_point(x + dx, y + dy);
             let rho = radius(p, q);
             if !(RING_INNER_RATIO..1.0).contains(&rho) {
                 white += w;
@@ -661,6 +846,103 @@ fn sampled_through(
         ring_samples.push(inside);
     }
     (fixed, ring_samples)
+}
+
+/// Samples at angles binned into the wedges of a ring of `sectors`
+/// ([`WEDGES_PER_SECTOR`] a sector), one entry a wedge.
+fn in_wedges(samples: &[Vec<(f64, f64)>], sectors: usize) -> Vec<Vec<(usize, f64)>> {
+    let wedges = sectors * WEDGES_PER_SECTOR;
+    let wedge_angle = 2.0 * PI / wedges as f64;
+    samples
+        .iter()
+        .map(|inside| {
+            let mut binned: Vec<(usize, f64)> = Vec::with_capacity(inside.len());
+            for &(t, w) in inside {
+                let wedge = ((t / wedge_angle) as usize).min(wedges - 1);
+                // Neighbouring samples mostly share a wedge.
+                match binned.iter_mut().find(|(j, _)| *j == wedge) {
+                    Some((_, sum)) => *sum += w,
+                    None => binned.push((wedge, w)),
+                }
+            }
+            binned
+        })
+        .collect()
+}
+
+/// The sums over pixels a phase's comparison needs, sector by sector: of
+/// each sector's weight in a pixel's model, of that weight times the
+/// pixel's white outside the ring and times its grey, and of products of
+/// two sectors' weights (the Gram matrix, `sectors` × `sectors`).
+struct PhaseSums {
+    gram: Vec<f64>,
+    w_sum: Vec<f64>,
+    w_fixed: Vec<f64>,
+    w_y: Vec<f64>,
+}
+
+impl PhaseSums {
+    /// At the phase `step` wedges on: wedge j lies in sector
+    /// (j − step) / [`WEDGES_PER_SECTOR`], cyclically.
+    fn of(
+        pixels: &[(f64, f64, f64)],
+        fixed: &[f64],
+        ring_samples: &[Vec<(usize, f64)>],
+        sectors: usize,
+        step: usize,
+    ) -> PhaseSums {
+        let wedges = sectors * WEDGES_PER_SECTOR;
+        let sector_of: Vec<usize> = (0..wedges)
+            .map(|j| (j + wedges - step) % wedges / WEDGES_PER_SECTOR)
+            .collect();
+        let mut sums = PhaseSums {
+            gram: vec![0.0; sectors * sectors],
+            w_sum: vec![0.0; sectors],
+            w_fixed: vec![0.0; sectors],
+            w_y: vec![0.0; sectors],
+        };
+        let mut weights = vec![0.0f64; sectors];
+        let mut touched: Vec<usize> = Vec::with_capacity(sectors);
+        for ((samples, &(_, _, y)), &white) in ring_samples.iter().zip(pixels).zip(fixed) {
+            // A footprint covers a few sectors: keep only those.
+            for &(wedge, w) in samples {
+                let index = sector_of[wedge];
+                if weights[index] == 0.0 {
+                    touched.push(index);
+                }
+                weights[index] += w;
+            }
+            for &i in &touched {
+                let wi = weights[i];
+                sums.w_sum[i] += wi;
+                sums.w_fixed[i] += wi * white;
+                sums.w_y[i] += wi * y;
+                let row = &mut sums.gram[i * sectors..(i + 1) * sectors];
+                for &j in &touched {
+                    row[j] += wi * weights[j];
+                }
+            }
+            for &i in &touched {
+                weights[i] = 0.0;
+            }
+            touched.clear();
+        }
+        sums
+    }
+
+    /// The sums a whole sector further on: every sector index one down.
+    fn next_sector(&self) -> PhaseSums {
+        let sectors = self.w_sum.len();
+        let up = |i: usize| (i + 1) % sectors;
+        PhaseSums {
+            gram: (0..sectors * sectors)
+                .map(|k| self.gram[up(k / sectors) * sectors + up(k % sectors)])
+                .collect(),
+            w_sum: (0..sectors).map(|i| self.w_sum[up(i)]).collect(),
+            w_fixed: (0..sectors).map(|i| self.w_fixed[up(i)]).collect(),
+            w_y: (0..sectors).map(|i| self.w_y[up(i)]).collect(),
+        }
+    }
 }
 
 /// Wedges a half-sector is cut into: the phase steps within it, so every
@@ -677,18 +959,23 @@ struct Coverage {
     white: Patch,
     /// Per wedge: the pixels it covers and by how much.
     wedges: Vec<Vec<(i64, i64, f64)>>,
-    /// Angle of each wedge, radians.
-    wedge_angle: f64,
 }
 
-impl Coverage {
+/// The 4x4 samples of every pixel's area around a ring, for [`Coverage`]:
+/// which fall on white, and the angle of each that falls in the code ring
+/// (binned into wedges once per bit count).
+struct SubSamples {
+    white: Patch,
+    /// (x, y, angle) of each sample in the ring, a pixel's together.
+    ring: Vec<(i64, i64, f64)>,
+}
+
+/// Samples a side of a pixel's area in [`SubSamples`].
+const SUBSAMPLES_SIDE: usize = 4;
+
+impl SubSamples {
     /// Over the box of `pixels` grown by `reach`.
-    fn of(
-        pixels: &[(f64, f64, f64)],
-        reach: i64,
-        to_marker: &impl Fn(f64, f64) -> (f64, f64),
-        sectors: usize,
-    ) -> Coverage {
+    fn of(pixels: &[(f64, f64, f64)], reach: i64, frame: &MarkerFrame) -> SubSamples {
         let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
         for &(x, y, _) in pixels {
             x0 = x0.min(x as i64);
@@ -698,47 +985,48 @@ impl Coverage {
         }
         let (gx, gy) = (x0 - reach, y0 - reach);
         let (gw, gh) = (x1 - x0 + 1 + 2 * reach, y1 - y0 + 1 + 2 * reach);
-        let count = sectors * WEDGES_PER_SECTOR;
-        let wedge_angle = 2.0 * PI / count as f64;
         let mut white = Patch::zeros(gx, gy, gw, gh);
-        let mut wedges: Vec<Vec<(i64, i64, f64)>> = vec![Vec::new(); count];
-        const SIDE: usize = 4;
-        let share = 1.0 / (SIDE * SIDE) as f64;
-        let mut counts = vec![0u8; count];
-        let mut hit: Vec<usize> = Vec::new();
+        let mut ring = Vec::new();
+        let share = 1.0 / (SUBSAMPLES_SIDE * SUBSAMPLES_SIDE) as f64;
         for py in gy..gy + gh {
             for px in gx..gx + gw {
                 let mut light = 0u32;
-                for k in 0..SIDE * SIDE {
-                    let du = ((k % SIDE) as f64 + 0.5) / SIDE as f64 - 0.5;
-                    let dv = ((k / SIDE) as f64 + 0.5) / SIDE as f64 - 0.5;
-                    let (p, q) = to_marker(px as f64 + du, py as f64 + dv);
+                for k in 0..SUBSAMPLES_SIDE * SUBSAMPLES_SIDE {
+                    let du = ((k % SUBSAMPLES_SIDE) as f64 + 0.5) / SUBSAMPLES_SIDE as f64 - 0.5;
+                    let dv = ((k / SUBSAMPLES_SIDE) as f64 + 0.5) / SUBSAMPLES_SIDE as f64 - 0.5;
+                    let (p, q) = frame.marker_point(px as f64 + du, py as f64 + dv);
                     let rho = radius(p, q);
                     if !(RING_INNER_RATIO..1.0).contains(&rho) {
                         light += 1;
                     } else if rho < WHYCODE_WHITE_RATIO {
-                        let t = q.atan2(p).rem_euclid(2.0 * PI);
-                        let j = ((t / wedge_angle) as usize).min(count - 1);
-                        if counts[j] == 0 {
-                            hit.push(j);
-                        }
-                        counts[j] += 1;
+                        ring.push((px, py, q.atan2(p).rem_euclid(2.0 * PI)));
                     }
                 }
                 if light > 0 {
                     white.set(px, py, f64::from(light) * share);
                 }
-                for &j in &hit {
-                    wedges[j].push((px, py, f64::from(counts[j]) * share));
-                    counts[j] = 0;
-                }
-                hit.clear();
+            }
+        }
+        SubSamples { white, ring }
+    }
+
+    /// The coverage of the wedges of a ring of `sectors`.
+    fn binned(&self, sectors: usize) -> Coverage {
+        let count = sectors * WEDGES_PER_SECTOR;
+        let wedge_angle = 2.0 * PI / count as f64;
+        let share = 1.0 / (SUBSAMPLES_SIDE * SUBSAMPLES_SIDE) as f64;
+        let mut wedges: Vec<Vec<(i64, i64, f64)>> = vec![Vec::new(); count];
+        for &(px, py, t) in &self.ring {
+            let cells = &mut wedges[((t / wedge_angle) as usize).min(count - 1)];
+            // A pixel's samples come together: its cell is the last one.
+            match cells.last_mut() {
+                Some((x, y, w)) if (*x, *y) == (px, py) => *w += share,
+                _ => cells.push((px, py, share)),
             }
         }
         Coverage {
-            white,
+            white: self.white.clone(),
             wedges,
-            wedge_angle,
         }
     }
 }
@@ -768,7 +1056,7 @@ fn rendered_through_gaussian(
     pixels: &[(f64, f64, f64)],
     sigma: f64,
     coverage: &Coverage,
-) -> (Vec<f64>, Vec<Vec<(f64, f64)>>) {
+) -> (Vec<f64>, Vec<Vec<(usize, f64)>>) {
     let (kernel, reach) = gaussian_kernel(sigma);
     let white = coverage.white.blurred(&kernel, reach);
     let blurred: Vec<Patch> = coverage
@@ -793,16 +1081,16 @@ fn rendered_through_gaussian(
         })
         .collect();
     let mut fixed = Vec::with_capacity(pixels.len());
-    let mut ring_samples: Vec<Vec<(f64, f64)>> = Vec::with_capacity(pixels.len());
+    let mut ring_samples: Vec<Vec<(usize, f64)>> = Vec::with_capacity(pixels.len());
     for &(x, y, _) in pixels {
         let (x, y) = (x as i64, y as i64);
         fixed.push(white.get(x, y));
-        let inside: Vec<(f64, f64)> = blurred
+        let inside: Vec<(usize, f64)> = blurred
             .iter()
             .enumerate()
             .filter_map(|(j, patch)| {
                 let w = patch.get(x, y);
-                (w > NEGLIGIBLE_WEIGHT).then_some(((j as f64 + 0.5) * coverage.wedge_angle, w))
+                (w > NEGLIGIBLE_WEIGHT).then_some((j, w))
             })
             .collect();
         ring_samples.push(inside);
@@ -811,6 +1099,7 @@ fn rendered_through_gaussian(
 }
 
 /// A dense box of values on the pixel grid, zero outside.
+#[derive(Clone)]
 struct Patch {
     x0: i64,
     y0: i64,
@@ -1052,5 +1341,63 @@ mod tests {
         // The comparison needs the whole disc inside the image.
         let cut = ImageEllipse { u: 3.0, ..outline };
         assert_eq!(read_small_ring(&image, &cut, &family), None);
+    }
+
+    /// The tables give every word the sums a sector-by-sector pass over
+    /// its bits and pairs of bits gives, whatever the count and however
+    /// many sectors a pixel's footprint spans (narrow bands read few
+    /// pairs; a band past half the ring reads them all, opposite bits of
+    /// an even count once).
+    #[test]
+    fn pattern_tables_sum_as_the_sectors_do() {
+        let mut rng = crate::math::Pcg32::new(25, 3);
+        for case in 0..400 {
+            let n = 2 + case % 13;
+            let sectors = 2 * n;
+            let span = 1 + rng.next_u32() as usize % sectors;
+            let mut gram = vec![0.0; sectors * sectors];
+            let mut w_sum = vec![0.0; sectors];
+            let mut w_fixed = vec![0.0; sectors];
+            let mut w_y = vec![0.0; sectors];
+            for _ in 0..20 {
+                let first = rng.next_u32() as usize % sectors;
+                let width = 1 + rng.next_u32() as usize % span;
+                let touched: Vec<(usize, f64)> = (0..width)
+                    .map(|k| ((first + k) % sectors, rng.range(0.01, 1.0)))
+                    .collect();
+                let (white, grey) = (rng.next_f64(), rng.range(0.0, 255.0));
+                for &(i, wi) in &touched {
+                    w_sum[i] += wi;
+                    w_fixed[i] += wi * white;
+                    w_y[i] += wi * grey;
+                    for &(j, wj) in &touched {
+                        gram[i * sectors + j] += wi * wj;
+                    }
+                }
+            }
+            let mut tables = PatternTables::new(n);
+            tables.fill(&gram, &w_sum, &w_fixed, &w_y);
+            for _ in 0..20 {
+                let seen = u64::from(rng.next_u32()) & ((1 << n) - 1);
+                let white: Vec<usize> = (0..n)
+                    .map(|b| 2 * b + 1 - (seen >> b & 1) as usize)
+                    .collect();
+                let sum: f64 = white.iter().map(|&s| w_sum[s]).sum();
+                let grey: f64 = white.iter().map(|&s| w_y[s]).sum();
+                let norm: f64 = white.iter().map(|&s| 2.0 * w_fixed[s]).sum::<f64>()
+                    + white
+                        .iter()
+                        .flat_map(|&s| white.iter().map(move |&t| (s, t)))
+                        .map(|(s, t)| gram[s * sectors + t])
+                        .sum::<f64>();
+                let got = tables.sums(seen);
+                for (a, b) in [(got.0, sum), (got.1, norm), (got.2, grey)] {
+                    assert!(
+                        (a - b).abs() <= 1e-9 * b.abs().max(1.0),
+                        "n {n} span {span} word {seen:b}: {got:?} against {sum}, {norm}, {grey}"
+                    );
+                }
+            }
+        }
     }
 }
