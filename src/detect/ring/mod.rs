@@ -220,7 +220,9 @@ impl Rings {
             (RingEvidence::Absent, _) | (RingEvidence::TooSmall, None) => marker = false,
             (RingEvidence::TooSmall, Some(reader)) => {
                 let family = reader.decoder().map(Decoder::family);
-                match family.and_then(|family| small_ring(image, &c.outer, family)) {
+                match family
+                    .and_then(|family| model::read_small_ring_of_its_count(image, &c.outer, family))
+                {
                     Some(ring) if !ring.structured => {
                         // The rendered model ignores perspective, which a
                         // steep view of a large marker cannot: there it
@@ -369,29 +371,10 @@ fn read_sectors<C: Deref<Target = [u8]>>(
     }
 }
 
-/// The ring model's reading of a ring too small to sample sector by
-/// sector, unless a ring of a neighbouring count explains its pixels
-/// better than the member it names (then it names none).
-fn small_ring<C: Deref<Target = [u8]>>(
-    image: &ImageBuffer<Luma<u8>, C>,
-    outer: &Ellipse,
-    family: &Family,
-) -> Option<SmallRing> {
-    model::read_small_ring(image, outer, family).map(|ring| {
-        let refuted =
-            ring.id != 0 && model::neighbour_count_fits_better(image, outer, family, &ring);
-        SmallRing {
-            id: if refuted { 0 } else { ring.id },
-            yaw: ring.yaw.filter(|_| !refuted),
-            ..ring
-        }
-    })
-}
-
 /// A ring too small to sample named through the focus blur its outline
 /// shows, when that blur is past the small-ring model's own: the member
-/// [`model::read_defocused_ring`] names, unless a ring of a neighbouring
-/// count explains the pixels better. `None` under a motion blur, a blur
+/// [`model::read_defocused_ring_of_its_count`] names (none when a ring of a
+/// neighbouring count explains the pixels better). `None` under a motion blur, a blur
 /// the small-ring model covers, or without a member named.
 fn defocused_small_ring<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
@@ -404,11 +387,8 @@ fn defocused_small_ring<C: Deref<Target = [u8]>>(
         return None;
     }
     let sigma = ellipse::defocus(gray, outer).filter(|&s| s >= MIN_SMALL_RING_DEFOCUS_PX)?;
-    let ring = model::read_defocused_ring(image, outer, family, sigma)?;
-    let named = ring.structured
-        && ring.id != 0
-        && !model::neighbour_count_fits_better_defocused(image, outer, family, &ring, sigma);
-    named.then_some(ring)
+    let ring = model::read_defocused_ring_of_its_count(image, outer, family, sigma)?;
+    (ring.structured && ring.id != 0).then_some(ring)
 }
 
 /// The reading as the blurred ring model judges it: None when the model

@@ -118,64 +118,33 @@ fn small_footprints() -> Vec<Footprint> {
     BLURS.iter().map(|&blur| gaussian_footprint(blur)).collect()
 }
 
-/// Whether the pixels inside `outer` look more like a ring of a
-/// neighbouring bit count (up to two more or fewer than the family's: any
-/// aperiodic code of that count) than like `read`, the family's best
-/// member. A ring too small to count its sectors otherwise matches a
-/// member of the family one count off (a 9-bit marker 16 px across read as
-/// ID 10 of the 8-bit family). Counts whose codes are too many to compare
-/// refute nothing.
-pub fn neighbour_count_fits_better<C: Deref<Target = [u8]>>(
+/// [`read_small_ring`], with the member withdrawn (ID 0, no yaw) when a
+/// ring of a neighbouring bit count explains the pixels better
+/// ([`RingPixels::neighbour_count_fits_better`]).
+pub fn read_small_ring_of_its_count<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
     outer: &ImageEllipse,
     family: &Family,
-    read: &SmallRing,
-) -> bool {
-    neighbour_count_fits_better_through(image, outer, family, read, &small_footprints(), 1)
+) -> Option<SmallRing> {
+    RingPixels::read(image, outer, &small_footprints(), 1)?
+        .read_of_its_count(family, Thresholds::SMALL)
 }
 
-/// [`neighbour_count_fits_better`] for a ring read through the focus blur
-/// of `sigma` pixels ([`read_defocused_ring`]).
-pub fn neighbour_count_fits_better_defocused<C: Deref<Target = [u8]>>(
+/// [`read_defocused_ring`], with the member withdrawn when a ring of a
+/// neighbouring bit count explains the pixels better.
+pub fn read_defocused_ring_of_its_count<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
     outer: &ImageEllipse,
     family: &Family,
-    read: &SmallRing,
     sigma: f64,
-) -> bool {
-    neighbour_count_fits_better_through(
+) -> Option<SmallRing> {
+    RingPixels::read(
         image,
         outer,
-        family,
-        read,
         &defocus_footprints(sigma, outer),
         compared_stride(outer),
-    )
-}
-
-fn neighbour_count_fits_better_through<C: Deref<Target = [u8]>>(
-    image: &ImageBuffer<Luma<u8>, C>,
-    outer: &ImageEllipse,
-    family: &Family,
-    read: &SmallRing,
-    footprints: &[Footprint],
-    stride: u32,
-) -> bool {
-    let Some(ring) = RingPixels::read(image, outer, footprints, stride) else {
-        return false;
-    };
-    let bits = family.bits();
-    [
-        bits.saturating_sub(2),
-        bits.saturating_sub(1),
-        bits + 1,
-        bits + 2,
-    ]
-    .into_iter()
-    .filter(|n| super::manchester::BITS.contains(n))
-    .filter_map(|n| Family::generate(n, 1).ok())
-    .filter_map(|every| ring.compare(&every, Thresholds::SMALL))
-    .any(|other| other.residual < read.residual)
+    )?
+    .read_of_its_count(family, Thresholds::BLURRED)
 }
 
 /// Reads a ring smeared by the motion blur `blur` (measured on the outline,
@@ -281,7 +250,7 @@ pub fn light_elongation<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
     outer: &ImageEllipse,
 ) -> Option<f64> {
-    let (s, c) = outer.angle.sin_cos();
+    let frame = MarkerFrame::of(outer);
     let (a, b) = (outer.semi_major, outer.semi_minor);
     let (width, height) = image.dimensions();
     let reach = a * MARGIN_RADII.1 + 1.0;
@@ -294,8 +263,7 @@ pub fn light_elongation<C: Deref<Target = [u8]>>(
     let mut margin: Vec<f64> = Vec::new();
     for y in y0 as u32..=y1 as u32 {
         for x in x0 as u32..=x1 as u32 {
-            let (dx, dy) = (f64::from(x) - outer.u, f64::from(y) - outer.v);
-            let (p, q) = ((dx * c + dy * s) / a, (dx * s - dy * c) / b);
+            let (p, q) = frame.marker_point(f64::from(x), f64::from(y));
             let rho = p.hypot(q);
             let grey = f64::from(image.get_pixel(x, y).0[0]);
             if rho <= COMPARED_RADIUS {
@@ -448,7 +416,7 @@ impl MarkerFrame {
 /// The pixels of one ring that the model is compared with, and what each
 /// footprint samples of the marker at them: read once, then compared with
 /// the family and with rings of the neighbouring bit counts
-/// ([`neighbour_count_fits_better`]), whose sectors differ but whose
+/// ([`RingPixels::neighbour_count_fits_better`]), whose sectors differ but whose
 /// samples do not.
 struct RingPixels {
     frame: MarkerFrame,
@@ -545,9 +513,54 @@ impl RingPixels {
         })
     }
 
+    /// [`RingPixels::compare`], with the member withdrawn (ID 0, no yaw)
+    /// when a ring of a neighbouring count fits better.
+    fn read_of_its_count(&self, family: &Family, thresholds: Thresholds) -> Option<SmallRing> {
+        let read = self.compare(family, thresholds)?;
+        let refuted = read.id != 0 && self.neighbour_count_fits_better(family, &read);
+        Some(SmallRing {
+            id: if refuted { 0 } else { read.id },
+            yaw: read.yaw.filter(|_| !refuted),
+            ..read
+        })
+    }
+
+    /// Whether the pixels look more like a ring of a neighbouring bit count
+    /// (up to two more or fewer than the family's: any aperiodic code of
+    /// that count) than like `read`, the family's best member. A ring too
+    /// small to count its sectors otherwise matches a member of the family
+    /// one count off (a 9-bit marker 16 px across read as ID 10 of the
+    /// 8-bit family). Counts whose codes are too many to compare refute
+    /// nothing.
+    fn neighbour_count_fits_better(&self, family: &Family, read: &SmallRing) -> bool {
+        let bits = family.bits();
+        [
+            bits.saturating_sub(2),
+            bits.saturating_sub(1),
+            bits + 1,
+            bits + 2,
+        ]
+        .into_iter()
+        .filter(|n| super::manchester::BITS.contains(n))
+        .filter_map(|n| Family::generate(n, 1).ok())
+        .filter_map(|every| self.compare_beating(&every, Thresholds::SMALL, Some(read.residual)))
+        .any(|other| other.residual < read.residual)
+    }
+
     /// Compares the pixels with every member of `family` at every rotation.
     /// `None` when the family is too large to compare.
     fn compare(&self, family: &Family, thresholds: Thresholds) -> Option<SmallRing> {
+        self.compare_beating(family, thresholds, None)
+    }
+
+    /// [`RingPixels::compare`]; given `beat`, phases where no rotation can
+    /// leave a residual under it are skipped (see [`unconstrained_residual`]).
+    fn compare_beating(
+        &self,
+        family: &Family,
+        thresholds: Thresholds,
+        beat: Option<f64>,
+    ) -> Option<SmallRing> {
         let bits = family.bits();
         let members = family.len();
         if members == 0 || members * bits as usize > MAX_MODELS {
@@ -636,6 +649,12 @@ impl RingPixels {
                     w_fixed,
                     w_y,
                 } = sums;
+                if let Some(beat) = beat {
+                    let free = unconstrained_residual(sums, sum_fixed, ff, yf, count, sum_y, syy);
+                    if free.is_some_and(|free| free > beat * (1.0 + BOUND_MARGIN)) {
+                        continue;
+                    }
+                }
                 tables.fill(gram, w_sum, w_fixed, w_y);
                 for &(id, rotation, seen) in &patterns {
                     let (sm, smm, sym) = tables.sums(seen);
@@ -870,6 +889,52 @@ fn in_wedges(samples: &[Vec<(f64, f64)>], sectors: usize) -> Vec<Vec<(usize, f64
         .collect()
 }
 
+/// Relative margin by which [`unconstrained_residual`] must exceed a
+/// residual to rule a phase out (the solve's rounding stays far below).
+const BOUND_MARGIN: f64 = 0.01;
+
+/// The least residual of any model whose sectors each take their own
+/// grey at this phase (with its own weight for the white outside the ring
+/// and an offset): a lower bound on every member rotation's residual,
+/// each being such a model with sector greys 0 or 1. `None` when the
+/// sums leave that fit undetermined.
+fn unconstrained_residual(
+    sums: &PhaseSums,
+    sum_fixed: f64,
+    ff: f64,
+    yf: f64,
+    count: f64,
+    sum_y: f64,
+    syy: f64,
+) -> Option<f64> {
+    let sectors = sums.w_sum.len();
+    // Columns: the white outside the ring, then every sector that any
+    // pixel sees (the others are all zero), centred.
+    let columns: Vec<Option<usize>> = std::iter::once(None)
+        .chain(
+            (0..sectors)
+                .filter(|&i| sums.gram[i * sectors + i] > 0.0)
+                .map(Some),
+        )
+        .collect();
+    let total = |c: Option<usize>| c.map_or(sum_fixed, |i| sums.w_sum[i]);
+    let product = |a: Option<usize>, b: Option<usize>| match (a, b) {
+        (None, None) => ff,
+        (None, Some(i)) | (Some(i), None) => sums.w_fixed[i],
+        (Some(i), Some(j)) => sums.gram[i * sectors + j],
+    };
+    let with_grey = |c: Option<usize>| c.map_or(yf, |i| sums.w_y[i]);
+    let k = columns.len();
+    let normal = nalgebra::DMatrix::from_fn(k, k, |r, c| {
+        product(columns[r], columns[c]) - total(columns[r]) * total(columns[c]) / count
+    });
+    let right = nalgebra::DVector::from_fn(k, |r, _| {
+        with_grey(columns[r]) - total(columns[r]) * sum_y / count
+    });
+    let solved = normal.cholesky()?.solve(&right);
+    Some(syy - right.dot(&solved))
+}
+
 /// The sums over pixels a phase's comparison needs, sector by sector: of
 /// each sector's weight in a pixel's model, of that weight times the
 /// pixel's white outside the ring and times its grey, and of products of
@@ -901,29 +966,28 @@ impl PhaseSums {
             w_fixed: vec![0.0; sectors],
             w_y: vec![0.0; sectors],
         };
-        let mut weights = vec![0.0f64; sectors];
-        let mut touched: Vec<usize> = Vec::with_capacity(sectors);
+        // The sectors a pixel's footprint covers, a few, with their weights.
+        let mut touched: Vec<(usize, f64)> = Vec::with_capacity(sectors);
         for ((samples, &(_, _, y)), &white) in ring_samples.iter().zip(pixels).zip(fixed) {
-            // A footprint covers a few sectors: keep only those.
             for &(wedge, w) in samples {
                 let index = sector_of[wedge];
-                if weights[index] == 0.0 {
-                    touched.push(index);
+                // Wedges mostly come in order, a sector's together.
+                match touched.last_mut() {
+                    Some((last, sum)) if *last == index => *sum += w,
+                    _ => match touched.iter_mut().find(|(i, _)| *i == index) {
+                        Some((_, sum)) => *sum += w,
+                        None => touched.push((index, w)),
+                    },
                 }
-                weights[index] += w;
             }
-            for &i in &touched {
-                let wi = weights[i];
+            for &(i, wi) in &touched {
                 sums.w_sum[i] += wi;
                 sums.w_fixed[i] += wi * white;
                 sums.w_y[i] += wi * y;
                 let row = &mut sums.gram[i * sectors..(i + 1) * sectors];
-                for &j in &touched {
-                    row[j] += wi * weights[j];
+                for &(j, wj) in &touched {
+                    row[j] += wi * wj;
                 }
-            }
-            for &i in &touched {
-                weights[i] = 0.0;
             }
             touched.clear();
         }
@@ -1059,43 +1123,91 @@ fn rendered_through_gaussian(
 ) -> (Vec<f64>, Vec<Vec<(usize, f64)>>) {
     let (kernel, reach) = gaussian_kernel(sigma);
     let white = coverage.white.blurred(&kernel, reach);
-    let blurred: Vec<Patch> = coverage
-        .wedges
+    let fixed: Vec<f64> = pixels
         .iter()
-        .map(|cells| {
-            let (mut a, mut b, mut c, mut d) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
-            for &(x, y, _) in cells {
-                a = a.min(x);
-                b = b.min(y);
-                c = c.max(x);
-                d = d.max(y);
-            }
-            if cells.is_empty() {
-                return Patch::zeros(0, 0, 0, 0);
-            }
-            let mut patch = Patch::zeros(a, b, c - a + 1, d - b + 1);
-            for &(x, y, w) in cells {
-                patch.set(x, y, w);
-            }
-            patch.blurred(&kernel, reach)
-        })
+        .map(|&(x, y, _)| white.get(x as i64, y as i64))
         .collect();
-    let mut fixed = Vec::with_capacity(pixels.len());
-    let mut ring_samples: Vec<Vec<(usize, f64)>> = Vec::with_capacity(pixels.len());
-    for &(x, y, _) in pixels {
-        let (x, y) = (x as i64, y as i64);
-        fixed.push(white.get(x, y));
-        let inside: Vec<(usize, f64)> = blurred
-            .iter()
-            .enumerate()
-            .filter_map(|(j, patch)| {
-                let w = patch.get(x, y);
-                (w > NEGLIGIBLE_WEIGHT).then_some((j, w))
-            })
-            .collect();
-        ring_samples.push(inside);
+    // Each wedge's blurred coverage is handed to the compared pixels it
+    // reaches (a pixel's wedges in order), through the pixels' index on
+    // the grid of their box.
+    let index = PixelIndex::of(pixels);
+    let mut ring_samples: Vec<Vec<(usize, f64)>> = vec![Vec::new(); pixels.len()];
+    for (j, cells) in coverage.wedges.iter().enumerate() {
+        let Some((a, b, c, d)) = cells.iter().fold(None, |span, &(x, y, _)| {
+            let (a, b, c, d) = span.unwrap_or((x, y, x, y));
+            Some((a.min(x), b.min(y), c.max(x), d.max(y)))
+        }) else {
+            continue;
+        };
+        let mut patch = Patch::zeros(a, b, c - a + 1, d - b + 1);
+        for &(x, y, w) in cells {
+            patch.set(x, y, w);
+        }
+        let patch = patch.blurred(&kernel, reach);
+        for (k, w) in index.within(&patch) {
+            if w > NEGLIGIBLE_WEIGHT {
+                ring_samples[k].push((j, w));
+            }
+        }
     }
     (fixed, ring_samples)
+}
+
+/// Where each compared pixel lies on the grid of the pixels' box.
+struct PixelIndex {
+    x0: i64,
+    y0: i64,
+    width: i64,
+    height: i64,
+    /// Per grid cell, the pixel there ([`usize::MAX`] for none).
+    cells: Vec<usize>,
+}
+
+impl PixelIndex {
+    fn of(pixels: &[(f64, f64, f64)]) -> PixelIndex {
+        let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
+        for &(x, y, _) in pixels {
+            x0 = x0.min(x as i64);
+            y0 = y0.min(y as i64);
+            x1 = x1.max(x as i64);
+            y1 = y1.max(y as i64);
+        }
+        let (width, height) = ((x1 - x0 + 1).max(0), (y1 - y0 + 1).max(0));
+        let mut cells = vec![usize::MAX; (width * height) as usize];
+        for (k, &(x, y, _)) in pixels.iter().enumerate() {
+            cells[((y as i64 - y0) * width + (x as i64 - x0)) as usize] = k;
+        }
+        PixelIndex {
+            x0,
+            y0,
+            width,
+            height,
+            cells,
+        }
+    }
+
+    /// (pixel, value) of every compared pixel inside `patch`.
+    fn within<'a>(&'a self, patch: &'a Patch) -> impl Iterator<Item = (usize, f64)> + 'a {
+        let (xa, xb) = (
+            patch.x0.max(self.x0),
+            (patch.x0 + patch.width).min(self.x0 + self.width),
+        );
+        let (ya, yb) = (
+            patch.y0.max(self.y0),
+            (patch.y0 + patch.height).min(self.y0 + self.height),
+        );
+        (ya..yb).flat_map(move |y| {
+            (xa..xb).filter_map(move |x| {
+                let k = self.cells[((y - self.y0) * self.width + (x - self.x0)) as usize];
+                (k != usize::MAX).then(|| {
+                    (
+                        k,
+                        patch.values[((y - patch.y0) * patch.width + (x - patch.x0)) as usize],
+                    )
+                })
+            })
+        })
+    }
 }
 
 /// A dense box of values on the pixel grid, zero outside.
