@@ -634,7 +634,22 @@ impl RingPixels {
             let within: Vec<PhaseSums> = (0..WEDGES_PER_SECTOR)
                 .map(|step| PhaseSums::of(pixels, fixed, ring_samples, sectors, step))
                 .collect();
+            // Phases where no rotation can leave a residual under `beat`.
+            let ruled_out: Vec<bool> = within
+                .iter()
+                .map(|sums| {
+                    beat.is_some_and(|beat| {
+                        unconstrained_residual(sums, sum_fixed, ff, yf, count, sum_y, syy)
+                            .is_some_and(|free| free > beat * (1.0 + BOUND_MARGIN))
+                    })
+                })
+                .collect();
             for step in 0..PHASE_STEPS {
+                // A sector on, the same sectors under other indices: the
+                // same bound.
+                if ruled_out[step % WEDGES_PER_SECTOR] {
+                    continue;
+                }
                 let phase = 2.0 * sector * step as f64 / PHASE_STEPS as f64;
                 let shifted;
                 let sums = if step < WEDGES_PER_SECTOR {
@@ -649,12 +664,6 @@ impl RingPixels {
                     w_fixed,
                     w_y,
                 } = sums;
-                if let Some(beat) = beat {
-                    let free = unconstrained_residual(sums, sum_fixed, ff, yf, count, sum_y, syy);
-                    if free.is_some_and(|free| free > beat * (1.0 + BOUND_MARGIN)) {
-                        continue;
-                    }
-                }
                 tables.fill(gram, w_sum, w_fixed, w_y);
                 for &(id, rotation, seen) in &patterns {
                     let (sm, smm, sym) = tables.sums(seen);
