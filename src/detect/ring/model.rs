@@ -435,7 +435,7 @@ enum Sampled {
     /// Per pixel: the weight on white outside the code ring, and the
     /// (angle, weight) of each sample inside the ring.
     #[allow(clippy::type_complexity)]
-    Points(Vec<f64>, Vec<Vec<(f64, f64)>>),
+    Points(Vec<f64>, PerPixel<(f64, f64)>),
     /// The pixel's area seen through a Gaussian of this sigma, pixels.
     Gaussian(f64),
 }
@@ -622,8 +622,8 @@ impl RingPixels {
             };
             // Structureless ring: y ≈ α + β·fixed + γ·ring coverage.
             let coverage: Vec<f64> = ring_samples
-                .iter()
-                .map(|v| v.iter().map(|s| s.1).sum())
+                .runs()
+                .map(|run| run.iter().map(|s| s.1).sum())
                 .collect();
             best_null = best_null.min(residual_of_two(pixels, fixed, &coverage));
             let sum_fixed: f64 = fixed.iter().sum();
@@ -855,47 +855,87 @@ fn sampled_through(
     pixels: &[(f64, f64, f64)],
     offsets: &[(f64, f64, f64)],
     frame: &MarkerFrame,
-) -> (Vec<f64>, Vec<Vec<(f64, f64)>>) {
+) -> (Vec<f64>, PerPixel<(f64, f64)>) {
     let mut fixed = Vec::with_capacity(pixels.len());
-    let mut ring_samples: Vec<Vec<(f64, f64)>> = Vec::with_capacity(pixels.len());
+    let mut ring_samples = PerPixel::with_capacity(pixels.len(), pixels.len() * offsets.len());
     for &(x, y, _) in pixels {
         let mut white = 0.0;
-        let mut inside = Vec::new();
         for &(dx, dy, w) in offsets {
             let (p, q) = frame.marker_point(x + dx, y + dy);
             let rho = radius(p, q);
             if !(RING_INNER_RATIO..1.0).contains(&rho) {
                 white += w;
             } else if rho < WHYCODE_WHITE_RATIO {
-                inside.push((q.atan2(p).rem_euclid(2.0 * PI), w));
+                ring_samples.push((q.atan2(p).rem_euclid(2.0 * PI), w));
             }
         }
         fixed.push(white);
-        ring_samples.push(inside);
+        ring_samples.end_pixel();
     }
     (fixed, ring_samples)
 }
 
+/// Entries per compared pixel, every pixel's run in one buffer: a ring's
+/// pixels are sampled for every blur and bit count compared, and one
+/// allocation a pixel cost more than the sampling.
+struct PerPixel<T> {
+    /// Where each pixel's run ends in `entries`.
+    ends: Vec<usize>,
+    entries: Vec<T>,
+}
+
+impl<T> PerPixel<T> {
+    fn with_capacity(pixels: usize, entries: usize) -> PerPixel<T> {
+        PerPixel {
+            ends: Vec::with_capacity(pixels),
+            entries: Vec::with_capacity(entries),
+        }
+    }
+
+    /// Adds an entry to the current pixel's run.
+    fn push(&mut self, entry: T) {
+        self.entries.push(entry);
+    }
+
+    /// Closes the current pixel's run; the next entry is the next pixel's.
+    fn end_pixel(&mut self) {
+        self.ends.push(self.entries.len());
+    }
+
+    /// The entries of the current pixel's run so far.
+    fn current_mut(&mut self) -> &mut [T] {
+        let start = self.ends.last().copied().unwrap_or(0);
+        &mut self.entries[start..]
+    }
+
+    /// Every pixel's run, in the pixels' order.
+    fn runs(&self) -> impl Iterator<Item = &[T]> {
+        self.ends.iter().scan(0, |start, &end| {
+            let run = &self.entries[*start..end];
+            *start = end;
+            Some(run)
+        })
+    }
+}
+
 /// Samples at angles binned into the wedges of a ring of `sectors`
 /// ([`WEDGES_PER_SECTOR`] a sector), one entry a wedge.
-fn in_wedges(samples: &[Vec<(f64, f64)>], sectors: usize) -> Vec<Vec<(usize, f64)>> {
+fn in_wedges(samples: &PerPixel<(f64, f64)>, sectors: usize) -> PerPixel<(usize, f64)> {
     let wedges = sectors * WEDGES_PER_SECTOR;
     let wedge_angle = 2.0 * PI / wedges as f64;
-    samples
-        .iter()
-        .map(|inside| {
-            let mut binned: Vec<(usize, f64)> = Vec::with_capacity(inside.len());
-            for &(t, w) in inside {
-                let wedge = ((t / wedge_angle) as usize).min(wedges - 1);
-                // Neighbouring samples mostly share a wedge.
-                match binned.iter_mut().find(|(j, _)| *j == wedge) {
-                    Some((_, sum)) => *sum += w,
-                    None => binned.push((wedge, w)),
-                }
+    let mut binned = PerPixel::with_capacity(samples.ends.len(), samples.entries.len());
+    for inside in samples.runs() {
+        for &(t, w) in inside {
+            let wedge = ((t / wedge_angle) as usize).min(wedges - 1);
+            // Neighbouring samples mostly share a wedge.
+            match binned.current_mut().iter_mut().find(|(j, _)| *j == wedge) {
+                Some((_, sum)) => *sum += w,
+                None => binned.push((wedge, w)),
             }
-            binned
-        })
-        .collect()
+        }
+        binned.end_pixel();
+    }
+    binned
 }
 
 /// Relative margin by which [`unconstrained_residual`] must exceed a
@@ -961,7 +1001,7 @@ impl PhaseSums {
     fn of(
         pixels: &[(f64, f64, f64)],
         fixed: &[f64],
-        ring_samples: &[Vec<(usize, f64)>],
+        ring_samples: &PerPixel<(usize, f64)>,
         sectors: usize,
         step: usize,
     ) -> PhaseSums {
@@ -977,7 +1017,7 @@ impl PhaseSums {
         };
         // The sectors a pixel's footprint covers, a few, with their weights.
         let mut touched: Vec<(usize, f64)> = Vec::with_capacity(sectors);
-        for ((samples, &(_, _, y)), &white) in ring_samples.iter().zip(pixels).zip(fixed) {
+        for ((samples, &(_, _, y)), &white) in ring_samples.runs().zip(pixels).zip(fixed) {
             for &(wedge, w) in samples {
                 let index = sector_of[wedge];
                 // Wedges mostly come in order, a sector's together.
@@ -1129,7 +1169,7 @@ fn rendered_through_gaussian(
     pixels: &[(f64, f64, f64)],
     sigma: f64,
     coverage: &Coverage,
-) -> (Vec<f64>, Vec<Vec<(usize, f64)>>) {
+) -> (Vec<f64>, PerPixel<(usize, f64)>) {
     let (kernel, reach) = gaussian_kernel(sigma);
     let white = coverage.white.blurred(&kernel, reach);
     let fixed: Vec<f64> = pixels
@@ -1140,26 +1180,51 @@ fn rendered_through_gaussian(
     // reaches (a pixel's wedges in order), through the pixels' index on
     // the grid of their box.
     let index = PixelIndex::of(pixels);
-    let mut ring_samples: Vec<Vec<(usize, f64)>> = vec![Vec::new(); pixels.len()];
-    for (j, cells) in coverage.wedges.iter().enumerate() {
-        let Some((a, b, c, d)) = cells.iter().fold(None, |span, &(x, y, _)| {
-            let (a, b, c, d) = span.unwrap_or((x, y, x, y));
-            Some((a.min(x), b.min(y), c.max(x), d.max(y)))
-        }) else {
-            continue;
-        };
-        let mut patch = Patch::zeros(a, b, c - a + 1, d - b + 1);
-        for &(x, y, w) in cells {
-            patch.set(x, y, w);
-        }
-        let patch = patch.blurred(&kernel, reach);
-        for (k, w) in index.within(&patch) {
-            if w > NEGLIGIBLE_WEIGHT {
-                ring_samples[k].push((j, w));
+    let blurred: Vec<(usize, Patch)> = coverage
+        .wedges
+        .iter()
+        .enumerate()
+        .filter_map(|(j, cells)| {
+            let (a, b, c, d) = cells.iter().fold(None, |span, &(x, y, _)| {
+                let (a, b, c, d) = span.unwrap_or((x, y, x, y));
+                Some((a.min(x), b.min(y), c.max(x), d.max(y)))
+            })?;
+            let mut patch = Patch::zeros(a, b, c - a + 1, d - b + 1);
+            for &(x, y, w) in cells {
+                patch.set(x, y, w);
             }
-        }
+            Some((j, patch.blurred(&kernel, reach)))
+        })
+        .collect();
+    // Two passes: how many wedges reach each pixel, then the wedges in
+    // order into each pixel's run.
+    let mut ends = vec![0usize; pixels.len()];
+    for (_, patch) in &blurred {
+        index.for_each_within(patch, |k, w| {
+            if w > NEGLIGIBLE_WEIGHT {
+                ends[k] += 1;
+            }
+        });
     }
-    (fixed, ring_samples)
+    let mut total = 0;
+    for end in &mut ends {
+        total += *end;
+        *end = total;
+    }
+    let mut next: Vec<usize> = std::iter::once(0)
+        .chain(ends.iter().copied())
+        .take(pixels.len())
+        .collect();
+    let mut entries = vec![(0usize, 0.0f64); total];
+    for (j, patch) in &blurred {
+        index.for_each_within(patch, |k, w| {
+            if w > NEGLIGIBLE_WEIGHT {
+                entries[next[k]] = (*j, w);
+                next[k] += 1;
+            }
+        });
+    }
+    (fixed, PerPixel { ends, entries })
 }
 
 /// Where each compared pixel lies on the grid of the pixels' box.
@@ -1195,8 +1260,9 @@ impl PixelIndex {
         }
     }
 
-    /// (pixel, value) of every compared pixel inside `patch`.
-    fn within<'a>(&'a self, patch: &'a Patch) -> impl Iterator<Item = (usize, f64)> + 'a {
+    /// Calls `visit` with (pixel, value) of every compared pixel inside
+    /// `patch`.
+    fn for_each_within(&self, patch: &Patch, mut visit: impl FnMut(usize, f64)) {
         let (xa, xb) = (
             patch.x0.max(self.x0),
             (patch.x0 + patch.width).min(self.x0 + self.width),
@@ -1205,17 +1271,20 @@ impl PixelIndex {
             patch.y0.max(self.y0),
             (patch.y0 + patch.height).min(self.y0 + self.height),
         );
-        (ya..yb).flat_map(move |y| {
-            (xa..xb).filter_map(move |x| {
-                let k = self.cells[((y - self.y0) * self.width + (x - self.x0)) as usize];
-                (k != usize::MAX).then(|| {
-                    (
-                        k,
-                        patch.values[((y - patch.y0) * patch.width + (x - patch.x0)) as usize],
-                    )
-                })
-            })
-        })
+        if xa >= xb {
+            return;
+        }
+        for y in ya..yb {
+            let cells = &self.cells[((y - self.y0) * self.width + (xa - self.x0)) as usize..]
+                [..(xb - xa) as usize];
+            let values = &patch.values[((y - patch.y0) * patch.width + (xa - patch.x0)) as usize..]
+                [..(xb - xa) as usize];
+            for (&k, &value) in cells.iter().zip(values) {
+                if k != usize::MAX {
+                    visit(k, value);
+                }
+            }
+        }
     }
 }
 
