@@ -1083,19 +1083,24 @@ struct SubSamples {
     ring: Vec<(i64, i64, f64)>,
 }
 
+/// The smallest box (x0, y0, x1, y1, inclusive) holding the pixels.
+fn pixel_box(pixels: &[(f64, f64, f64)]) -> (i64, i64, i64, i64) {
+    pixels.iter().fold(
+        (i64::MAX, i64::MAX, i64::MIN, i64::MIN),
+        |(x0, y0, x1, y1), &(x, y, _)| {
+            let (x, y) = (x as i64, y as i64);
+            (x0.min(x), y0.min(y), x1.max(x), y1.max(y))
+        },
+    )
+}
+
 /// Samples a side of a pixel's area in [`SubSamples`].
 const SUBSAMPLES_SIDE: usize = 4;
 
 impl SubSamples {
     /// Over the box of `pixels` grown by `reach`.
     fn of(pixels: &[(f64, f64, f64)], reach: i64, frame: &MarkerFrame) -> SubSamples {
-        let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
-        for &(x, y, _) in pixels {
-            x0 = x0.min(x as i64);
-            y0 = y0.min(y as i64);
-            x1 = x1.max(x as i64);
-            y1 = y1.max(y as i64);
-        }
+        let (x0, y0, x1, y1) = pixel_box(pixels);
         let (gx, gy) = (x0 - reach, y0 - reach);
         let (gw, gh) = (x1 - x0 + 1 + 2 * reach, y1 - y0 + 1 + 2 * reach);
         let mut white = Patch::zeros(gx, gy, gw, gh);
@@ -1239,13 +1244,7 @@ struct PixelIndex {
 
 impl PixelIndex {
     fn of(pixels: &[(f64, f64, f64)]) -> PixelIndex {
-        let (mut x0, mut y0, mut x1, mut y1) = (i64::MAX, i64::MAX, i64::MIN, i64::MIN);
-        for &(x, y, _) in pixels {
-            x0 = x0.min(x as i64);
-            y0 = y0.min(y as i64);
-            x1 = x1.max(x as i64);
-            y1 = y1.max(y as i64);
-        }
+        let (x0, y0, x1, y1) = pixel_box(pixels);
         let (width, height) = ((x1 - x0 + 1).max(0), (y1 - y0 + 1).max(0));
         let mut cells = vec![usize::MAX; (width * height) as usize];
         for (k, &(x, y, _)) in pixels.iter().enumerate() {
