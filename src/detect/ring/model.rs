@@ -434,7 +434,6 @@ struct RingPixels {
 enum Sampled {
     /// Per pixel: the weight on white outside the code ring, and the
     /// (angle, weight) of each sample inside the ring.
-    #[allow(clippy::type_complexity)]
     Points(Vec<f64>, PerPixel<(f64, f64)>),
     /// The pixel's area seen through a Gaussian of this sigma, pixels.
     Gaussian(f64),
@@ -850,7 +849,6 @@ impl PatternTables {
 /// Per pixel of `pixels`: the weight of its footprint `offsets` on white
 /// outside the code ring, and the (angle, weight) of the footprint's
 /// samples inside the ring.
-#[allow(clippy::type_complexity)]
 fn sampled_through(
     pixels: &[(f64, f64, f64)],
     offsets: &[(f64, f64, f64)],
@@ -918,15 +916,21 @@ impl<T> PerPixel<T> {
     }
 }
 
+/// The wedge of `wedges` (equal, the first from angle 0) holding the
+/// angle `t` in [0, 2π).
+fn wedge_of(t: f64, wedges: usize) -> usize {
+    let wedge_angle = 2.0 * PI / wedges as f64;
+    ((t / wedge_angle) as usize).min(wedges - 1)
+}
+
 /// Samples at angles binned into the wedges of a ring of `sectors`
 /// ([`WEDGES_PER_SECTOR`] a sector), one entry a wedge.
 fn in_wedges(samples: &PerPixel<(f64, f64)>, sectors: usize) -> PerPixel<(usize, f64)> {
     let wedges = sectors * WEDGES_PER_SECTOR;
-    let wedge_angle = 2.0 * PI / wedges as f64;
     let mut binned = PerPixel::with_capacity(samples.ends.len(), samples.entries.len());
     for inside in samples.runs() {
         for &(t, w) in inside {
-            let wedge = ((t / wedge_angle) as usize).min(wedges - 1);
+            let wedge = wedge_of(t, wedges);
             // Neighbouring samples mostly share a wedge.
             match binned.current_mut().iter_mut().find(|(j, _)| *j == wedge) {
                 Some((_, sum)) => *sum += w,
@@ -1068,8 +1072,8 @@ const NEGLIGIBLE_WEIGHT: f64 = 1e-5;
 /// What each pixel's area covers of the marker, for [`rendered_through_gaussian`]:
 /// white (the centre disc and the paper), and each of the ring's thin
 /// wedges (4x4 samples a pixel, as a camera's pixel integrates).
-struct Coverage {
-    white: Patch,
+struct Coverage<'a> {
+    white: &'a Patch,
     /// Per wedge: the pixels it covers and by how much.
     wedges: Vec<Vec<(i64, i64, f64)>>,
 }
@@ -1129,13 +1133,12 @@ impl SubSamples {
     }
 
     /// The coverage of the wedges of a ring of `sectors`.
-    fn binned(&self, sectors: usize) -> Coverage {
+    fn binned(&self, sectors: usize) -> Coverage<'_> {
         let count = sectors * WEDGES_PER_SECTOR;
-        let wedge_angle = 2.0 * PI / count as f64;
         let share = 1.0 / (SUBSAMPLES_SIDE * SUBSAMPLES_SIDE) as f64;
         let mut wedges: Vec<Vec<(i64, i64, f64)>> = vec![Vec::new(); count];
         for &(px, py, t) in &self.ring {
-            let cells = &mut wedges[((t / wedge_angle) as usize).min(count - 1)];
+            let cells = &mut wedges[wedge_of(t, count)];
             // A pixel's samples come together: its cell is the last one.
             match cells.last_mut() {
                 Some((x, y, w)) if (*x, *y) == (px, py) => *w += share,
@@ -1143,7 +1146,7 @@ impl SubSamples {
             }
         }
         Coverage {
-            white: self.white.clone(),
+            white: &self.white,
             wedges,
         }
     }
@@ -1169,7 +1172,6 @@ fn gaussian_kernel(sigma: f64) -> (Vec<f64>, i64) {
 /// noise's on a ring out of focus); this does not. Each wedge's weight
 /// carries the wedge's middle angle, so the phases the comparison tries
 /// (whole wedges) split the wedges exactly at the sector edges.
-#[allow(clippy::type_complexity)]
 fn rendered_through_gaussian(
     pixels: &[(f64, f64, f64)],
     sigma: f64,
