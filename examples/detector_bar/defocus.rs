@@ -19,21 +19,6 @@ use crate::rival;
 use crate::table::{beats_ids, cells, median, pct, Table};
 use crate::Rivals;
 
-/// `c` added to `total`.
-fn add(total: &mut Counts, c: &Counts) {
-    total.markers += c.markers;
-    total.detected += c.detected;
-    total.correct_id += c.correct_id;
-    total.unknown_id += c.unknown_id;
-    total.wrong_id += c.wrong_id;
-    total.false_detections += c.false_detections;
-    total.false_with_id += c.false_with_id;
-    total.frames += c.frames;
-    total.first_miss = total.first_miss.or(c.first_miss);
-    total.first_wrong = total.first_wrong.or(c.first_wrong);
-    total.first_false = total.first_false.or(c.first_false);
-}
-
 fn named(c: &Counts) -> String {
     format!("{}/{}", c.correct_id, c.markers)
 }
@@ -87,14 +72,14 @@ pub fn rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals) {
                         Err(e) => eprintln!("{} failed: {e}", rival.name()),
                     }
                 }
-                add(&mut ours_total, &ours);
-                add(&mut by_sigma[k].1, &ours);
+                ours_total.merge(&ours);
+                by_sigma[k].1.merge(&ours);
                 for j in 0..3 {
                     if let (Some(t), Some(c)) = (theirs_total[j].as_mut(), &theirs[j]) {
-                        add(t, c);
+                        t.merge(c);
                     }
                     if let (Some(t), Some(c)) = (by_sigma[k].2[j].as_mut(), &theirs[j]) {
-                        add(t, c);
+                        t.merge(c);
                     }
                 }
                 let cell = Cell {

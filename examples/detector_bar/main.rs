@@ -22,6 +22,7 @@ mod aruco;
 mod defocus;
 mod measures;
 mod original;
+mod real_camera;
 mod rival;
 mod speed;
 mod table;
@@ -96,10 +97,10 @@ fn main() {
         .inspect_err(|e| println!("original WhyCode: not measured ({e})"))
         .ok();
     let aruco = Aruco::find()
-        .inspect(|_| println!("ArUco: OpenCV cv2.aruco, DICT_4X4_50, one thread (defocus row)"))
+        .inspect(|_| println!("ArUco: OpenCV cv2.aruco, DICT_4X4_50, one thread (defocus and realistic-camera rows)"))
         .inspect_err(|e| println!("ArUco: not measured ({e})"))
         .ok();
-    // ArUco joins on the defocus row only (issue 25's comparison).
+    // ArUco joins on the defocus and realistic-camera rows only.
     let rivals: Rivals = [
         apriltag.as_ref().map(|a| a as &dyn Rival),
         original.as_ref().map(|o| o as &dyn Rival),
@@ -144,6 +145,16 @@ fn main() {
             aruco.as_ref().map(|a| a as &dyn Rival),
         ];
         defocus::rows(&mut table, &fam8, scale, &rivals);
+    }
+    if run(10) {
+        println!("10. realistic cameras");
+        let apriltag_full = apriltag.as_ref().map(AprilTag::full_resolution);
+        let rivals: Rivals = [
+            apriltag_full.as_ref().map(|a| a as &dyn Rival),
+            original.as_ref().map(|o| o as &dyn Rival),
+            aruco.as_ref().map(|a| a as &dyn Rival),
+        ];
+        real_camera::rows(&mut table, &fam8, scale, &rivals);
     }
     table.print();
     println!("{:.0} s in all", started.elapsed().as_secs_f64());

@@ -341,6 +341,14 @@ impl PyMarker {
     fn bits(&self) -> Option<u32> {
         self.detection.bits
     }
+    /// Why a WhyCode marker has ID 0, as detect's JSON says it
+    /// ("no_code_ring", "ring_unread", "not_a_member", "ambiguous",
+    /// "other_bit_count", "no_family"); None when it is named, and for
+    /// legacy circles.
+    #[getter]
+    fn unknown(&self) -> Option<&'static str> {
+        self.detection.unnamed.map(whycode::detect::Unnamed::key)
+    }
     #[getter]
     fn confidence(&self) -> f64 {
         self.detection.confidence

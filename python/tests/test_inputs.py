@@ -108,12 +108,14 @@ def test_render_marker_image_is_detected() -> None:
     assert legacy.id == 0 and legacy.yaw is None
 
 
-def test_a_whycode_detector_tells_of_legacy_markers_it_does_not_read() -> None:
+def test_a_whycode_detector_reports_legacy_markers_as_unknown() -> None:
     legacy = whycode.render_marker_image(legacy=True)
     found = whycode.Detector().detect(legacy)
-    assert list(found) == [] and found.legacy_looking == 1
+    [marker] = found
+    assert marker.id == 0 and marker.unknown == "no_code_ring" and found.legacy_looking == 1
     found = whycode.Detector().detect(whycode.render_marker_image(3))
     assert [m.id for m in found] == [3] and found.legacy_looking == 0
+    assert found[0].unknown is None
 
 
 def test_timings_give_each_stage_of_the_last_frame(grey: np.ndarray,

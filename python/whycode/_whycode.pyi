@@ -205,6 +205,9 @@ class Marker:
     @property
     def bits(self) -> Optional[int]: ...
     @property
+    def unknown(self) -> Optional[str]:
+        """Why a WhyCode marker has ID 0 ("no_code_ring", "ring_unread", "not_a_member", ...)."""
+    @property
     def track(self) -> Optional[int]:
         """With tracking, the marker's track number (the same while it is followed)."""
     def as_dict(self) -> dict[str, Any]:

@@ -316,6 +316,7 @@ mod tests {
             pose: None,
             bits: Some(8),
             unreadable: false,
+            unnamed: None,
             track: None,
             arena: None,
         }

@@ -7,6 +7,7 @@ use std::ops::Deref;
 
 use image::{ImageBuffer, Luma};
 
+use super::identity::{self, Unnamed};
 use super::ring::{RingRead, RingVerdict};
 use super::segment::Gray;
 use super::tracking::track::PoseMemory;
@@ -35,31 +36,43 @@ impl Detector {
                 let verdict = self.rings.identify(image, gray, c, outline, remembered);
                 // A settled track whose ring blurs is still the marker.
                 let settled = c.track.is_some_and(|i| self.settled(i));
-                let not_marker = matches!(verdict, RingVerdict::NotAMarker(_));
-                if not_marker
-                    && c.track.is_none()
-                    && legacy::is_marker(image, gray, c, self.config.legacy_min_ink_px)
-                {
-                    self.legacy_looking += 1;
+                let mut marker = !matches!(verdict, RingVerdict::NotAMarker(_)) || settled;
+                if !marker {
+                    // No code ring shows: a marker still, when its geometry
+                    // says so (a legacy WhyCon circle, a ring blurred past
+                    // reading), reported without an ID.
+                    let large = 2.0 * c.outer.semi_minor >= identity::MIN_NO_RING_DIAMETER_PX;
+                    let sharp = legacy::is_marker(image, gray, c, self.config.legacy_min_ink_px);
+                    if sharp && c.track.is_none() {
+                        self.legacy_looking += 1;
+                    }
+                    marker = (sharp && large) || legacy::is_blurred_marker(gray, c);
                 }
-                (
-                    detection(c, verdict.read(), not_marker && !settled),
-                    *verdict.read(),
-                )
+                let family = self.config.target.family().is_some();
+                let mut d = detection(c, verdict.read(), !marker);
+                d.unnamed = Unnamed::of_verdict(&verdict, family);
+                (d, *verdict.read())
             }
             None => {
                 // A marker followed for a while stays one when its inside
                 // blurs, so its inside need not be looked at (the ray test
                 // costs more than following it).
                 let followed = c.track.is_some_and(|i| self.tracks[i].hits >= 3);
-                let marker =
-                    followed || legacy::is_marker(image, gray, c, self.config.legacy_min_ink_px);
+                let marker = followed
+                    || legacy::is_marker(image, gray, c, self.config.legacy_min_ink_px)
+                    || legacy::is_blurred_marker(gray, c);
                 let read = RingRead::nothing(outline);
                 (detection(c, &read, !marker), read)
             }
         };
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed.is_some());
+        }
+        if d.id != 0 {
+            d.unnamed = None;
+        } else if d.unnamed.is_none() && self.config.target.design() == Design::WhyCode {
+            // A followed marker whose ring this frame did not name.
+            d.unnamed = Some(Unnamed::Unread);
         }
         self.stopwatch.lap(Stage::Describe);
         let memory = self.measure_pose(gray, c, &mut d, &read, followed.and_then(|f| f.posed));
@@ -84,6 +97,7 @@ fn detection(c: &Candidate, read: &RingRead, unreadable: bool) -> Detection {
         pose: None,
         bits: read.bits,
         unreadable,
+        unnamed: None,
         track: None,
         arena: None,
     }

@@ -46,7 +46,9 @@ pub(super) fn is_marker<C: Deref<Target = [u8]>>(
     let inside = concentric_white_disc(gray, &c.outer, c.black, c.white);
     let paper = inside.and_then(|_| white_margin(gray, &c.outer, c.black, c.white));
     match (inside, paper) {
-        (Some(Inside::WhyConDisc), Some(paper)) => white_disc_mass(gray, &c.outer, paper),
+        (Some(Inside::WhyConDisc), Some(paper)) => {
+            white_disc_mass(gray, &c.outer, paper, &MassLimits::PRINTED)
+        }
         (Some(Inside::WhyCodeRing), Some(_)) => matches!(
             ring::evidence(image, c, None, None),
             RingEvidence::Manchester(_)
@@ -276,11 +278,74 @@ fn on_circle(edges: &[Edge], ratio: f64, outer: &Ellipse, hole: bool) -> bool {
                 && offset <= MAX_DECENTRE_PX + MAX_DECENTRE_RELATIVE * size))
 }
 
-/// Least and greatest radius of the white disc, relative to the outline,
-/// that its light adds up to: the spec's 0.41 R, and the 0.354 R of the
-/// original's printed markers (`many.png`, where every one of 48 weighs
-/// 0.354-0.356 R but the held-up print, 0.38 R).
-const MASS_RATIO: std::ops::RangeInclusive<f64> = 0.34..=0.43;
+/// Whether candidate `c`, out of focus, still shows a marker's disc: a
+/// WhyCon circle, or a WhyCode marker whose ring the blur has smeared into
+/// its centre's light. The edges inside such a disc no longer lie where
+/// they were printed (blur and a camera's sharpening move them by a share
+/// of the blur), but the light inside still adds up to a centre of a
+/// marker's size, about the outline's centre, under a white margin; only
+/// the shape of that light is judged more loosely. No letter of printed
+/// text is as large, so this is asked of discs of
+/// [`super::identity::MIN_NO_RING_DIAMETER_PX`] and more.
+pub(super) fn is_blurred_marker(gray: Gray<'_>, c: &Candidate) -> bool {
+    let outer = &c.outer;
+    if 2.0 * outer.semi_minor < super::identity::MIN_NO_RING_DIAMETER_PX {
+        return false;
+    }
+    let Some(sigma) = ellipse::defocus(gray, outer).filter(|&s| s >= MIN_BLUR_PX) else {
+        return false;
+    };
+    let Some(paper) = white_margin(gray, outer, c.black, c.white) else {
+        return false;
+    };
+    white_disc_mass(gray, outer, paper, &MassLimits::blurred(sigma))
+}
+
+/// Focus blur (Gaussian sigma, pixels) the outline must show for
+/// [`is_blurred_marker`]'s looser judgement: a sharp disc is judged by its
+/// edges.
+const MIN_BLUR_PX: f64 = 1.0;
+
+/// Bounds on the light inside a disc ([`white_disc_mass`]).
+struct MassLimits {
+    /// Least and greatest radius, relative to the outline, that the light
+    /// adds up to.
+    ratio: std::ops::RangeInclusive<f64>,
+    /// Largest excess elongation, relative to the light's spread.
+    elongation: f64,
+    /// Further offset (pixels) of the light's centroid allowed.
+    decentre_px: f64,
+}
+
+impl MassLimits {
+    /// A printed WhyCon marker's white disc seen in focus: the spec's
+    /// 0.41 R, and the 0.354 R of the original's printed markers
+    /// (`many.png`, where every one of 48 weighs 0.354-0.356 R but the
+    /// held-up print, 0.38 R).
+    const PRINTED: MassLimits = MassLimits {
+        ratio: 0.34..=0.43,
+        elongation: MAX_MASS_ELONGATION,
+        decentre_px: 0.0,
+    };
+
+    /// A marker's light under a focus blur of `sigma` pixels: the
+    /// original's window of white centres (0.34-0.55 of the outline), which
+    /// holds a WhyCode marker's smeared ring too (its centre and the white
+    /// half of its ring weigh 0.49 R); an elongation up to what blocky
+    /// video compression gives a blurred centre; an offset up to the blur.
+    fn blurred(sigma: f64) -> MassLimits {
+        MassLimits {
+            ratio: 0.34..=0.55,
+            elongation: MAX_BLURRED_MASS_ELONGATION,
+            decentre_px: sigma,
+        }
+    }
+}
+
+/// Largest excess elongation of a blurred disc's light (see
+/// [`MassLimits::blurred`]): bold letters reach 0.1-0.3 but are never as
+/// large as the discs this is asked of.
+const MAX_BLURRED_MASS_ELONGATION: f64 = 0.25;
 
 /// Largest excess elongation of the white disc's light over the outline's:
 /// anisotropy of the second moments (px²), beyond the outline's own scaled
@@ -328,7 +393,7 @@ const MASS_SAMPLES: f64 = 28.0;
 /// blurred disc); and it adds the same spread in every direction, so the
 /// anisotropy of the light's second moments is the disc's own: for a view
 /// of concentric circles, the outline's scaled by the area ratio.
-pub fn white_disc_mass(gray: Gray<'_>, outer: &Ellipse, paper: f64) -> bool {
+fn white_disc_mass(gray: Gray<'_>, outer: &Ellipse, paper: f64, limits: &MassLimits) -> bool {
     let reach = MASS_REACH * outer.semi_major;
     let (x0, x1) = ((outer.u - reach).floor(), (outer.u + reach).ceil());
     let (y0, y1) = ((outer.v - reach).floor(), (outer.v + reach).ceil());
@@ -431,7 +496,11 @@ pub fn white_disc_mass(gray: Gray<'_>, outer: &Ellipse, paper: f64) -> bool {
     let ratio_slack = noise * n.sqrt() * cell / outer.area() / (2.0 * ratio);
     let excess_slack = noise * (r4_sum / 4.0).sqrt() / m0;
     let offset_slack = noise * (r2_sum / 2.0).sqrt() / m0;
-    (MASS_RATIO.start() - ratio_slack..=MASS_RATIO.end() + ratio_slack).contains(&ratio)
-        && excess <= MASS_ELONGATION_PX2 + MAX_MASS_ELONGATION * spread + excess_slack
-        && cx.hypot(cy) <= MASS_DECENTRE_PX + MASS_DECENTRE_PERSPECTIVE * size2 + offset_slack
+    (limits.ratio.start() - ratio_slack..=limits.ratio.end() + ratio_slack).contains(&ratio)
+        && excess <= MASS_ELONGATION_PX2 + limits.elongation * spread + excess_slack
+        && cx.hypot(cy)
+            <= MASS_DECENTRE_PX
+                + MASS_DECENTRE_PERSPECTIVE * size2
+                + limits.decentre_px
+                + offset_slack
 }

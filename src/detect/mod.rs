@@ -29,6 +29,7 @@ pub mod annotate;
 mod describe;
 pub mod ellipse;
 pub mod family_check;
+pub mod identity;
 pub mod legacy;
 mod pose;
 pub(crate) mod rectify;
@@ -42,6 +43,7 @@ mod timings;
 pub mod trace;
 mod tracking;
 
+pub use identity::Unnamed;
 pub use timings::{Stage, StageTimings};
 pub use tracking::idfilter;
 
@@ -203,6 +205,10 @@ pub struct Detection {
     /// A round candidate whose ring shows no Manchester code structure:
     /// reported only with [`DetectorConfig::report_unreadable`].
     pub unreadable: bool,
+    /// Why a WhyCode marker has no ID (ID 0): no code ring shows, the ring
+    /// could not be read, it reads as no member, ... None when it is
+    /// named, and for legacy WhyCon markers, which carry no ID.
+    pub unnamed: Option<Unnamed>,
     /// With tracking, the marker's track: the same number in every frame
     /// while it is followed, so markers of one ID (legacy circles are all
     /// ID 0) can be told apart. Numbers start at 1 and are not reused.

@@ -124,6 +124,9 @@ struct MarkerRecord {
     bits: Option<u32>,
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     unreadable: bool,
+    /// Why a WhyCode marker has ID 0.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    unknown: Option<&'static str>,
     u: f64,
     v: f64,
     yaw: Option<f64>,
@@ -164,6 +167,7 @@ impl FrameReport {
                     code: m.code,
                     bits: m.bits,
                     unreadable: m.unreadable,
+                    unknown: m.unnamed.map(super::Unnamed::key),
                     u: round(m.u, 3),
                     v: round(m.v, 3),
                     yaw: m.yaw.map(|y| round(y, 5)),
@@ -365,6 +369,9 @@ impl FrameReport {
                     format!("{:.4}, {:.4}, {:.4}, {yaw}", a.x, a.y, a.z)
                 );
             }
+            if let Some(why) = m.unnamed {
+                let _ = write!(out, "  (unknown: {})", why.key());
+            }
             out.push('\n');
         }
         if with_heading {
@@ -414,6 +421,7 @@ mod tests {
             pose: None,
             bits: (id > 0).then_some(8),
             unreadable: false,
+            unnamed: None,
             track: None,
             arena: None,
         }

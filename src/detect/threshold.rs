@@ -439,8 +439,12 @@ impl ThresholdMap {
         let solid: Vec<bool> = (0..values.len()).map(|i| own_hi[i] < values[i]).collect();
         let shaded_flags: Vec<u8> = (0..values.len())
             .map(|i| {
+                // Dark but for the noise's brightest pixels: on shaded
+                // paper the noise alone lifts a few of a tile's 256 pixels
+                // over the threshold just above the paper's grey.
+                let under = u16::from(own_hi[i]) < u16::from(values[i]) + u16::from(noise_floor);
                 u8::from(
-                    solid[i]
+                    under
                         && u16::from(own_hi[i])
                             >= 2 * u16::from(lo[i]) + 2 * u16::from(noise_floor),
                 )

@@ -127,6 +127,7 @@ mod tests {
                 pose: None,
                 bits: None,
                 unreadable: false,
+                unnamed: None,
                 track: None,
                 arena: None,
             })

@@ -243,6 +243,7 @@ mod tests {
             pose: None,
             bits: Some(8),
             unreadable: false,
+            unnamed: None,
             track: None,
             arena,
         }

@@ -22,22 +22,124 @@ pub(super) fn develop(scene: &Scene, mut image: Vec<f32>) -> GrayImage {
     if scene.focus_blur_px > 0.05 {
         image = gaussian_blur(&image, width, height, scene.focus_blur_px);
     }
+    let processing = scene.processing;
+    if let Some(aberration) = processing.bayer_aberration {
+        image = bayer_mosaic(&image, width, height, aberration);
+    }
     if scene.noise > 0.0 {
         let mut rng = Pcg32::new(scene.seed, 23);
         for px in image.iter_mut() {
             *px += (scene.noise * rng.gaussian()) as f32;
         }
     }
-    let bytes: Vec<u8> = image
-        .iter()
-        .map(|&g| g.round().clamp(0.0, 255.0) as u8)
-        .collect();
-    let gray = GrayImage::from_raw(scene.camera.width, scene.camera.height, bytes)
-        .expect("buffer matches the camera size");
+    if processing.bayer_aberration.is_some() {
+        image = demosaic_to_grey(&image, width, height);
+    }
+    if let Some((amount, sigma)) = processing.sharpen {
+        let soft = gaussian_blur(&image, width, height, sigma);
+        for (px, s) in image.iter_mut().zip(soft) {
+            *px += amount as f32 * (*px - s);
+        }
+    }
+    let mut gray = quantise(&image, scene.camera.width, scene.camera.height);
+    if let Some(factor) = processing.video_downscale.filter(|&f| f > 1) {
+        gray = video_round_trip(&gray, factor, processing.video_quality);
+    }
     match scene.jpeg_quality {
         Some(quality) => jpeg_round_trip(&gray, quality),
         None => gray,
     }
+}
+
+/// The 8-bit image of grey values.
+fn quantise(image: &[f32], width: u32, height: u32) -> GrayImage {
+    let bytes: Vec<u8> = image
+        .iter()
+        .map(|&g| g.round().clamp(0.0, 255.0) as u8)
+        .collect();
+    GrayImage::from_raw(width, height, bytes).expect("buffer matches the camera size")
+}
+
+/// Luma weights of red, green and blue (ITU-R BT.601), as a camera's
+/// grey conversion takes them.
+const LUMA: [f32; 3] = [0.299, 0.587, 0.114];
+
+/// Each pixel of a grey scene as an RGGB sensor reads it: its one colour
+/// through a lens whose red image is magnified by 1 + `aberration` about
+/// the centre and the blue by 1 - `aberration`.
+fn bayer_mosaic(image: &[f32], width: usize, height: usize, aberration: f64) -> Vec<f32> {
+    let (cu, cv) = (0.5 * width as f64 - 0.5, 0.5 * height as f64 - 0.5);
+    let mut out = vec![0f32; image.len()];
+    out.par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(row, line)| {
+            for (col, px) in line.iter_mut().enumerate() {
+                let scale = match (row % 2, col % 2) {
+                    (0, 0) => 1.0 / (1.0 + aberration),
+                    (1, 1) => 1.0 / (1.0 - aberration),
+                    _ => 1.0,
+                };
+                let (u, v) = (
+                    cu + (col as f64 - cu) * scale,
+                    cv + (row as f64 - cv) * scale,
+                );
+                *px = sample(image, width, height, u, v);
+            }
+        });
+    out
+}
+
+/// Bilinear demosaicing of an RGGB mosaic, then the grey a camera's
+/// luma gives: each missing colour the mean of its nearest samples.
+fn demosaic_to_grey(mosaic: &[f32], width: usize, height: usize) -> Vec<f32> {
+    let at = |x: isize, y: isize| {
+        let (x, y) = (
+            x.clamp(0, width as isize - 1) as usize,
+            y.clamp(0, height as isize - 1) as usize,
+        );
+        mosaic[y * width + x]
+    };
+    let mut out = vec![0f32; mosaic.len()];
+    out.par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(row, line)| {
+            let y = row as isize;
+            for (col, px) in line.iter_mut().enumerate() {
+                let x = col as isize;
+                let cross = 0.25 * (at(x - 1, y) + at(x + 1, y) + at(x, y - 1) + at(x, y + 1));
+                let diagonal = 0.25
+                    * (at(x - 1, y - 1) + at(x + 1, y - 1) + at(x - 1, y + 1) + at(x + 1, y + 1));
+                let across = 0.5 * (at(x - 1, y) + at(x + 1, y));
+                let along = 0.5 * (at(x, y - 1) + at(x, y + 1));
+                let own = at(x, y);
+                let [r, g, b] = match (row % 2, col % 2) {
+                    (0, 0) => [own, cross, diagonal],
+                    (1, 1) => [diagonal, cross, own],
+                    // Green on a red row: red left and right, blue above
+                    // and below; on a blue row the other way round.
+                    (0, _) => [across, own, along],
+                    _ => [along, own, across],
+                };
+                *px = LUMA[0] * r + LUMA[1] * g + LUMA[2] * b;
+            }
+        });
+    out
+}
+
+/// The image as a video stream of `factor` times fewer pixels a side
+/// shows it, scaled back up: shrunk by area averaging, JPEG-encoded at
+/// `quality`, decoded and enlarged bilinearly.
+fn video_round_trip(image: &GrayImage, factor: u32, quality: u8) -> GrayImage {
+    let (width, height) = (image.width(), image.height());
+    let (small_w, small_h) = ((width / factor).max(1), (height / factor).max(1));
+    let small = image::imageops::resize(
+        image,
+        small_w,
+        small_h,
+        image::imageops::FilterType::Triangle,
+    );
+    let coded = jpeg_round_trip(&small, quality);
+    image::imageops::resize(&coded, width, height, image::imageops::FilterType::Triangle)
 }
 
 /// Light falling off linearly across the frame from 1 to 1/gradient.
@@ -61,13 +163,23 @@ fn illuminate(scene: &Scene, image: &mut [f32], width: usize) {
         .map(|&(u, v)| along(u, v))
         .fold(f64::MIN, f64::max);
     let exposure = scene.exposure * FULL_SCALE;
+    let shade = |u: f64, v: f64| {
+        scene.shades.iter().fold(1.0, |light, s| {
+            let outside = ((u - s.u).hypot(v - s.v) - s.radius_px) / s.soft_px.max(1e-9);
+            light * (s.factor + (1.0 - s.factor) * outside.clamp(0.0, 1.0))
+        })
+    };
     image
         .par_chunks_mut(width)
         .enumerate()
         .for_each(|(row, line)| {
             for (col, px) in line.iter_mut().enumerate() {
                 let t = (along(col as f64 + 0.5, row as f64 + 0.5) - lo) / (hi - lo).max(1e-9);
-                let light = 1.0 - (1.0 - 1.0 / ratio) * t;
+                let (u, v) = (col as f64 + 0.5, row as f64 + 0.5);
+                let mut light = 1.0 - (1.0 - 1.0 / ratio) * t;
+                if !scene.shades.is_empty() {
+                    light *= shade(u, v);
+                }
                 *px = (f64::from(*px) * exposure * light) as f32;
             }
         });

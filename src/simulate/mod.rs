@@ -223,6 +223,44 @@ pub struct MotionBlur {
     pub angle: f64,
 }
 
+/// A patch of shade: light falls to `factor` inside a circle of
+/// `radius_px` around (`u`, `v`), over a soft edge of `soft_px` (paper in
+/// the shadow of a person or a shelf, in a frame lit by lamps and windows).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shade {
+    /// Centre column, pixels.
+    pub u: f64,
+    /// Centre row, pixels.
+    pub v: f64,
+    /// Radius of the fully shaded part, pixels.
+    pub radius_px: f64,
+    /// Width of the edge over which the light returns, pixels.
+    pub soft_px: f64,
+    /// Share of the light left in the shade (0..1).
+    pub factor: f64,
+}
+
+/// What a real camera's own processing does after the lens, in the order
+/// it does it: a colour sensor's mosaic, its noise, demosaicing,
+/// sharpening, then a video encoder's resizing and compression.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Processing {
+    /// A Bayer (RGGB) sensor read by bilinear demosaicing, with the lens's
+    /// lateral chromatic aberration: the red image magnified about the
+    /// centre by 1 + this, the blue by 1 - this (0.002 shifts red and blue
+    /// a pixel apart at 500 px from the centre). None: a grey sensor.
+    pub bayer_aberration: Option<f64>,
+    /// An unsharp mask of (amount, Gaussian sigma in pixels), as phones and
+    /// webcams apply: edges gain a light and a dark halo.
+    pub sharpen: Option<(f64, f64)>,
+    /// A video stream of lower resolution shown larger: the frame shrunk
+    /// by this whole factor, encoded as JPEG at `video_quality`, decoded
+    /// and scaled back up bilinearly.
+    pub video_downscale: Option<u32>,
+    /// JPEG quality of that stream (1-100).
+    pub video_quality: u8,
+}
+
 #[derive(Debug, Clone, PartialEq)]
 /// A camera view to synthesise: what is in front of the camera, the light, and the ways a real camera spoils the picture; [`render`] turns it into an image with exact ground truth.
 pub struct Scene {
@@ -247,8 +285,12 @@ pub struct Scene {
     pub focus_blur_px: f64,
     /// Motion blur, if the camera or the objects moved during exposure.
     pub motion_blur: Option<MotionBlur>,
+    /// Patches of shade over the frame's light.
+    pub shades: Vec<Shade>,
     /// Sensor noise: Gaussian sigma in grey levels.
     pub noise: f64,
+    /// The camera's processing after the sensor.
+    pub processing: Processing,
     /// JPEG round trip at this quality (1-100).
     pub jpeg_quality: Option<u8>,
     /// Seed of the noise, texture and clutter: the same scene gives the same
@@ -272,7 +314,9 @@ impl Scene {
             ink_reflectance: 0.05,
             focus_blur_px: 0.0,
             motion_blur: None,
+            shades: Vec::new(),
             noise: 0.0,
+            processing: Processing::default(),
             jpeg_quality: None,
             seed: 1,
             supersampling: 4,

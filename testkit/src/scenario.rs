@@ -412,3 +412,193 @@ pub fn defocused(
         s.focus_blur_px = sigma_px;
     })
 }
+
+/// What one realistic-camera cell does to the picture (the real-cameras
+/// rows of the detector bar): each is a way photographs taken by other
+/// people differ from the simulator's clean frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RealCamera {
+    /// Each marker's card in a patch of shade (a fifth to a third of the
+    /// light) in a bright frame of lamps and white walls.
+    Shade,
+    /// Grey ink on grey paper (reflectance 0.3 on 0.65), sensor noise 3.
+    GreyInk,
+    /// A video stream of half the resolution shown twice as large (JPEG
+    /// quality 40), out of focus by 0.04-0.07 of the marker's diameter.
+    Video,
+    /// A phone's sharpening (unsharp mask of amount 1.5 at sigma 1.5 px)
+    /// on a slightly soft picture: halos round every edge.
+    Sharpened,
+    /// A Bayer sensor with bilinear demosaicing, lateral chromatic
+    /// aberration of 0.003 and noise 3.
+    Bayer,
+    /// Markers whose disc comes within 0.02 of its diameter of the frame's
+    /// edge (a landing pad filling a drone's camera).
+    Border,
+    /// A Bayer sensor, sharpening, and the video stream, out of focus, at
+    /// once (a webcam's stream).
+    Everything,
+}
+
+impl RealCamera {
+    /// Every cell, in the bar's order.
+    pub const ALL: [RealCamera; 7] = [
+        RealCamera::Shade,
+        RealCamera::GreyInk,
+        RealCamera::Video,
+        RealCamera::Sharpened,
+        RealCamera::Bayer,
+        RealCamera::Border,
+        RealCamera::Everything,
+    ];
+
+    /// The cell's name in the bar's table.
+    pub fn name(self) -> &'static str {
+        match self {
+            RealCamera::Shade => "paper in shade, bright frame",
+            RealCamera::GreyInk => "grey ink on grey paper",
+            RealCamera::Video => "video upscaled x2, blur 0.04-0.07 D",
+            RealCamera::Sharpened => "camera sharpening halos",
+            RealCamera::Bayer => "Bayer demosaicing, chromatic offset",
+            RealCamera::Border => "discs at the frame's border",
+            RealCamera::Everything => "webcam: Bayer, sharpening, video, blur",
+        }
+    }
+
+    /// Face-on diameters of the cell's markers, pixels.
+    fn sizes(self) -> (f64, f64) {
+        match self {
+            RealCamera::Shade | RealCamera::GreyInk => (30.0, 80.0),
+            RealCamera::Video | RealCamera::Everything => (40.0, 60.0),
+            RealCamera::Sharpened | RealCamera::Bayer => (24.0, 50.0),
+            RealCamera::Border => (120.0, 300.0),
+        }
+    }
+}
+
+/// One realistic-camera cell: `frames` frames of 1280x720 (f = 1000 px),
+/// 8-bit markers of `family` (legacy WhyCon without) tilted up to 30°,
+/// spoilt as `camera` says.
+pub fn real_camera(
+    family: Option<&Family>,
+    camera: RealCamera,
+    frames: usize,
+    seed0: u64,
+) -> Scenario<'_> {
+    let count = if camera == RealCamera::Border { 4 } else { 8 };
+    Scenario::new(
+        family,
+        Spread::tilted(count, camera.sizes(), 30.0),
+        frames,
+        seed0,
+    )
+    .size(1280, 720)
+    .focal(1000.0)
+    .look(move |s, rng, _| {
+        s.background = simulate::Background::Clutter { density: 0.5 };
+        s.noise = 2.0;
+        match camera {
+            RealCamera::Shade => {
+                s.exposure = 1.15;
+                shade_each_marker(s, rng);
+            }
+            RealCamera::GreyInk => {
+                s.paper_reflectance = 0.65;
+                s.ink_reflectance = 0.3;
+                s.noise = 3.0;
+            }
+            RealCamera::Border => move_to_border(s, rng),
+            _ => {}
+        }
+        let video = |s: &mut Scene, rng: &mut Pcg32| {
+            s.focus_blur_px = rng.range(0.04, 0.07) * marker_diameter_px(s);
+            s.processing.video_downscale = Some(2);
+            s.processing.video_quality = 40;
+        };
+        match camera {
+            RealCamera::Video => video(s, rng),
+            RealCamera::Sharpened => {
+                s.focus_blur_px = 0.8;
+                s.processing.sharpen = Some((1.5, 1.5));
+            }
+            RealCamera::Bayer => {
+                s.processing.bayer_aberration = Some(0.003);
+                s.noise = 3.0;
+            }
+            RealCamera::Everything => {
+                video(s, rng);
+                s.processing.sharpen = Some((1.0, 1.5));
+                s.processing.bayer_aberration = Some(0.003);
+            }
+            _ => {}
+        }
+    })
+}
+
+/// The mean face-on diameter, pixels, of the scene's markers.
+fn marker_diameter_px(s: &Scene) -> f64 {
+    let f = s.camera.fx;
+    let sizes: Vec<f64> = s
+        .objects
+        .iter()
+        .filter_map(|o| match o {
+            SceneObject::Marker(m) => {
+                Some(f * m.marker.diameter_mm / 1000.0 / m.placement.position.z)
+            }
+            _ => None,
+        })
+        .collect();
+    sizes.iter().sum::<f64>() / sizes.len().max(1) as f64
+}
+
+/// A patch of shade over each marker's card (the frame's exposure is the
+/// cell's).
+fn shade_each_marker(s: &mut Scene, rng: &mut Pcg32) {
+    let camera = s.camera;
+    let shades: Vec<simulate::Shade> = s
+        .objects
+        .iter()
+        .filter_map(|o| match o {
+            SceneObject::Marker(m) => {
+                let centre = m.placement.position;
+                let (u, v) = camera.project(&centre)?;
+                let radius = camera.fx * m.card_half_mm / 1000.0 / centre.z;
+                Some(simulate::Shade {
+                    u,
+                    v,
+                    // The card's corners in the shade too.
+                    radius_px: 1.5 * radius,
+                    soft_px: 0.3 * radius,
+                    factor: rng.range(0.2, 0.35),
+                })
+            }
+            _ => None,
+        })
+        .collect();
+    s.shades = shades;
+}
+
+/// Moves the scene's markers (as `spread_markers` placed them) so that
+/// each disc comes within 0.02 of its diameter of one of the frame's four
+/// edges, the first marker at the left edge, the next at the top, ...
+fn move_to_border(s: &mut Scene, rng: &mut Pcg32) {
+    let camera = s.camera;
+    let (w, h) = (f64::from(camera.width), f64::from(camera.height));
+    for (k, object) in s.objects.iter_mut().enumerate() {
+        let SceneObject::Marker(m) = object else {
+            continue;
+        };
+        let d = camera.fx * m.marker.diameter_mm / 1000.0 / m.placement.position.z;
+        // Face-on at the border: the disc's edge 0.02 D from the frame's.
+        let gap = 0.02 * d + 0.5 * d;
+        let (u, v) = match k % 4 {
+            0 => (gap, rng.range(gap, h - gap)),
+            1 => (rng.range(gap, w - gap), gap),
+            2 => (w - gap, rng.range(gap, h - gap)),
+            _ => (rng.range(gap, w - gap), h - gap),
+        };
+        let roll = rng.range(0.0, 2.0 * PI);
+        let placement = Placement::at_pixel(&camera, &m.marker, (u, v), d, 0.0, 0.0, roll);
+        *object = SceneObject::Marker(LooseMarker::new(m.marker.clone(), m.id, placement));
+    }
+}

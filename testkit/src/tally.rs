@@ -122,6 +122,22 @@ impl Counts {
         }
     }
 
+    /// Adds another set of frames' counts (the first misses, wrong IDs and
+    /// false reports kept where these had none).
+    pub fn merge(&mut self, other: &Counts) {
+        self.markers += other.markers;
+        self.detected += other.detected;
+        self.correct_id += other.correct_id;
+        self.unknown_id += other.unknown_id;
+        self.wrong_id += other.wrong_id;
+        self.false_detections += other.false_detections;
+        self.false_with_id += other.false_with_id;
+        self.frames += other.frames;
+        self.first_miss = self.first_miss.or(other.first_miss);
+        self.first_wrong = self.first_wrong.or(other.first_wrong);
+        self.first_false = self.first_false.or(other.first_false);
+    }
+
     /// Share of the targets detected.
     pub fn detection_rate(&self) -> f64 {
         self.detected as f64 / self.markers.max(1) as f64

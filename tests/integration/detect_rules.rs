@@ -6,7 +6,7 @@
 use std::f64::consts::PI;
 
 use whycode::camera::Camera;
-use whycode::detect::{Detection, Detector, DetectorConfig, Target};
+use whycode::detect::{Detection, Detector, DetectorConfig, Target, Unnamed};
 use whycode::family::{necklace, Family};
 use whycode::geometry::Marker;
 use whycode::math::angle::wrap_angle;
@@ -83,8 +83,9 @@ fn clutter_without_markers_gives_no_report() {
 }
 
 #[test]
-fn a_dark_disc_with_a_light_middle_is_reported_only_on_request_and_marked() {
-    // A legacy WhyCon marker is exactly such a disc: no code ring.
+fn a_legacy_circle_is_reported_by_a_whycode_detector_as_a_marker_without_a_code_ring() {
+    // Detection apart from identification: a disc of WhyCon's geometry is a
+    // marker whatever its ring says, reported with ID 0 and the reason.
     let cam = camera();
     let mut scene = Scene::new(cam);
     let marker = Marker::whycon(DIAMETER_M * 1000.0);
@@ -94,19 +95,21 @@ fn a_dark_disc_with_a_light_middle_is_reported_only_on_request_and_marked() {
         .push(SceneObject::Marker(LooseMarker::new(marker, 0, p)));
     let (image, _) = render(&scene);
     let family = Family::generate(8, 2).unwrap();
-    assert!(with_family(&family).detect(&image).is_empty());
-    let found = detector(DetectorConfig {
-        target: Target::WhyCode(family),
-        report_unreadable: true,
-        ..Default::default()
-    })
-    .detect(&image);
-    assert_eq!(found.len(), 1, "{found:?}");
-    assert!(found[0].unreadable && found[0].id == 0, "{found:?}");
-    // And legacy settings take it for what it is.
+    for report_unreadable in [false, true] {
+        let found = detector(DetectorConfig {
+            target: Target::WhyCode(family.clone()),
+            report_unreadable,
+            ..Default::default()
+        })
+        .detect(&image);
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert!(!found[0].unreadable && found[0].id == 0, "{found:?}");
+        assert_eq!(found[0].unnamed, Some(Unnamed::NoCodeRing), "{found:?}");
+    }
+    // And legacy settings take it for what it is: no ID by design.
     let legacy = detector(DetectorConfig::default()).detect(&image);
     assert_eq!(legacy.len(), 1);
-    assert!(!legacy[0].unreadable);
+    assert!(!legacy[0].unreadable && legacy[0].unnamed.is_none());
 }
 
 #[test]

@@ -13,6 +13,7 @@ mod calibrate_roundtrip;
 mod defects_cli;
 mod detect_cli;
 mod detect_compat;
+mod detect_real_camera;
 mod detect_robustness;
 mod detect_roundtrip;
 mod detect_rules;
