@@ -278,6 +278,15 @@ fn on_circle(edges: &[Edge], ratio: f64, outer: &Ellipse, hole: bool) -> bool {
                 && offset <= MAX_DECENTRE_PX + MAX_DECENTRE_RELATIVE * size))
 }
 
+/// Radii of a marker's white centre, relative to the outline, that the
+/// original accepts (its pixel-count window), for discs out of focus: the
+/// spec's 0.41 R, the 0.354 R of the original's own prints, the larger
+/// centres of other printers' (0.43-0.46 R on robots' blurred markers in
+/// the field), and a WhyCode ring smeared into its centre (0.49 R). In
+/// focus the window is the printed one ([`MassLimits::PRINTED`]): bold
+/// letters and washers with holes of 0.45-0.5 R are as sharp as a marker.
+const WHITE_CENTRE: std::ops::RangeInclusive<f64> = 0.34..=0.55;
+
 /// Whether candidate `c`, out of focus, still shows a marker's disc: a
 /// WhyCon circle, or a WhyCode marker whose ring the blur has smeared into
 /// its centre's light. The edges inside such a disc no longer lie where
@@ -329,13 +338,13 @@ impl MassLimits {
     };
 
     /// A marker's light under a focus blur of `sigma` pixels: the
-    /// original's window of white centres (0.34-0.55 of the outline), which
-    /// holds a WhyCode marker's smeared ring too (its centre and the white
+    /// original's window of white centres ([`WHITE_CENTRE`]), which holds a
+    /// WhyCode marker's smeared ring too (its centre and the white
     /// half of its ring weigh 0.49 R); an elongation up to what blocky
     /// video compression gives a blurred centre; an offset up to the blur.
     fn blurred(sigma: f64) -> MassLimits {
         MassLimits {
-            ratio: 0.34..=0.55,
+            ratio: WHITE_CENTRE,
             elongation: MAX_BLURRED_MASS_ELONGATION,
             decentre_px: sigma,
         }

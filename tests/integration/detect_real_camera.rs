@@ -131,21 +131,54 @@ fn a_blurred_marker_whose_ring_cannot_be_read_is_reported_as_unknown() {
 
 #[test]
 fn a_blurred_legacy_circle_whose_white_centre_has_grown_is_found() {
-    let (image, places) = video_scene([0, 0, 0]);
-    let found = detect(&image, Target::WhyCon);
-    assert_eq!(found.len(), 3, "{found:?}");
-    for place in places {
-        assert_eq!(near(&found, place, 4.0).len(), 1, "{place:?}: {found:?}");
+    // WhyCon circles printed with a white centre of 0.46 of the diameter
+    // (as robots' markers in the field measure), seen through the video's
+    // blur, by a legacy and by a WhyCode detector.
+    let camera = camera();
+    let places = [(300.0, 200.0), (700.0, 420.0), (1000.0, 250.0)];
+    for blur in [0.055, 0.07] {
+        let mut scene = Scene::new(camera);
+        scene.background = Background::Table;
+        scene.objects = [40.0, 48.0, 57.0]
+            .into_iter()
+            .zip(places)
+            .map(|(size, place)| {
+                let mut m = marker_at(&camera, 0, place, size);
+                m.blots.push(simulate::Blot {
+                    x_mm: 0.0,
+                    y_mm: 0.0,
+                    radius_mm: 0.46 * m.marker.outer_radius(),
+                    black: false,
+                });
+                SceneObject::Marker(m)
+            })
+            .collect();
+        scene.focus_blur_px = blur * 48.0;
+        scene.processing.video_downscale = Some(2);
+        scene.processing.video_quality = 40;
+        scene.noise = 2.0;
+        let image = simulate::render(&scene).0;
+        for target in [Target::WhyCon, Target::WhyCode(family())] {
+            let found = detect(&image, target);
+            assert_eq!(found.len(), 3, "blur {blur}: {found:?}");
+            for place in places {
+                let at = near(&found, place, 4.0);
+                assert_eq!(at.len(), 1, "blur {blur}, {place:?}: {found:?}");
+                assert_eq!(at[0].id, 0);
+            }
+        }
     }
 }
 
 #[test]
 fn a_disc_a_fiftieth_of_its_diameter_from_the_border_is_found_and_named() {
-    let camera = camera();
-    let d = 340.0;
-    let gap = 0.02 * d;
+    // A landing pad filling a drone's camera: 344 px across in a frame 360
+    // px high, 0.02 of its diameter from three of its edges.
+    let camera = whycode_testkit::scenes::camera(640, 360, 500.0);
+    let d = 344.0;
+    let gap = 0.5 * (360.0 - d);
     for (id, target) in [(5, Target::WhyCode(family())), (0, Target::WhyCon)] {
-        for place in [(gap + d / 2.0, 360.0), (640.0, 720.0 - gap - d / 2.0)] {
+        for place in [(gap + d / 2.0, 180.0), (640.0 - gap - d / 2.0, 180.0)] {
             let mut scene = Scene::new(camera);
             scene.background = Background::Uniform(0.7);
             scene.objects = vec![SceneObject::Marker(marker_at(&camera, id, place, d))];
