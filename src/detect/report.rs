@@ -45,7 +45,7 @@ pub struct StreamPosition {
 /// The CSV header line (without its newline) of a run without an arena;
 /// [`FrameReport::to_csv_rows`] writes the rows under it.
 pub const CSV_HEADER: &str =
-    "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw,bits,unreadable";
+    "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw,bits,unreadable,unknown";
 
 /// The columns a run's CSV has. They are fixed for the whole run (the header
 /// comes before any frame), so the arena columns follow the configuration,
@@ -240,7 +240,7 @@ impl FrameReport {
             let pose = m.pose.as_ref();
             let _ = write!(
                 out,
-                "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 m.id,
                 m.code.map_or(String::new(), |c| c.to_string()),
                 round(m.u, 3),
@@ -258,6 +258,7 @@ impl FrameReport {
                 opt(pose.map(|p| round(p.quaternion[3], 6))),
                 m.bits.map_or(String::new(), |b| b.to_string()),
                 u8::from(m.unreadable),
+                m.unnamed.map_or("", super::Unnamed::key),
             );
             if columns.arena {
                 // Same rounding as the JSON's `arena`.

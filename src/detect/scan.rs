@@ -53,15 +53,21 @@ impl Detector {
     /// A second look at the rows where the scan's `map` saw a cast
     /// shadow's edge: shaded paper fell below the mid-level threshold.
     /// There thresholds that keep the paper's ratio to the ink find what
-    /// the first look missed. Only where a family's ring test stands
-    /// between grey clutter (which looks shaded too) and a report.
+    /// the first look missed.
     pub(super) fn look_in_shade(
         &mut self,
         gray: Gray<'_>,
         map: &ThresholdMap,
         found: &mut Vec<Candidate>,
     ) {
-        let shaded = map.shaded_rows();
+        // A family's ring test stands between grey clutter (which looks
+        // shaded too) and a report, and makes the look worth its time on
+        // every frame; without one (legacy circles, any bit count) the
+        // look is taken, as the original moves its threshold, only on a
+        // frame where the first look found nothing.
+        let shaded = map
+            .shaded_rows()
+            .filter(|_| self.config.target.family().is_some() || found.is_empty());
         let Some(rows) = shaded else {
             return;
         };

@@ -126,7 +126,6 @@ impl ThresholdMap {
         if n == 0 {
             return Vec::new();
         }
-        let tile = 1usize << self.shift;
         let y_start = self.row0 << self.shift;
         let y_end = ((self.row0 + self.rows) << self.shift).min(height);
         let low_range = |i: usize| {
@@ -150,17 +149,7 @@ impl ThresholdMap {
                 if needed[i] == 0 {
                     return 0;
                 }
-                let w = if i % self.cols + 1 == self.cols {
-                    last_w
-                } else {
-                    tile
-                };
-                let h = if i / self.cols + 1 == self.rows {
-                    last_h
-                } else {
-                    tile
-                };
-                (self.sums[i] / (w * h).max(1) as u32) as u8
+                tile_mean(&self.sums, i, self.cols, self.rows, (last_w, last_h)) as u8
             })
             .collect();
         let darkest = box_filter(&means, self.cols, self.rows, NEIGHBOURHOOD_TILES, u8::min);
@@ -437,17 +426,21 @@ impl ThresholdMap {
         // floor between cards off from the image's sides; left unflagged,
         // such pockets were flood-filled as candidates every tracked frame.
         let solid: Vec<bool> = (0..values.len()).map(|i| own_hi[i] < values[i]).collect();
+        let tile_size = (
+            width - ((cols - 1) << TILE_SHIFT),
+            y_end - y_start - ((rows - 1) << TILE_SHIFT),
+        );
         let shaded_flags: Vec<u8> = (0..values.len())
             .map(|i| {
-                // Dark but for the noise's brightest pixels: on shaded
-                // paper the noise alone lifts a few of a tile's 256 pixels
-                // over the threshold just above the paper's grey.
-                let under = u16::from(own_hi[i]) < u16::from(values[i]) + u16::from(noise_floor);
-                u8::from(
-                    under
-                        && u16::from(own_hi[i])
-                            >= 2 * u16::from(lo[i]) + 2 * u16::from(noise_floor),
-                )
+                // Dark, or flat paper dark but for the noise's brightest
+                // pixels: on shaded paper the noise alone lifts a few of a
+                // tile's 256 pixels over a threshold just above the paper's
+                // grey. (A tile across an edge's ramp is not flat: its
+                // brightest pixel stands far above its mean.)
+                let (hi_own, nf) = (u16::from(own_hi[i]), u16::from(noise_floor));
+                let flat_paper = hi_own < u16::from(values[i]) + nf
+                    && hi_own <= tile_mean(&sums, i, cols, rows, tile_size) + nf;
+                u8::from((solid[i] || flat_paper) && hi_own >= 2 * u16::from(lo[i]) + 2 * nf)
             })
             .collect();
         let shaded_tiles = (0..values.len()).filter(|&i| shaded_flags[i] != 0);
@@ -537,6 +530,16 @@ impl ThresholdMap {
             sums,
         }
     }
+}
+
+/// The mean grey of tile `i` of a map of `cols` x `rows` tiles from its
+/// pixel sum; `last` is the size of the last column's and the last row's
+/// tiles, which the image's edges may cut short.
+fn tile_mean(sums: &[u32], i: usize, cols: usize, rows: usize, last: (usize, usize)) -> u16 {
+    let tile = 1usize << TILE_SHIFT;
+    let w = if i % cols + 1 == cols { last.0 } else { tile };
+    let h = if i / cols + 1 == rows { last.1 } else { tile };
+    (sums[i] / (w * h).max(1) as u32) as u16
 }
 
 /// Per tile of the pixel rows `y` (whole tile rows), its own brightest

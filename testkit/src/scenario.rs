@@ -418,8 +418,9 @@ pub fn defocused(
 /// people differ from the simulator's clean frames.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RealCamera {
-    /// Each marker's card in a patch of shade (a fifth to a third of the
-    /// light) in a bright frame of lamps and white walls.
+    /// Each marker on a card with a third of a radius of paper round it,
+    /// in a patch of shade (a fifth to a third of the light), in a bright
+    /// frame (1.3 times the usual exposure).
     Shade,
     /// Grey ink on grey paper (reflectance 0.3 on 0.65), sensor noise 3.
     GreyInk,
@@ -432,8 +433,8 @@ pub enum RealCamera {
     /// A Bayer sensor with bilinear demosaicing, lateral chromatic
     /// aberration of 0.003 and noise 3.
     Bayer,
-    /// Markers whose disc comes within 0.02 of its diameter of the frame's
-    /// edge (a landing pad filling a drone's camera).
+    /// Markers whose disc comes within 0.02 of its diameter of two of the
+    /// frame's edges (a landing pad filling a drone's camera).
     Border,
     /// A Bayer sensor, sharpening, and the video stream, out of focus, at
     /// once (a webcam's stream).
@@ -460,7 +461,7 @@ impl RealCamera {
             RealCamera::Video => "video upscaled x2, blur 0.04-0.07 D",
             RealCamera::Sharpened => "camera sharpening halos",
             RealCamera::Bayer => "Bayer demosaicing, chromatic offset",
-            RealCamera::Border => "discs at the frame's border",
+            RealCamera::Border => "discs in the frame's corners",
             RealCamera::Everything => "webcam: Bayer, sharpening, video, blur",
         }
     }
@@ -499,7 +500,7 @@ pub fn real_camera(
         s.noise = 2.0;
         match camera {
             RealCamera::Shade => {
-                s.exposure = 1.15;
+                s.exposure = 1.3;
                 shade_each_marker(s, rng);
             }
             RealCamera::GreyInk => {
@@ -551,15 +552,16 @@ fn marker_diameter_px(s: &Scene) -> f64 {
     sizes.iter().sum::<f64>() / sizes.len().max(1) as f64
 }
 
-/// A patch of shade over each marker's card (the frame's exposure is the
-/// cell's).
+/// Cuts each marker's card to a third of a radius of paper round the disc
+/// and puts a patch of shade over it (the frame's exposure is the cell's).
 fn shade_each_marker(s: &mut Scene, rng: &mut Pcg32) {
     let camera = s.camera;
     let shades: Vec<simulate::Shade> = s
         .objects
-        .iter()
+        .iter_mut()
         .filter_map(|o| match o {
             SceneObject::Marker(m) => {
+                m.card_half_mm = 1.33 * m.marker.outer_radius();
                 let centre = m.placement.position;
                 let (u, v) = camera.project(&centre)?;
                 let radius = camera.fx * m.card_half_mm / 1000.0 / centre.z;
@@ -579,8 +581,8 @@ fn shade_each_marker(s: &mut Scene, rng: &mut Pcg32) {
 }
 
 /// Moves the scene's markers (as `spread_markers` placed them) so that
-/// each disc comes within 0.02 of its diameter of one of the frame's four
-/// edges, the first marker at the left edge, the next at the top, ...
+/// each disc comes within 0.02 of its diameter of two of the frame's
+/// edges, one marker in each corner.
 fn move_to_border(s: &mut Scene, rng: &mut Pcg32) {
     let camera = s.camera;
     let (w, h) = (f64::from(camera.width), f64::from(camera.height));
@@ -592,10 +594,10 @@ fn move_to_border(s: &mut Scene, rng: &mut Pcg32) {
         // Face-on at the border: the disc's edge 0.02 D from the frame's.
         let gap = 0.02 * d + 0.5 * d;
         let (u, v) = match k % 4 {
-            0 => (gap, rng.range(gap, h - gap)),
-            1 => (rng.range(gap, w - gap), gap),
-            2 => (w - gap, rng.range(gap, h - gap)),
-            _ => (rng.range(gap, w - gap), h - gap),
+            0 => (gap, gap),
+            1 => (w - gap, gap),
+            2 => (w - gap, h - gap),
+            _ => (gap, h - gap),
         };
         let roll = rng.range(0.0, 2.0 * PI);
         let placement = Placement::at_pixel(&camera, &m.marker, (u, v), d, 0.0, 0.0, roll);
