@@ -67,6 +67,9 @@ fn image_error(path: &Path, problem: LoadProblem) -> LoadError {
 /// colour) as 8-bit grey. Refuses sizes beyond [`SizeLimit::FILES`] before
 /// decoding.
 pub fn load_gray(path: &Path) -> Result<GrayImage, LoadError> {
+    // Refuses a FIFO or device before the decoder waits on it or reads
+    // without end.
+    crate::input::open(path, FileKind::Image)?;
     let open = || std::fs::File::open(path).map(std::io::BufReader::new);
     Ok(decode(path, open, SizeLimit::FILES)?.0)
 }

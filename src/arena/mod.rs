@@ -773,8 +773,7 @@ impl Arena {
 
     /// Reads an arena file (see [`Arena::to_yaml`]).
     pub fn load(path: &Path) -> Result<Arena, LoadError> {
-        let text =
-            std::fs::read_to_string(path).map_err(|e| LoadError::read(path, FileKind::Arena, e))?;
+        let text = crate::input::read_text(path, FileKind::Arena)?;
         Arena::parse(&text)
             .map_err(|problem| LoadError::new(path, FileKind::Arena, LoadProblem::Invalid(problem)))
     }

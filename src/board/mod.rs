@@ -117,8 +117,7 @@ impl Board {
     /// `id`, `diameter` (or `size`), `x`, `y`, `z` in metres and
     /// optionally `qw`, `qx`, `qy`, `qz`).
     pub fn load(path: &Path) -> Result<Vec<Board>, LoadError> {
-        let text =
-            std::fs::read_to_string(path).map_err(|e| LoadError::read(path, FileKind::Board, e))?;
+        let text = crate::input::read_text(path, FileKind::Board)?;
         Board::from_text(path, &text)
     }
 

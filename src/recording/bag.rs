@@ -41,7 +41,7 @@ impl Bag {
             path: path.to_path_buf(),
             source,
         };
-        let file = std::fs::File::open(path).map_err(io)?;
+        let file = super::open_file(path)?;
         // SAFETY: the map is only read; a bag changed by another process
         // while mapped can give wrong frames, not undefined behaviour in
         // safe code that copies out of it (the MCAP reader checks lengths).

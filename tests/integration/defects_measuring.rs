@@ -1,0 +1,266 @@
+//! Regression tests for the defects 650 bad inputs found on the measuring
+//! surfaces (calibrate, arena, boards, bags, videos): outputs over files a
+//! command reads, outputs lost to a closed pipe, sizes taken on trust,
+//! configuration files that are not files, results silently wrong.
+
+use std::collections::BTreeMap;
+use std::io::Cursor;
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+
+use crate::support::{stderr, whycode_in};
+use whycode::ros::cdr;
+use whycode::ros::msg::{CameraInfo, Header, Image, RosType, Time};
+
+fn ok(out: &Output) {
+    assert!(out.status.success(), "{}", stderr(out));
+}
+
+/// Fails with one line on stderr, nothing on stdout; returns the line.
+fn one_line_error(out: &Output) -> String {
+    assert!(!out.status.success(), "succeeded: {}", stderr(out));
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(out));
+    let text = stderr(out);
+    assert_eq!(text.lines().count(), 1, "{text}");
+    text.trim_end().to_string()
+}
+
+/// A sheet of 8-bit IDs 1-4 (`name`.pdf or .png pages and `name`.json).
+fn sheet(dir: &Path, output: &str) {
+    ok(&whycode_in(
+        dir,
+        &[
+            "sheet",
+            "--ids",
+            "1-4",
+            "--diameter",
+            "30mm",
+            "--no-check",
+            "-o",
+            output,
+        ],
+    ));
+}
+
+/// The 8-bit ID 4 drawn by the tool itself.
+fn marker_png(dir: &Path, name: &str) {
+    ok(&whycode_in(
+        dir,
+        &[
+            "marker",
+            "--bits",
+            "8",
+            "--id",
+            "4",
+            "--diameter",
+            "20mm",
+            "--dpi",
+            "150",
+            "-o",
+            name,
+        ],
+    ));
+}
+
+#[test]
+fn calibrate_never_writes_over_the_sheet_its_manifest_lists() {
+    let dir = tempfile::tempdir().unwrap();
+    sheet(dir.path(), "target.pdf");
+    marker_png(dir.path(), "view.png");
+    let before = std::fs::read(dir.path().join("target.pdf")).unwrap();
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &[
+            "calibrate",
+            "--manifest",
+            "target.json",
+            "view.png",
+            "-o",
+            "target.pdf",
+        ],
+    ));
+    assert!(
+        line.contains("target.pdf: would overwrite") && line.contains("which this command reads"),
+        "{line}"
+    );
+    assert_eq!(
+        std::fs::read(dir.path().join("target.pdf")).unwrap(),
+        before
+    );
+}
+
+#[test]
+fn simulate_never_writes_over_the_pages_its_manifest_lists() {
+    let dir = tempfile::tempdir().unwrap();
+    sheet(dir.path(), "target.pdf");
+    let pdf = std::fs::read(dir.path().join("target.pdf")).unwrap();
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &[
+            "simulate",
+            "--manifest",
+            "target.json",
+            "-o",
+            "v.png",
+            "--truth",
+            "target.pdf",
+        ],
+    ));
+    assert!(line.contains("target.pdf: would overwrite"), "{line}");
+    assert_eq!(std::fs::read(dir.path().join("target.pdf")).unwrap(), pdf);
+    assert!(!dir.path().join("v.png").exists());
+    // A sheet of PNG pages: its own page as the image.
+    sheet(dir.path(), "pages.png");
+    let page = std::fs::read(dir.path().join("pages.png")).unwrap();
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &[
+            "simulate",
+            "--manifest",
+            "pages.json",
+            "-o",
+            "pages.png",
+            "--truth",
+            "t.json",
+        ],
+    ));
+    assert!(line.contains("pages.png: would overwrite"), "{line}");
+    assert_eq!(std::fs::read(dir.path().join("pages.png")).unwrap(), page);
+}
+
+#[test]
+fn arena_never_writes_over_its_family_file() {
+    let dir = tempfile::tempdir().unwrap();
+    ok(&whycode_in(
+        dir.path(),
+        &["ids", "--bits", "8", "--format", "json", "-o", "fam.json"],
+    ));
+    marker_png(dir.path(), "floor.png");
+    let before = std::fs::read(dir.path().join("fam.json")).unwrap();
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &[
+            "arena",
+            "--family",
+            "fam.json",
+            "--size",
+            "2m,1.5m",
+            "floor.png",
+            "-o",
+            "./fam.json",
+        ],
+    ));
+    assert!(line.contains("would overwrite fam.json"), "{line}");
+    assert_eq!(std::fs::read(dir.path().join("fam.json")).unwrap(), before);
+}
+
+/// Runs whycode in `dir`, killed after 20 s (a read of a FIFO with no
+/// writer would block forever).
+fn whycode_bounded(dir: &Path, args: &[&str]) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_whycode"))
+        .current_dir(dir)
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > std::time::Duration::from_secs(20) {
+            child.kill().unwrap();
+            panic!("whycode {args:?} still running after 20 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.wait_with_output().unwrap()
+}
+
+#[cfg(unix)]
+#[test]
+fn configuration_files_that_are_not_files_or_too_large_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    marker_png(dir.path(), "view.png");
+    let made = Command::new("mkfifo")
+        .arg(dir.path().join("fifo"))
+        .status()
+        .unwrap();
+    assert!(made.success());
+    std::fs::create_dir(dir.path().join("folder")).unwrap();
+    let huge = std::fs::File::create(dir.path().join("huge.json")).unwrap();
+    huge.set_len(300 << 20).unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "calibrate",
+                "--manifest",
+                "/dev/zero",
+                "view.png",
+                "-o",
+                "c.yaml",
+            ],
+            "/dev/zero: is a device, not a file: give the sheet manifest itself",
+        ),
+        (
+            vec!["detect", "--family", "fifo", "view.png"],
+            "fifo: is a FIFO (named pipe), not a file: give the family file itself",
+        ),
+        (
+            vec![
+                "detect",
+                "--camera",
+                "fifo",
+                "--diameter",
+                "20mm",
+                "view.png",
+            ],
+            "fifo: is a FIFO (named pipe), not a file: give the camera calibration itself",
+        ),
+        (
+            vec!["detect", "--arena", "folder", "view.png"],
+            "folder: is a folder, not a file: give the arena file itself",
+        ),
+        (
+            vec![
+                "detect",
+                "--board",
+                "/dev/zero",
+                "--camera",
+                "fifo",
+                "view.png",
+            ],
+            "fifo: is a FIFO",
+        ),
+        (
+            vec!["sheet", "--template", "./fifo", "-o", "s.pdf"],
+            "fifo: is a FIFO (named pipe), not a file: give the template itself",
+        ),
+        (
+            vec!["validate", "--manifest", "huge.json", "view.png"],
+            "huge.json: is 300 MB, more than any sheet manifest (256 MB)",
+        ),
+        (
+            vec!["detect", "fifo"],
+            "fifo: is a FIFO (named pipe), not a file: give the image itself",
+        ),
+    ];
+    for (args, expected) in cases {
+        let out = whycode_bounded(dir.path(), &args);
+        let line = one_line_error(&out);
+        assert!(line.contains(expected), "{args:?}: {line}");
+    }
+    // A recording that is a FIFO: ffmpeg or the bag reader would wait on it.
+    for name in ["run.mcap", "run.mp4"] {
+        let made = Command::new("mkfifo")
+            .arg(dir.path().join(name))
+            .status()
+            .unwrap();
+        assert!(made.success());
+        let line = one_line_error(&whycode_bounded(dir.path(), &["detect", name]));
+        assert!(
+            line.ends_with(&format!(
+                "{name}: is a FIFO (named pipe), not a file: give the recording itself"
+            )),
+            "{line}"
+        );
+    }
+}
