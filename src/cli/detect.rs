@@ -392,7 +392,11 @@ fn run_recordings(args: DetectArgs) -> Result<ExitCode> {
         annotate: &annotate,
         output: args.output.as_deref(),
     };
-    let mut out = output::Stdout::new();
+    let mut out = if run.output.is_some() || !matches!(annotate, Annotate::None) {
+        output::Stdout::outliving_its_reader()
+    } else {
+        output::Stdout::new()
+    };
     recording::header(&run, &mut out)?;
     for input in &args.inputs {
         if let Err(err) = recording::run(input, &run, &mut out) {

@@ -154,6 +154,128 @@ fn arena_never_writes_over_its_family_file() {
     assert_eq!(std::fs::read(dir.path().join("fam.json")).unwrap(), before);
 }
 
+/// Writes a bag of `messages` (topic, schema name, CDR bytes) with the
+/// same MCAP writer the library uses for its detections bag.
+fn write_bag(path: &Path, messages: &[(&str, String, Vec<u8>)]) {
+    let mut writer = mcap::WriteOptions::new()
+        .profile("ros2")
+        .create(Cursor::new(Vec::new()))
+        .unwrap();
+    let mut channels: BTreeMap<String, u16> = BTreeMap::new();
+    for (k, (topic, schema, data)) in messages.iter().enumerate() {
+        let channel = match channels.get(*topic) {
+            Some(&c) => c,
+            None => {
+                let s = writer.add_schema(schema, "ros2msg", b"").unwrap();
+                let c = writer
+                    .add_channel(s, topic, "cdr", &BTreeMap::new())
+                    .unwrap();
+                channels.insert(topic.to_string(), c);
+                c
+            }
+        };
+        let time = 1_000_000_000 + k as u64 * 33_000_000;
+        writer
+            .write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id: channel,
+                    sequence: k as u32,
+                    log_time: time,
+                    publish_time: time,
+                },
+                data,
+            )
+            .unwrap();
+    }
+    writer.finish().unwrap();
+    std::fs::write(path, writer.into_inner().into_inner()).unwrap();
+}
+
+fn header(k: usize) -> Header {
+    Header {
+        stamp: Time {
+            sec: 1 + k as i32,
+            nanosec: 0,
+        },
+        frame_id: "cam".into(),
+    }
+}
+
+/// A mono8 Image message of the marker photo in `dir`.
+fn marker_frame(dir: &Path, k: usize) -> (&'static str, String, Vec<u8>) {
+    let image = whycode::load_gray(&dir.join("view.png")).unwrap();
+    let message = Image {
+        header: header(k),
+        height: image.height(),
+        width: image.width(),
+        encoding: "mono8".into(),
+        is_bigendian: 0,
+        step: image.width(),
+        data: image.into_raw(),
+    };
+    (
+        "/cam/image_raw",
+        Image::schema_name(),
+        cdr::encode(&message),
+    )
+}
+
+fn camera_info(k: usize, width: u32, height: u32, d: Vec<f64>) -> (&'static str, String, Vec<u8>) {
+    let f = 400.0;
+    let (cx, cy) = (f64::from(width) / 2.0, f64::from(height) / 2.0);
+    let message = CameraInfo {
+        header: header(k),
+        height,
+        width,
+        distortion_model: "plumb_bob".into(),
+        d,
+        k: [f, 0.0, cx, 0.0, f, cy, 0.0, 0.0, 1.0],
+        r: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+        p: [f, 0.0, cx, 0.0, 0.0, f, cy, 0.0, 0.0, 0.0, 1.0, 0.0],
+        ..CameraInfo::default()
+    };
+    (
+        "/cam/camera_info",
+        CameraInfo::schema_name(),
+        cdr::encode(&message),
+    )
+}
+
+#[test]
+fn a_bag_output_is_written_when_the_reader_of_stdout_goes_away() {
+    let dir = tempfile::tempdir().unwrap();
+    marker_png(dir.path(), "view.png");
+    let frames: Vec<_> = (0..6).map(|k| marker_frame(dir.path(), k)).collect();
+    write_bag(&dir.path().join("big.mcap"), &frames);
+    // `| head -c1`: the reader is gone before the first line is written.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_whycode"))
+        .current_dir(dir.path())
+        .args([
+            "detect",
+            "--bits",
+            "8",
+            "--format",
+            "json",
+            "--output",
+            "found.mcap",
+            "big.mcap",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    ok(&out);
+    let bag = dir.path().join("found.mcap");
+    assert!(bag.is_file(), "no bag written: {}", stderr(&out));
+    assert!(
+        stderr(&out).contains("wrote the detections to found.mcap"),
+        "{}",
+        stderr(&out)
+    );
+}
+
 /// Runs whycode in `dir`, killed after 20 s (a read of a FIFO with no
 /// writer would block forever).
 fn whycode_bounded(dir: &Path, args: &[&str]) -> Output {
