@@ -186,6 +186,21 @@ impl VideoFrames {
                 }
             }
         };
+        // The size comes from ffmpeg's log, which also echoes the file's
+        // own metadata: checked before it is allocated.
+        let limit = crate::image_io::SizeLimit::FRAMES;
+        if width == 0 || height == 0 || !limit.admits(width, height) {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+            return Err(RecordingError::Video {
+                path: self.path.clone(),
+                problem: format!(
+                    "ffmpeg reports frames of {width}x{height} pixels, outside 1 to {} px a side and {} megapixels",
+                    limit.max_side,
+                    limit.max_pixels / 1_000_000
+                ),
+            });
+        }
         let mut pixels = vec![0u8; width as usize * height as usize];
         if self.stdout.read_exact(&mut pixels).is_err() {
             return Err(self.failure("the video ends inside a frame"));

@@ -276,6 +276,44 @@ fn a_bag_output_is_written_when_the_reader_of_stdout_goes_away() {
     );
 }
 
+#[cfg(unix)]
+#[test]
+fn a_bag_message_declaring_more_bytes_than_it_holds_allocates_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut message = cdr::encode(&Image {
+        header: header(0),
+        height: 2,
+        width: 2,
+        encoding: "mono8".into(),
+        is_bigendian: 0,
+        step: 2,
+        data: vec![0; 4],
+    });
+    // The data's length word: 4 GB, in front of 4 bytes.
+    let at = message.len() - 8;
+    message[at..at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+    write_bag(
+        &dir.path().join("bad.mcap"),
+        &[("/cam/image_raw", Image::schema_name(), message)],
+    );
+    // Under a 3 GB address-space limit a 4 GB allocation aborts the process.
+    let out = Command::new("sh")
+        .current_dir(dir.path())
+        .arg("-c")
+        .arg(format!(
+            "ulimit -v 3000000 && exec {} detect bad.mcap",
+            env!("CARGO_BIN_EXE_whycode")
+        ))
+        .output()
+        .unwrap();
+    let line = one_line_error(&out);
+    assert_eq!(
+        line,
+        "whycode: error: bad.mcap: /cam/image_raw, message 0: message declares a byte array \
+         of 4294967295 bytes, but only 4 bytes follow"
+    );
+}
+
 /// Runs whycode in `dir`, killed after 20 s (a read of a FIFO with no
 /// writer would block forever).
 fn whycode_bounded(dir: &Path, args: &[&str]) -> Output {
