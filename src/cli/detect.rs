@@ -505,6 +505,14 @@ fn detect_one(
     detector
         .fit_camera(image.width(), image.height())
         .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
+    if let Some(problem) = detector
+        .config()
+        .arena
+        .as_ref()
+        .and_then(|arena| arena.frame_problem(image.width(), image.height()))
+    {
+        anyhow::bail!("{}: {problem}", path.display());
+    }
     let start = Instant::now();
     let markers = detector.detect(&image);
     let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;

@@ -216,6 +216,11 @@ pub struct Skipped {
     pub count: u64,
     /// The first skipped frame's index and why.
     pub first: Option<(u64, String)>,
+    /// camera_info messages refused (no image size, not a real lens), and
+    /// the first one's reason: frames before a sound one have no poses.
+    pub refused_calibrations: u64,
+    /// Why the first refused camera_info was refused.
+    pub first_refused_calibration: Option<String>,
 }
 
 impl Skipped {

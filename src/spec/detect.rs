@@ -60,7 +60,7 @@ impl DetectSpec {
         let arena = self
             .arena
             .as_ref()
-            .map(|arena| self.arena_with(arena, &mut camera, diameter_m))
+            .map(|arena| self.arena_with(arena, &mut camera))
             .transpose()?;
         if arena.is_none() && self.marker_height.is_some() {
             return Err(SpecError::of(
@@ -87,7 +87,9 @@ impl DetectSpec {
             (true, false) if !self.camera_later => {
                 return Err(pose_needs_both("diameter", "camera"))
             }
-            (false, true) => {
+            // The camera an arena brings places markers without a
+            // diameter: each outline is read on the arena's known plane.
+            (false, true) if self.camera.is_some() => {
                 return Err(pose_needs_both(
                     "camera",
                     "diameter (or a board, whose markers give theirs)",
@@ -137,7 +139,6 @@ impl DetectSpec {
         &self,
         arena: &crate::arena::Arena,
         camera: &mut Option<Camera>,
-        diameter_m: Option<f64>,
     ) -> Result<crate::arena::Arena, SpecError> {
         let mut arena = arena.clone();
         let Some(measured_with) = arena.camera().copied() else {
@@ -154,6 +155,9 @@ impl DetectSpec {
         if let Some(height) = self.marker_height {
             arena.marker_height_m = within("marker_height", height.m(), limits::MARKER_HEIGHT_M)?;
         }
+        if let Some(problem) = arena.height_problem(arena.marker_height_m) {
+            return Err(SpecError::invalid("marker_height", problem));
+        }
         match *camera {
             None => *camera = Some(measured_with),
             Some(given) if !same_camera(&given, &measured_with) => {
@@ -166,14 +170,6 @@ impl DetectSpec {
                 ))
             }
             Some(_) => {}
-        }
-        if diameter_m.is_none() {
-            return Err(SpecError::of(
-                "arena",
-                Problem::Conflict(
-                    "measured with a camera, it places markers by their poses: give diameter too (any diameter gives the same arena coordinates)".into(),
-                ),
-            ));
         }
         Ok(arena)
     }

@@ -424,3 +424,167 @@ fn configuration_files_that_are_not_files_or_too_large_are_refused_by_name() {
         );
     }
 }
+
+#[test]
+fn a_bag_camera_info_no_lens_gives_is_refused_and_said() {
+    let dir = tempfile::tempdir().unwrap();
+    marker_png(dir.path(), "view.png");
+    let (w, h) = image::image_dimensions(dir.path().join("view.png")).unwrap();
+    let mut messages = vec![camera_info(0, w, h, vec![1e30, 0.0, 0.0, 0.0, 0.0])];
+    messages.extend((0..3).map(|k| marker_frame(dir.path(), k)));
+    write_bag(&dir.path().join("run.mcap"), &messages);
+    let out = whycode_in(
+        dir.path(),
+        &[
+            "detect",
+            "--bits",
+            "8",
+            "--diameter",
+            "20mm",
+            "--format",
+            "json",
+            "run.mcap",
+        ],
+    );
+    ok(&out);
+    let text = stderr(&out);
+    assert!(
+        text.contains("run.mcap: refused 1 camera_info message (first: camera_info is not a real lens: distortion_coefficients [1e30"),
+        "{text}"
+    );
+    for line in crate::support::stdout(&out).lines() {
+        let frame: serde_json::Value = serde_json::from_str(line).unwrap();
+        assert!(frame["markers"][0]["position"].is_null(), "{line}");
+    }
+    // The same check as a --camera file: fx = 1e308 is no lens either.
+    let mut info = CameraInfo {
+        width: 640,
+        height: 480,
+        k: [1e308, 0.0, 320.0, 0.0, 1e308, 240.0, 0.0, 0.0, 1.0],
+        ..CameraInfo::default()
+    };
+    let err = info.camera(false).unwrap_err();
+    assert!(err.contains("fx = 1e308"), "{err}");
+    info.k[0] = f64::NAN;
+    assert!(info.camera(false).is_err());
+}
+
+/// An arena file measured with a camera looking straight down from 2.5 m
+/// onto a 2 m x 1.5 m floor; `camera` and `marker_height` as given.
+fn arena_yaml(camera: &str, marker_height: f64) -> String {
+    format!(
+        "format: whycode-arena\nversion: 1\nids: [1, 2, 3, 4]\nsize: [2.0, 1.5]\n\
+         marker_height: {marker_height}\ncorner_error: 0.001\ncamera: {camera}\n\
+         floor:\n  rotation: [[1, 0, 0], [0, -1, 0], [0, 0, -1]]\n  translation: [-1.0, 0.75, 2.5]\n"
+    )
+}
+
+const SANE_CAMERA: &str =
+    "{fx: 400, fy: 400, cx: 239.5, cy: 239.5, distortion: [0, 0, 0, 0, 0], width: 480, height: 480}";
+
+#[test]
+fn arena_files_get_the_camera_checks_and_heights_below_the_camera() {
+    let dir = tempfile::tempdir().unwrap();
+    marker_png(dir.path(), "view.png");
+    std::fs::write(dir.path().join("sane.yaml"), arena_yaml(SANE_CAMERA, 0.0)).unwrap();
+    ok(&whycode_in(
+        dir.path(),
+        &["detect", "--bits", "8", "--arena", "sane.yaml", "view.png"],
+    ));
+    let wild = SANE_CAMERA.replace("fx: 400", "fx: 1e308");
+    std::fs::write(dir.path().join("wild.yaml"), arena_yaml(&wild, 0.0)).unwrap();
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &["detect", "--bits", "8", "--arena", "wild.yaml", "view.png"],
+    ));
+    assert!(
+        line.contains("wild.yaml: camera: camera_matrix: fx = 1e308"),
+        "{line}"
+    );
+    let arena = whycode::arena::Arena::parse(&arena_yaml(&wild, 0.0)).unwrap_err();
+    assert!(arena.contains("fx = 1e308"), "{arena}");
+    // Markers above the camera can never be placed: refused, in the file
+    // and on the command line.
+    std::fs::write(dir.path().join("high.yaml"), arena_yaml(SANE_CAMERA, 3.0)).unwrap();
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &["detect", "--bits", "8", "--arena", "high.yaml", "view.png"],
+    ));
+    assert!(
+        line.contains(
+            "high.yaml: marker_height: 3 m is at or above the camera, which is 2.500 m above"
+        ),
+        "{line}"
+    );
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &[
+            "detect",
+            "--bits",
+            "8",
+            "--arena",
+            "sane.yaml",
+            "--marker-height",
+            "2.6m",
+            "view.png",
+        ],
+    ));
+    assert!(
+        line.contains("--marker-height: 2.6 m is at or above the camera"),
+        "{line}"
+    );
+}
+
+#[test]
+fn a_camera_less_arena_refuses_frames_of_another_shape() {
+    let dir = tempfile::tempdir().unwrap();
+    marker_png(dir.path(), "view.png");
+    let yaml = "format: whycode-arena\nversion: 1\nids: [1, 2, 3, 4]\nsize: [2.0, 1.5]\n\
+                marker_height: 0.0\ncorner_error: 0.0\nimage_to_floor:\n  width: 640\n  \
+                height: 480\n  floor_to_image: [[300, 0, 20], [0, -300, 460], [0, 0, 1]]\n";
+    std::fs::write(dir.path().join("plane.yaml"), yaml).unwrap();
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &["detect", "--bits", "8", "--arena", "plane.yaml", "view.png"],
+    ));
+    assert!(
+        line.contains(
+            "view.png: the arena was measured without a camera on 640x480 frames and cannot map"
+        ),
+        "{line}"
+    );
+}
+
+#[test]
+fn arena_corners_in_a_line_are_refused_as_such() {
+    use whycode::simulate::{self, LooseMarker, Placement, Scene, SceneObject};
+    let dir = tempfile::tempdir().unwrap();
+    let camera = whycode::Camera::ideal(1280, 720, 60.0);
+    let family = whycode::Family::generate(8, 2).unwrap();
+    let mut scene = Scene::new(camera);
+    for (k, id) in [1u32, 2, 3, 4].into_iter().enumerate() {
+        let marker = whycode::Marker::whycode(8, family.code(id).unwrap(), 50.0);
+        let u = 200.0 + 280.0 * k as f64;
+        let placement = Placement::at_pixel(&camera, &marker, (u, 360.0), 90.0, 0.0, 0.0, 0.0);
+        scene
+            .objects
+            .push(SceneObject::Marker(LooseMarker::new(marker, id, placement)));
+    }
+    simulate::render(&scene)
+        .0
+        .save(dir.path().join("row.png"))
+        .unwrap();
+    std::fs::write(dir.path().join("cam.yaml"), camera.to_ros_yaml("c")).unwrap();
+    // Without a camera the map would put every marker on one point; with
+    // one the fit failed as "clockwise".
+    for extra in [&[][..], &["--camera", "cam.yaml"][..]] {
+        let mut args = vec![
+            "arena", "--bits", "8", "--size", "2m,1.5m", "--ids", "1,2,3,4",
+        ];
+        args.extend_from_slice(extra);
+        args.extend(["row.png", "-o", "a.yaml"]);
+        let line = one_line_error(&whycode_in(dir.path(), &args));
+        assert!(line.contains("lie on one line in the image"), "{line}");
+        assert!(!dir.path().join("a.yaml").exists());
+    }
+}
