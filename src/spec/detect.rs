@@ -48,6 +48,56 @@ pub struct DetectSpec {
     pub marker_height: Option<Length>,
 }
 
+/// Boards a detector can locate and report: each name a /tf frame of its
+/// own, and each sheet printed in the family detected (in another, its IDs
+/// would be read as other markers, or as none, and the pose come from the
+/// wrong places).
+fn check_boards(boards: &[crate::board::Board], target: &Target) -> Result<(), SpecError> {
+    let mut names = std::collections::HashSet::new();
+    for board in boards {
+        if let Some(problem) = crate::board::name_problem(&board.name) {
+            return Err(SpecError::invalid("board", problem));
+        }
+        if !names.insert(board.name.as_str()) {
+            return Err(SpecError::invalid(
+                "board",
+                format!(
+                    "two boards are named {:?}: each board's name is its own /tf frame",
+                    board.name
+                ),
+            ));
+        }
+        let Some(family) = target.family() else {
+            continue;
+        };
+        for marker in &board.markers {
+            let Some((bits, code)) = marker.ring else {
+                continue;
+            };
+            if bits != family.bits() || family.code(marker.id) != Some(code) {
+                let reads = match family.id_of(code) {
+                    _ if bits != family.bits() => format!("has {} bits", family.bits()),
+                    Some(other) => format!("reads as ID {other}"),
+                    None => "does not hold".to_string(),
+                };
+                return Err(SpecError::invalid(
+                    "board",
+                    format!(
+                        "{}: ID {} is printed as the {bits}-bit code {code}, which the family \
+                         detected ({} bits, distance {}) {reads}: detect with the family the \
+                         sheet was printed in",
+                        board.name,
+                        marker.id,
+                        family.bits(),
+                        family.distance(),
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 impl DetectSpec {
     /// Checks every option and builds the detector's configuration.
     pub fn build(&self) -> Result<DetectorConfig, SpecError> {
@@ -69,6 +119,7 @@ impl DetectSpec {
             ));
         }
         if !self.boards.is_empty() {
+            check_boards(&self.boards, &target)?;
             if camera.is_none() && !self.camera_later {
                 return Err(SpecError::of(
                     "board",

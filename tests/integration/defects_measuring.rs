@@ -588,3 +588,89 @@ fn arena_corners_in_a_line_are_refused_as_such() {
         assert!(!dir.path().join("a.yaml").exists());
     }
 }
+
+#[test]
+fn board_names_must_be_frame_names_of_their_own() {
+    let dir = tempfile::tempdir().unwrap();
+    marker_png(dir.path(), "view.png");
+    std::fs::write(
+        dir.path().join("cam.yaml"),
+        whycode::Camera::ideal(300, 300, 60.0).to_ros_yaml("c"),
+    )
+    .unwrap();
+    let bundle = |name: &str| {
+        format!("bundles:\n  - name: {name}\n    layout:\n      - {{id: 4, diameter: 0.02, x: 0, y: 0, z: 0}}\n")
+    };
+    for (name, problem) in [
+        ("''", "cannot be empty"),
+        ("whycode_2", "is the /tf frame of a marker"),
+        ("arena", "is the /tf frame of the arena"),
+        ("a/b", "holds '/'"),
+        ("\"a\\nb\"", "holds '\\n'"),
+    ] {
+        std::fs::write(dir.path().join("b.yaml"), bundle(name)).unwrap();
+        let line = one_line_error(&whycode_in(
+            dir.path(),
+            &[
+                "detect", "--bits", "8", "--camera", "cam.yaml", "--board", "b.yaml", "view.png",
+            ],
+        ));
+        assert!(
+            line.contains("b.yaml") && line.contains(problem),
+            "{name}: {line}"
+        );
+    }
+    std::fs::write(dir.path().join("b.yaml"), bundle("rig")).unwrap();
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &[
+            "detect", "--bits", "8", "--camera", "cam.yaml", "--board", "b.yaml", "--board",
+            "./b.yaml", "view.png",
+        ],
+    ));
+    assert!(line.contains("two boards are named \"rig\""), "{line}");
+}
+
+#[test]
+fn a_board_sheet_of_another_family_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    marker_png(dir.path(), "view.png");
+    std::fs::write(
+        dir.path().join("cam.yaml"),
+        whycode::Camera::ideal(300, 300, 60.0).to_ros_yaml("c"),
+    )
+    .unwrap();
+    ok(&whycode_in(
+        dir.path(),
+        &[
+            "sheet",
+            "--bits",
+            "10",
+            "--ids",
+            "1-4",
+            "--diameter",
+            "30mm",
+            "--no-check",
+            "-o",
+            "ten.pdf",
+        ],
+    ));
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &[
+            "detect", "--bits", "8", "--camera", "cam.yaml", "--board", "ten.json", "view.png",
+        ],
+    ));
+    assert!(
+        line.contains("--board: ten: ID 1 is printed as the 10-bit code 1, which the family detected (8 bits, distance 2) has 8 bits")
+            && line.contains("detect with the family the sheet was printed in"),
+        "{line}"
+    );
+    // In its own family the sheet is a board.
+    ok(&whycode_in(
+        dir.path(),
+        &[
+            "detect", "--bits", "10", "--camera", "cam.yaml", "--board", "ten.json", "view.png",
+        ],
+    ));
+}
