@@ -674,3 +674,59 @@ fn a_board_sheet_of_another_family_is_refused() {
         ],
     ));
 }
+
+#[test]
+fn calibrate_counts_a_photo_once_and_names_photos_of_another_sheet() {
+    let dir = tempfile::tempdir().unwrap();
+    sheet(dir.path(), "target.pdf");
+    marker_png(dir.path(), "view.png");
+    std::fs::copy(dir.path().join("view.png"), dir.path().join("copy.png")).unwrap();
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &[
+            "calibrate",
+            "--manifest",
+            "target.json",
+            "view.png",
+            "copy.png",
+            "-o",
+            "c.yaml",
+        ],
+    ));
+    assert!(
+        line.contains("copy.png is the same photo as view.png: each view counts once"),
+        "{line}"
+    );
+    // A photo of a marker the sheet does not have is named, with what it shows.
+    ok(&whycode_in(
+        dir.path(),
+        &[
+            "marker",
+            "--bits",
+            "8",
+            "--id",
+            "9",
+            "--diameter",
+            "20mm",
+            "--dpi",
+            "150",
+            "-o",
+            "other.png",
+        ],
+    ));
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &[
+            "calibrate",
+            "--manifest",
+            "target.json",
+            "other.png",
+            "-o",
+            "c.yaml",
+        ],
+    ));
+    assert!(
+        line.contains("only 0 usable views (3 needed): other.png (none of this sheet's markers: 1 of other IDs"),
+        "{line}"
+    );
+}
