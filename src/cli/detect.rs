@@ -14,6 +14,7 @@ use whycode::detect::family_check::FamilyCheck;
 use whycode::detect::report::{CsvColumns, FrameReport};
 use whycode::detect::{Detector, DetectorConfig, StageTimings, Target};
 use whycode::image_io::load_gray;
+use whycode::recording::Kind;
 use whycode::spec::{DetectSpec, RecordingSpec};
 use whycode::units::Length;
 
@@ -195,6 +196,14 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     ] {
         if given {
             bail!("{option}: applies to bags and videos (.mcap, .mp4, .mkv, .avi, .mov, .webm)");
+        }
+    }
+    if let Some(path) = &args.annotate {
+        if Kind::of(path) == Some(Kind::Video) {
+            bail!(
+                "--annotate {}: an annotated video is made from a bag or video; for images give a folder",
+                path.display()
+            );
         }
     }
     let config = detector_config(&args, false)?;

@@ -55,7 +55,7 @@ impl FrameError {
     pub fn cause(&self) -> String {
         match self {
             FrameError::Empty { .. } => "empty".into(),
-            FrameError::UnknownEncoding(e) => format!("encoding {e}"),
+            FrameError::UnknownEncoding(e) => format!("encoding {}", e.escape_debug()),
             FrameError::StepTooSmall { encoding, .. } => format!("step {encoding}"),
             FrameError::DataLength { .. } => "data length".into(),
             FrameError::OddWidth(_) => "odd width".into(),
@@ -70,10 +70,13 @@ impl fmt::Display for FrameError {
             FrameError::Empty { width, height } => {
                 write!(f, "empty image ({width}x{height} pixels)")
             }
+            // Escaped: the name comes from the message, and a NUL or a
+            // line break in it must not reach a terminal or a log raw.
             FrameError::UnknownEncoding(e) => write!(
                 f,
-                "encoding '{e}' is not read (mono8, mono16, rgb8, bgr8, rgba8, bgra8, \
-                 yuv422/uyvy, yuv422_yuy2/yuyv are)"
+                "encoding '{}' is not read (mono8, mono16, rgb8, bgr8, rgba8, bgra8, \
+                 yuv422/uyvy, yuv422_yuy2/yuyv are)",
+                e.escape_debug()
             ),
             FrameError::StepTooSmall {
                 encoding,

@@ -426,6 +426,55 @@ fn configuration_files_that_are_not_files_or_too_large_are_refused_by_name() {
 }
 
 #[test]
+fn a_truncated_video_ends_with_one_line_not_success() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, codec) in [
+        (
+            "v.mp4",
+            &[
+                "-c:v",
+                "libx264",
+                "-pix_fmt",
+                "yuv420p",
+                "-movflags",
+                "+faststart",
+            ][..],
+        ),
+        ("v.mkv", &["-c:v", "libx264", "-pix_fmt", "yuv420p"][..]),
+        ("v.avi", &["-c:v", "mjpeg"][..]),
+    ] {
+        let path = dir.path().join(name);
+        let made = Command::new("ffmpeg")
+            .args(["-hide_banner", "-loglevel", "error", "-y", "-f", "lavfi"])
+            .args(["-i", "testsrc=size=320x240:rate=10", "-t", "3"])
+            .args(codec)
+            .arg(&path)
+            .output()
+            .expect("ffmpeg runs (apt-get install ffmpeg)");
+        assert!(made.status.success(), "{}", stderr(&made));
+        ok(&whycode_in(dir.path(), &["detect", name]));
+        let whole = std::fs::read(&path).unwrap();
+        let cut = format!("cut-{name}");
+        std::fs::write(dir.path().join(&cut), &whole[..whole.len() * 6 / 10]).unwrap();
+        let out = whycode_in(dir.path(), &["detect", "--format", "json", &cut]);
+        assert_eq!(out.status.code(), Some(1), "{cut}: {}", stderr(&out));
+        let text = stderr(&out);
+        let last = text.lines().last().unwrap_or_default();
+        assert!(
+            last.starts_with(&format!(
+                "whycode: error: {cut}: truncated or damaged video"
+            )),
+            "{text}"
+        );
+        // The frames before the damage were read and printed.
+        assert!(
+            crate::support::stdout(&out).lines().count() > 3,
+            "{cut}: no frames"
+        );
+    }
+}
+
+#[test]
 fn a_bag_camera_info_no_lens_gives_is_refused_and_said() {
     let dir = tempfile::tempdir().unwrap();
     marker_png(dir.path(), "view.png");
@@ -727,6 +776,68 @@ fn calibrate_counts_a_photo_once_and_names_photos_of_another_sheet() {
     ));
     assert!(
         line.contains("only 0 usable views (3 needed): other.png (none of this sheet's markers: 1 of other IDs"),
+        "{line}"
+    );
+}
+
+#[test]
+fn clearer_errors_for_recordings_and_annotations() {
+    let dir = tempfile::tempdir().unwrap();
+    marker_png(dir.path(), "view.png");
+    let line = one_line_error(&whycode_in(
+        dir.path(),
+        &["detect", "--annotate", "x.mp4", "view.png"],
+    ));
+    assert!(
+        line.contains("--annotate x.mp4: an annotated video is made from a bag or video"),
+        "{line}"
+    );
+    assert!(
+        !dir.path().join("x.mp4").exists(),
+        "a folder named x.mp4 was made"
+    );
+    // Sound only.
+    let made = Command::new("ffmpeg")
+        .current_dir(dir.path())
+        .args([
+            "-hide_banner",
+            "-loglevel",
+            "error",
+            "-f",
+            "lavfi",
+            "-i",
+            "sine=d=1",
+            "sound.mp4",
+        ])
+        .output()
+        .expect("ffmpeg runs");
+    assert!(made.status.success(), "{}", stderr(&made));
+    let line = one_line_error(&whycode_in(dir.path(), &["detect", "sound.mp4"]));
+    assert_eq!(
+        line,
+        "whycode: error: sound.mp4: holds no video stream (sound only?)"
+    );
+    // An encoding name holding a NUL and a line break is shown escaped.
+    let message = Image {
+        header: header(0),
+        height: 2,
+        width: 2,
+        encoding: "mono8\0\nx".into(),
+        is_bigendian: 0,
+        step: 2,
+        data: vec![0; 4],
+    };
+    write_bag(
+        &dir.path().join("odd.mcap"),
+        &[(
+            "/cam/image_raw",
+            Image::schema_name(),
+            cdr::encode(&message),
+        )],
+    );
+    let line = one_line_error(&whycode_in(dir.path(), &["detect", "odd.mcap"]));
+    assert!(
+        line.contains("encoding 'mono8\\0\\nx' is not read"),
         "{line}"
     );
 }
