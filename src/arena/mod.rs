@@ -659,7 +659,8 @@ fn check_spread(picked: &[&Detection; 4]) -> Result<(), ArenaError> {
     for (i, j, k) in [(0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)] {
         let (ab, ac) = (points[j] - points[i], points[k] - points[i]);
         let area = (ab.x * ac.y - ab.y * ac.x).abs();
-        if !(area > 0.005 * spread) {
+        // NaN (a corner at no finite pixel) counts as a line too.
+        if area.is_nan() || area <= 0.005 * spread {
             return Err(ArenaError::Collinear {
                 ids: [picked[i].id, picked[j].id, picked[k].id],
             });

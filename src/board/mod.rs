@@ -485,7 +485,7 @@ fn positions_start(
     // Three points in a line leave a rotation about it open.
     let mut singular: Vec<f64> = svd.singular_values.iter().copied().collect();
     singular.sort_by(f64::total_cmp);
-    if !(singular[1] > 1e-9 * singular[2].max(1e-12)) {
+    if singular[1].is_nan() || singular[1] <= 1e-9 * singular[2].max(1e-12) {
         return None;
     }
     let (u, v_t) = (svd.u?, svd.v_t?);

@@ -658,7 +658,11 @@ impl Fuzzer {
         let found = detector.detect(&image);
         check_detections(&found)?;
         for pose in detector.locate_boards(&found) {
-            let numbers = pose.position.iter().chain(&pose.quaternion).chain([&pose.rms_px]);
+            let numbers = pose
+                .position
+                .iter()
+                .chain(&pose.quaternion)
+                .chain([&pose.rms_px]);
             if !numbers.into_iter().all(|v| v.is_finite()) {
                 return Err(format!("board pose with a non-finite number: {pose:?}"));
             }
@@ -831,7 +835,9 @@ fn bag_seeds(scene: &image::GrayImage) -> Vec<Vec<u8>> {
             .unwrap();
         let mut channel = |topic: &str, schema: &str| {
             let s = writer.add_schema(schema, "ros2msg", b"").unwrap();
-            writer.add_channel(s, topic, "cdr", &Default::default()).unwrap()
+            writer
+                .add_channel(s, topic, "cdr", &Default::default())
+                .unwrap()
         };
         let (images, infos) = (
             channel(topic, schema),
@@ -883,7 +889,15 @@ fn video_seeds(dir: &std::path::Path, seed_png: &[u8]) -> Vec<(&'static str, Vec
     ] {
         let out = dir.join(format!("video-seed.{ext}"));
         let made = std::process::Command::new("ffmpeg")
-            .args(["-hide_banner", "-loglevel", "error", "-y", "-loop", "1", "-i"])
+            .args([
+                "-hide_banner",
+                "-loglevel",
+                "error",
+                "-y",
+                "-loop",
+                "1",
+                "-i",
+            ])
             .arg(&frame)
             .args(["-t", "0.4", "-r", "10"])
             .args(codec)
