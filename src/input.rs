@@ -1,8 +1,9 @@
-//! Files a command reads: the one place a configuration file is opened.
+//! Files a command reads: the one place they are opened.
 //!
 //! Two promises rest here. A file read as configuration (a family, a
 //! manifest, a calibration, a template, a board, an arena file) must be a
-//! regular file no larger than its kind ever is, so `--manifest /dev/zero`
+//! regular file no larger than its kind ever is (an image or a recording a
+//! regular file), so `--manifest /dev/zero`
 //! or a FIFO nobody writes is one error line instead of memory exhausted or
 //! a wait forever. And while a [`Recording`] is open (the command line
 //! opens one for the whole command), every file read, and every file a
@@ -59,7 +60,9 @@ impl Recording {
         }
     }
 
-    /// The files read since this recording started, as they were given.
+    /// The files read since this recording started, as they were given (a
+    /// file another recording open at the same time had already read is
+    /// not listed again).
     pub fn files(&self) -> Vec<PathBuf> {
         let record = record();
         record.files[self.from.min(record.files.len())..]

@@ -119,13 +119,13 @@ impl DetectSpec {
             ));
         }
         if !self.boards.is_empty() {
-            check_boards(&self.boards, &target)?;
             if camera.is_none() && !self.camera_later {
                 return Err(SpecError::of(
                     "board",
                     Problem::Conflict("a board's pose needs the camera: give camera too".into()),
                 ));
             }
+            check_boards(&self.boards, &target)?;
             diameter_m = diameter_m.or_else(|| {
                 self.boards
                     .iter()
