@@ -1,11 +1,12 @@
 //! The fuzz harness's long run: mutated image files, random images up to 2
-//! megapixels, family files, manifests, page templates and camera files
-//! through the library's loaders, detector and validation.
+//! megapixels, family files, manifests, page templates, camera files, arena
+//! files and boards through the library's loaders, detector and validation;
+//! mutated bags and videos through `whycode detect`.
 //!
 //!     cargo build --release && cargo run --release --example fuzz -- [--minutes N] [--seed S]
 //!
-//! The command-line targets (output streams closed or full, concurrent
-//! runs writing one output) run the `whycode` binary built beside this
+//! The command-line targets (bags, videos, output streams closed or full,
+//! concurrent runs writing one output) run the `whycode` binary built beside this
 //! example (target/release/whycode); without it they are skipped, and say so.
 //!
 //! Prints how many inputs each target tried; exits 1 on a panic, a hang,

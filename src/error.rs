@@ -20,6 +20,10 @@ pub enum FileKind {
     Board,
     /// An arena file (`whycode arena`).
     Arena,
+    /// A recorded run: a bag or a video.
+    Recording,
+    /// A ROS 2 params file (the node's `--params-file`).
+    Params,
 }
 
 impl FileKind {
@@ -33,6 +37,8 @@ impl FileKind {
             FileKind::Template => "template",
             FileKind::Board => "board",
             FileKind::Arena => "arena file",
+            FileKind::Recording => "recording",
+            FileKind::Params => "params file",
         }
     }
 }

@@ -69,6 +69,34 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
         .collect()
 }
 
+/// Lower-case hex SHA-256 of a regular file's bytes, read a block at a
+/// time; `None` for a file that cannot be read, or that is not a regular
+/// file (a FIFO named like a page would never end).
+fn file_sha256_hex(path: &Path) -> Option<String> {
+    if !std::fs::metadata(path).ok()?.is_file() {
+        return None;
+    }
+    use std::io::Read;
+    let mut file = std::fs::File::open(path).ok()?;
+    let mut hasher = Sha256::new();
+    let mut block = vec![0u8; 1 << 16];
+    loop {
+        match file.read(&mut block) {
+            Ok(0) => break,
+            Ok(n) => hasher.update(&block[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(_) => return None,
+        }
+    }
+    Some(
+        hasher
+            .finalize()
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect(),
+    )
+}
+
 /// The files `record` (read from `record_path`) lists that lie beside it
 /// with other contents than it was written with. A listed file that is
 /// missing is not a mismatch: people move the PDF to the printer and keep
@@ -78,8 +106,7 @@ pub fn mismatched(record_path: &Path, files: &[FileDigest]) -> Vec<String> {
     files
         .iter()
         .filter(|entry| {
-            std::fs::read(folder.join(&entry.file))
-                .is_ok_and(|bytes| sha256_hex(&bytes) != entry.sha256)
+            file_sha256_hex(&folder.join(&entry.file)).is_some_and(|sha| sha != entry.sha256)
         })
         .map(|entry| entry.file.clone())
         .collect()

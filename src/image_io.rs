@@ -29,7 +29,17 @@ impl SizeLimit {
         max_pixels: MAX_PIXELS,
     };
 
-    fn admits(&self, width: u32, height: u32) -> bool {
+    /// What a compressed frame of a stream (a bag's or a topic's
+    /// CompressedImage) may decode to: 64 megapixels, past any camera that
+    /// streams, because a small PNG message can declare a huge image and
+    /// each one would be decoded, frame after frame.
+    pub const FRAMES: SizeLimit = SizeLimit {
+        max_side: 16_384,
+        max_pixels: 64_000_000,
+    };
+
+    /// Whether an image of `width` x `height` pixels is within the limit.
+    pub fn admits(&self, width: u32, height: u32) -> bool {
         width <= self.max_side
             && height <= self.max_side
             && u64::from(width) * u64::from(height) <= self.max_pixels
@@ -67,6 +77,9 @@ fn image_error(path: &Path, problem: LoadProblem) -> LoadError {
 /// colour) as 8-bit grey. Refuses sizes beyond [`SizeLimit::FILES`] before
 /// decoding.
 pub fn load_gray(path: &Path) -> Result<GrayImage, LoadError> {
+    // Refuses a FIFO or device before the decoder waits on it or reads
+    // without end.
+    crate::input::open(path, FileKind::Image)?;
     let open = || std::fs::File::open(path).map(std::io::BufReader::new);
     Ok(decode(path, open, SizeLimit::FILES)?.0)
 }

@@ -78,7 +78,9 @@ impl Drop for Staged {
 /// or that appear twice among the outputs. Called before any work, with
 /// every path a command reads and every path it would write, derived names
 /// (the manifest beside a sheet, the ground truth beside an image)
-/// included.
+/// included. The inputs are `inputs` and every file read so far under an
+/// open [`crate::input::Recording`] (with the pages a manifest read lists),
+/// so a file the command reads counts even when no flag named it.
 pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), WriteError> {
     let read: Vec<(PathBuf, &Path)> = inputs
         .iter()
@@ -93,6 +95,7 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), WriteErr
                 input: input.to_path_buf(),
             });
         }
+        refuse_recorded_input(output, &real)?;
         if written.contains(&real) {
             return Err(WriteError::SameFileTwice {
                 output: output.to_path_buf(),
@@ -101,6 +104,19 @@ pub fn check_outputs(inputs: &[&Path], outputs: &[&Path]) -> Result<(), WriteErr
         written.push(real);
     }
     Ok(())
+}
+
+/// Refuses `output` (resolved to `real`) when it is a file the running
+/// command has read: checked again by every writer, so an input stays
+/// whole even when a command's early check could not know it yet.
+fn refuse_recorded_input(output: &Path, real: &Path) -> Result<(), WriteError> {
+    match crate::input::recorded_as(real) {
+        Some(input) => Err(WriteError::WouldOverwriteInput {
+            output: output.to_path_buf(),
+            input,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// The file a path names once links and `.`/`..` are resolved, also for a
@@ -338,6 +354,7 @@ enum Destination {
 }
 
 fn destination(path: &Path) -> Result<Destination, WriteError> {
+    refuse_recorded_input(path, &real_path(path))?;
     let target = resolve_links(path);
     match std::fs::metadata(&target) {
         Ok(meta) if meta.is_dir() => Err(WriteError::IsAFolder {

@@ -57,6 +57,7 @@ pub mod family;
 pub mod fileset;
 pub mod geometry;
 pub mod image_io;
+pub mod input;
 #[cfg(feature = "files")]
 pub mod io;
 pub mod manifest;

@@ -78,9 +78,15 @@ fn version_one() -> u32 {
 impl Manifest {
     /// Reads and checks a manifest file; errors name the file.
     pub fn load(path: &Path) -> Result<Manifest, LoadError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| LoadError::read(path, FileKind::Manifest, e))?;
-        Manifest::from_json(&path.display().to_string(), &text)
+        let text = crate::input::read_text(path, FileKind::Manifest)?;
+        let manifest = Manifest::from_json(&path.display().to_string(), &text)?;
+        // The pages it lists are what it describes: a command reading the
+        // manifest depends on them as much as on the manifest itself.
+        let folder = path.parent().unwrap_or(Path::new(""));
+        for file in &manifest.files {
+            crate::input::note(&folder.join(&file.file));
+        }
+        Ok(manifest)
     }
 
     /// Parses and checks a manifest's text; `name` (the file's name) starts

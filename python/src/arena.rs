@@ -120,9 +120,7 @@ impl PyArena {
     /// The camera it was measured with; None for a plane-to-image map.
     #[getter]
     fn camera(&self) -> Option<PyCamera> {
-        self.arena
-            .camera()
-            .map(|camera| PyCamera { camera: *camera })
+        self.arena.camera().map(|camera| PyCamera::new(*camera))
     }
 
     fn __repr__(&self) -> String {

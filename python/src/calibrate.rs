@@ -51,6 +51,9 @@ fn calibrate_photos<'py>(
     if images.is_empty() {
         return Err(Error::value("calibrate: no images given").into());
     }
+    // The manifest, the pages it lists and the photos: what the camera is
+    // found from, and what its `save` must never write over.
+    let read = whycode::input::Recording::start();
     let manifest = py.detach(|| guard(|| Ok(Manifest::load(&manifest)?)))?;
     let mut photos = Vec::with_capacity(images.len());
     for (k, item) in images.iter().enumerate() {
@@ -64,13 +67,18 @@ fn calibrate_photos<'py>(
             ));
         }
     }
+    let sources = read.files();
+    drop(read);
     let (camera, report) = py.detach(|| {
         guard(|| {
             let calibration = whycode::calibrate::calibrate(&manifest, &photos, &options)?;
             Ok((calibration.camera, calibration.to_json()))
         })
     })?;
-    Ok((PyCamera { camera }, crate::json_to_py(py, &report)?))
+    Ok((
+        PyCamera { camera, sources },
+        crate::json_to_py(py, &report)?,
+    ))
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -11,6 +11,19 @@ use whycode::camera::Camera;
 #[derive(Clone)]
 pub struct PyCamera {
     pub(crate) camera: Camera,
+    /// The files it was found from (a calibration's manifest, the pages
+    /// that lists, the photos), which `save` must not write over.
+    pub(crate) sources: Vec<PathBuf>,
+}
+
+impl PyCamera {
+    /// A camera that was not made from files.
+    pub(crate) fn new(camera: Camera) -> PyCamera {
+        PyCamera {
+            camera,
+            sources: Vec::new(),
+        }
+    }
 }
 
 fn values(array: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f64>> {
@@ -33,11 +46,7 @@ impl PyCamera {
     /// Reads a calibration: ROS camera_info YAML, OpenCV YAML/XML or Kalibr.
     #[staticmethod]
     fn load(path: PathBuf) -> PyResult<PyCamera> {
-        Ok(guard(|| {
-            Ok(PyCamera {
-                camera: Camera::load(&path)?,
-            })
-        })?)
+        Ok(guard(|| Ok(PyCamera::new(Camera::load(&path)?)))?)
     }
 
     /// From OpenCV's calibration results: the 3x3 camera matrix, the
@@ -73,11 +82,7 @@ impl PyCamera {
             format_list(&k),
             format_list(&d)
         );
-        Ok(guard(|| {
-            Ok(PyCamera {
-                camera: Camera::parse(&text)?,
-            })
-        })?)
+        Ok(guard(|| Ok(PyCamera::new(Camera::parse(&text)?)))?)
     }
 
     /// An ideal camera (no distortion) with a horizontal field of view.
@@ -90,9 +95,7 @@ impl PyCamera {
             )
             .into());
         }
-        Ok(PyCamera {
-            camera: Camera::ideal(width, height, fov_deg),
-        })
+        Ok(PyCamera::new(Camera::ideal(width, height, fov_deg)))
     }
 
     #[getter]
@@ -171,7 +174,13 @@ impl PyCamera {
             }
         };
         let text = self.camera.to_file_text(format, camera_name);
-        Ok(py.detach(|| guard(|| Ok(whycode::io::write_atomic(&path, text.as_bytes())?)))?)
+        let sources: Vec<&std::path::Path> = self.sources.iter().map(PathBuf::as_path).collect();
+        Ok(py.detach(|| {
+            guard(|| {
+                whycode::io::check_outputs(&sources, &[&path])?;
+                Ok(whycode::io::write_atomic(&path, text.as_bytes())?)
+            })
+        })?)
     }
 
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {

@@ -2,6 +2,7 @@
 the same simulated photos: the same camera file byte for byte, the same
 board poses, the same one-line refusals."""
 
+import json
 from pathlib import Path
 from typing import Any, Callable
 
@@ -72,6 +73,17 @@ def test_calibrate_writes_the_cli_camera_and_reports_the_fit(
     assert (tmp_path / "py.yaml").read_bytes() == (tmp_path / "cli.yaml").read_bytes()
     assert (tmp_path / "py.xml").read_bytes() == (tmp_path / "cli.xml").read_bytes()
     assert camera == whycode.Camera.load(tmp_path / "cli.yaml")
+
+    # Never over what it was found from: the manifest, the pages it lists,
+    # a photo; a camera loaded from a file may be saved over that file.
+    pages = [f["file"] for f in json.loads((tmp_path / "sheet.json").read_text())["files"]]
+    assert pages
+    for source in ["sheet.json", *pages, photos[0]]:
+        before = (tmp_path / source).read_bytes()
+        with pytest.raises(ValueError, match="would overwrite"):
+            camera.save(source)
+        assert (tmp_path / source).read_bytes() == before
+    whycode.Camera.load("py.yaml").save("py.yaml")
 
     # The lens comes back (the Rust round trip holds the figures; this
     # checks the report describes the fit that was written).

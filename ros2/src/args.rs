@@ -406,8 +406,10 @@ pub fn expand(name: &str, base: &str, namespace: &str) -> Result<String, String>
 
 /// The parameters a params file gives the node `node` (fully qualified).
 fn read_params_file(path: &Path, node: &str) -> Result<Vec<(String, ParameterValue)>, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("{}: cannot read the params file: {e}", path.display()))?;
+    // A regular file of bounded size: `--params-file /dev/zero` would
+    // otherwise grow without end, and a FIFO wait forever.
+    let text = whycode::input::read_text(path, whycode::FileKind::Params)
+        .map_err(|e| whycode::error::one_line(&e))?;
     params_from_yaml(&text, node).map_err(|e| format!("{}: {e}", path.display()))
 }
 

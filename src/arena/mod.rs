@@ -190,6 +190,12 @@ pub enum ArenaError {
     /// The camera was calibrated for another aspect ratio.
     #[error("{0}")]
     OtherCamera(String),
+    /// Three corners lie on one line in the image: no floor spans them.
+    #[error("corner IDs {}, {} and {} lie on one line in the image, so they span no floor: lay the four markers out as the corners of the rectangle, all in view", ids[0], ids[1], ids[2])]
+    Collinear {
+        /// The three corners in a line.
+        ids: [u32; 3],
+    },
     /// The corners' image points are degenerate.
     #[error("the corners' centres fit no plane-to-image map (three in a line?)")]
     Degenerate,
@@ -336,6 +342,7 @@ impl Arena {
     ) -> Result<Arena, ArenaError> {
         let picked = pick_corners(corners, detections)?;
         let ids = picked.map(|d| d.id);
+        check_spread(&picked)?;
         let floor = corner_points(size_m);
         match camera {
             Some(camera) => {
@@ -519,6 +526,51 @@ impl Arena {
         }
     }
 
+    /// The camera's height above the floor, metres, for an arena measured
+    /// with one.
+    pub fn camera_height_m(&self) -> Option<f64> {
+        match &self.mapping {
+            Mapping::Floor {
+                rotation,
+                translation,
+                ..
+            } => Some(-(rotation.transpose() * translation).z),
+            Mapping::Homography { .. } => None,
+        }
+    }
+
+    /// Why markers `height_m` above the floor cannot be placed, if they
+    /// cannot: at or above the camera, every ray misses their plane.
+    pub fn height_problem(&self, height_m: f64) -> Option<String> {
+        let camera = self.camera_height_m()?;
+        (height_m >= camera).then(|| {
+            format!(
+                "{height_m} m is at or above the camera, which is {camera:.3} m above the arena's floor: no marker there can be placed"
+            )
+        })
+    }
+
+    /// Why a frame of `width` x `height` pixels cannot be placed on this
+    /// arena, if it cannot: one measured without a camera maps frames of
+    /// its own aspect ratio only (one measured with a camera is fitted to
+    /// the frame as the camera is, and refused with it).
+    pub fn frame_problem(&self, width: u32, height: u32) -> Option<String> {
+        let Mapping::Homography {
+            width: w0,
+            height: h0,
+            ..
+        } = &self.mapping
+        else {
+            return None;
+        };
+        let scale = f64::from(*w0) / f64::from(width);
+        ((f64::from(*h0) / f64::from(height) / scale - 1.0).abs() > 0.01).then(|| {
+            format!(
+                "the arena was measured without a camera on {w0}x{h0} frames and cannot map a {width}x{height} frame (another aspect ratio): measure it on a frame of this camera"
+            )
+        })
+    }
+
     /// The camera an arena measured with one needs at detection.
     pub fn camera(&self) -> Option<&Camera> {
         match &self.mapping {
@@ -589,6 +641,32 @@ fn intersect(
     }
     let s = (height - eye.z) / direction.z;
     (s > 0.0 && s.is_finite()).then(|| eye + direction * s)
+}
+
+/// Three corners in one line map every marker to that line: without a
+/// camera the floor's map collapses, and with one the floor's fit can
+/// only fail for the wrong reason (a floor seen from below). A triangle
+/// of the corners under 0.5 % of the square of their spread is a line:
+/// a real rectangle seen that edge-on could not be measured anyway.
+fn check_spread(picked: &[&Detection; 4]) -> Result<(), ArenaError> {
+    let points: Vec<Vector2<f64>> = picked.iter().map(|d| Vector2::new(d.u, d.v)).collect();
+    let mut spread: f64 = 0.0;
+    for a in &points {
+        for b in &points {
+            spread = spread.max((a - b).norm_squared());
+        }
+    }
+    for (i, j, k) in [(0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)] {
+        let (ab, ac) = (points[j] - points[i], points[k] - points[i]);
+        let area = (ab.x * ac.y - ab.y * ac.x).abs();
+        // NaN (a corner at no finite pixel) counts as a line too.
+        if area.is_nan() || area <= 0.005 * spread {
+            return Err(ArenaError::Collinear {
+                ids: [picked[i].id, picked[j].id, picked[k].id],
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Without a camera the floor's map must keep the corners' turning
@@ -773,8 +851,7 @@ impl Arena {
 
     /// Reads an arena file (see [`Arena::to_yaml`]).
     pub fn load(path: &Path) -> Result<Arena, LoadError> {
-        let text =
-            std::fs::read_to_string(path).map_err(|e| LoadError::read(path, FileKind::Arena, e))?;
+        let text = crate::input::read_text(path, FileKind::Arena)?;
         Arena::parse(&text)
             .map_err(|problem| LoadError::new(path, FileKind::Arena, LoadProblem::Invalid(problem)))
     }
@@ -854,13 +931,17 @@ impl Arena {
                 )
             }
         };
-        Ok(Arena {
+        let arena = Arena {
             ids: file.ids,
             size_m: file.size,
             marker_height_m: file.marker_height,
             corner_error_m: file.corner_error,
             mapping,
-        })
+        };
+        if let Some(problem) = arena.height_problem(arena.marker_height_m) {
+            return Err(format!("marker_height: {problem}"));
+        }
+        Ok(arena)
     }
 }
 
@@ -877,7 +958,8 @@ fn check_camera(camera: &Camera) -> Result<(), String> {
     if !(finite && camera.fx > 0.0 && camera.fy > 0.0) {
         return Err("camera: focal lengths must be positive numbers".into());
     }
-    Ok(())
+    // The checks a --camera file gets: an arena's camera is used the same way.
+    camera.check_plausible().map_err(|e| format!("camera: {e}"))
 }
 
 #[cfg(test)]

@@ -39,6 +39,9 @@ pub struct BoardMarker {
     pub position: Vector3<f64>,
     /// Marker → board rotation; `None` when the bundle gave a position only.
     pub rotation: Option<Matrix3<f64>>,
+    /// The ring printed, as bit count and code, where a sheet's manifest
+    /// says it: a detector of another family reads other IDs there.
+    pub ring: Option<(u32, u32)>,
 }
 
 /// A rigid set of markers.
@@ -48,6 +51,68 @@ pub struct Board {
     pub name: String,
     /// Its markers.
     pub markers: Vec<BoardMarker>,
+}
+
+/// Why `name` cannot be a board's name, if it cannot: the name becomes the
+/// board's frame on /tf, beside the markers' `whycode_<ID>` frames and the
+/// arena's `arena` (the node's and the detections bag's defaults), so it
+/// must be a frame name of its own: not empty, not one of those, and of
+/// letters, digits, `_`, `-` and `.` only (a slash would make it a path
+/// in the frame tree, white space or a control character break the tools
+/// that print it).
+pub fn name_problem(name: &str) -> Option<String> {
+    if name.is_empty() {
+        return Some("a board's name is its /tf frame and cannot be empty".into());
+    }
+    if name.len() > 200 {
+        return Some(format!(
+            "name {:?}... is {} characters; a /tf frame name of at most 200 is wanted",
+            name.chars().take(20).collect::<String>(),
+            name.len()
+        ));
+    }
+    if let Some(bad) = name
+        .chars()
+        .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.')))
+    {
+        return Some(format!(
+            "name {name:?} holds {bad:?}; a board's name is its /tf frame: use letters, digits, _, - and . only"
+        ));
+    }
+    let marker_frame = name
+        .strip_prefix("whycode_")
+        .is_some_and(|id| !id.is_empty() && id.bytes().all(|b| b.is_ascii_digit()));
+    if marker_frame || name == "arena" {
+        return Some(format!(
+            "name {name:?} is the /tf frame of {}: give the board another name",
+            if marker_frame {
+                "a marker"
+            } else {
+                "the arena"
+            }
+        ));
+    }
+    None
+}
+
+/// `stem` made a board name: characters a /tf frame cannot hold become `_`
+/// (a sheet saved as `lab sheet.json` is board `lab_sheet`).
+fn frame_safe(stem: &str) -> String {
+    let safe: String = stem
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    if safe.is_empty() || name_problem(&safe).is_some() {
+        format!("board_{safe}")
+    } else {
+        safe
+    }
 }
 
 /// A marker printed unrotated on a page: its +x along the page's x, its +y
@@ -96,6 +161,8 @@ impl Board {
             .iter()
             .map(|m| (m.id, m.diameter_mm * print_scale / 1000.0))
             .collect();
+        let codes: std::collections::HashMap<u32, u32> =
+            manifest.markers.iter().map(|m| (m.id, m.code)).collect();
         Board {
             name,
             markers: crate::calibrate::board_points(manifest, page, print_scale)
@@ -105,6 +172,10 @@ impl Board {
                     diameter_m: diameters[&id],
                     position: Vector3::new(x, y, 0.0),
                     rotation: Some(page_marker_rotation()),
+                    ring: manifest
+                        .family
+                        .filter(|_| !manifest.legacy)
+                        .map(|f| (f.bits, codes[&id])),
                 })
                 .collect(),
         }
@@ -117,8 +188,7 @@ impl Board {
     /// `id`, `diameter` (or `size`), `x`, `y`, `z` in metres and
     /// optionally `qw`, `qx`, `qy`, `qz`).
     pub fn load(path: &Path) -> Result<Vec<Board>, LoadError> {
-        let text =
-            std::fs::read_to_string(path).map_err(|e| LoadError::read(path, FileKind::Board, e))?;
+        let text = crate::input::read_text(path, FileKind::Board)?;
         Board::from_text(path, &text)
     }
 
@@ -132,7 +202,7 @@ impl Board {
                 .map_err(|e| invalid(e.problem.to_string()))?;
             let stem = path
                 .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
+                .map(|s| frame_safe(&s.to_string_lossy()))
                 .unwrap_or_else(|| "board".into());
             return Ok((1..=manifest.pages)
                 .map(|page| {
@@ -162,6 +232,9 @@ impl Board {
         file.bundles
             .into_iter()
             .map(|bundle| {
+                if let Some(problem) = name_problem(&bundle.name) {
+                    return Err(format!("bundle {problem}"));
+                }
                 if bundle.layout.is_empty() {
                     return Err(format!("bundle {} lists no markers", bundle.name));
                 }
@@ -216,6 +289,7 @@ impl Board {
                             diameter_m: m.diameter,
                             position: Vector3::new(m.x, m.y, m.z),
                             rotation,
+                            ring: None,
                         })
                     })
                     .collect::<Result<Vec<_>, String>>()?;
@@ -304,6 +378,15 @@ pub fn locate(
             Some((rotation, position - rotation * s.marker.position))
         })
         .collect();
+    // Markers given by position only (a bundle may): the board's pose that
+    // carries their positions onto where their own poses put them.
+    let starts = if starts.is_empty() {
+        positions_start(&sightings, detector_diameter_m)
+            .into_iter()
+            .collect()
+    } else {
+        starts
+    };
     let mut active: Vec<bool> = vec![true; sightings.len()];
     let mut best: Option<(f64, DVector<f64>)> = None;
     for (rotation, translation) in &starts {
@@ -368,6 +451,48 @@ pub fn locate(
         rejected,
         rms_px,
     })
+}
+
+/// The rigid motion (Kabsch) that best carries the board positions of the
+/// sightings with poses onto the camera-frame centres those poses give,
+/// rescaled to each marker's diameter; `None` for fewer than three, or
+/// three in a line.
+fn positions_start(
+    sightings: &[Sighting],
+    detector_diameter_m: f64,
+) -> Option<(Matrix3<f64>, Vector3<f64>)> {
+    let pairs: Vec<(Vector3<f64>, Vector3<f64>)> = sightings
+        .iter()
+        .filter_map(|s| {
+            let pose = s.pose.as_ref()?;
+            Some((
+                s.marker.position,
+                pose.position * (s.marker.diameter_m / detector_diameter_m),
+            ))
+        })
+        .collect();
+    if pairs.len() < 3 {
+        return None;
+    }
+    let n = pairs.len() as f64;
+    let board_mean = pairs.iter().map(|(p, _)| p).sum::<Vector3<f64>>() / n;
+    let camera_mean = pairs.iter().map(|(_, q)| q).sum::<Vector3<f64>>() / n;
+    let mut h = Matrix3::zeros();
+    for (p, q) in &pairs {
+        h += (p - board_mean) * (q - camera_mean).transpose();
+    }
+    let svd = h.svd(true, true);
+    // Three points in a line leave a rotation about it open.
+    let mut singular: Vec<f64> = svd.singular_values.iter().copied().collect();
+    singular.sort_by(f64::total_cmp);
+    if singular[1].is_nan() || singular[1] <= 1e-9 * singular[2].max(1e-12) {
+        return None;
+    }
+    let (u, v_t) = (svd.u?, svd.v_t?);
+    let mut correction = Matrix3::identity();
+    correction[(2, 2)] = (v_t.transpose() * u.transpose()).determinant().signum();
+    let rotation = v_t.transpose() * correction * u.transpose();
+    Some((rotation, camera_mean - rotation * board_mean))
 }
 
 /// Each marker whose own pose faces away from where the board's pose `x`

@@ -111,6 +111,16 @@ pub enum CalibrationError {
         /// Its size.
         size: [u32; 2],
     },
+    /// One photo given twice (or two copies of it): it would count as two
+    /// views, passing the views needed and shrinking every standard
+    /// deviation with nothing new measured.
+    #[error("{second} is the same photo as {first}: each view counts once; give photos taken from different places")]
+    SameView {
+        /// The photo first given.
+        first: String,
+        /// The same photo again.
+        second: String,
+    },
     /// Fewer views than a calibration needs.
     #[error("only {usable} usable view{} ({MIN_VIEWS} needed){}", if *usable == 1 { "" } else { "s" }, skipped_text(skipped))]
     TooFewViews {
@@ -696,7 +706,30 @@ fn views_in(
         .as_ref()
         .zip(config.diameter_m)
         .map(|(camera, diameter_m)| Posed { camera, diameter_m });
-    observe(manifest, name, &detections, print_scale, posed)
+    let views = observe(manifest, name, &detections, print_scale, posed);
+    if !views.is_empty() {
+        return views;
+    }
+    // A photo that gives no view at all is still named among those left
+    // out, with what it does show: a sheet of another family or other IDs
+    // reads as rings the manifest does not list.
+    let others = detections.iter().filter(|d| d.id != 0).count();
+    let unknown = detections.len() - others;
+    let label = if detections.is_empty() {
+        format!("{name} (no marker found)")
+    } else {
+        format!(
+            "{name} (none of this sheet's markers: {others} of other IDs, {unknown} without an ID; \
+             a photo of another sheet, or printed in another family?)"
+        )
+    };
+    vec![ViewPoints {
+        label,
+        page: 0,
+        ids: Vec::new(),
+        plane: Vec::new(),
+        pixels: Vec::new(),
+    }]
 }
 
 /// Calibrates a camera from photos (name, grey image) of the sheet
@@ -724,6 +757,16 @@ pub fn calibrate(
             name: name.clone(),
             size: [image.width(), image.height()],
         });
+    }
+    let mut pixels_seen: std::collections::HashMap<&[u8], &String> =
+        std::collections::HashMap::new();
+    for (name, image) in photos {
+        if let Some(first) = pixels_seen.insert(image.as_raw(), name) {
+            return Err(CalibrationError::SameView {
+                first: first.clone(),
+                second: name.clone(),
+            });
+        }
     }
     let views_through = |camera: Option<Camera>| -> Result<Vec<ViewPoints>, CalibrationError> {
         let config = sheet_detector(manifest, camera)?;

@@ -33,8 +33,7 @@ impl Camera {
     /// Errors carry the file name as context and say what is missing.
     pub fn load(path: impl AsRef<Path>) -> Result<Camera, LoadError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| LoadError::read(path, FileKind::Camera, e))?;
+        let text = crate::input::read_text(path, FileKind::Camera)?;
         Camera::parse(&text).map_err(|err| err.in_file(path))
     }
 

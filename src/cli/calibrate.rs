@@ -80,10 +80,11 @@ pub fn run(args: CalibrateArgs) -> Result<ExitCode> {
     }
     .build()
     .map_err(spec_error)?;
+    let manifest = super::load_manifest(&args.manifest)?;
+    // After the manifest, so the pages it lists count as inputs too.
     let mut inputs: Vec<&Path> = args.photos.iter().map(PathBuf::as_path).collect();
     inputs.push(&args.manifest);
     whycode::io::check_outputs(&inputs, &[&args.output])?;
-    let manifest = super::load_manifest(&args.manifest)?;
     let photos = args
         .photos
         .iter()

@@ -14,6 +14,7 @@ use whycode::detect::family_check::FamilyCheck;
 use whycode::detect::report::{CsvColumns, FrameReport};
 use whycode::detect::{Detector, DetectorConfig, StageTimings, Target};
 use whycode::image_io::load_gray;
+use whycode::recording::Kind;
 use whycode::spec::{DetectSpec, RecordingSpec};
 use whycode::units::Length;
 
@@ -195,6 +196,14 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     ] {
         if given {
             bail!("{option}: applies to bags and videos (.mcap, .mp4, .mkv, .avi, .mov, .webm)");
+        }
+    }
+    if let Some(path) = &args.annotate {
+        if Kind::of(path) == Some(Kind::Video) {
+            bail!(
+                "--annotate {}: an annotated video is made from a bag or video; for images give a folder",
+                path.display()
+            );
         }
     }
     let config = detector_config(&args, false)?;
@@ -392,7 +401,11 @@ fn run_recordings(args: DetectArgs) -> Result<ExitCode> {
         annotate: &annotate,
         output: args.output.as_deref(),
     };
-    let mut out = output::Stdout::new();
+    let mut out = if run.output.is_some() || !matches!(annotate, Annotate::None) {
+        output::Stdout::outliving_its_reader()
+    } else {
+        output::Stdout::new()
+    };
     recording::header(&run, &mut out)?;
     for input in &args.inputs {
         if let Err(err) = recording::run(input, &run, &mut out) {
@@ -501,6 +514,14 @@ fn detect_one(
     detector
         .fit_camera(image.width(), image.height())
         .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
+    if let Some(problem) = detector
+        .config()
+        .arena
+        .as_ref()
+        .and_then(|arena| arena.frame_problem(image.width(), image.height()))
+    {
+        anyhow::bail!("{}: {problem}", path.display());
+    }
     let start = Instant::now();
     let markers = detector.detect(&image);
     let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;

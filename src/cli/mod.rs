@@ -70,6 +70,9 @@ pub fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(err) => return usage_error(err),
     };
+    // Every file the command reads is an input no output may replace,
+    // the pages a manifest lists included, not only those its flags name.
+    let _inputs = whycode::input::Recording::start();
     let result = match cli.command {
         Command::Ids(args) => ids::run(args),
         Command::Marker(args) => marker::run(args),

@@ -25,6 +25,11 @@ pub fn print(text: &str) -> anyhow::Result<()> {
 /// the same rules as [`print`].
 pub struct Stdout {
     inner: std::io::BufWriter<std::io::StdoutLock<'static>>,
+    /// The run writes files too, so a reader that goes away ends the
+    /// printing, not the run: `| head -c1` must not cost the bag.
+    outlives_reader: bool,
+    /// The reader went away (with `outlives_reader`): writes are dropped.
+    gone: bool,
 }
 
 impl Stdout {
@@ -32,23 +37,57 @@ impl Stdout {
     pub fn new() -> Stdout {
         Stdout {
             inner: std::io::BufWriter::new(std::io::stdout().lock()),
+            outlives_reader: false,
+            gone: false,
+        }
+    }
+
+    /// Standard output for a run that also writes files: once its reader
+    /// has gone, what is printed is dropped and the run goes on to write
+    /// them (any other failure of standard output is still an error).
+    pub fn outliving_its_reader() -> Stdout {
+        Stdout {
+            outlives_reader: true,
+            ..Stdout::new()
         }
     }
 
     /// Writes `text`.
     pub fn write(&mut self, text: &str) -> anyhow::Result<()> {
-        self.inner.write_all(text.as_bytes()).map_err(stdout_error)
+        if self.gone {
+            return Ok(());
+        }
+        let result = self.inner.write_all(text.as_bytes());
+        self.settle(result)
     }
 
     /// Writes `text` and a line break.
     pub fn line(&mut self, text: impl Display) -> anyhow::Result<()> {
-        writeln!(self.inner, "{text}").map_err(stdout_error)
+        if self.gone {
+            return Ok(());
+        }
+        let result = writeln!(self.inner, "{text}");
+        self.settle(result)
     }
 
     /// Sends what is buffered (before a message on standard error, so the
     /// two stay in order on a terminal).
     pub fn flush(&mut self) -> anyhow::Result<()> {
-        self.inner.flush().map_err(stdout_error)
+        if self.gone {
+            return Ok(());
+        }
+        let result = self.inner.flush();
+        self.settle(result)
+    }
+
+    fn settle(&mut self, result: std::io::Result<()>) -> anyhow::Result<()> {
+        match result {
+            Err(err) if err.kind() == ErrorKind::BrokenPipe && self.outlives_reader => {
+                self.gone = true;
+                Ok(())
+            }
+            other => other.map_err(stdout_error),
+        }
     }
 }
 

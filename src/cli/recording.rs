@@ -121,6 +121,14 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
                     frame.index
                 )
             })?;
+        if let Some(problem) = run
+            .config
+            .arena
+            .as_ref()
+            .and_then(|arena| arena.frame_problem(width, height))
+        {
+            anyhow::bail!("{shown}: frame {}: {problem}", frame.index);
+        }
         if detector.config().camera != fitted {
             let mut config = detector.config().clone();
             config.camera = fitted;
@@ -213,7 +221,12 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
     }
     progress.finish_and_clear();
     out.flush()?;
-    let skipped = frames.skipped().clone();
+    let mut skipped = frames.skipped().clone();
+    if run.camera_given {
+        // The bag's camera_info was not what the poses used.
+        skipped.refused_calibrations = 0;
+        skipped.first_refused_calibration = None;
+    }
     drop(frames);
     result?;
     if let Some(bag) = bag {

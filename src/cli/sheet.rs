@@ -68,7 +68,9 @@ pub struct SheetArgs {
 /// someone has since replaced with a file of their own is left alone.
 fn stale_pages(output: &Path, files: &[(PathBuf, Vec<u8>)]) -> Vec<PathBuf> {
     let manifest = output.with_extension("json");
-    let Ok(old) = whycode::manifest::Manifest::load(&manifest) else {
+    // The old manifest is an output about to be replaced, not an input.
+    let Ok(old) = whycode::input::unrecorded(|| whycode::manifest::Manifest::load(&manifest))
+    else {
         return Vec::new();
     };
     let new: Vec<&PathBuf> = files.iter().map(|(p, _)| p).collect();

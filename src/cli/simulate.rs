@@ -225,6 +225,8 @@ pub fn run(args: SimulateArgs) -> Result<ExitCode> {
         seed: args.seed,
     };
     let scene = spec.build().map_err(spec_error)?;
+    // Again now that the manifest is read: the pages it lists are inputs too.
+    whycode::io::check_outputs(&inputs, &[&args.output, &truth_path])?;
     if let Some(path) = &args.manifest {
         // The scene read the manifest; its copy tells whether the pages
         // beside it are the ones it was written with.
@@ -289,7 +291,10 @@ fn display(path: &Path) -> String {
 }
 
 fn is_sheet_manifest(path: &std::path::Path) -> bool {
-    let Ok(text) = std::fs::read_to_string(path) else {
+    // The truth's old content is an output's, not an input.
+    let Ok(text) =
+        whycode::input::unrecorded(|| whycode::input::read_text(path, whycode::FileKind::Manifest))
+    else {
         return false;
     };
     serde_json::from_str::<serde_json::Value>(&text)

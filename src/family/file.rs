@@ -188,8 +188,7 @@ impl Family {
 
     /// Reads and checks a family file. Errors read `<file>: <problem>`.
     pub fn load(path: &Path) -> Result<Family, LoadError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| LoadError::read(path, FileKind::Family, e))?;
+        let text = crate::input::read_text(path, FileKind::Family)?;
         Family::from_json(&text).map_err(|err| err.in_file(path))
     }
 }

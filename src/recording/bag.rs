@@ -41,7 +41,7 @@ impl Bag {
             path: path.to_path_buf(),
             source,
         };
-        let file = std::fs::File::open(path).map_err(io)?;
+        let file = super::open_file(path)?;
         // SAFETY: the map is only read; a bag changed by another process
         // while mapped can give wrong frames, not undefined behaviour in
         // safe code that copies out of it (the MCAP reader checks lengths).
@@ -227,9 +227,13 @@ impl BagFrames<'_> {
                         problem: e.to_string(),
                     })?;
                 // An invalid calibration leaves the previous one in place,
-                // as in the node.
-                if let Ok(camera) = info.camera(self.rectified) {
-                    self.camera = Some(camera);
+                // as in the node, and is counted for the summary.
+                match info.camera(self.rectified) {
+                    Ok(camera) => self.camera = Some(camera),
+                    Err(reason) => {
+                        self.skipped.refused_calibrations += 1;
+                        self.skipped.first_refused_calibration.get_or_insert(reason);
+                    }
                 }
                 continue;
             }

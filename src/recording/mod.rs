@@ -171,6 +171,9 @@ pub enum RecordingError {
         /// The video.
         path: PathBuf,
     },
+    /// The recording is not a regular file (a FIFO, a device, a folder).
+    #[error(transparent)]
+    File(#[from] crate::error::LoadError),
     /// ffmpeg could not read the video (or write one).
     #[error("{}: {problem}", path.display())]
     Video {
@@ -179,6 +182,23 @@ pub enum RecordingError {
         /// ffmpeg's own words.
         problem: String,
     },
+}
+
+/// Opens a recording as a regular file (never a FIFO or device, which
+/// would wait for a writer or never end) and remembers it as an input.
+fn open_file(path: &Path) -> Result<std::fs::File, RecordingError> {
+    use crate::error::{FileKind, LoadError, LoadProblem};
+    match crate::input::open(path, FileKind::Recording) {
+        Ok((file, _)) => Ok(file),
+        Err(LoadError {
+            problem: LoadProblem::Read(source),
+            ..
+        }) => Err(RecordingError::Io {
+            path: path.to_path_buf(),
+            source,
+        }),
+        Err(err) => Err(err.into()),
+    }
 }
 
 fn listed(topics: &[String]) -> String {
@@ -196,6 +216,11 @@ pub struct Skipped {
     pub count: u64,
     /// The first skipped frame's index and why.
     pub first: Option<(u64, String)>,
+    /// camera_info messages refused (no image size, not a real lens), and
+    /// the first one's reason: frames before a sound one have no poses.
+    pub refused_calibrations: u64,
+    /// Why the first refused camera_info was refused.
+    pub first_refused_calibration: Option<String>,
 }
 
 impl Skipped {
@@ -223,10 +248,8 @@ impl Recording {
         match Kind::of(path) {
             Some(Kind::Bag) => Ok(Recording::Bag(bag::Bag::open(path)?)),
             _ => {
-                std::fs::metadata(path).map_err(|source| RecordingError::Io {
-                    path: path.to_path_buf(),
-                    source,
-                })?;
+                // A FIFO would leave ffmpeg waiting for a writer forever.
+                open_file(path)?;
                 Ok(Recording::Video(path.to_path_buf()))
             }
         }

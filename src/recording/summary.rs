@@ -71,6 +71,13 @@ impl Summary {
             ));
         }
         lines.push(read);
+        if let Some(reason) = &skipped.first_refused_calibration {
+            lines.push(format!(
+                "refused {} camera_info message{} (first: {reason}); frames before a sound one have no poses",
+                skipped.refused_calibrations,
+                plural(skipped.refused_calibrations)
+            ));
+        }
         if self.ids.is_empty() {
             lines.push("no marker identified".into());
         } else {

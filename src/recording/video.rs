@@ -47,6 +47,9 @@ pub struct VideoFrames {
     tail: std::sync::Arc<std::sync::Mutex<Vec<String>>>,
     /// The filter's time base (numerator, denominator), once reported.
     time_base: std::sync::Arc<std::sync::Mutex<Option<(i64, i64)>>>,
+    /// ffmpeg's first line saying the file is cut short or damaged: it
+    /// then decodes what it can and exits with success.
+    damage: std::sync::Arc<std::sync::Mutex<Option<String>>>,
     every: u64,
     expected: Option<u64>,
     skipped: Skipped,
@@ -102,11 +105,12 @@ impl VideoFrames {
         let (send, reports) = std::sync::mpsc::channel();
         let tail = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
         let time_base = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let damage = std::sync::Arc::new(std::sync::Mutex::new(None));
         {
-            let (tail, time_base) = (tail.clone(), time_base.clone());
+            let (tail, time_base, damage) = (tail.clone(), time_base.clone(), damage.clone());
             let (every, window) = (options.every, (options.start_ns, options.end_ns));
             std::thread::spawn(move || {
-                read_reports(stderr, &send, &tail, &time_base, every, window)
+                read_reports(stderr, &send, &tail, &time_base, &damage, every, window)
             });
         }
         Ok(VideoFrames {
@@ -116,6 +120,7 @@ impl VideoFrames {
             reports,
             tail,
             time_base,
+            damage,
             every: options.every,
             expected: None,
             skipped: Skipped::default(),
@@ -147,6 +152,11 @@ impl VideoFrames {
     /// ffmpeg's own last words on the file, else `fallback`.
     fn problem(&self, fallback: &str) -> String {
         let tail = self.tail.lock().unwrap_or_else(|p| p.into_inner());
+        // ffmpeg's advice for `-map 0:v:0` on a file without video ("add a
+        // trailing '?' to the map") is about its command line, not the user's.
+        if tail.iter().any(|line| line.contains("matches no streams")) {
+            return "holds no video stream (sound only?)".to_string();
+        }
         let name = self.path.display().to_string();
         tail.iter()
             .rev()
@@ -155,11 +165,9 @@ impl VideoFrames {
                 // "run.mp4: Invalid data found when processing input": the
                 // file is named once, by us.
                 let line = line.trim();
-                line.strip_prefix(&format!("{name}: "))
-                    .unwrap_or(line)
-                    .to_string()
+                let line = line.strip_prefix(&format!("{name}: ")).unwrap_or(line);
+                format!("ffmpeg cannot read it: {line}")
             })
-            .map(|line| format!("ffmpeg cannot read it: {line}"))
             .unwrap_or_else(|| fallback.to_string())
     }
 
@@ -179,6 +187,20 @@ impl VideoFrames {
                         path: self.path.clone(),
                         problem: format!("ffmpeg: {e}"),
                     })?;
+                    let damage = self.damage.lock().unwrap_or_else(|p| p.into_inner()).take();
+                    if let Some(line) = damage {
+                        return Err(RecordingError::Video {
+                            path: self.path.clone(),
+                            problem: format!(
+                                "truncated or damaged video: frames were read up to the damage \
+                                 (ffmpeg: {})",
+                                // "[mov,mp4,... @ 0x55ca64003900] stream 0, ...":
+                                // the component and its address mean nothing here.
+                                line.split_once("] ")
+                                    .map_or(line.trim(), |(_, rest)| rest.trim())
+                            ),
+                        });
+                    }
                     if status.success() {
                         return Ok(None);
                     }
@@ -186,6 +208,21 @@ impl VideoFrames {
                 }
             }
         };
+        // The size comes from ffmpeg's log, which also echoes the file's
+        // own metadata: checked before it is allocated.
+        let limit = crate::image_io::SizeLimit::FRAMES;
+        if width == 0 || height == 0 || !limit.admits(width, height) {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+            return Err(RecordingError::Video {
+                path: self.path.clone(),
+                problem: format!(
+                    "ffmpeg reports frames of {width}x{height} pixels, outside 1 to {} px a side and {} megapixels",
+                    limit.max_side,
+                    limit.max_pixels / 1_000_000
+                ),
+            });
+        }
         let mut pixels = vec![0u8; width as usize * height as usize];
         if self.stdout.read_exact(&mut pixels).is_err() {
             return Err(self.failure("the video ends inside a frame"));
@@ -234,14 +271,24 @@ fn seconds(ns: i64) -> String {
     format!("{}.{:09}", ns / 1_000_000_000, (ns % 1_000_000_000).abs())
 }
 
+/// What ffmpeg says of a file cut short (MP4, Matroska, AVI) before it
+/// decodes what it can and exits with success anyway.
+const TRUNCATED: [&str; 4] = [
+    "partial file",
+    "File ended prematurely",
+    "Packet corrupt",
+    "Truncating packet",
+];
+
 /// Reads ffmpeg's standard error: showinfo's frame lines and time base,
-/// the duration and rate for the expected frame count, and the last lines
-/// for an error message.
+/// the duration and rate for the expected frame count, a truncated file's
+/// first complaint, and the last lines for an error message.
 fn read_reports(
     stderr: std::process::ChildStderr,
     send: &Sender<Report>,
     tail: &std::sync::Mutex<Vec<String>>,
     time_base: &std::sync::Mutex<Option<(i64, i64)>>,
+    damage: &std::sync::Mutex<Option<String>>,
     every: u64,
     (start_ns, end_ns): (Option<i64>, Option<i64>),
 ) {
@@ -278,6 +325,12 @@ fn read_reports(
                 }
             }
             continue;
+        }
+        if TRUNCATED.iter().any(|t| line.contains(t)) {
+            damage
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .get_or_insert_with(|| line.clone());
         }
         if let Some(d) = field(&line, "Duration:") {
             duration_s = clock(d.trim_end_matches(','));

@@ -162,8 +162,7 @@ impl Template {
 
     /// A user's template file.
     pub fn load(path: &Path) -> Result<Template, LoadError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| LoadError::read(path, FileKind::Template, e))?;
+        let text = crate::input::read_text(path, FileKind::Template)?;
         Template::parse(&path.display().to_string(), &text)
     }
 

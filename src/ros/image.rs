@@ -55,7 +55,7 @@ impl FrameError {
     pub fn cause(&self) -> String {
         match self {
             FrameError::Empty { .. } => "empty".into(),
-            FrameError::UnknownEncoding(e) => format!("encoding {e}"),
+            FrameError::UnknownEncoding(e) => format!("encoding {}", e.escape_debug()),
             FrameError::StepTooSmall { encoding, .. } => format!("step {encoding}"),
             FrameError::DataLength { .. } => "data length".into(),
             FrameError::OddWidth(_) => "odd width".into(),
@@ -70,10 +70,13 @@ impl fmt::Display for FrameError {
             FrameError::Empty { width, height } => {
                 write!(f, "empty image ({width}x{height} pixels)")
             }
+            // Escaped: the name comes from the message, and a NUL or a
+            // line break in it must not reach a terminal or a log raw.
             FrameError::UnknownEncoding(e) => write!(
                 f,
-                "encoding '{e}' is not read (mono8, mono16, rgb8, bgr8, rgba8, bgra8, \
-                 yuv422/uyvy, yuv422_yuy2/yuyv are)"
+                "encoding '{}' is not read (mono8, mono16, rgb8, bgr8, rgba8, bgra8, \
+                 yuv422/uyvy, yuv422_yuy2/yuyv are)",
+                e.escape_debug()
             ),
             FrameError::StepTooSmall {
                 encoding,
@@ -250,7 +253,7 @@ impl Converter {
         if msg.format.contains("compressedDepth") {
             return Err(FrameError::UnknownEncoding(msg.format.clone()));
         }
-        let gray = crate::decode_gray(std::path::Path::new(topic), &msg.data, SizeLimit::FILES)
+        let gray = crate::decode_gray(std::path::Path::new(topic), &msg.data, SizeLimit::FRAMES)
             .map_err(|e| FrameError::Undecodable(e.to_string()))?;
         if gray.width() == 0 || gray.height() == 0 {
             return Err(FrameError::Empty {
@@ -460,6 +463,37 @@ mod tests {
         assert_eq!(
             converter.gray_compressed(&depth, "t").unwrap_err().cause(),
             "encoding 16UC1; compressedDepth"
+        );
+    }
+
+    #[test]
+    fn a_small_message_declaring_a_huge_image_is_refused_before_decoding() {
+        // A PNG header of 9000 x 9000 pixels (81 megapixels) and no pixels:
+        // under the files' limit, over a stream frame's.
+        let mut png = Vec::new();
+        {
+            let mut encoder = png::Encoder::new(&mut png, 9000, 9000);
+            encoder.set_color(png::ColorType::Grayscale);
+            let mut writer = encoder.write_header().unwrap();
+            // The start of a zlib stream: the header is read up to here.
+            writer
+                .write_chunk(png::chunk::IDAT, &[0x78, 0x9c, 0x63, 0x00, 0x00])
+                .unwrap();
+            drop(writer);
+        }
+        assert!(png.len() < 100, "{}", png.len());
+        let msg = CompressedImage {
+            header: Header::default(),
+            format: "png".into(),
+            data: png,
+        };
+        let err = Converter::default()
+            .gray_compressed(&msg, "/cam/image/compressed")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("image of 9000x9000 pixels is larger than the supported 16384 px a side and 64 megapixels"),
+            "{err}"
         );
     }
 }

@@ -333,6 +333,10 @@ impl CameraInfo {
             width: self.width,
             height: self.height,
         };
+        // The checks a calibration file gets: a camera_info is used the same way.
+        camera
+            .check_plausible()
+            .map_err(|e| format!("camera_info is not a real lens: {e}"))?;
         let roi = self.roi;
         if roi.width != 0 && roi.height != 0 && (roi.width, roi.height) != (self.width, self.height)
         {

@@ -48,6 +48,56 @@ pub struct DetectSpec {
     pub marker_height: Option<Length>,
 }
 
+/// Boards a detector can locate and report: each name a /tf frame of its
+/// own, and each sheet printed in the family detected (in another, its IDs
+/// would be read as other markers, or as none, and the pose come from the
+/// wrong places).
+fn check_boards(boards: &[crate::board::Board], target: &Target) -> Result<(), SpecError> {
+    let mut names = std::collections::HashSet::new();
+    for board in boards {
+        if let Some(problem) = crate::board::name_problem(&board.name) {
+            return Err(SpecError::invalid("board", problem));
+        }
+        if !names.insert(board.name.as_str()) {
+            return Err(SpecError::invalid(
+                "board",
+                format!(
+                    "two boards are named {:?}: each board's name is its own /tf frame",
+                    board.name
+                ),
+            ));
+        }
+        let Some(family) = target.family() else {
+            continue;
+        };
+        for marker in &board.markers {
+            let Some((bits, code)) = marker.ring else {
+                continue;
+            };
+            if bits != family.bits() || family.code(marker.id) != Some(code) {
+                let reads = match family.id_of(code) {
+                    _ if bits != family.bits() => format!("has {} bits", family.bits()),
+                    Some(other) => format!("reads as ID {other}"),
+                    None => "does not hold".to_string(),
+                };
+                return Err(SpecError::invalid(
+                    "board",
+                    format!(
+                        "{}: ID {} is printed as the {bits}-bit code {code}, which the family \
+                         detected ({} bits, distance {}) {reads}: detect with the family the \
+                         sheet was printed in",
+                        board.name,
+                        marker.id,
+                        family.bits(),
+                        family.distance(),
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 impl DetectSpec {
     /// Checks every option and builds the detector's configuration.
     pub fn build(&self) -> Result<DetectorConfig, SpecError> {
@@ -60,7 +110,7 @@ impl DetectSpec {
         let arena = self
             .arena
             .as_ref()
-            .map(|arena| self.arena_with(arena, &mut camera, diameter_m))
+            .map(|arena| self.arena_with(arena, &mut camera))
             .transpose()?;
         if arena.is_none() && self.marker_height.is_some() {
             return Err(SpecError::of(
@@ -75,6 +125,7 @@ impl DetectSpec {
                     Problem::Conflict("a board's pose needs the camera: give camera too".into()),
                 ));
             }
+            check_boards(&self.boards, &target)?;
             diameter_m = diameter_m.or_else(|| {
                 self.boards
                     .iter()
@@ -87,7 +138,9 @@ impl DetectSpec {
             (true, false) if !self.camera_later => {
                 return Err(pose_needs_both("diameter", "camera"))
             }
-            (false, true) => {
+            // The camera an arena brings places markers without a
+            // diameter: each outline is read on the arena's known plane.
+            (false, true) if self.camera.is_some() => {
                 return Err(pose_needs_both(
                     "camera",
                     "diameter (or a board, whose markers give theirs)",
@@ -137,7 +190,6 @@ impl DetectSpec {
         &self,
         arena: &crate::arena::Arena,
         camera: &mut Option<Camera>,
-        diameter_m: Option<f64>,
     ) -> Result<crate::arena::Arena, SpecError> {
         let mut arena = arena.clone();
         let Some(measured_with) = arena.camera().copied() else {
@@ -154,6 +206,9 @@ impl DetectSpec {
         if let Some(height) = self.marker_height {
             arena.marker_height_m = within("marker_height", height.m(), limits::MARKER_HEIGHT_M)?;
         }
+        if let Some(problem) = arena.height_problem(arena.marker_height_m) {
+            return Err(SpecError::invalid("marker_height", problem));
+        }
         match *camera {
             None => *camera = Some(measured_with),
             Some(given) if !same_camera(&given, &measured_with) => {
@@ -166,14 +221,6 @@ impl DetectSpec {
                 ))
             }
             Some(_) => {}
-        }
-        if diameter_m.is_none() {
-            return Err(SpecError::of(
-                "arena",
-                Problem::Conflict(
-                    "measured with a camera, it places markers by their poses: give diameter too (any diameter gives the same arena coordinates)".into(),
-                ),
-            ));
         }
         Ok(arena)
     }

@@ -1,12 +1,15 @@
 //! Fuzzing on stable Rust: proptest generates mutations of valid seed files
-//! (images, family files, manifests, page templates, camera calibrations)
-//! and random images up to 2 megapixels; each input goes through the
+//! (images, family files, manifests, page templates, camera calibrations,
+//! arena files, boards and bundles, bags and videos) and random images up
+//! to 2 megapixels; each input goes through the
 //! library's loaders and, when accepted, through what uses them (detector,
 //! validation, sheet layout, projection). A run fails on a panic, on an
 //! input that takes too long, and on any JSON output that does not parse
 //! back or carries a non-finite number.
 //!
-//! With the `whycode` binary at hand it also runs the command line itself:
+//! Bags and videos go through the command line (`whycode detect`, which
+//! must end in its output or one error line, never a panic, a signal or a
+//! hang). With the `whycode` binary at hand it also runs the command line itself:
 //! with its standard output or error closed or full (it must not panic, and
 //! exits as it would have, 0 for a reader that went away, 1 for a full
 //! disk), and several runs at once writing one output (the files they
@@ -64,19 +67,23 @@ pub struct TargetSummary {
 
 type FuzzTarget = fn(&mut Fuzzer, &mut TestRunner) -> Result<bool, String>;
 
-const TARGETS: [(&str, FuzzTarget); 8] = [
+const TARGETS: [(&str, FuzzTarget); 12] = [
     ("image files", Fuzzer::image_file),
     ("random images", Fuzzer::random_image),
     ("family files", Fuzzer::family_file),
     ("manifests", Fuzzer::manifest_file),
     ("templates", Fuzzer::template_file),
     ("camera files", Fuzzer::camera_file),
+    ("arena files", Fuzzer::arena_file),
+    ("board files", Fuzzer::board_file),
+    ("bags", Fuzzer::bag_file),
+    ("videos", Fuzzer::video_file),
     ("output streams", Fuzzer::output_streams),
     ("concurrent runs", Fuzzer::concurrent_writers),
 ];
 
 /// Targets that run the `whycode` binary.
-const NEEDS_BINARY: [&str; 2] = ["output streams", "concurrent runs"];
+const NEEDS_BINARY: [&str; 4] = ["bags", "videos", "output streams", "concurrent runs"];
 
 /// Runs every target for its share of the budget.
 pub fn run(settings: &Settings) -> Vec<TargetSummary> {
@@ -330,6 +337,12 @@ struct Fuzzer {
     manifest_seed: Vec<u8>,
     template_seeds: Vec<Vec<u8>>,
     camera_seeds: Vec<(&'static str, Vec<u8>)>,
+    arena_seeds: Vec<Vec<u8>>,
+    board_seeds: Vec<(&'static str, Vec<u8>)>,
+    bag_seeds: Vec<Vec<u8>>,
+    /// Videos ffmpeg made of the seed scene (none without ffmpeg), made
+    /// on the first video input.
+    video_seeds: Option<Vec<(&'static str, Vec<u8>)>>,
     /// The command line's binary, for the targets that run it.
     whycode: Option<std::path::PathBuf>,
     /// Exit codes of the commands run with both streams working.
@@ -397,6 +410,13 @@ impl Fuzzer {
                 .iter()
                 .map(|(ext, text)| (*ext, text.as_bytes().to_vec()))
                 .collect(),
+            arena_seeds: ARENA_SEEDS.iter().map(|t| t.as_bytes().to_vec()).collect(),
+            board_seeds: vec![
+                ("yaml", BUNDLE_SEED.as_bytes().to_vec()),
+                ("json", sheet.manifest.to_json().into_bytes()),
+            ],
+            bag_seeds: bag_seeds(&scene_image),
+            video_seeds: None,
             whycode,
             baseline: std::collections::HashMap::new(),
             last: String::new(),
@@ -574,6 +594,322 @@ impl Fuzzer {
         }
         Ok(true)
     }
+}
+
+impl Fuzzer {
+    fn arena_file(&mut self, runner: &mut TestRunner) -> Result<bool, String> {
+        let (which, changes) = draw((0..self.arena_seeds.len(), mutations(4)), runner);
+        self.note_input(format!("arena seed {which} with {changes:?}"));
+        let path = self.write("arena.yaml", &apply(&self.arena_seeds[which], &changes));
+        let Ok(arena) = whycode::arena::Arena::load(&path) else {
+            return Ok(false);
+        };
+        // An accepted arena places the seed scene's markers finitely (or
+        // not at all), with and without a diameter.
+        let image = load_gray(&self.write("seed.png", &self.image_seeds[0].1.clone()))
+            .map_err(|e| e.to_string())?;
+        for diameter in [None, Some(whycode::units::Length::from_mm(60.0))] {
+            let Ok(config) = (whycode::spec::DetectSpec {
+                arena: Some(arena.clone()),
+                diameter,
+                ..Default::default()
+            })
+            .build() else {
+                continue;
+            };
+            let mut detector = Detector::new(config);
+            if detector.fit_camera(image.width(), image.height()).is_err() {
+                continue;
+            }
+            let found = detector.detect(&image);
+            check_detections(&found)?;
+            for d in &found {
+                if let Some(a) = &d.arena {
+                    if ![a.x, a.y, a.z].iter().all(|v| v.is_finite())
+                        || a.yaw.is_some_and(|y| !y.is_finite())
+                    {
+                        return Err(format!("arena position with a non-finite number: {d:?}"));
+                    }
+                }
+            }
+        }
+        Ok(true)
+    }
+
+    fn board_file(&mut self, runner: &mut TestRunner) -> Result<bool, String> {
+        let (which, changes) = draw((0..self.board_seeds.len(), mutations(4)), runner);
+        let (ext, seed) = self.board_seeds[which].clone();
+        self.note_input(format!("board seed {which} with {changes:?}"));
+        let path = self.write(&format!("board.{ext}"), &apply(&seed, &changes));
+        let Ok(boards) = whycode::board::Board::load(&path) else {
+            return Ok(false);
+        };
+        let Ok(config) = (whycode::spec::DetectSpec {
+            camera: Some(Camera::ideal(320, 240, 60.0)),
+            boards,
+            ..Default::default()
+        })
+        .build() else {
+            return Ok(true);
+        };
+        let mut detector = Detector::new(config);
+        let image = load_gray(&self.write("seed.png", &self.image_seeds[0].1.clone()))
+            .map_err(|e| e.to_string())?;
+        let found = detector.detect(&image);
+        check_detections(&found)?;
+        for pose in detector.locate_boards(&found) {
+            let numbers = pose
+                .position
+                .iter()
+                .chain(&pose.quaternion)
+                .chain([&pose.rms_px]);
+            if !numbers.into_iter().all(|v| v.is_finite()) {
+                return Err(format!("board pose with a non-finite number: {pose:?}"));
+            }
+        }
+        Ok(true)
+    }
+
+    /// Runs `whycode detect --format json FILE` on a mutated recording: it
+    /// must print JSON lines and end with status 0, or end with status 1
+    /// and one error line; never a panic, a signal or a hang.
+    fn detect_recording(&mut self, name: &str, bytes: &[u8]) -> Result<bool, String> {
+        let binary = self.whycode.clone().ok_or("no whycode binary")?;
+        let path = self.write(name, bytes);
+        let out = std::process::Command::new(&binary)
+            .args(["detect", "--format", "json", "--diameter", "60mm"])
+            .arg(&path)
+            .current_dir(self.dir.path())
+            .stdin(std::process::Stdio::null())
+            .output()
+            .map_err(|e| format!("cannot run {}: {e}", binary.display()))?;
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let Some(code) = out.status.code() else {
+            return Err(format!("killed by a signal ({}): {stderr}", out.status));
+        };
+        if code == 101 || stderr.contains("panicked") {
+            return Err(format!("panicked (exit {code}): {stderr}"));
+        }
+        for line in String::from_utf8_lossy(&out.stdout).lines() {
+            check_json("detect's JSON line", line)?;
+        }
+        match code {
+            0 => Ok(true),
+            1 if stderr
+                .lines()
+                .last()
+                .is_some_and(|l| l.starts_with("whycode: error: ")) =>
+            {
+                Ok(false)
+            }
+            _ => Err(format!("exit {code} without one error line: {stderr}")),
+        }
+    }
+
+    fn bag_file(&mut self, runner: &mut TestRunner) -> Result<bool, String> {
+        let (which, changes) = draw((0..self.bag_seeds.len(), mutations(6)), runner);
+        self.note_input(format!("bag seed {which} with {changes:?}"));
+        let bytes = apply(&self.bag_seeds[which], &changes);
+        self.detect_recording("fuzz.mcap", &bytes)
+    }
+
+    fn video_file(&mut self, runner: &mut TestRunner) -> Result<bool, String> {
+        let seeds = match &self.video_seeds {
+            Some(seeds) => seeds.clone(),
+            None => {
+                let made = video_seeds(self.dir.path(), &self.image_seeds[0].1);
+                self.video_seeds = Some(made.clone());
+                made
+            }
+        };
+        if seeds.is_empty() {
+            // No ffmpeg: nothing to mutate (the recordings tests say so).
+            return Ok(false);
+        }
+        let (which, changes) = draw((0..seeds.len(), mutations(4)), runner);
+        let (ext, seed) = &seeds[which];
+        self.note_input(format!("{ext} video seed {which} with {changes:?}"));
+        let bytes = apply(seed, &changes);
+        self.detect_recording(&format!("fuzz.{ext}"), &bytes)
+    }
+}
+
+/// Arena files as `whycode arena` writes them: measured with a camera
+/// looking down from 2.5 m, and without one.
+const ARENA_SEEDS: [&str; 2] = [
+    "format: whycode-arena\nversion: 1\nids: [1, 5, 9, 3]\nsize: [2.0, 1.5]\n\
+     marker_height: 0.1\ncorner_error: 0.001\n\
+     camera: {fx: 277.1, fy: 277.1, cx: 159.5, cy: 119.5, distortion: [-0.1, 0.01, 0.0, 0.0, 0.0], width: 320, height: 240}\n\
+     floor:\n  rotation: [[1, 0, 0], [0, -1, 0], [0, 0, -1]]\n  translation: [-1.0, 0.75, 2.5]\n",
+    "format: whycode-arena\nversion: 1\nids: [1, 5, 9, 3]\nsize: [2.0, 1.5]\n\
+     marker_height: 0.0\ncorner_error: 0.0\nimage_to_floor:\n  width: 320\n  height: 240\n\
+     floor_to_image: [[120, 0, 40], [0, -120, 200], [0, 0, 1]]\n",
+];
+
+/// A bundle of the seed scene's markers, one given by position only.
+const BUNDLE_SEED: &str = "bundles:\n  - name: rig\n    layout:\n\
+      - {id: 1, diameter: 0.06, x: -0.12, y: 0, z: 0, qw: 1, qx: 0, qy: 0, qz: 0}\n\
+      - {id: 5, diameter: 0.06, x: 0, y: 0, z: 0, qw: 1, qx: 0, qy: 0, qz: 0}\n\
+      - {id: 9, size: 0.06, x: 0.12, y: 0, z: 0}\n";
+
+/// Little-endian CDR, as bags hold ROS 2 messages: the encapsulation
+/// header, then each primitive aligned to its size from the body's start.
+struct Cdr(Vec<u8>);
+
+impl Cdr {
+    fn new() -> Cdr {
+        Cdr(vec![0, 1, 0, 0])
+    }
+    fn align(&mut self, n: usize) {
+        while !(self.0.len() - 4).is_multiple_of(n) {
+            self.0.push(0);
+        }
+    }
+    fn u32(&mut self, v: u32) -> &mut Cdr {
+        self.align(4);
+        self.0.extend(v.to_le_bytes());
+        self
+    }
+    fn f64s(&mut self, values: &[f64]) -> &mut Cdr {
+        for v in values {
+            self.align(8);
+            self.0.extend(v.to_le_bytes());
+        }
+        self
+    }
+    fn bytes(&mut self, data: &[u8]) -> &mut Cdr {
+        self.u32(data.len() as u32);
+        self.0.extend(data);
+        self
+    }
+    fn string(&mut self, text: &str) -> &mut Cdr {
+        let mut data = text.as_bytes().to_vec();
+        data.push(0);
+        self.bytes(&data)
+    }
+    fn header(&mut self, k: u32) -> &mut Cdr {
+        self.u32(100 + k).u32(5_000).string("cam")
+    }
+}
+
+/// Bags of the seed scene: mono8 Image and PNG CompressedImage frames with
+/// a camera_info, unchunked and in uncompressed chunks (so mutations reach
+/// the records and messages, not a compressor's checksums).
+fn bag_seeds(scene: &image::GrayImage) -> Vec<Vec<u8>> {
+    let mut png = Vec::new();
+    image::DynamicImage::ImageLuma8(scene.clone())
+        .write_to(&mut Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    let (w, h) = scene.dimensions();
+    let info = {
+        let mut m = Cdr::new();
+        m.header(0).u32(h).u32(w).string("plumb_bob");
+        m.u32(5).f64s(&[-0.1, 0.01, 0.0, 0.0, 0.0]);
+        let (f, cx, cy) = (277.1, 159.5, 119.5);
+        m.f64s(&[f, 0.0, cx, 0.0, f, cy, 0.0, 0.0, 1.0]);
+        m.f64s(&[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+        m.f64s(&[f, 0.0, cx, 0.0, 0.0, f, cy, 0.0, 0.0, 0.0, 1.0, 0.0]);
+        m.u32(0).u32(0).u32(0).u32(0).u32(0).u32(0);
+        m.0.push(0);
+        m.0
+    };
+    let raw = |k: u32| {
+        let mut m = Cdr::new();
+        m.header(k).u32(h).u32(w).string("mono8");
+        m.0.push(0);
+        m.u32(w).bytes(scene.as_raw());
+        m.0
+    };
+    let compressed = |k: u32| {
+        let mut m = Cdr::new();
+        m.header(k).string("png").bytes(&png);
+        m.0
+    };
+    let write = |chunks: bool, topic: &str, schema: &str, frame: &dyn Fn(u32) -> Vec<u8>| {
+        let mut writer = mcap::WriteOptions::new()
+            .profile("ros2")
+            .compression(None)
+            .use_chunks(chunks)
+            .calculate_chunk_crcs(false)
+            .create(Cursor::new(Vec::new()))
+            .unwrap();
+        let mut channel = |topic: &str, schema: &str| {
+            let s = writer.add_schema(schema, "ros2msg", b"").unwrap();
+            writer
+                .add_channel(s, topic, "cdr", &Default::default())
+                .unwrap()
+        };
+        let (images, infos) = (
+            channel(topic, schema),
+            channel("/cam/camera_info", "sensor_msgs/msg/CameraInfo"),
+        );
+        for k in 0..3u32 {
+            for (channel, data) in [(infos, info.clone()), (images, frame(k))] {
+                let time = 1_000_000_000 + u64::from(k) * 33_000_000;
+                writer
+                    .write_to_known_channel(
+                        &mcap::records::MessageHeader {
+                            channel_id: channel,
+                            sequence: k,
+                            log_time: time,
+                            publish_time: time,
+                        },
+                        &data,
+                    )
+                    .unwrap();
+            }
+        }
+        writer.finish().unwrap();
+        writer.into_inner().into_inner()
+    };
+    vec![
+        write(false, "/cam/image_raw", "sensor_msgs/msg/Image", &raw),
+        write(true, "/cam/image_raw", "sensor_msgs/msg/Image", &raw),
+        write(
+            false,
+            "/cam/image_raw/compressed",
+            "sensor_msgs/msg/CompressedImage",
+            &compressed,
+        ),
+    ]
+}
+
+/// Short videos of the seed scene made by ffmpeg (MJPG in AVI, H.264 in
+/// MP4 and Matroska); none when ffmpeg is missing.
+fn video_seeds(dir: &std::path::Path, seed_png: &[u8]) -> Vec<(&'static str, Vec<u8>)> {
+    let frame = dir.join("video-seed.png");
+    if std::fs::write(&frame, seed_png).is_err() {
+        return Vec::new();
+    }
+    let mut seeds = Vec::new();
+    for (ext, codec) in [
+        ("avi", &["-c:v", "mjpeg"][..]),
+        ("mp4", &["-c:v", "libx264", "-pix_fmt", "yuv420p"][..]),
+        ("mkv", &["-c:v", "libx264", "-pix_fmt", "yuv420p"][..]),
+    ] {
+        let out = dir.join(format!("video-seed.{ext}"));
+        let made = std::process::Command::new("ffmpeg")
+            .args([
+                "-hide_banner",
+                "-loglevel",
+                "error",
+                "-y",
+                "-loop",
+                "1",
+                "-i",
+            ])
+            .arg(&frame)
+            .args(["-t", "0.4", "-r", "10"])
+            .args(codec)
+            .arg(&out)
+            .output();
+        if matches!(made, Ok(m) if m.status.success()) {
+            if let Ok(bytes) = std::fs::read(&out) {
+                seeds.push((ext, bytes));
+            }
+        }
+    }
+    seeds
 }
 
 /// Commands for the output-stream target, run in the fuzzer's folder

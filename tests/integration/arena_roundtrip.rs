@@ -144,6 +144,45 @@ fn robots_are_placed_on_the_floor_through_a_distorting_lens() {
 }
 
 #[test]
+fn a_calibrated_arena_places_markers_without_a_diameter() {
+    let robots = arena::robots(12, 0.12, 3);
+    let scene = measured_scene(&robots, 3, "2m,1.5m");
+    let json = |extra: &[&str]| {
+        let mut args = vec![
+            "detect",
+            "--arena",
+            path(&scene.arena_file),
+            "--marker-height",
+            "12cm",
+            "--format",
+            "json",
+        ];
+        args.extend_from_slice(extra);
+        args.push(path(&scene.photo));
+        run_ok(&args)
+    };
+    let without = json(&[]);
+    let placed: Vec<(f64, f64)> = errors(&without, &robots);
+    let position: Vec<f64> = placed.iter().map(|e| e.0).collect();
+    assert!(worst(&position) < 3e-3, "{placed:?}");
+    assert!(
+        median(placed.iter().map(|e| e.1).collect()) < 0.5,
+        "{placed:?}"
+    );
+    // No diameter, no pose; the same places as with one, to a fraction of
+    // a millimetre.
+    let frame: serde_json::Value = serde_json::from_str(without.trim()).unwrap();
+    assert!(frame["markers"][0]["position"].is_null(), "{without}");
+    let with: Vec<f64> = errors(&json(&["--diameter", "80mm"]), &robots)
+        .iter()
+        .map(|e| e.0)
+        .collect();
+    for (a, b) in position.iter().zip(&with) {
+        assert!((a - b).abs() < 1e-3, "{position:?} against {with:?}");
+    }
+}
+
+#[test]
 fn markers_raised_on_robots_are_placed_at_their_height() {
     let robots = arena::robots(8, 0.12, 2);
     let Scene {

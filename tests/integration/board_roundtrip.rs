@@ -263,3 +263,46 @@ fn a_tracked_board_is_smoothed_over_the_frames() {
         rms(raw_sq)
     );
 }
+
+/// A bundle may give its markers' positions only (as apriltag_ros's may):
+/// the pose then comes from the centres, started from where the markers'
+/// own poses put them.
+#[test]
+fn a_bundle_of_positions_only_gives_the_cube_pose() {
+    let truth = calibration::lens();
+    let family = Family::generate(10, 2).unwrap();
+    let (faces, _) = cube(3);
+    let bundle: String = std::iter::once("bundles:\n  - name: cube\n    layout:\n".to_string())
+        .chain(faces.iter().map(|(id, p, _)| {
+            format!(
+                "      - {{id: {id}, diameter: 0.04, x: {}, y: {}, z: {}}}\n",
+                p.x, p.y, p.z
+            )
+        }))
+        .collect();
+    let boards = Board::parse_bundles(&bundle).unwrap();
+    assert!(boards[0].markers.iter().all(|m| m.rotation.is_none()));
+    let cube_rotation = *Rotation3::rotation_between(
+        &Vector3::new(1.0, 1.0, 1.0),
+        &Vector3::new(0.15, -0.1, -1.0),
+    )
+    .unwrap()
+    .matrix();
+    let cube_position = Vector3::new(0.03, -0.02, 0.45);
+    let scene = cube_scene(truth, &family, &faces, &cube_rotation, cube_position);
+    let image = simulate::render(&scene).0;
+    let mut detector = Detector::new(DetectorConfig {
+        target: Target::WhyCode(family),
+        camera: Some(truth),
+        diameter_m: Some(0.04),
+        boards,
+        ..Default::default()
+    });
+    let found = detector.detect(&image);
+    let poses = detector.locate_boards(&found);
+    assert_eq!(poses.len(), 1, "no pose from positions only: {found:?}");
+    let pose = &poses[0];
+    assert_eq!(pose.used, vec![1, 2, 3], "{pose:?}");
+    assert!(angle_deg(&pose.rotation, &cube_rotation) < 1.0, "{pose:?}");
+    assert!((pose.position - cube_position).norm() < 2e-3, "{pose:?}");
+}

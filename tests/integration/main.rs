@@ -11,6 +11,7 @@ mod arena_roundtrip;
 mod board_roundtrip;
 mod calibrate_roundtrip;
 mod defects_cli;
+mod defects_measuring;
 mod detect_cli;
 mod detect_compat;
 mod detect_real_camera;
