@@ -439,7 +439,7 @@ impl ThresholdMap {
                 // brightest pixel stands far above its mean.)
                 let (hi_own, nf) = (u16::from(own_hi[i]), u16::from(noise_floor));
                 let flat_paper = hi_own < u16::from(values[i]) + nf
-                    && hi_own <= tile_mean(&sums, i, cols, rows, tile_size) + nf;
+                    && hi_own <= tile_mean(&sums, i, cols, rows, tile_size) + 2 * nf;
                 u8::from((solid[i] || flat_paper) && hi_own >= 2 * u16::from(lo[i]) + 2 * nf)
             })
             .collect();

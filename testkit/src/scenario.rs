@@ -601,6 +601,6 @@ fn move_to_border(s: &mut Scene, rng: &mut Pcg32) {
         };
         let roll = rng.range(0.0, 2.0 * PI);
         let placement = Placement::at_pixel(&camera, &m.marker, (u, v), d, 0.0, 0.0, roll);
-        *object = SceneObject::Marker(LooseMarker::new(m.marker.clone(), m.id, placement));
+        *object = SceneObject::Marker(LooseMarker::new(m.marker, m.id, placement));
     }
 }
