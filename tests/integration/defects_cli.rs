@@ -4,36 +4,16 @@
 use std::path::Path;
 use std::process::Output;
 
-use crate::support::{stderr, stdout, whycode_in};
+use crate::support::{stderr, stdout, tool_marker_png, whycode_in};
 
 fn ok(out: &Output) {
     assert!(out.status.success(), "{}", stderr(out));
 }
 
-/// A marker photo: the 8-bit ID 4 rendered as a PNG by the tool itself.
-fn marker_photo(dir: &Path, name: &str) {
-    ok(&whycode_in(
-        dir,
-        &[
-            "marker",
-            "--bits",
-            "8",
-            "--id",
-            "4",
-            "--diameter",
-            "20mm",
-            "--dpi",
-            "150",
-            "-o",
-            name,
-        ],
-    ));
-}
-
 #[test]
 fn detect_annotate_into_the_inputs_folder_keeps_the_input() {
     let dir = tempfile::tempdir().unwrap();
-    marker_photo(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     let before = std::fs::read(dir.path().join("view.png")).unwrap();
     ok(&whycode_in(
         dir.path(),

@@ -8,7 +8,7 @@ use std::io::Cursor;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-use crate::support::{stderr, whycode_in};
+use crate::support::{stderr, tool_marker_png, whycode_in};
 use whycode::ros::cdr;
 use whycode::ros::msg::{CameraInfo, Header, Image, RosType, Time};
 
@@ -42,31 +42,11 @@ fn sheet(dir: &Path, output: &str) {
     ));
 }
 
-/// The 8-bit ID 4 drawn by the tool itself.
-fn marker_png(dir: &Path, name: &str) {
-    ok(&whycode_in(
-        dir,
-        &[
-            "marker",
-            "--bits",
-            "8",
-            "--id",
-            "4",
-            "--diameter",
-            "20mm",
-            "--dpi",
-            "150",
-            "-o",
-            name,
-        ],
-    ));
-}
-
 #[test]
 fn calibrate_never_writes_over_the_sheet_its_manifest_lists() {
     let dir = tempfile::tempdir().unwrap();
     sheet(dir.path(), "target.pdf");
-    marker_png(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     let before = std::fs::read(dir.path().join("target.pdf")).unwrap();
     let line = one_line_error(&whycode_in(
         dir.path(),
@@ -135,7 +115,7 @@ fn arena_never_writes_over_its_family_file() {
         dir.path(),
         &["ids", "--bits", "8", "--format", "json", "-o", "fam.json"],
     ));
-    marker_png(dir.path(), "floor.png");
+    tool_marker_png(dir.path(), "floor.png");
     let before = std::fs::read(dir.path().join("fam.json")).unwrap();
     let line = one_line_error(&whycode_in(
         dir.path(),
@@ -244,7 +224,7 @@ fn camera_info(k: usize, width: u32, height: u32, d: Vec<f64>) -> (&'static str,
 #[test]
 fn a_bag_output_is_written_when_the_reader_of_stdout_goes_away() {
     let dir = tempfile::tempdir().unwrap();
-    marker_png(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     let frames: Vec<_> = (0..6).map(|k| marker_frame(dir.path(), k)).collect();
     write_bag(&dir.path().join("big.mcap"), &frames);
     // `| head -c1`: the reader is gone before the first line is written.
@@ -339,7 +319,7 @@ fn whycode_bounded(dir: &Path, args: &[&str]) -> Output {
 #[test]
 fn configuration_files_that_are_not_files_or_too_large_are_refused_by_name() {
     let dir = tempfile::tempdir().unwrap();
-    marker_png(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     let made = Command::new("mkfifo")
         .arg(dir.path().join("fifo"))
         .status()
@@ -477,7 +457,7 @@ fn a_truncated_video_ends_with_one_line_not_success() {
 #[test]
 fn a_bag_camera_info_no_lens_gives_is_refused_and_said() {
     let dir = tempfile::tempdir().unwrap();
-    marker_png(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     let (w, h) = image::image_dimensions(dir.path().join("view.png")).unwrap();
     let mut messages = vec![camera_info(0, w, h, vec![1e30, 0.0, 0.0, 0.0, 0.0])];
     messages.extend((0..3).map(|k| marker_frame(dir.path(), k)));
@@ -534,7 +514,7 @@ const SANE_CAMERA: &str =
 #[test]
 fn arena_files_get_the_camera_checks_and_heights_below_the_camera() {
     let dir = tempfile::tempdir().unwrap();
-    marker_png(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     std::fs::write(dir.path().join("sane.yaml"), arena_yaml(SANE_CAMERA, 0.0)).unwrap();
     ok(&whycode_in(
         dir.path(),
@@ -587,7 +567,7 @@ fn arena_files_get_the_camera_checks_and_heights_below_the_camera() {
 #[test]
 fn a_camera_less_arena_refuses_frames_of_another_shape() {
     let dir = tempfile::tempdir().unwrap();
-    marker_png(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     let yaml = "format: whycode-arena\nversion: 1\nids: [1, 2, 3, 4]\nsize: [2.0, 1.5]\n\
                 marker_height: 0.0\ncorner_error: 0.0\nimage_to_floor:\n  width: 640\n  \
                 height: 480\n  floor_to_image: [[300, 0, 20], [0, -300, 460], [0, 0, 1]]\n";
@@ -641,7 +621,7 @@ fn arena_corners_in_a_line_are_refused_as_such() {
 #[test]
 fn board_names_must_be_frame_names_of_their_own() {
     let dir = tempfile::tempdir().unwrap();
-    marker_png(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     std::fs::write(
         dir.path().join("cam.yaml"),
         whycode::Camera::ideal(300, 300, 60.0).to_ros_yaml("c"),
@@ -683,7 +663,7 @@ fn board_names_must_be_frame_names_of_their_own() {
 #[test]
 fn a_board_sheet_of_another_family_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    marker_png(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     std::fs::write(
         dir.path().join("cam.yaml"),
         whycode::Camera::ideal(300, 300, 60.0).to_ros_yaml("c"),
@@ -728,7 +708,7 @@ fn a_board_sheet_of_another_family_is_refused() {
 fn calibrate_counts_a_photo_once_and_names_photos_of_another_sheet() {
     let dir = tempfile::tempdir().unwrap();
     sheet(dir.path(), "target.pdf");
-    marker_png(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     std::fs::copy(dir.path().join("view.png"), dir.path().join("copy.png")).unwrap();
     let line = one_line_error(&whycode_in(
         dir.path(),
@@ -783,7 +763,7 @@ fn calibrate_counts_a_photo_once_and_names_photos_of_another_sheet() {
 #[test]
 fn clearer_errors_for_recordings_and_annotations() {
     let dir = tempfile::tempdir().unwrap();
-    marker_png(dir.path(), "view.png");
+    tool_marker_png(dir.path(), "view.png");
     let line = one_line_error(&whycode_in(
         dir.path(),
         &["detect", "--annotate", "x.mp4", "view.png"],

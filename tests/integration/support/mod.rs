@@ -69,6 +69,27 @@ fn ok_stdout(args: &[&str], out: Output) -> String {
     String::from_utf8(out.stdout).expect("stdout is UTF-8")
 }
 
+/// The 8-bit ID 4, 20 mm at 150 dpi, drawn by the tool itself as `name` in
+/// `dir` (a photo for the commands that read one).
+pub fn tool_marker_png(dir: &Path, name: &str) {
+    run_ok_in(
+        dir,
+        &[
+            "marker",
+            "--bits",
+            "8",
+            "--id",
+            "4",
+            "--diameter",
+            "20mm",
+            "--dpi",
+            "150",
+            "-o",
+            name,
+        ],
+    );
+}
+
 /// Runs a command that must fail with exactly one line on stderr and nothing
 /// on stdout; returns that line.
 pub fn run_err(args: &[&str]) -> String {
