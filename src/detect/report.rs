@@ -444,8 +444,14 @@ mod tests {
         let rows = frame("a,\"b\".png", vec![marker(0)]).to_csv_rows(CsvColumns::default());
         assert_eq!(
             rows,
-            "\"a,\"\"b\"\".png\",0,,10.123,20.5,,30,29,0.988,,,,,,,,,0\n"
+            "\"a,\"\"b\"\".png\",0,,10.123,20.5,,30,29,0.988,,,,,,,,,0,\n"
         );
+        let unread = Detection {
+            unnamed: Some(super::super::Unnamed::Unread),
+            ..marker(0)
+        };
+        let rows = frame("a.png", vec![unread]).to_csv_rows(CsvColumns::default());
+        assert!(rows.ends_with(",0,ring_unread\n"), "{rows}");
     }
 
     #[test]
