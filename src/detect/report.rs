@@ -45,7 +45,7 @@ pub struct StreamPosition {
 /// The CSV header line (without its newline) of a run without an arena;
 /// [`FrameReport::to_csv_rows`] writes the rows under it.
 pub const CSV_HEADER: &str =
-    "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw,bits,unreadable,unknown";
+    "image,id,code,u,v,yaw,axis_major,axis_minor,confidence,x,y,z,qx,qy,qz,qw,bits,unreadable";
 
 /// The columns a run's CSV has. They are fixed for the whole run (the header
 /// comes before any frame), so the arena columns follow the configuration,
@@ -240,7 +240,7 @@ impl FrameReport {
             let pose = m.pose.as_ref();
             let _ = write!(
                 out,
-                "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                "{image},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 m.id,
                 m.code.map_or(String::new(), |c| c.to_string()),
                 round(m.u, 3),
@@ -258,7 +258,6 @@ impl FrameReport {
                 opt(pose.map(|p| round(p.quaternion[3], 6))),
                 m.bits.map_or(String::new(), |b| b.to_string()),
                 u8::from(m.unreadable),
-                m.unnamed.map_or("", super::Unnamed::key),
             );
             if columns.arena {
                 // Same rounding as the JSON's `arena`.
@@ -440,18 +439,33 @@ mod tests {
     }
 
     #[test]
+    fn json_and_table_say_why_a_marker_has_no_id() {
+        let unread = Detection {
+            unnamed: Some(super::super::Unnamed::NoCodeRing),
+            ..marker(0)
+        };
+        let report = frame("a.png", vec![unread, marker(3)]);
+        let json = report.to_json();
+        assert_eq!(
+            json.matches("\"unknown\":\"no_code_ring\"").count(),
+            1,
+            "{json}"
+        );
+        let table = report.to_table(false);
+        assert_eq!(
+            table.matches("(unknown: no_code_ring)").count(),
+            1,
+            "{table}"
+        );
+    }
+
+    #[test]
     fn csv_quotes_awkward_names_and_leaves_unknowns_empty() {
         let rows = frame("a,\"b\".png", vec![marker(0)]).to_csv_rows(CsvColumns::default());
         assert_eq!(
             rows,
-            "\"a,\"\"b\"\".png\",0,,10.123,20.5,,30,29,0.988,,,,,,,,,0,\n"
+            "\"a,\"\"b\"\".png\",0,,10.123,20.5,,30,29,0.988,,,,,,,,,0\n"
         );
-        let unread = Detection {
-            unnamed: Some(super::super::Unnamed::Unread),
-            ..marker(0)
-        };
-        let rows = frame("a.png", vec![unread]).to_csv_rows(CsvColumns::default());
-        assert!(rows.ends_with(",0,ring_unread\n"), "{rows}");
     }
 
     #[test]
