@@ -37,28 +37,6 @@ fn sample_line(
     true
 }
 
-/// Pixels of the margin beyond the coarse outline that a ray must show to
-/// place the edge on it: the edge's blur and a pixel of the paper.
-const MIN_MARGIN_SEEN_PX: f64 = 3.0;
-
-/// How far from `origin` along the unit direction `dir` the bilinear
-/// sampler can read before it leaves the image.
-fn room(origin: (f64, f64), dir: (f64, f64), image: Gray<'_>) -> f64 {
-    let limit = |p: f64, d: f64, size: usize| {
-        let last = size as f64 - 1.0 - 1e-9;
-        if d > 1e-12 {
-            (last - p) / d
-        } else if d < -1e-12 {
-            -p / d
-        } else {
-            f64::INFINITY
-        }
-    };
-    limit(origin.0, dir.0, image.width)
-        .min(limit(origin.1, dir.1, image.height))
-        .max(0.0)
-}
-
 /// The coarse outline of a segment: the ellipse of its pixel moments.
 pub fn from_moments(stats: &Stats) -> Option<Ellipse> {
     if stats.count < 3 {
@@ -90,15 +68,7 @@ pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>)
             continue;
         }
         let (ux, uy) = (dx / r, dy / r);
-        // A disc near the image's border leaves some rays less of the
-        // margin than the profile would take: what lies inside the frame is
-        // read, as long as it shows a few pixels of the margin's light.
-        let s0 = 0.75 * r - 1.0;
-        let whole = 1.3 * r + 1.5;
-        let s1 = whole.min(room((coarse.u, coarse.v), (ux, uy), image));
-        if s1 < whole && s1 < r + MIN_MARGIN_SEEN_PX {
-            continue;
-        }
+        let (s0, s1) = (0.75 * r - 1.0, 1.3 * r + 1.5);
         let n = (((s1 - s0) as usize) + 1).clamp(8, profile.len());
         let step = (s1 - s0) / (n - 1) as f64;
         let (origin, dir) = ((coarse.u, coarse.v), (ux, uy));
