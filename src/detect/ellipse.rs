@@ -37,6 +37,36 @@ fn sample_line(
     true
 }
 
+/// Pixels of the margin beyond the coarse outline that a ray must show to
+/// place the edge on it: the edge's blur and a pixel of the paper.
+const MIN_MARGIN_SEEN_PX: f64 = 3.0;
+
+/// How far the rays' samples keep from the image's first and last pixel
+/// centres. The sampler refuses a point even a rounding error outside;
+/// a ray cut exactly at the edge would end there, and whether its last
+/// sample falls inside would depend on the last bit of the platform's
+/// square roots and sines, so the same photo would give other outlines
+/// in the browser than on the command line.
+const EDGE_SLACK_PX: f64 = 1.0 / 64.0;
+
+/// How far from `origin` along the unit direction `dir` the bilinear
+/// sampler can read before it leaves the image (less the slack).
+fn room(origin: (f64, f64), dir: (f64, f64), image: Gray<'_>) -> f64 {
+    let limit = |p: f64, d: f64, size: usize| {
+        let (first, last) = (EDGE_SLACK_PX, size as f64 - 1.0 - EDGE_SLACK_PX);
+        if d > 1e-12 {
+            (last - p) / d
+        } else if d < -1e-12 {
+            (first - p) / d
+        } else {
+            f64::INFINITY
+        }
+    };
+    limit(origin.0, dir.0, image.width)
+        .min(limit(origin.1, dir.1, image.height))
+        .max(0.0)
+}
+
 /// The coarse outline of a segment: the ellipse of its pixel moments.
 pub fn from_moments(stats: &Stats) -> Option<Ellipse> {
     if stats.count < 3 {
@@ -68,7 +98,15 @@ pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>)
             continue;
         }
         let (ux, uy) = (dx / r, dy / r);
-        let (s0, s1) = (0.75 * r - 1.0, 1.3 * r + 1.5);
+        // A disc near the image's border leaves some rays less of the
+        // margin than the profile would take: what lies inside the frame is
+        // read, as long as it shows a few pixels of the margin's light.
+        let s0 = 0.75 * r - 1.0;
+        let whole = 1.3 * r + 1.5;
+        let s1 = whole.min(room((coarse.u, coarse.v), (ux, uy), image));
+        if s1 < whole && s1 < r + MIN_MARGIN_SEEN_PX {
+            continue;
+        }
         let n = (((s1 - s0) as usize) + 1).clamp(8, profile.len());
         let step = (s1 - s0) / (n - 1) as f64;
         let (origin, dir) = ((coarse.u, coarse.v), (ux, uy));
@@ -778,6 +816,47 @@ fn erf(x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A disc cut by the frame's top edge: the rays that meet the edge end
+    /// where the frame does, and which of them place an edge point must
+    /// not hang on the last bit of the centre (a rounding error of another
+    /// platform's square root or sine moves it that much).
+    #[test]
+    fn rays_cut_by_the_edge_do_not_hang_on_rounding() {
+        let (width, height, radius) = (200usize, 120usize, 40.0);
+        let (cx, cy) = (100.0, 44.0);
+        let pixels: Vec<u8> = (0..width * height)
+            .map(|i| {
+                let (x, y) = ((i % width) as f64, (i / width) as f64);
+                let r = (x - cx).hypot(y - cy);
+                (40.0 + 160.0 * (r - radius + 0.5).clamp(0.0, 1.0)) as u8
+            })
+            .collect();
+        let image = Gray::new(&pixels, width, height);
+        let mut counts = std::collections::BTreeSet::new();
+        let mut points = Vec::new();
+        for k in 0..400 {
+            let nudge = f64::from(k) * 1e-12;
+            let coarse = Ellipse {
+                u: cx + nudge,
+                v: cy - nudge,
+                semi_major: radius,
+                semi_minor: radius,
+                angle: 0.0,
+            };
+            edge_points(image, &coarse, &mut points);
+            for &(x, y) in &points {
+                let off = (x - cx).hypot(y - cy) - radius;
+                assert!(off.abs() < 0.35, "({x}, {y}) is {off} px off the edge");
+            }
+            counts.insert(points.len());
+        }
+        assert_eq!(counts.len(), 1, "edge points per nudge: {counts:?}");
+        // The disc's top reaches within 4 px of the edge: the rays up to it
+        // still read, those that show too little margin do not.
+        let count = *counts.first().unwrap();
+        assert!((40..64).contains(&count), "{count} edge points");
+    }
 
     /// The vector blend of a 3×3 neighbourhood and the portable one (taken
     /// where the slice ends before a fourth byte of the last row) agree to

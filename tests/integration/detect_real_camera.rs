@@ -1,7 +1,8 @@
 //! What photographs taken by other people do to markers, rendered by the
 //! simulator and read back: paper in the shade of a bright room, a blurred
 //! marker from a compressed video whose ring cannot be read, a legacy
-//! circle whose white centre the blur has grown. Each marker a person sees in these pictures must be found, and
+//! circle whose white centre the blur has grown, a disc at the frame's
+//! border. Each marker a person sees in these pictures must be found, and
 //! named where its ring can be read; never with a wrong ID.
 
 use whycode::camera::Camera;
@@ -165,6 +166,28 @@ fn a_blurred_legacy_circle_whose_white_centre_has_grown_is_found() {
                 assert_eq!(at.len(), 1, "blur {blur}, {place:?}: {found:?}");
                 assert_eq!(at[0].id, 0);
             }
+        }
+    }
+}
+
+#[test]
+fn a_disc_a_fiftieth_of_its_diameter_from_the_border_is_found_and_named() {
+    // A landing pad filling a drone's camera: 344 px across in a frame 360
+    // px high, 0.02 of its diameter from three of its edges.
+    let camera = whycode_testkit::scenes::camera(640, 360, 500.0);
+    let d = 344.0;
+    let gap = 0.5 * (360.0 - d);
+    for (id, target) in [(5, Target::WhyCode(family())), (0, Target::WhyCon)] {
+        for place in [(gap + d / 2.0, 180.0), (640.0 - gap - d / 2.0, 180.0)] {
+            let mut scene = Scene::new(camera);
+            scene.background = Background::Uniform(0.7);
+            scene.objects = vec![SceneObject::Marker(marker_at(&camera, id, place, d))];
+            scene.noise = 2.0;
+            let image = simulate::render(&scene).0;
+            let found = detect(&image, target.clone());
+            let at = near(&found, place, 3.0);
+            assert_eq!(at.len(), 1, "{place:?}: {found:?}");
+            assert_eq!(at[0].id, id, "{:?}", at[0]);
         }
     }
 }
