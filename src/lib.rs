@@ -69,13 +69,13 @@ pub mod recording;
 pub mod render;
 #[cfg(feature = "ros")]
 pub mod ros;
+pub mod session;
 pub mod simulate;
 pub mod spec;
 pub mod units;
 pub mod validate;
 
 pub use camera::{Camera, OtherCamera};
-pub use detect::report::FrameReport;
 pub use detect::{Detection, Detector, DetectorConfig, Target};
 pub use error::{FileKind, LoadError, LoadProblem, WriteError};
 pub use family::{Decoded, Decoder, Family, FamilyError, MatchStatus};
@@ -85,6 +85,7 @@ pub use manifest::Manifest;
 pub use math::Ellipse;
 pub use pose::Pose;
 pub use render::{Format, MarkerOptions, Sheet, SheetMarker, SheetSpec, Template};
+pub use session::{FrameReport, Session, SessionConfig};
 pub use simulate::{GroundTruth, Scene};
 pub use units::{Angle, Length};
 pub use validate::{PhotoReport, Report};

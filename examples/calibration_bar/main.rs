@@ -23,7 +23,8 @@ use serde::Deserialize;
 use whycode::board::Board;
 use whycode::calibrate::{calibrate, disagreement, CalibrationOptions};
 use whycode::camera::Camera;
-use whycode::detect::{Detector, DetectorConfig, Target};
+use whycode::detect::{DetectorConfig, Target};
+use whycode::session::{Frame, Session, SessionConfig};
 use whycode::simulate::Placement;
 use whycode_testkit::calibration;
 
@@ -132,7 +133,7 @@ fn worst(values: &[f64]) -> f64 {
 type PoseErrors = (Vec<f64>, Vec<f64>);
 
 /// Board poses through the true camera: ours from the sheet's markers
-/// (`Detector::locate_boards`), one per view seen.
+/// (a session's board poses), one per view seen.
 fn our_board_errors(
     truth: &Camera,
     manifest: &whycode::manifest::Manifest,
@@ -140,19 +141,23 @@ fn our_board_errors(
     poses: &[Placement],
 ) -> PoseErrors {
     let family = whycode::family::Family::generate(10, 2).expect("the sheet's family");
-    let mut detector = Detector::new(DetectorConfig {
-        target: Target::WhyCode(family),
-        camera: Some(*truth),
-        diameter_m: Some(calibration::MARKER_DIAMETER_MM / 1000.0),
+    let mut session = Session::new(SessionConfig {
         boards: vec![Board::from_manifest_page(manifest, 1, "sheet".into(), 1.0)],
-        max_markers: 100,
-        ..Default::default()
+        ..SessionConfig::detector(DetectorConfig {
+            target: Target::WhyCode(family),
+            camera: Some(*truth),
+            diameter_m: Some(calibration::MARKER_DIAMETER_MM / 1000.0),
+            max_markers: 100,
+            ..Default::default()
+        })
     });
     let (mut rotations, mut positions) = (Vec::new(), Vec::new());
-    for ((_, image), placement) in sheets.iter().zip(poses) {
-        detector.reset();
-        let found = detector.detect(image);
-        if let Some(pose) = detector.locate_boards(&found).first() {
+    for ((name, image), placement) in sheets.iter().zip(poses) {
+        session.reset();
+        let report = session
+            .process(Frame::new(image, name.as_str()))
+            .expect("the views are of the camera's size");
+        if let Some(pose) = report.boards.first() {
             let (r, p) = pose_error(&true_board_pose(placement), &pose.rotation, &pose.position);
             rotations.push(r);
             positions.push(p);

@@ -6,9 +6,10 @@ use crate::{guard, Error};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use std::sync::Mutex;
+use whycode::arena::ArenaPosition;
 use whycode::board::{Board, BoardPose};
-use whycode::detect::report::FrameReport;
-use whycode::detect::{Detection, Detector, DetectorConfig, StageTimings, Target};
+use whycode::detect::{Detection, Detector, StageTimings, Target};
+use whycode::session::{Frame, FrameReport, Session, SessionConfig};
 use whycode::spec::{DetectSpec, TargetSpec};
 
 /// Finds WhyCode markers (or legacy WhyCon circles) in frames.
@@ -18,46 +19,30 @@ use whycode::spec::{DetectSpec, TargetSpec};
 /// are a sequence and calls take turns.
 #[pyclass(name = "Detector", module = "whycode", frozen)]
 pub struct PyDetector {
-    config: DetectorConfig,
-    /// A detector that has seen no frame, cloned for new workers.
-    fresh: Detector,
-    /// Idle workers (without tracking), or the one tracking detector.
-    idle: Mutex<Vec<Detector>>,
-    tracking_state: Mutex<Option<Detector>>,
+    config: SessionConfig,
+    /// A session that has seen no frame, cloned for new workers.
+    fresh: Session,
+    /// Idle workers (without tracking), or the one tracking session.
+    idle: Mutex<Vec<Session>>,
+    tracking_state: Mutex<Option<Session>>,
     /// The stage timings of the frame detected last (with `timings=True`).
     last_timings: Mutex<Option<StageTimings>>,
 }
 
-/// The markers of one frame and the poses of the configured boards.
-/// What one frame gave: the markers, the boards' poses, and how many discs
-/// looked like legacy WhyCon markers (the CLI's "--legacy reads them" note).
-struct Found {
-    markers: Vec<Detection>,
-    boards: Vec<BoardPose>,
-    legacy_looking: usize,
-}
-
-/// Detects in `view` with `detector`, then places the boards through the
-/// camera fitted to the frame's size, as `whycode detect --board` does.
-fn detect_with_boards(detector: &mut Detector, view: &crate::pixels::GrayView<'_>) -> Found {
-    let markers = detector.detect(view);
-    let boards = if detector.config().boards.is_empty() {
-        Vec::new()
-    } else {
-        // The frame's size was checked against the camera before.
-        let _ = detector.fit_camera(view.width(), view.height());
-        detector.locate_boards(&markers)
-    };
-    Found {
-        markers,
-        boards,
-        legacy_looking: detector.last_legacy_looking(),
-    }
+/// Measures `view` in `session` as `whycode detect` measures an image:
+/// the markers, their places on the arena, the boards' poses.
+fn process(
+    session: &mut Session,
+    view: &crate::pixels::GrayView<'_>,
+) -> Result<FrameReport, Error> {
+    session
+        .process(Frame::new(view, ""))
+        .map_err(|problem| Error::value(problem.to_string()))
 }
 
 impl PyDetector {
-    fn run(&self, view: &crate::pixels::GrayView<'_>) -> Found {
-        if self.config.tracking {
+    fn run(&self, view: &crate::pixels::GrayView<'_>) -> Result<FrameReport, Error> {
+        if self.config.detector.tracking {
             let mut state = self
                 .tracking_state
                 .lock()
@@ -65,14 +50,14 @@ impl PyDetector {
             let detector = state.get_or_insert_with(|| self.fresh.clone());
             // A panic below leaves `state` empty, never half-updated.
             let mut taken = std::mem::replace(detector, self.fresh.clone());
-            let found = detect_with_boards(&mut taken, view);
+            let found = process(&mut taken, view);
             self.keep_timings(&taken);
             *detector = taken;
             found
         } else {
             let worker = self.idle.lock().unwrap_or_else(|p| p.into_inner()).pop();
             let mut worker = worker.unwrap_or_else(|| self.fresh.clone());
-            let found = detect_with_boards(&mut worker, view);
+            let found = process(&mut worker, view);
             self.keep_timings(&worker);
             self.idle
                 .lock()
@@ -82,9 +67,10 @@ impl PyDetector {
         }
     }
 
-    fn keep_timings(&self, detector: &Detector) {
-        if self.config.timings {
-            *self.last_timings.lock().unwrap_or_else(|p| p.into_inner()) = detector.last_timings();
+    fn keep_timings(&self, session: &Session) {
+        if self.config.detector.timings {
+            *self.last_timings.lock().unwrap_or_else(|p| p.into_inner()) =
+                session.detector().last_timings();
         }
     }
 }
@@ -156,7 +142,7 @@ impl PyDetector {
                 }
             })
         })?;
-        let fresh = guard(|| Ok(Detector::new(config.clone())))?;
+        let fresh = guard(|| Ok(Session::new(config.clone())))?;
         Ok(PyDetector {
             config,
             fresh,
@@ -182,12 +168,17 @@ impl PyDetector {
             // The detector rescales a calibration made for another
             // resolution of the same sensor by itself; another aspect ratio
             // is another camera, refused here rather than left without pose.
-            if let Some(camera) = self.config.camera {
+            if let Some(camera) = self.config.detector.camera {
                 camera.for_image(view.width(), view.height())?;
             }
-            Ok(self.run(view))
+            self.run(view)
         })?;
-        let markers: Vec<PyMarker> = found.markers.into_iter().map(PyMarker::from).collect();
+        let markers: Vec<PyMarker> = found
+            .markers
+            .into_iter()
+            .zip(found.places)
+            .map(|(detection, arena)| PyMarker { detection, arena })
+            .collect();
         let result = crate::detections_type(py)?.call1((markers,))?;
         result.setattr("boards", boards_to_py(py, found.boards)?)?;
         result.setattr("legacy_looking", found.legacy_looking)?;
@@ -203,7 +194,7 @@ impl PyDetector {
         repeats: usize,
     ) -> PyResult<f64> {
         crate::pixels::with_gray(py, image, |view| {
-            let mut detector = self.fresh.clone();
+            let mut detector = Detector::new(self.config.detector.clone());
             let mut times: Vec<f64> = (0..repeats.max(1))
                 .map(|_| {
                     let start = std::time::Instant::now();
@@ -240,19 +231,19 @@ impl PyDetector {
 
     #[getter]
     fn tracking(&self) -> bool {
-        self.config.tracking
+        self.config.detector.tracking
     }
 
     #[getter]
     fn family(&self) -> Option<PyFamily> {
-        match &self.config.target {
+        match &self.config.detector.target {
             Target::WhyCode(family) => Some(PyFamily::wrap(family.clone())),
             Target::WhyCon | Target::AnyBits { .. } => None,
         }
     }
 
     fn __repr__(&self) -> String {
-        let family = match &self.config.target {
+        let family = match &self.config.detector.target {
             Target::WhyCode(f) => format!("Family(bits={}, distance={})", f.bits(), f.distance()),
             Target::WhyCon => "None (legacy)".to_string(),
             Target::AnyBits { distance: None } => "None (any bit count)".to_string(),
@@ -262,13 +253,13 @@ impl PyDetector {
         };
         format!(
             "Detector(family={family}, diameter={:?}, camera={}, tracking={})",
-            self.config.diameter_m,
-            if self.config.camera.is_some() {
+            self.config.detector.diameter_m,
+            if self.config.detector.camera.is_some() {
                 "..."
             } else {
                 "None"
             },
-            if self.config.tracking {
+            if self.config.detector.tracking {
                 "True"
             } else {
                 "False"
@@ -282,12 +273,8 @@ impl PyDetector {
 #[pyclass(name = "Marker", module = "whycode", frozen)]
 pub struct PyMarker {
     detection: Detection,
-}
-
-impl From<Detection> for PyMarker {
-    fn from(detection: Detection) -> PyMarker {
-        PyMarker { detection }
-    }
+    /// Where it lies on the detector's arena.
+    arena: Option<ArenaPosition>,
 }
 
 #[pymethods]
@@ -404,8 +391,7 @@ impl PyMarker {
     /// +x from the arena's +x, counter-clockwise; None for legacy circles).
     #[getter]
     fn arena<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, pyo3::types::PyDict>>> {
-        self.detection
-            .arena
+        self.arena
             .map(|a| {
                 let dict = pyo3::types::PyDict::new(py);
                 dict.set_item("x", a.x)?;
@@ -427,6 +413,7 @@ impl PyMarker {
             height: 0,
             elapsed_ms: 0.0,
             markers: vec![self.detection.clone()],
+            places: vec![self.arena],
             boards: Vec::new(),
             timings: None,
             stream: None,
@@ -465,6 +452,7 @@ fn boards_to_py(py: Python<'_>, boards: Vec<BoardPose>) -> PyResult<Bound<'_, Py
         height: 0,
         elapsed_ms: 0.0,
         markers: Vec::new(),
+        places: Vec::new(),
         boards,
         timings: None,
         stream: None,
@@ -483,7 +471,7 @@ fn draw<'py>(
     image: &Bound<'py, PyAny>,
     markers: Vec<PyRef<'py, PyMarker>>,
 ) -> PyResult<Bound<'py, numpy::PyArray3<u8>>> {
-    use whycode::detect::annotate::{annotated_rgb, drawn_over};
+    use whycode::session::annotate::{annotated_rgb, drawn_over};
     let detections: Vec<Detection> = markers.iter().map(|m| m.detection.clone()).collect();
     let picture = match crate::pixels::colour_image(image)? {
         Some(colour) => py.detach(|| guard(|| Ok(drawn_over(&colour, &detections)?)))?,

@@ -57,7 +57,7 @@ fn main() {
     let settings = Settings::from_parameters(&args.parameters("/whycode", "whycode").unwrap())
         .expect("settings");
     let config = params::detector_config(&settings, Some(camera)).expect("config");
-    let mut detector = Detector::new(config);
+    let mut detector = Detector::new(config.detector);
     let mut alone = Vec::with_capacity(frames);
     for image in &images {
         let started = Instant::now();

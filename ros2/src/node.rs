@@ -28,7 +28,10 @@ use std::net::Ipv4Addr;
 use std::pin::Pin;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
-use whycode::detect::{Detection, Detector, DetectorConfig};
+use whycode::detect::Detection;
+use whycode::session::{
+    Frame as SessionFrame, FrameError as SessionError, FrameReport, Session, SessionConfig,
+};
 use whycode::Camera;
 
 /// What the loop is told from outside: a parameter change the parameter
@@ -46,7 +49,7 @@ pub struct Update {
     pub settings: Settings,
     /// The detector configuration built for them, when the change concerns
     /// the detector.
-    pub config: Option<DetectorConfig>,
+    pub config: Option<SessionConfig>,
     /// What the change touches.
     pub change: Change,
 }
@@ -211,7 +214,7 @@ struct Pipeline {
     node: Node,
     topics: Topics,
     settings: Settings,
-    detector: Detector,
+    session: Session,
     converter: Converter,
     /// The newest valid calibration from camera_info, at its own size.
     camera_info: Option<Camera>,
@@ -367,7 +370,7 @@ pub fn run(
     let mut pipeline = Pipeline {
         node,
         topics,
-        detector: Detector::new(config),
+        session: Session::new(config),
         settings,
         converter: Converter::default(),
         camera_info: None,
@@ -568,7 +571,7 @@ struct Checked {
     name: String,
     value: ParameterValue,
     settings: Settings,
-    config: Option<DetectorConfig>,
+    config: Option<SessionConfig>,
 }
 
 impl ParameterGate {
@@ -648,7 +651,7 @@ impl Pipeline {
     /// each change.
     fn describe_setup(&self) {
         let s = &self.settings;
-        let target = match &self.detector.config().target {
+        let target = match &self.session.detector_config().target {
             whycode::Target::WhyCon => "legacy WhyCon circles (no IDs, so no /tf)".to_string(),
             whycode::Target::WhyCode(f) => format!(
                 "WhyCode {}-bit distance-{} family ({} IDs)",
@@ -683,17 +686,16 @@ impl Pipeline {
         self.last_sequence = Some((writer, sequence));
     }
 
-    fn on_settings(&mut self, settings: Settings, config: Option<DetectorConfig>) {
+    fn on_settings(&mut self, settings: Settings, config: Option<SessionConfig>) {
         let old = std::mem::replace(&mut self.settings, settings);
         if old.rectified != self.settings.rectified {
             // camera_info reads otherwise now: wait for the next one.
             self.camera_info = None;
         }
-        if let Some(mut config) = config {
-            // The camera stays; the detector starts over (its tracks were
-            // made with the old settings).
-            config.camera = self.detector.config().camera;
-            self.detector.restart(config);
+        if let Some(config) = config {
+            // The session starts over (its tracks were made with the old
+            // settings); camera_info stays and fits the next frame.
+            self.session.restart(config);
         }
         self.sync_publishers();
         self.describe_setup();
@@ -770,39 +772,6 @@ impl Pipeline {
         }
     }
 
-    /// Makes the detector's camera the calibration fitted to a frame of
-    /// `width` x `height`: rescaled for another resolution of the same
-    /// sensor, refused for another aspect ratio.
-    fn fit_camera(&mut self, width: u32, height: u32) -> Result<(), String> {
-        // Until camera_info comes, an arena measured with a camera brings it.
-        let arena_camera = self
-            .detector
-            .config()
-            .arena
-            .as_ref()
-            .and_then(|a| a.camera().copied());
-        let wanted = match self.camera_info {
-            None => arena_camera
-                .map(|camera| camera.for_image(width, height))
-                .transpose()
-                .map_err(|e| {
-                    format!("the arena file's calibration does not fit this image: {e}")
-                })?,
-            Some(camera) => Some(camera.for_image(width, height).map_err(|e| {
-                format!(
-                    "the calibration from {} does not fit this image: {e}",
-                    self.topics.camera_info
-                )
-            })?),
-        };
-        if self.detector.config().camera != wanted {
-            let mut config = self.detector.config().clone();
-            config.camera = wanted;
-            self.detector.restart(config);
-        }
-        Ok(())
-    }
-
     fn skip(&mut self, cause: &str, message: &str) {
         self.stats.skipped += 1;
         self.log.once(LogLevel::Warn, cause, message);
@@ -844,17 +813,37 @@ impl Pipeline {
             }
         };
         let (width, height) = gray.dimensions();
-        if let Err(reason) = self.fit_camera(width, height) {
-            self.skip(
-                &format!("fit {width}x{height}"),
-                &format!("frame skipped: {reason}"),
-            );
-            self.converter = converter;
-            return;
-        }
-        let started = Instant::now();
-        let detections = self.detector.detect(&gray);
-        let detect_ms = started.elapsed().as_secs_f64() * 1e3;
+        let processed = self.session.process(SessionFrame {
+            image: &gray,
+            name: String::new(),
+            stream: None,
+            camera: self.camera_info,
+        });
+        let report = match processed {
+            Ok(report) => report,
+            Err(problem) => {
+                let reason = match problem {
+                    SessionError::Camera {
+                        from_stream: true,
+                        problem,
+                    } => format!(
+                        "the calibration from {} does not fit this image: {problem}",
+                        self.topics.camera_info
+                    ),
+                    SessionError::Camera { problem, .. } => {
+                        format!("the arena file's calibration does not fit this image: {problem}")
+                    }
+                    SessionError::Arena(problem) => problem,
+                };
+                self.skip(
+                    &format!("fit {width}x{height}"),
+                    &format!("frame skipped: {reason}"),
+                );
+                self.converter = converter;
+                return;
+            }
+        };
+        let detect_ms = report.elapsed_ms;
 
         let parent = if self.settings.camera_frame.is_empty() {
             header.frame_id.clone()
@@ -867,18 +856,9 @@ impl Pipeline {
         };
         let Described {
             markers,
-            mut transforms,
+            transforms,
             poses,
-        } = self.describe(&detections, &stamped);
-        let boards = self.detector.locate_boards(&detections);
-        transforms.extend(whycode::ros::describe::board_transforms(&boards, &stamped));
-        if let Some(arena) = &self.detector.config().arena {
-            transforms.extend(whycode::ros::describe::arena_transform(
-                arena,
-                &stamped,
-                &self.settings.arena_frame,
-            ));
-        }
+        } = self.describe(&report, &stamped);
         if self.settings.publish_tf && !transforms.is_empty() {
             if parent.is_empty() {
                 self.log.once(
@@ -913,7 +893,7 @@ impl Pipeline {
         if let Some(publisher) = &self.arena_markers {
             let placed = whycode::ros::describe::arena_markers(
                 &markers,
-                &detections,
+                &report.places,
                 &self.settings.arena_frame,
             );
             if let Err(e) = publisher.publish(placed) {
@@ -932,7 +912,7 @@ impl Pipeline {
             );
         }
         if self.settings.debug_image {
-            self.publish_debug(&gray, &detections, &stamped);
+            self.publish_debug(&gray, &report.markers, &stamped);
         }
         self.converter = converter;
     }
@@ -941,10 +921,14 @@ impl Pipeline {
     /// identified marker with a pose, to its frame (the most confident
     /// marker when two read as the same ID), by the library's conversion
     /// that bags written by `whycode detect --output` share.
-    fn describe(&self, detections: &[Detection], header: &Header) -> Described {
-        let detector_diameter = self.detector.config().diameter_m;
-        let described =
-            whycode::ros::describe::describe(detections, header, detector_diameter, |id| {
+    fn describe(&self, report: &FrameReport, header: &Header) -> Described {
+        let detections = &report.markers;
+        let detector_diameter = self.session.detector_config().diameter_m;
+        let described = whycode::ros::describe::describe_frame(
+            report,
+            header,
+            detector_diameter,
+            |id| {
                 if id == 0 {
                     (
                         None,
@@ -954,7 +938,11 @@ impl Pipeline {
                     let (frame, size) = self.settings.tag(id);
                     (Some(frame.into_owned()), size)
                 }
-            });
+            },
+            self.session
+                .arena()
+                .map(|arena| (arena, self.settings.arena_frame.as_str())),
+        );
         for frame in &described.duplicate_frames {
             self.log.once(
                 LogLevel::Warn,
@@ -971,7 +959,9 @@ impl Pipeline {
                 "markers found, but no diameter is set (-p diameter:=<metres>, or tag.sizes): \
                  no poses, no /tf",
             );
-        } else if detections.iter().any(|d| d.id != 0) && self.detector.config().camera.is_none() {
+        } else if detections.iter().any(|d| d.id != 0)
+            && self.session.detector_config().camera.is_none()
+        {
             self.log.once(
                 LogLevel::Warn,
                 "no camera_info",
@@ -1048,7 +1038,7 @@ impl Pipeline {
         let owned = image::GrayImage::from_raw(gray.width(), gray.height(), gray.as_raw().to_vec())
             .expect("a whole image");
         // Drawn once; the PNG is encoded from the same pixels, not decoded back.
-        let drawn = whycode::detect::annotate::annotated_rgb(&owned, detections)
+        let drawn = whycode::session::annotate::annotated_rgb(&owned, detections)
             .map_err(|e| e.to_string())
             .and_then(|rgb| {
                 let png = whycode::image_io::encode_rgb_png(&rgb).map_err(|e| e.to_string())?;

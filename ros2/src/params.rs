@@ -1,6 +1,6 @@
 //! The node's parameters: their names, types, defaults and ranges
 //! ([`Settings`]), and the one place they become the library's
-//! [`DetectorConfig`] ([`detector_config`]).
+//! [`SessionConfig`] ([`detector_config`]).
 //!
 //! Every value is checked when it is set, from the command line or through
 //! `ros2 param set`; a refused value leaves the settings as they were.
@@ -10,8 +10,9 @@ use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use whycode::arena::Arena;
 use whycode::board::Board;
-use whycode::detect::{DetectorConfig, Target};
+use whycode::detect::Target;
 use whycode::family::{DEFAULT_BITS, DEFAULT_DISTANCE};
+use whycode::session::SessionConfig;
 use whycode::spec::{limits, DetectSpec, TargetSpec};
 use whycode::units::Length;
 use whycode::Camera;
@@ -358,7 +359,7 @@ impl Settings {
 pub fn detector_config(
     settings: &Settings,
     camera: Option<Camera>,
-) -> Result<DetectorConfig, String> {
+) -> Result<SessionConfig, String> {
     let family_file = !settings.family_file.is_empty();
     let names_family = !settings.legacy && !family_file;
     let in_parameter = |name: &str, err: whycode::LoadError| {
@@ -402,7 +403,7 @@ pub fn detector_config(
             format!("parameter {name}")
         })
     })?;
-    if let Target::WhyCode(family) = &config.target {
+    if let Target::WhyCode(family) = &config.detector.target {
         if let Some(id) = settings
             .tag_ids
             .iter()
@@ -666,20 +667,20 @@ mod tests {
             .unwrap();
         let camera = Camera::ideal(640, 480, 60.0);
         let config = detector_config(&s, Some(camera)).unwrap();
-        let family = config.target.family().unwrap();
+        let family = config.detector.target.family().unwrap();
         assert_eq!((family.bits(), family.distance()), (12, 3));
-        assert_eq!(config.diameter_m, Some(0.04));
-        assert_eq!(config.max_markers, 5);
-        assert!(!config.tracking);
-        assert_eq!(config.camera, Some(camera));
+        assert_eq!(config.detector.diameter_m, Some(0.04));
+        assert_eq!(config.detector.max_markers, 5);
+        assert!(!config.detector.tracking);
+        assert_eq!(config.detector.camera, Some(camera));
         let legacy = s.with("legacy", &ParameterValue::Boolean(true)).unwrap();
         assert_eq!(
-            detector_config(&legacy, None).unwrap().target,
+            detector_config(&legacy, None).unwrap().detector.target,
             Target::WhyCon
         );
         let auto = s.with("bits", &text("auto")).unwrap();
         assert_eq!(
-            detector_config(&auto, None).unwrap().target,
+            detector_config(&auto, None).unwrap().detector.target,
             Target::AnyBits { distance: Some(3) }
         );
     }

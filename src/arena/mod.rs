@@ -514,18 +514,6 @@ impl Arena {
         }
     }
 
-    /// Gives every detection its place on the arena (see [`Arena::locate`]).
-    pub fn locate_all(
-        &self,
-        detections: &mut [Detection],
-        camera: Option<&Camera>,
-        frame: (u32, u32),
-    ) {
-        for d in detections {
-            d.arena = self.locate(d, camera, frame);
-        }
-    }
-
     /// The camera's height above the floor, metres, for an arena measured
     /// with one.
     pub fn camera_height_m(&self) -> Option<f64> {

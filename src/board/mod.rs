@@ -13,7 +13,7 @@
 //! and named.
 
 mod smooth;
-pub(crate) use smooth::BoardFilter;
+pub use smooth::BoardTracker;
 
 use std::path::Path;
 

@@ -26,7 +26,7 @@ const GATE_ANGLE: f64 = 3.0 * std::f64::consts::PI / 180.0;
 
 /// One board's filter state.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct BoardFilter {
+struct BoardFilter {
     state: Option<State>,
 }
 
@@ -142,5 +142,65 @@ mod tests {
             .update(Some(pose(Vector3::new(0.2, 0.0, 1.0), 0.0)))
             .unwrap();
         assert_eq!(again.position, Vector3::new(0.2, 0.0, 1.0));
+    }
+}
+
+/// The configured boards of a stream and each one's filter: every frame's
+/// markers in, the boards' poses out (what a session reports beside the
+/// markers).
+#[derive(Debug, Clone, Default)]
+pub struct BoardTracker {
+    boards: Vec<super::Board>,
+    filters: Vec<BoardFilter>,
+    /// Frames are one sequence: each board's pose is smoothed over the
+    /// frames it was seen in. Off, each frame stands alone.
+    smooth: bool,
+}
+
+impl BoardTracker {
+    /// A tracker of `boards`, smoothing across frames with `smooth`.
+    pub fn new(boards: Vec<super::Board>, smooth: bool) -> BoardTracker {
+        BoardTracker {
+            filters: vec![BoardFilter::default(); boards.len()],
+            boards,
+            smooth,
+        }
+    }
+
+    /// The boards tracked.
+    pub fn boards(&self) -> &[super::Board] {
+        &self.boards
+    }
+
+    /// The pose of every board seen in `detections` (one frame's markers)
+    /// through `camera`, the markers' poses computed for `diameter_m`;
+    /// none without a camera or a diameter.
+    pub fn update(
+        &mut self,
+        detections: &[crate::detect::Detection],
+        camera: Option<&crate::camera::Camera>,
+        diameter_m: Option<f64>,
+    ) -> Vec<BoardPose> {
+        let (Some(camera), Some(diameter)) = (camera, diameter_m) else {
+            return Vec::new();
+        };
+        let smooth = self.smooth;
+        self.boards
+            .iter()
+            .zip(&mut self.filters)
+            .filter_map(|(board, filter)| {
+                let measured = super::locate(board, detections, camera, diameter);
+                if smooth {
+                    filter.update(measured)
+                } else {
+                    measured
+                }
+            })
+            .collect()
+    }
+
+    /// Forgets every board's past poses.
+    pub fn reset(&mut self) {
+        self.filters = vec![BoardFilter::default(); self.boards.len()];
     }
 }

@@ -8,13 +8,13 @@ use rayon::prelude::*;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Instant;
 use whycode::camera::Camera;
 use whycode::detect::family_check::FamilyCheck;
-use whycode::detect::report::{CsvColumns, FrameReport};
-use whycode::detect::{Detector, DetectorConfig, StageTimings, Target};
+use whycode::detect::{StageTimings, Target};
 use whycode::image_io::load_gray;
 use whycode::recording::Kind;
+use whycode::session::report::{CsvColumns, FrameReport};
+use whycode::session::{Frame, FrameError, Session, SessionConfig};
 use whycode::spec::{DetectSpec, RecordingSpec};
 use whycode::units::Length;
 
@@ -207,11 +207,11 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         }
     }
     let config = detector_config(&args, false)?;
-    let family_bits = config.target.family().map(|f| f.bits());
+    let family_bits = config.detector.target.family().map(|f| f.bits());
     // In auto mode with a distance the IDs are there already; legacy
     // circles carry no ring.
     let wants_note = matches!(
-        config.target,
+        config.detector.target,
         Target::WhyCode(_) | Target::AnyBits { distance: None }
     );
     let jobs = collect_jobs(&args.inputs, args.no_tracking)?;
@@ -233,33 +233,32 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
         indicatif::ProgressBar::hidden()
     };
 
-    let process = |detector: &mut Detector, path: &Path| -> Result<FrameReport> {
+    let process = |session: &mut Session, path: &Path| -> Result<FrameReport> {
         let result = detect_one(
-            detector,
+            session,
             path,
             annotate_names.get(path).map(PathBuf::as_path),
         );
         progress.inc(1);
         result
     };
-    // Jobs run in parallel, one detector per worker thread, restarted for
+    // Jobs run in parallel, one session per worker thread, restarted for
     // each job (so results never depend on which thread ran what); a
-    // sequence's frames run in order on one detector.
+    // sequence's frames run in order, tracked, in one session.
     let results: Vec<Vec<Result<FrameReport>>> = jobs
         .par_iter()
         .map_init(
-            || Detector::new(config.clone()),
-            |detector, job| match job {
+            || Session::new(config.clone()),
+            |session, job| match job {
                 Job::Image(path) => {
-                    detector.restart(config.clone());
-                    vec![process(detector, path)]
+                    session.restart(config.clone());
+                    vec![process(session, path)]
                 }
                 Job::Sequence(frames) => {
-                    detector.restart(DetectorConfig {
-                        tracking: true,
-                        ..config.clone()
-                    });
-                    frames.iter().map(|f| process(detector, f)).collect()
+                    let mut tracked = config.clone();
+                    tracked.detector.tracking = true;
+                    session.restart(tracked);
+                    frames.iter().map(|f| process(session, f)).collect()
                 }
             },
         )
@@ -320,9 +319,9 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     })
 }
 
-/// The detector the options ask for; a recording's camera may come later
+/// The session the options ask for; a recording's camera may come later
 /// (a bag's camera_info), and its frames are tracked.
-fn detector_config(args: &DetectArgs, recording: bool) -> Result<DetectorConfig> {
+fn detector_config(args: &DetectArgs, recording: bool) -> Result<SessionConfig> {
     DetectSpec {
         target: args.kind.spec()?,
         diameter: args.diameter,
@@ -395,7 +394,6 @@ fn run_recordings(args: DetectArgs) -> Result<ExitCode> {
     }
     let run = recording::Run {
         config,
-        camera_given: args.camera.is_some(),
         read,
         format: args.format.format,
         annotate: &annotate,
@@ -505,42 +503,19 @@ fn annotation_names(
         .collect()
 }
 
-fn detect_one(
-    detector: &mut Detector,
-    path: &Path,
-    annotate: Option<&Path>,
-) -> Result<FrameReport> {
+fn detect_one(session: &mut Session, path: &Path, annotate: Option<&Path>) -> Result<FrameReport> {
     let image = load_gray(path)?;
-    detector
-        .fit_camera(image.width(), image.height())
-        .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
-    if let Some(problem) = detector
-        .config()
-        .arena
-        .as_ref()
-        .and_then(|arena| arena.frame_problem(image.width(), image.height()))
-    {
-        anyhow::bail!("{}: {problem}", path.display());
-    }
-    let start = Instant::now();
-    let markers = detector.detect(&image);
-    let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;
-    let boards = detector.locate_boards(&markers);
+    let report = session
+        .process(Frame::new(&image, path.display().to_string()))
+        .map_err(|problem| match problem {
+            FrameError::Camera { problem, .. } => anyhow::anyhow!("{}: {problem}", path.display()),
+            FrameError::Arena(problem) => anyhow::anyhow!("{}: {problem}", path.display()),
+        })?;
     if let Some(out) = annotate {
-        let png = whycode::detect::annotate::annotated_png(&image, &markers)?;
+        let png = whycode::session::annotate::annotated_png(&image, &report.markers)?;
         whycode::io::write_atomic(out, &png)?;
     }
-    Ok(FrameReport {
-        image: path.display().to_string(),
-        width: image.width(),
-        height: image.height(),
-        elapsed_ms,
-        markers,
-        boards,
-        timings: detector.last_timings(),
-        stream: None,
-        legacy_looking: detector.last_legacy_looking(),
-    })
+    Ok(report)
 }
 
 #[cfg(test)]

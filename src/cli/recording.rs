@@ -8,13 +8,12 @@ use super::output;
 use anyhow::{anyhow, bail, Context, Result};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
-use whycode::detect::report::{CsvColumns, FrameReport, StreamPosition};
-use whycode::detect::{Detector, DetectorConfig};
 use whycode::recording::output::{AnnotatedVideo, DetectionsBag};
 use whycode::recording::{Kind, ReadOptions, Recording, Summary};
-use whycode::ros::describe::describe;
+use whycode::ros::describe::describe_frame;
 use whycode::ros::msg::{Header, Time};
+use whycode::session::report::{CsvColumns, StreamPosition};
+use whycode::session::{Frame, FrameError, Session, SessionConfig};
 
 /// Where the annotated frames go.
 pub enum Annotate {
@@ -39,10 +38,9 @@ impl Annotate {
 
 /// What one recording is read with.
 pub struct Run<'a> {
-    /// The detector's configuration (tracking is turned on here).
-    pub config: DetectorConfig,
-    /// The camera came from `--camera`, so a bag's camera_info is not used.
-    pub camera_given: bool,
+    /// The session's configuration (tracking is turned on here); without
+    /// `--camera`, a bag's camera_info brings the camera.
+    pub config: SessionConfig,
     /// Frames to read.
     pub read: ReadOptions,
     /// How frames are printed.
@@ -75,10 +73,9 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
     } else {
         indicatif::ProgressBar::hidden()
     };
-    let mut detector = Detector::new(DetectorConfig {
-        tracking: true,
-        ..run.config.clone()
-    });
+    let mut config = run.config.clone();
+    config.detector.tracking = true;
+    let mut session = Session::new(config);
     let mut bag = run
         .output
         .map(|_| DetectionsBag::new())
@@ -106,107 +103,71 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
                 break;
             }
         };
-        let (width, height) = frame.image.dimensions();
-        let camera = if run.camera_given {
-            run.config.camera
-        } else {
-            frame.camera
-        };
-        let fitted = camera
-            .map(|c| c.for_image(width, height))
-            .transpose()
-            .map_err(|e| {
-                anyhow!(
-                    "{shown}: frame {}: the camera does not fit: {e}",
+        let report = session
+            .process(Frame {
+                image: &frame.image,
+                name: shown.clone(),
+                stream: Some(StreamPosition {
+                    frame: frame.index,
+                    stamp_ns: frame.stamp_ns,
+                    topic: frame.topic.clone(),
+                }),
+                camera: frame.camera,
+            })
+            .map_err(|problem| match problem {
+                FrameError::Camera { problem, .. } => anyhow!(
+                    "{shown}: frame {}: the camera does not fit: {problem}",
                     frame.index
-                )
+                ),
+                FrameError::Arena(problem) => anyhow!("{shown}: frame {}: {problem}", frame.index),
             })?;
-        if let Some(problem) = run
-            .config
-            .arena
-            .as_ref()
-            .and_then(|arena| arena.frame_problem(width, height))
-        {
-            anyhow::bail!("{shown}: frame {}: {problem}", frame.index);
-        }
-        if detector.config().camera != fitted {
-            let mut config = detector.config().clone();
-            config.camera = fitted;
-            detector.restart(config);
-        }
-        let start = Instant::now();
-        let markers = detector.detect(&frame.image);
-        let elapsed_ms = start.elapsed().as_secs_f64() * 1000.0;
-        summary.observe(frame.index, &markers);
-        let stamp = Time {
-            sec: frame.stamp_ns.div_euclid(1_000_000_000) as i32,
-            nanosec: frame.stamp_ns.rem_euclid(1_000_000_000) as u32,
-        };
-        let boards = detector.locate_boards(&markers);
+        summary.observe(frame.index, &report.markers);
         if let Some(bag) = &mut bag {
             let header = Header {
-                stamp,
+                stamp: Time {
+                    sec: frame.stamp_ns.div_euclid(1_000_000_000) as i32,
+                    nanosec: frame.stamp_ns.rem_euclid(1_000_000_000) as u32,
+                },
                 frame_id: if frame.frame_id.is_empty() {
                     "camera".into()
                 } else {
                     frame.frame_id.clone()
                 },
             };
-            let computed_for = detector.config().diameter_m;
-            let mut described = describe(&markers, &header, computed_for, |id| {
-                (
-                    Some(format!("{}{id}", whycode::ros::DEFAULT_FRAME_PREFIX)),
-                    computed_for,
-                )
-            });
-            // The boards' and the arena's frames join the markers' as the
-            // node sends them.
-            described
-                .transforms
-                .extend(whycode::ros::describe::board_transforms(&boards, &header));
-            if let Some(arena) = &detector.config().arena {
-                described
-                    .transforms
-                    .extend(whycode::ros::describe::arena_transform(
-                        arena,
-                        &header,
-                        whycode::ros::DEFAULT_ARENA_FRAME,
-                    ));
-            }
+            let computed_for = session.detector_config().diameter_m;
+            let described = describe_frame(
+                &report,
+                &header,
+                computed_for,
+                |id| {
+                    (
+                        Some(format!("{}{id}", whycode::ros::DEFAULT_FRAME_PREFIX)),
+                        computed_for,
+                    )
+                },
+                session
+                    .arena()
+                    .map(|arena| (arena, whycode::ros::DEFAULT_ARENA_FRAME)),
+            );
             bag.add(frame.stamp_ns, &described)
                 .context("cannot write the detections bag")?;
         }
         match run.annotate {
             Annotate::None => {}
             Annotate::Folder(dir) => {
-                let png = whycode::detect::annotate::annotated_png(&frame.image, &markers)?;
+                let png = whycode::session::annotate::annotated_png(&frame.image, &report.markers)?;
                 whycode::io::write_atomic(
                     &dir.join(format!("frame_{:06}.png", frame.index)),
                     &png,
                 )?;
             }
             Annotate::Video(_) => {
-                let rgb = whycode::detect::annotate::annotated_rgb(&frame.image, &markers)?;
+                let rgb = whycode::session::annotate::annotated_rgb(&frame.image, &report.markers)?;
                 if let Some((writer, _)) = &mut video {
                     writer.push(rgb, frame.stamp_ns)?;
                 }
             }
         }
-        let report = FrameReport {
-            image: shown.clone(),
-            width,
-            height,
-            elapsed_ms,
-            markers,
-            boards,
-            timings: detector.last_timings(),
-            stream: Some(StreamPosition {
-                frame: frame.index,
-                stamp_ns: frame.stamp_ns,
-                topic: frame.topic.clone(),
-            }),
-            legacy_looking: detector.last_legacy_looking(),
-        };
         progress.suspend(|| -> Result<()> {
             match run.format {
                 Format::Json => out.line(report.to_json()),
@@ -222,7 +183,7 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
     progress.finish_and_clear();
     out.flush()?;
     let mut skipped = frames.skipped().clone();
-    if run.camera_given {
+    if !run.config.stream_cameras {
         // The bag's camera_info was not what the poses used.
         skipped.refused_calibrations = 0;
         skipped.first_refused_calibration = None;

@@ -99,6 +99,5 @@ fn detection(c: &Candidate, read: &RingRead, unreadable: bool) -> Detection {
         unreadable,
         unnamed: None,
         track: None,
-        arena: None,
     }
 }

@@ -25,7 +25,6 @@
 //! the yaw on the rectified ring; `tracking/` the following of known
 //! markers across frames and their ID filter ([`idfilter`]).
 
-pub mod annotate;
 mod describe;
 pub mod ellipse;
 pub mod family_check;
@@ -33,7 +32,6 @@ pub mod identity;
 pub mod legacy;
 mod pose;
 pub(crate) mod rectify;
-pub mod report;
 pub mod ring;
 mod scan;
 pub(crate) mod segment;
@@ -98,12 +96,6 @@ pub struct DetectorConfig {
     /// within 8 frames; on (a recording read offline, where nothing waits
     /// for the frame), in the frame it comes.
     pub scan_every_frame: bool,
-    /// Rigid sets of markers whose poses [`Detector::locate_boards`]
-    /// reports (with a camera).
-    pub boards: Vec<crate::board::Board>,
-    /// A floor frame every detection is placed in ([`Detection::arena`]);
-    /// one measured with a camera needs that camera and a diameter here.
-    pub arena: Option<crate::arena::Arena>,
     /// Read each posed marker's circles along a ray every pixel of their
     /// outline instead of every two (at most 48): projected centres about
     /// a fifth closer to the truth, for several times the pose stage's
@@ -128,8 +120,6 @@ impl Default for DetectorConfig {
             legacy_min_ink_px: legacy::MIN_INK_PX,
             timings: false,
             scan_every_frame: false,
-            boards: Vec::new(),
-            arena: None,
             fine_edges: false,
         }
     }
@@ -213,8 +203,6 @@ pub struct Detection {
     /// while it is followed, so markers of one ID (legacy circles are all
     /// ID 0) can be told apart. Numbers start at 1 and are not reused.
     pub track: Option<u32>,
-    /// Where it lies on the configured arena ([`DetectorConfig::arena`]).
-    pub arena: Option<crate::arena::ArenaPosition>,
 }
 
 /// The detector: configuration, tracking state and reusable buffers.
@@ -245,8 +233,6 @@ pub struct Detector {
     check: family_check::FamilyCheck,
     /// Discs of this frame that only a legacy WhyCon marker would explain.
     legacy_looking: usize,
-    /// Each configured board's pose across tracked frames.
-    board_filters: Vec<crate::board::BoardFilter>,
     search: ThresholdSearch,
     ratio: Adaptive,
     roundness: Adaptive,
@@ -295,7 +281,6 @@ impl Detector {
     pub fn new(config: DetectorConfig) -> Detector {
         let white = config.target.design().white_fraction();
         let check = family_check::FamilyCheck::new(config.target.family().map(Family::bits));
-        let board_filters = vec![crate::board::BoardFilter::default(); config.boards.len()];
         Detector {
             ratio: Adaptive::new(white, config.ratio_tolerance),
             roundness: Adaptive::new(0.0, config.roundness_tolerance),
@@ -315,7 +300,6 @@ impl Detector {
             frame_camera: None,
             check,
             legacy_looking: 0,
-            board_filters,
             search: ThresholdSearch::default(),
             frame: 0,
             stopwatch: Stopwatch::default(),
@@ -366,30 +350,6 @@ impl Detector {
     /// frame, and on targets without a clock (wasm32-unknown-unknown).
     pub fn last_timings(&self) -> Option<StageTimings> {
         self.timings
-    }
-
-    /// The pose of every configured board seen in `detections` (this
-    /// detector's last frame), through the configured camera; none
-    /// without a camera and a diameter. With tracking on, each board's pose
-    /// is smoothed over the frames it was seen in (`board::smooth`).
-    pub fn locate_boards(&mut self, detections: &[Detection]) -> Vec<crate::board::BoardPose> {
-        let (Some(camera), Some(diameter)) = (self.config.camera, self.config.diameter_m) else {
-            return Vec::new();
-        };
-        let tracking = self.config.tracking;
-        self.config
-            .boards
-            .iter()
-            .zip(&mut self.board_filters)
-            .filter_map(|(board, filter)| {
-                let measured = crate::board::locate(board, detections, &camera, diameter);
-                if tracking {
-                    filter.update(measured)
-                } else {
-                    measured
-                }
-            })
-            .collect()
     }
 
     /// Forgets tracks and adapted tolerances.
@@ -451,15 +411,7 @@ impl Detector {
                 // no track either).
                 finds.drop_unreadable();
             }
-            let mut detections = d.end_frame(finds);
-            if let Some(arena) = &d.config.arena {
-                arena.locate_all(
-                    &mut detections,
-                    d.frame_camera.as_ref(),
-                    (image.width(), image.height()),
-                );
-            }
-            detections
+            d.end_frame(finds)
         });
         self.timings = self.stopwatch.stop();
         detections

@@ -136,7 +136,6 @@ mod tests {
                 unreadable: false,
                 unnamed: None,
                 track: None,
-                arena: None,
             })
             .collect()
     }

@@ -171,6 +171,29 @@ pub fn arena_transform(
     Some(transform(header, frame, *translation, q))
 }
 
+/// A session's frame as messages (see [`describe`]), its /tf holding the
+/// markers', then the boards' and, with an arena measured with a camera,
+/// the arena's floor frame (named `arena_frame`): what the node publishes
+/// and a detections bag records.
+pub fn describe_frame(
+    report: &crate::session::FrameReport,
+    header: &Header,
+    computed_for: Option<f64>,
+    tag: impl Fn(u32) -> (Option<String>, Option<f64>),
+    arena: Option<(&crate::arena::Arena, &str)>,
+) -> Described {
+    let mut described = describe(&report.markers, header, computed_for, tag);
+    described
+        .transforms
+        .extend(board_transforms(&report.boards, header));
+    if let Some((arena, frame)) = arena {
+        described
+            .transforms
+            .extend(arena_transform(arena, header, frame));
+    }
+    described
+}
+
 /// The markers of `described` placed on the arena: the same markers in the
 /// same order, each with its pose in the arena's floor frame (`frame`,
 /// z up): position x, y, z in metres and the orientation a turn of its
@@ -179,16 +202,16 @@ pub fn arena_transform(
 /// stays there, so this is a second array of the same type.
 pub fn arena_markers(
     described: &MarkerArray,
-    detections: &[Detection],
+    places: &[Option<crate::arena::ArenaPosition>],
     frame: &str,
 ) -> MarkerArray {
     let markers = described
         .markers
         .iter()
-        .zip(detections)
-        .map(|(marker, d)| {
+        .zip(places)
+        .map(|(marker, place)| {
             let mut marker = marker.clone();
-            match d.arena {
+            match *place {
                 Some(at) => {
                     let half = at.yaw.unwrap_or(0.0) / 2.0;
                     marker.pose = Pose {
@@ -229,7 +252,7 @@ mod tests {
     use crate::arena::{Arena, ArenaPosition, Mapping};
     use nalgebra::{Matrix3, Vector3 as V3};
 
-    fn detection(id: u32, arena: Option<ArenaPosition>) -> Detection {
+    fn detection(id: u32) -> Detection {
         Detection {
             id,
             code: Some(7),
@@ -245,7 +268,6 @@ mod tests {
             unreadable: false,
             unnamed: None,
             track: None,
-            arena,
         }
     }
 
@@ -264,9 +286,9 @@ mod tests {
             z: 0.12,
             yaw: Some(std::f64::consts::FRAC_PI_2),
         };
-        let detections = [detection(3, Some(placed)), detection(4, None)];
+        let detections = [detection(3), detection(4)];
         let described = describe(&detections, &header(), None, |_| (None, None));
-        let on_floor = arena_markers(&described.markers, &detections, "arena");
+        let on_floor = arena_markers(&described.markers, &[Some(placed), None], "arena");
         assert_eq!(on_floor.header.frame_id, "arena");
         assert_eq!(on_floor.header.stamp, described.markers.header.stamp);
         assert_eq!(on_floor.markers.len(), 2);

@@ -1,10 +1,11 @@
 //! A detector as the front ends ask for it: `whycode detect`'s options,
 //! Python's `Detector(...)` keywords, the page's live view and the ROS 2
-//! node's parameters, checked once and built into a [`DetectorConfig`].
+//! node's parameters, checked once and built into a [`SessionConfig`].
 
 use super::{limits, within, Problem, SpecError, TargetSpec};
 use crate::camera::Camera;
 use crate::detect::{DetectorConfig, Target};
+use crate::session::SessionConfig;
 use crate::units::Length;
 
 /// What to look for and what to report. `Default` is the command line's
@@ -99,8 +100,9 @@ fn check_boards(boards: &[crate::board::Board], target: &Target) -> Result<(), S
 }
 
 impl DetectSpec {
-    /// Checks every option and builds the detector's configuration.
-    pub fn build(&self) -> Result<DetectorConfig, SpecError> {
+    /// Checks every option and builds the session's configuration: the
+    /// detector's, the boards and the arena.
+    pub fn build(&self) -> Result<SessionConfig, SpecError> {
         let target = self.target.resolve()?;
         let mut diameter_m = self
             .diameter
@@ -161,10 +163,8 @@ impl DetectSpec {
             camera,
             tracking: self.tracking,
             report_unreadable: self.unreadable,
-            boards: self.boards.clone(),
             timings: self.timings,
             scan_every_frame: self.scan_every_frame,
-            arena,
             ..DetectorConfig::default()
         };
         if let Some(n) = self.max_markers {
@@ -179,7 +179,14 @@ impl DetectSpec {
             }
             config.legacy_min_ink_px = within("min_ink", pixels, limits::LEGACY_MIN_INK_PX)?;
         }
-        Ok(config)
+        Ok(SessionConfig {
+            detector: config,
+            boards: self.boards.clone(),
+            arena,
+            // A camera the user gave wins over one that comes with the
+            // frames; the arena's does not.
+            stream_cameras: self.camera.is_none(),
+        })
     }
 }
 
@@ -287,6 +294,6 @@ mod tests {
             camera: Some(Camera::ideal(640, 480, 60.0)),
             ..spec
         };
-        assert_eq!(both.build().unwrap().diameter_m, Some(0.04));
+        assert_eq!(both.build().unwrap().detector.diameter_m, Some(0.04));
     }
 }

@@ -617,14 +617,14 @@ impl Fuzzer {
             .build() else {
                 continue;
             };
-            let mut detector = Detector::new(config);
-            if detector.fit_camera(image.width(), image.height()).is_err() {
+            let mut session = whycode::Session::new(config);
+            let Ok(report) = session.process(whycode::session::Frame::new(&image, "seed.png"))
+            else {
                 continue;
-            }
-            let found = detector.detect(&image);
-            check_detections(&found)?;
-            for d in &found {
-                if let Some(a) = &d.arena {
+            };
+            check_detections(&report.markers)?;
+            for (d, a) in report.markers.iter().zip(&report.places) {
+                if let Some(a) = a {
                     if ![a.x, a.y, a.z].iter().all(|v| v.is_finite())
                         || a.yaw.is_some_and(|y| !y.is_finite())
                     {
@@ -652,12 +652,14 @@ impl Fuzzer {
         .build() else {
             return Ok(true);
         };
-        let mut detector = Detector::new(config);
+        let mut session = whycode::Session::new(config);
         let image = load_gray(&self.write("seed.png", &self.image_seeds[0].1.clone()))
             .map_err(|e| e.to_string())?;
-        let found = detector.detect(&image);
-        check_detections(&found)?;
-        for pose in detector.locate_boards(&found) {
+        let report = session
+            .process(whycode::session::Frame::new(&image, "seed.png"))
+            .map_err(|e| format!("the seed frame does not fit the board's camera: {e}"))?;
+        check_detections(&report.markers)?;
+        for pose in report.boards {
             let numbers = pose
                 .position
                 .iter()

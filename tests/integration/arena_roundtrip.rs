@@ -262,7 +262,7 @@ fn csv_and_table_carry_the_arena_columns_only_with_an_arena() {
     let plain = detect(&[], "csv");
     assert_eq!(
         plain.lines().next().unwrap(),
-        whycode::detect::report::CSV_HEADER
+        whycode::session::report::CSV_HEADER
     );
     assert!(plain.lines().all(|l| l.split(',').count() == 18), "{plain}");
     assert!(!detect(&[], "table").contains("arena"));

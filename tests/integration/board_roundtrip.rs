@@ -6,9 +6,10 @@ use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 use crate::support::run_ok;
 use whycode::board::Board;
-use whycode::detect::{Detector, DetectorConfig, Target};
+use whycode::detect::{DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::geometry::Marker;
+use whycode::session::{Frame, Session, SessionConfig};
 use whycode::simulate::{self, Blot, LooseMarker, Placement, Scene, SceneObject, SheetPage};
 use whycode_testkit::calibration;
 
@@ -187,15 +188,17 @@ fn a_bundle_on_a_cube_gives_the_cube_pose() {
     scene.noise = 1.5;
     let image = simulate::render(&scene).0;
 
-    let mut detector = Detector::new(DetectorConfig {
-        target: Target::WhyCode(family),
-        camera: Some(truth),
-        diameter_m: Some(0.04),
+    let mut session = Session::new(SessionConfig {
         boards,
-        ..Default::default()
+        ..SessionConfig::detector(DetectorConfig {
+            target: Target::WhyCode(family),
+            camera: Some(truth),
+            diameter_m: Some(0.04),
+            ..Default::default()
+        })
     });
-    let found = detector.detect(&image);
-    let poses = detector.locate_boards(&found);
+    let report = session.process(Frame::new(&image, "cube")).unwrap();
+    let (found, poses) = (report.markers, report.boards);
     assert_eq!(poses.len(), 1, "{found:?}");
     let pose = &poses[0];
     assert_eq!(pose.used, vec![1, 2, 3], "{pose:?}");
@@ -225,17 +228,19 @@ fn a_tracked_board_is_smoothed_over_the_frames() {
     )
     .unwrap()
     .matrix();
-    let detector = |tracking: bool| {
-        Detector::new(DetectorConfig {
-            target: Target::WhyCode(family.clone()),
-            camera: Some(truth),
-            diameter_m: Some(0.04),
+    let session = |tracking: bool| {
+        Session::new(SessionConfig {
             boards: boards.clone(),
-            tracking,
-            ..Default::default()
+            ..SessionConfig::detector(DetectorConfig {
+                target: Target::WhyCode(family.clone()),
+                camera: Some(truth),
+                diameter_m: Some(0.04),
+                tracking,
+                ..Default::default()
+            })
         })
     };
-    let (mut tracked, mut single) = (detector(true), detector(false));
+    let (mut tracked, mut single) = (session(true), session(false));
     let (mut smoothed_sq, mut raw_sq, mut counted) = (0.0, 0.0, 0);
     for frame in 0u32..40 {
         let cube_position = Vector3::new(-0.02 + 0.0003 * f64::from(frame), -0.02, 0.7);
@@ -244,10 +249,8 @@ fn a_tracked_board_is_smoothed_over_the_frames() {
         scene.noise = 6.0;
         scene.seed = u64::from(frame) + 7;
         let image = simulate::render(&scene).0;
-        let found = tracked.detect(&image);
-        let smoothed = tracked.locate_boards(&found);
-        let found = single.detect(&image);
-        let raw = single.locate_boards(&found);
+        let smoothed = tracked.process(Frame::new(&image, "cube")).unwrap().boards;
+        let raw = single.process(Frame::new(&image, "cube")).unwrap().boards;
         assert_eq!((smoothed.len(), raw.len()), (1, 1), "frame {frame}");
         if frame >= 20 {
             smoothed_sq += (smoothed[0].position - cube_position).norm_squared();
@@ -291,15 +294,17 @@ fn a_bundle_of_positions_only_gives_the_cube_pose() {
     let cube_position = Vector3::new(0.03, -0.02, 0.45);
     let scene = cube_scene(truth, &family, &faces, &cube_rotation, cube_position);
     let image = simulate::render(&scene).0;
-    let mut detector = Detector::new(DetectorConfig {
-        target: Target::WhyCode(family),
-        camera: Some(truth),
-        diameter_m: Some(0.04),
+    let mut session = Session::new(SessionConfig {
         boards,
-        ..Default::default()
+        ..SessionConfig::detector(DetectorConfig {
+            target: Target::WhyCode(family),
+            camera: Some(truth),
+            diameter_m: Some(0.04),
+            ..Default::default()
+        })
     });
-    let found = detector.detect(&image);
-    let poses = detector.locate_boards(&found);
+    let report = session.process(Frame::new(&image, "cube")).unwrap();
+    let (found, poses) = (report.markers, report.boards);
     assert_eq!(poses.len(), 1, "no pose from positions only: {found:?}");
     let pose = &poses[0];
     assert_eq!(pose.used, vec![1, 2, 3], "{pose:?}");

@@ -107,7 +107,8 @@ fn each_refusal_is_one_line() {
 fn the_page_decides_which_of_its_two_poses_a_marker_has() {
     use whycode::board::Board;
     use whycode::calibrate::{observe, Posed};
-    use whycode::detect::{Detector, DetectorConfig, Target};
+    use whycode::detect::{DetectorConfig, Target};
+    use whycode::session::{Frame, Session, SessionConfig};
 
     let truth = calibration::lens();
     let manifest = calibration::a4_sheet();
@@ -116,15 +117,18 @@ fn the_page_decides_which_of_its_two_poses_a_marker_has() {
     let placement = calibration::views(&truth, 1, 4)[0];
     let image = calibration::sheet_view(&truth, &manifest, placement, 4000);
     let diameter_m = calibration::MARKER_DIAMETER_MM / 1000.0;
-    let mut detector = Detector::new(DetectorConfig {
-        target: Target::WhyCode(whycode::family::Family::generate(10, 2).unwrap()),
-        camera: Some(truth),
-        diameter_m: Some(diameter_m),
+    let mut session = Session::new(SessionConfig {
         boards: vec![Board::from_manifest_page(&manifest, 1, "sheet".into(), 1.0)],
-        max_markers: 100,
-        ..Default::default()
+        ..SessionConfig::detector(DetectorConfig {
+            target: Target::WhyCode(whycode::family::Family::generate(10, 2).unwrap()),
+            camera: Some(truth),
+            diameter_m: Some(diameter_m),
+            max_markers: 100,
+            ..Default::default()
+        })
     });
-    let found = detector.detect(&image);
+    let report = session.process(Frame::new(&image, "view")).unwrap();
+    let found = report.markers;
     let true_centre = |id: u32| {
         let m = manifest.markers.iter().find(|m| m.id == id).unwrap();
         calibration::projected_centre(&truth, &placement, m).unwrap()
@@ -158,7 +162,7 @@ fn the_page_decides_which_of_its_two_poses_a_marker_has() {
         );
     }
 
-    let board = &detector.locate_boards(&found)[0];
+    let board = &report.boards[0];
     let true_rotation = placement.rotation
         * nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, -1.0, -1.0));
     let turn =

@@ -14,7 +14,6 @@ use whycode::arena::Arena;
 use whycode::board::Board;
 use whycode::calibrate;
 use whycode::camera::Camera;
-use whycode::detect::report::FrameReport;
 use whycode::detect::{Detector, Target};
 #[cfg(feature = "files")]
 use whycode::error::{FileKind, LoadError, LoadProblem};
@@ -23,6 +22,7 @@ use whycode::image_io;
 use whycode::manifest::Manifest;
 use whycode::render::job::{MarkerJob, PrintError, SheetJob};
 use whycode::render::template::{builtin_names, Template};
+use whycode::session::{Frame, FrameError, FrameReport, Session, SessionConfig};
 use whycode::spec::{cli_option, Bits, CalibrateSpec, DetectSpec, SpecError, TargetSpec};
 use whycode::units::{trim_float, Length};
 use whycode::validate::{self, annotate, PhotoReport};
@@ -617,7 +617,7 @@ fn diameter(text: Option<&str>) -> Result<Option<Length>> {
 impl LiveOptions {
     /// The detector `whycode detect` builds from the same options (tracked
     /// frame to frame).
-    fn parse(options: &str) -> Result<whycode::detect::DetectorConfig> {
+    fn parse(options: &str) -> Result<SessionConfig> {
         let args: LiveOptions = serde_json::from_str(options).context("live options")?;
         let target = if args.legacy {
             TargetSpec::legacy()
@@ -687,7 +687,8 @@ impl LiveOptions {
 /// single photos detected as `whycode detect` reads an image file.
 #[wasm_bindgen]
 pub struct Live {
-    detector: Detector,
+    config: SessionConfig,
+    session: Session,
     grey: GrayImage,
     /// The last camera frame's markers and board poses.
     last: FrameReport,
@@ -699,27 +700,13 @@ pub fn live_stride() -> usize {
     11
 }
 
-fn frame_report(image: String, grey: &GrayImage) -> FrameReport {
-    FrameReport {
-        image,
-        width: grey.width(),
-        height: grey.height(),
-        // The library has no clock here; the page shows its own timing.
-        elapsed_ms: 0.0,
-        markers: Vec::new(),
-        boards: Vec::new(),
-        timings: None,
-        stream: None,
-        legacy_looking: 0,
+/// A frame's problem (a camera calibrated at another size, an arena
+/// measured in another frame) in the command line's words.
+fn frame_problem(name: &str, problem: FrameError) -> anyhow::Error {
+    match problem {
+        FrameError::Camera { problem, .. } => anyhow::anyhow!("{name}: {problem}"),
+        FrameError::Arena(problem) => anyhow::anyhow!("{name}: {problem}"),
     }
-}
-
-/// A camera calibrated at another size than the frames, in the command
-/// line's words.
-fn fit_camera(detector: &mut Detector, name: &str, grey: &GrayImage) -> Result<()> {
-    detector
-        .fit_camera(grey.width(), grey.height())
-        .map_err(|problem| anyhow::anyhow!("{name}: {problem}"))
 }
 
 #[wasm_bindgen]
@@ -732,8 +719,9 @@ impl Live {
         let config = LiveOptions::parse(options).map_err(js_error)?;
         let grey = GrayImage::new(0, 0);
         Ok(Live {
-            detector: Detector::new(config),
-            last: frame_report("camera".into(), &grey),
+            session: Session::new(config.clone()),
+            config,
+            last: FrameReport::empty("camera", 0, 0),
             grey,
         })
     }
@@ -759,18 +747,22 @@ impl Live {
         }
         if self.grey.dimensions() != (width, height) {
             self.grey = GrayImage::new(width, height);
-            self.detector.reset();
-            fit_camera(&mut self.detector, "the camera's frames", &self.grey).map_err(js_error)?;
+            self.session.reset();
         }
         // Rec. 709 weights, as the image crate's grey conversion of files.
         for (g, px) in self.grey.iter_mut().zip(rgba.chunks_exact(4)) {
             let sum = 2126 * u32::from(px[0]) + 7152 * u32::from(px[1]) + 722 * u32::from(px[2]);
             *g = ((sum + 5000) / 10_000) as u8;
         }
-        let detections = self.detector.detect(&self.grey);
-        let mut out = Vec::with_capacity(detections.len() * live_stride());
-        for d in &detections {
-            let arena = d.arena.as_ref();
+        let mut report = self
+            .session
+            .process(Frame::new(&self.grey, "camera"))
+            .map_err(|problem| js_error(frame_problem("the camera's frames", problem)))?;
+        // The library has no clock here; the page shows its own timing.
+        report.elapsed_ms = 0.0;
+        let mut out = Vec::with_capacity(report.markers.len() * live_stride());
+        for (k, d) in report.markers.iter().enumerate() {
+            let arena = report.place(k);
             out.extend_from_slice(&[
                 f64::from(d.id),
                 d.u,
@@ -785,9 +777,7 @@ impl Live {
                 arena.and_then(|a| a.yaw).unwrap_or(f64::NAN),
             ]);
         }
-        self.last = frame_report("camera".into(), &self.grey);
-        self.last.boards = self.detector.locate_boards(&detections);
-        self.last.markers = detections;
+        self.last = report;
         Ok(out)
     }
 
@@ -799,20 +789,18 @@ impl Live {
     }
 
     /// One photo, read as `whycode detect` reads an image file with the
-    /// same options (its own untracked detector: the camera's tracks are
+    /// same options (its own untracked session: the camera's tracks are
     /// kept); returns the command's JSON line, with `elapsed_ms` 0.
     #[wasm_bindgen(js_name = detectPhoto)]
     pub fn detect_photo(&self, name: &str, bytes: &[u8]) -> Result<String, JsError> {
         let inner = || -> Result<String> {
             let grey = decode_gray(name, bytes)?;
-            let mut detector = Detector::new(whycode::detect::DetectorConfig {
-                tracking: false,
-                ..self.detector.config().clone()
-            });
-            fit_camera(&mut detector, name, &grey)?;
-            let mut report = frame_report(name.to_string(), &grey);
-            report.markers = detector.detect(&grey);
-            report.boards = detector.locate_boards(&report.markers);
+            let mut config = self.config.clone();
+            config.detector.tracking = false;
+            let mut report = Session::new(config)
+                .process(Frame::new(&grey, name))
+                .map_err(|problem| frame_problem(name, problem))?;
+            report.elapsed_ms = 0.0;
             Ok(report.to_json())
         };
         inner().map_err(js_error)
@@ -820,7 +808,7 @@ impl Live {
 
     /// Forgets tracked markers (after a pause or a camera switch).
     pub fn reset(&mut self) {
-        self.detector.reset();
+        self.session.reset();
     }
 }
 

@@ -1,7 +1,8 @@
 //! Detect's reports: JSON lines, CSV rows and a table, shared by the command
 //! line and the bindings so every front end emits the same fields.
 
-use super::Detection;
+use crate::arena::ArenaPosition;
+use crate::detect::Detection;
 use std::fmt::Write as _;
 
 /// The detections in one image.
@@ -18,15 +19,18 @@ pub struct FrameReport {
     pub elapsed_ms: f64,
     /// What was found, in the detector's order.
     pub markers: Vec<Detection>,
-    /// The configured boards' poses ([`super::Detector::locate_boards`]).
+    /// Where each marker lies on the arena, in the markers' order (all
+    /// `None` without an arena).
+    pub places: Vec<Option<ArenaPosition>>,
+    /// The configured boards' poses ([`crate::board::BoardTracker::update`]).
     pub boards: Vec<crate::board::BoardPose>,
     /// How long each stage of the detector took on this frame, when asked
-    /// for ([`DetectorConfig::timings`](super::DetectorConfig::timings)).
-    pub timings: Option<super::timings::StageTimings>,
+    /// for ([`DetectorConfig::timings`](crate::detect::DetectorConfig::timings)).
+    pub timings: Option<crate::detect::StageTimings>,
     /// Where the image sits in a recorded stream (a bag or a video).
     pub stream: Option<StreamPosition>,
     /// Discs that looked like legacy WhyCon markers while WhyCode markers
-    /// were looked for ([`super::Detector::last_legacy_looking`]); feeds the
+    /// were looked for ([`crate::detect::Detector::last_legacy_looking`]); feeds the
     /// run's hint, not the frame's output.
     pub legacy_looking: usize,
 }
@@ -60,7 +64,7 @@ pub struct CsvColumns {
 
 impl CsvColumns {
     /// The columns of a detector with this configuration.
-    pub fn of(config: &super::DetectorConfig) -> Self {
+    pub fn of(config: &super::SessionConfig) -> Self {
         Self {
             arena: config.arena.is_some(),
         }
@@ -98,7 +102,7 @@ struct FrameRecord<'a> {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     boards: Vec<BoardRecord>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    timings: Option<&'a super::timings::StageTimings>,
+    timings: Option<&'a crate::detect::StageTimings>,
 }
 
 #[derive(serde::Serialize)]
@@ -149,6 +153,27 @@ struct ArenaRecord {
 }
 
 impl FrameReport {
+    /// A frame of `width` x `height` with nothing found in it.
+    pub fn empty(image: impl Into<String>, width: u32, height: u32) -> FrameReport {
+        FrameReport {
+            image: image.into(),
+            width,
+            height,
+            elapsed_ms: 0.0,
+            markers: Vec::new(),
+            places: Vec::new(),
+            boards: Vec::new(),
+            timings: None,
+            stream: None,
+            legacy_looking: 0,
+        }
+    }
+
+    /// Where the `k`-th marker lies on the arena, if it was placed.
+    pub fn place(&self, k: usize) -> Option<&ArenaPosition> {
+        self.places.get(k).and_then(Option::as_ref)
+    }
+
     /// One JSON object on one line (no newline): image (and for a frame
     /// of a recording: frame, stamp_ns and a bag's topic), width, height,
     /// elapsed_ms and the markers with id, code, u, v, yaw, axes,
@@ -159,7 +184,8 @@ impl FrameReport {
         let markers = self
             .markers
             .iter()
-            .map(|m| {
+            .enumerate()
+            .map(|(k, m)| {
                 let pose = m.pose.as_ref();
                 MarkerRecord {
                     id: m.id,
@@ -167,7 +193,7 @@ impl FrameReport {
                     code: m.code,
                     bits: m.bits,
                     unreadable: m.unreadable,
-                    unknown: m.unnamed.map(super::Unnamed::key),
+                    unknown: m.unnamed.map(crate::detect::Unnamed::key),
                     u: round(m.u, 3),
                     v: round(m.v, 3),
                     yaw: m.yaw.map(|y| round(y, 5)),
@@ -186,7 +212,7 @@ impl FrameReport {
                         })
                     }),
                     quaternion: pose.map(|p| p.quaternion.map(|q| round(q, 6))),
-                    arena: m.arena.map(|a| ArenaRecord {
+                    arena: self.place(k).map(|a| ArenaRecord {
                         x: round(a.x, 6),
                         y: round(a.y, 6),
                         z: round(a.z, 6),
@@ -236,7 +262,7 @@ impl FrameReport {
         let opt = |x: Option<f64>| x.map_or(String::new(), |v| v.to_string());
         let image = csv_field(&self.image);
         let mut out = String::new();
-        for m in &self.markers {
+        for (k, m) in self.markers.iter().enumerate() {
             let pose = m.pose.as_ref();
             let _ = write!(
                 out,
@@ -261,7 +287,7 @@ impl FrameReport {
             );
             if columns.arena {
                 // Same rounding as the JSON's `arena`.
-                let a = m.arena.as_ref();
+                let a = self.place(k);
                 let _ = write!(
                     out,
                     ",{},{},{},{}",
@@ -309,21 +335,26 @@ impl FrameReport {
         if has_pose {
             let _ = write!(out, " {:>26}", "position_m (x, y, z)");
         }
-        let has_arena = self.markers.iter().any(|m| m.arena.is_some());
+        let has_arena = (0..self.markers.len()).any(|k| self.place(k).is_some());
         if has_arena {
             let _ = write!(out, " {:>36}", "arena_m (x, y, z), yaw_deg");
         }
         out.push('\n');
         // Sorted by ID for reading (unknown IDs last, then left to right);
         // csv and json keep the detector's order.
-        let mut sorted: Vec<_> = self.markers.iter().collect();
-        sorted.sort_by(|a, b| {
+        let mut sorted: Vec<_> = self
+            .markers
+            .iter()
+            .enumerate()
+            .map(|(k, m)| (m, self.place(k)))
+            .collect();
+        sorted.sort_by(|(a, _), (b, _)| {
             (a.id == 0, a.id)
                 .cmp(&(b.id == 0, b.id))
                 .then(a.u.total_cmp(&b.u))
                 .then(a.v.total_cmp(&b.v))
         });
-        for m in sorted {
+        for (m, place) in sorted {
             let id = if m.id == 0 {
                 "?".to_string()
             } else {
@@ -359,7 +390,7 @@ impl FrameReport {
             } else if has_pose && has_arena {
                 let _ = write!(out, " {:>26}", "-");
             }
-            if let Some(a) = m.arena {
+            if let Some(a) = place {
                 let yaw = a
                     .yaw
                     .map_or("-".to_string(), |y| format!("{:.1}", y.to_degrees()));
@@ -399,6 +430,7 @@ mod tests {
             width: 640,
             height: 480,
             elapsed_ms: 1.23456,
+            places: vec![None; markers.len()],
             markers,
             boards: Vec::new(),
             timings: None,
@@ -423,7 +455,6 @@ mod tests {
             unreadable: false,
             unnamed: None,
             track: None,
-            arena: None,
         }
     }
 
@@ -441,7 +472,7 @@ mod tests {
     #[test]
     fn json_and_table_say_why_a_marker_has_no_id() {
         let unread = Detection {
-            unnamed: Some(super::super::Unnamed::NoCodeRing),
+            unnamed: Some(crate::detect::Unnamed::NoCodeRing),
             ..marker(0)
         };
         let report = frame("a.png", vec![unread, marker(3)]);
@@ -470,14 +501,14 @@ mod tests {
 
     #[test]
     fn csv_arena_columns_follow_the_configuration_not_the_marker() {
-        let mut placed = marker(3);
-        placed.arena = Some(crate::arena::ArenaPosition {
+        let mut report = frame("a.png", vec![marker(3), marker(4)]);
+        report.places[0] = Some(crate::arena::ArenaPosition {
             x: 1.23456789,
             y: 0.5,
             z: 0.12,
             yaw: None,
         });
-        let rows = frame("a.png", vec![placed, marker(4)]).to_csv_rows(CsvColumns { arena: true });
+        let rows = report.to_csv_rows(CsvColumns { arena: true });
         let lines: Vec<&str> = rows.lines().collect();
         assert!(lines[0].ends_with(",1.234568,0.5,0.12,"), "{rows}");
         assert!(lines[1].ends_with(",,,,"), "{rows}");

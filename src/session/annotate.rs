@@ -1,7 +1,7 @@
 //! Drawing detections over the image they came from: each marker's outer
 //! ellipse, its +x axis and its ID, for checking a detector run by eye.
 
-use super::Detection;
+use crate::detect::Detection;
 use crate::render::RenderError;
 use image::{GrayImage, RgbImage};
 use std::f64::consts::PI;
@@ -318,7 +318,6 @@ mod tests {
             unreadable: false,
             unnamed: None,
             track: None,
-            arena: None,
         }
     }
 
