@@ -797,9 +797,8 @@ pub fn calibrate(
 /// is a hundred times finer than the fit's spread, and coarse enough
 /// that the command line, Python and the browser page write the same
 /// bytes for the same photos (WebAssembly rounds the last bits of sin, cos
-/// and atan2 its own way, and those bits reach the fit's last digits: at
-/// 1e-6 px the page's fy, and at 1e-7 its k3, were seen one digit apart
-/// from the command line's).
+/// and atan2 its own way, and those bits reach the fit's last digits; what
+/// finer rounding gave: docs/calibration.md, "Written precision").
 fn to_written_precision(camera: Camera) -> Camera {
     Camera {
         fx: rounded(camera.fx, 4),

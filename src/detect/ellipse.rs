@@ -314,9 +314,9 @@ pub struct EdgeRays {
 
 impl EdgeRays {
     /// A ray every two pixels, at most 48 a circle: 144 points over the
-    /// three circles hold the fitted normal's error near 0.5° face-on (bar
-    /// rows 2/2a); more rays cost time on every posed marker for no gain
-    /// measured there.
+    /// three circles give the normal the accuracy of the detector bar's
+    /// rows 2/2a (docs/benchmarks.md); more rays cost time on every posed
+    /// marker for no gain measured there.
     pub const POSE: EdgeRays = EdgeRays {
         per_px: 0.5,
         most: 48,
@@ -326,11 +326,9 @@ impl EdgeRays {
     /// pixel depending on where the ray crosses the pixel grid (the
     /// sampler's smoothing is not quite the same at every phase); 48 rays
     /// leave those errors to add up to a few thousandths of a pixel in the
-    /// projected centre, rays at every pixel average them out: on the
-    /// calibration bar's views rendered at 16×16 samples a pixel without
-    /// noise, centres 0.0056 -> 0.0036 px rms off the truth; at the bar's
-    /// 8×8 with its noise, 0.0076 -> 0.0057 (`examples/calibration_centres`).
-    /// Halving the spacing again gains nothing.
+    /// projected centre, rays at every pixel average them out (measured by
+    /// `examples/calibration_centres`: docs/calibration.md, "What the
+    /// centres were limited by"). Halving the spacing again gains nothing.
     pub const FINE: EdgeRays = EdgeRays {
         per_px: 1.0,
         most: 400,

@@ -82,9 +82,10 @@ fn samples_per_sector(camera: &Camera, pose: &Pose, radius_m: f64, sectors: usiz
     (wanted as usize).clamp(MIN_SAMPLES_PER_SECTOR, SAMPLES_PER_SECTOR)
 }
 
-/// At 0.75 px the yaw of bar rows 1a/1b grew by a tenth (mean 0.023° to
-/// 0.025°); at 0.6 px it stays within a thousandth of a degree of 12
-/// samples a sector, for two fifths fewer samples on a 14-bit ring.
+/// Spacing of the samples along the rectified ring, pixels: as close as
+/// 12 samples a sector in yaw, for fewer samples on long codes; wider
+/// spacing costs yaw (the detector bar's rows 1a/1b: docs/detection.md,
+/// "Where the time goes").
 const SAMPLE_SPACING_PX: f64 = 0.6;
 const MIN_SAMPLES_PER_SECTOR: usize = 6;
 const MAX_SAMPLES: usize = 2 * MAX_BITS as usize * SAMPLES_PER_SECTOR;

@@ -76,9 +76,9 @@ impl Decoded {
 /// Decodes n-bit words into (ID, rotation).
 ///
 /// Up to [`DENSE_MAX_BITS`] bits every answer is precomputed in a table
-/// (4 bytes per word, 4 MiB at 20 bits): a decode is one lookup, about
-/// 4 ns. Above that a table would take 64 MiB, so the decoder keeps a
-/// bitset of all member rotations (2^n bits, 2 MiB at 24 bits) and searches:
+/// (4 bytes per word, 4 MiB at 20 bits): a decode is one lookup. Above
+/// that a table would take 64 MiB, so the decoder keeps a bitset of all
+/// member rotations (2^n bits, 2 MiB at 24 bits) and searches:
 /// it walks the Hamming ball of the word, one bitset probe per neighbour,
 /// or, when that ball is larger than the family, compares against every
 /// member rotation. The search is slowest where the ball and the family are

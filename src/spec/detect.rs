@@ -42,7 +42,8 @@ pub struct DetectSpec {
     pub camera_later: bool,
     /// A floor frame (`whycode arena`) every marker is placed in. One
     /// measured with a camera brings that camera (`camera`, if given, must
-    /// be the same) and needs `diameter`.
+    /// be the same) and places markers without `diameter` too (each
+    /// outline is read on the arena's plane).
     pub arena: Option<crate::arena::Arena>,
     /// Height above the arena's floor of the markers located, in place of
     /// the arena file's (with an arena measured with a camera).

@@ -332,7 +332,9 @@ impl Rings {
         // A blur narrow beside the half-sectors leaves their edges to the
         // structure test and the reader: a ring they refute then is no
         // marker's (desk clutter's washers and letters, whose edges read
-        // as half a pixel of blur, cost the model 20 times a desk frame).
+        // as a little blur, would otherwise all be compared with the
+        // family; the cost: docs/detection.md, "Defocus, small and steep
+        // markers").
         let sectors = manchester::sector_pixels(outer, family.bits());
         let sigma = ellipse::defocus(gray, outer)
             .filter(|&s| s >= MIN_DEFOCUS_PX && s >= MIN_DEFOCUS_PER_SECTOR * sectors)?;

@@ -1,4 +1,4 @@
-//! Reading rings too small for sector sampling (paper section 5, issue 9).
+//! Reading rings too small for sector sampling (paper section 5).
 //!
 //! At 12 px across an 8-bit marker's half-bit sector is about a pixel of
 //! ring: the blur of the lens and the pixel's own area mix neighbouring
@@ -10,7 +10,7 @@
 //! against a ring without angular structure (any grey, any radial profile
 //! of the marker's discs) tells a tiny marker from a round blob.
 //!
-//! A ring smeared by motion blur is read the same way (issue 9): a blur of
+//! A ring smeared by motion blur is read the same way: a blur of
 //! length L smears sectors into their neighbours, so no sample reads one
 //! sector, but the members rendered through a segment of the length and
 //! direction the outline's edge spread shows
@@ -217,8 +217,8 @@ fn defocus_footprints(sigma: f64, outer: &ImageEllipse) -> Vec<Footprint> {
 /// A black annulus narrower than this many sigmas of the blur read (along
 /// the outline's minor axis: a small or steep ring) keeps the outline's
 /// edge from reaching full contrast under the blur, so the edge reads a
-/// blur short of the ring's (30 px at 65 degrees under sigma 2 reads 1.2,
-/// 20 px face-on under sigma 2 reads 1.4).
+/// blur short of the ring's (the sigmas read: docs/detection.md, "Defocus,
+/// small and steep markers").
 const NARROW_ANNULUS_SIGMAS: f64 = 3.0;
 
 /// Further defocus tried on a ring of a narrow annulus, relative to the
@@ -227,13 +227,14 @@ const NARROW_DEFOCUS_SCALES: [f64; 2] = [1.6, 2.0];
 
 /// Most elongation of a small ring's light along its outline's major axis
 /// ([`light_elongation`]) for a ring the model vouches for without naming
-/// it. The light of real small rings (446 reported on the detector bar's
-/// row 7, 8-14 px, and row 9, minor axis under 14 px) spans -0.22 to
-/// +0.19, the code's second harmonic turned any way; the hole of a bold
-/// stroke-font 'O' 10.7 px across reads +0.28, and 1757 letter candidates
-/// of 8-15 px have a median of +0.21 (`examples/small_ring_light`). Rings
-/// the model names are left alone: a member explaining them with a clear
-/// margin over every other is what no letter earned.
+/// it. The light of real small rings spreads either way, the code's second
+/// harmonic turned any way, and stays under it; the hole of a bold
+/// stroke-font letter is stretched along the major axis, most letters' to
+/// near it or past it, and the 'O' once reported as a marker well past it
+/// (the spreads, measured by `examples/small_ring_light`:
+/// docs/detection.md, "The 11 px 'O', reproduced"). Rings the model names
+/// are left alone: a member explaining them with a clear margin over every
+/// other is what no letter earned.
 pub const MAX_LIGHT_ELONGATION: f64 = 0.23;
 
 /// How much more the light inside the ring's outer edge (radius 0.6 of
@@ -1458,8 +1459,9 @@ mod tests {
         // ring keep a tenth of their contrast. The member rendered as the
         // camera forms it (pixel areas, then the Gaussian) explains the
         // pixels to within the rounding to grey levels; the same member
-        // through a few footprint points left 60 grey levels squared a
-        // pixel, as much as the code's own signal, and named none.
+        // through a few footprint points left a residual as large as the
+        // code's own signal, and named none (docs/detection.md, "The
+        // members rendered as the camera forms them").
         let family = Family::generate(8, 2).unwrap();
         for (id, turn) in [(3, 0.4), (11, 2.2)] {
             let code = family.code(id).unwrap();
@@ -1492,7 +1494,7 @@ mod tests {
             }
         }
         // An 'O' drawn with a pen 3 px wide, 10.7 x 8.4 px outside (the
-        // stroke-font 'O' of issue 25: a hole 2 x 5 px).
+        // stroke-font 'O' of docs/detection.md: a hole 2 x 5 px).
         let outline = ImageEllipse {
             u: 12.2,
             v: 11.7,

@@ -73,9 +73,9 @@ const MIN_FILL_PIXELS: f64 = 2.0;
 
 /// Least reading quality (edge strength, sector width, weakest kept bit)
 /// at which a reading with filled erasures that still needed correcting is
-/// named: 8-bit rings under 20-25 px of motion blur were read that way to
-/// wrong IDs at quality 0.66-0.74 (and to no right one). Such rings are
-/// now read by the blurred ring model (`ring_model::read_blurred_ring`),
+/// named: under heavy motion blur such readings named wrong IDs well below
+/// it, and no right one (docs/detection.md, "Reporting rules"). Such rings
+/// are now read by the blurred ring model (`model::read_blurred_ring`),
 /// which also overrules a corrected reading it cannot confirm; this guard
 /// stays for smears the outline does not show as a linear blur.
 const MIN_FILLED_QUALITY: f64 = 0.9;
