@@ -84,7 +84,7 @@ impl PyDetector {
     /// each stage of every frame (see `last_timings()`). `arena` (an
     /// `Arena` or an arena file's path) gives each marker its place on the
     /// floor (`Marker.arena`); one measured with a camera brings that camera
-    /// and needs `diameter`. `boards`: sheet manifests (each page a board)
+    /// and places markers without `diameter`. `boards`: sheet manifests (each page a board)
     /// and bundle files whose poses every frame's result carries in
     /// `boards` (needs `camera`; without `diameter` the first board's first
     /// marker gives it).

@@ -84,7 +84,8 @@ pub struct DetectArgs {
 
     /// An arena file (`whycode arena`): each marker gets `arena` {x, y, z,
     /// yaw}, its place on the floor in metres. One measured with a camera
-    /// brings that camera and needs --diameter
+    /// brings that camera, and places markers without --diameter (each
+    /// outline is read on the arena's known plane)
     #[arg(long, value_name = "FILE")]
     arena: Option<PathBuf>,
 
