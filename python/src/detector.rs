@@ -9,7 +9,7 @@ use std::sync::Mutex;
 use whycode::arena::ArenaPosition;
 use whycode::board::{Board, BoardPose};
 use whycode::detect::{Detection, Detector, StageTimings, Target};
-use whycode::session::{Frame, FrameReport, Session, SessionConfig};
+use whycode::session::{Frame, FrameError, FrameReport, Session, SessionConfig};
 use whycode::spec::{DetectSpec, TargetSpec};
 
 /// Finds WhyCode markers (or legacy WhyCon circles) in frames.
@@ -30,14 +30,19 @@ pub struct PyDetector {
 }
 
 /// Measures `view` in `session` as `whycode detect` measures an image:
-/// the markers, their places on the arena, the boards' poses.
+/// the markers, their places on the arena, the boards' poses. A camera of
+/// another aspect ratio is another camera, refused rather than left
+/// without pose.
 fn process(
     session: &mut Session,
     view: &crate::pixels::GrayView<'_>,
 ) -> Result<FrameReport, Error> {
     session
         .process(Frame::new(view, ""))
-        .map_err(|problem| Error::value(problem.to_string()))
+        .map_err(|problem| match problem {
+            FrameError::Camera { problem, .. } => problem.into(),
+            FrameError::Arena(problem) => Error::value(problem),
+        })
 }
 
 impl PyDetector {
@@ -164,15 +169,7 @@ impl PyDetector {
         py: Python<'py>,
         image: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let found = crate::pixels::with_gray(py, image, |view| {
-            // The detector rescales a calibration made for another
-            // resolution of the same sensor by itself; another aspect ratio
-            // is another camera, refused here rather than left without pose.
-            if let Some(camera) = self.config.detector.camera {
-                camera.for_image(view.width(), view.height())?;
-            }
-            self.run(view)
-        })?;
+        let found = crate::pixels::with_gray(py, image, |view| self.run(view))?;
         let markers: Vec<PyMarker> = found
             .markers
             .into_iter()

@@ -167,11 +167,6 @@ impl BoardTracker {
         }
     }
 
-    /// The boards tracked.
-    pub fn boards(&self) -> &[super::Board] {
-        &self.boards
-    }
-
     /// The pose of every board seen in `detections` (one frame's markers)
     /// through `camera`, the markers' poses computed for `diameter_m`;
     /// none without a camera or a diameter.

@@ -14,7 +14,7 @@ use whycode::detect::{StageTimings, Target};
 use whycode::image_io::load_gray;
 use whycode::recording::Kind;
 use whycode::session::report::{CsvColumns, FrameReport};
-use whycode::session::{Frame, FrameError, Session, SessionConfig};
+use whycode::session::{Frame, Session, SessionConfig};
 use whycode::spec::{DetectSpec, RecordingSpec};
 use whycode::units::Length;
 
@@ -508,10 +508,7 @@ fn detect_one(session: &mut Session, path: &Path, annotate: Option<&Path>) -> Re
     let image = load_gray(path)?;
     let report = session
         .process(Frame::new(&image, path.display().to_string()))
-        .map_err(|problem| match problem {
-            FrameError::Camera { problem, .. } => anyhow::anyhow!("{}: {problem}", path.display()),
-            FrameError::Arena(problem) => anyhow::anyhow!("{}: {problem}", path.display()),
-        })?;
+        .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
     if let Some(out) = annotate {
         let png = whycode::session::annotate::annotated_png(&image, &report.markers)?;
         whycode::io::write_atomic(out, &png)?;

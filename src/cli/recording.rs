@@ -115,8 +115,8 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
                 camera: frame.camera,
             })
             .map_err(|problem| match problem {
-                FrameError::Camera { problem, .. } => anyhow!(
-                    "{shown}: frame {}: the camera does not fit: {problem}",
+                camera @ FrameError::Camera { .. } => anyhow!(
+                    "{shown}: frame {}: the camera does not fit: {camera}",
                     frame.index
                 ),
                 FrameError::Arena(problem) => anyhow!("{shown}: frame {}: {problem}", frame.index),

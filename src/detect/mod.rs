@@ -318,8 +318,8 @@ impl Detector {
     /// [`Camera::for_image`] (rescaled for the same sensor at another
     /// resolution, refused for another aspect ratio). [`Detector::detect`]
     /// does the same for every frame by itself and gives a frame of another
-    /// aspect ratio no pose; a front end calls this first to tell its user
-    /// why.
+    /// aspect ratio no pose; a caller calls this first to tell its user why
+    /// (a session fits the camera for its front ends).
     pub fn fit_camera(
         &mut self,
         width: u32,

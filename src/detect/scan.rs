@@ -372,10 +372,6 @@ impl Detector {
         let coarse = match coarse {
             Some(e) if accepted => e,
             _ => {
-                if std::env::var_os("WDBG").is_some() && dark.count > 300 {
-                    let (wu, wv) = white.centroid();
-                    eprintln!("ratio-lost at {:?}: ratio {ratio:.3} (expected {:.3} tol {:.2}) white centroid ({wu:.1},{wv:.1}) coarse {:?}", dark.centroid(), self.ratio.expected, self.ratio.tolerance(), coarse);
-                }
                 self.filler.undo_last(&mut self.labels);
                 lost!(self, RatioOrConcentricity, dark);
             }

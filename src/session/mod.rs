@@ -79,11 +79,12 @@ impl<'a, C: std::ops::Deref<Target = [u8]>> Frame<'a, C> {
     }
 }
 
-/// Why a frame could not be measured; front ends say it in their words.
+/// Why a frame could not be measured: the problem alone, which front ends
+/// put after the frame's name in their own words.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum FrameError {
     /// The calibration is of another aspect ratio than the frame.
-    #[error("the camera does not fit: {problem}")]
+    #[error("{problem}")]
     Camera {
         /// The calibration came with the stream (not the configured one).
         from_stream: bool,
@@ -147,11 +148,6 @@ impl Session {
         self.arena.as_ref()
     }
 
-    /// The boards whose poses are reported.
-    pub fn boards(&self) -> &[Board] {
-        self.boards.boards()
-    }
-
     /// Forgets tracked markers and boards (a pause, a camera switch).
     pub fn reset(&mut self) {
         self.detector.reset();
@@ -160,7 +156,7 @@ impl Session {
 
     /// The camera for a frame of `width` x `height` (the stream's, the
     /// configured one or none), fitted to its size.
-    pub fn camera_for(
+    fn camera_for(
         &self,
         width: u32,
         height: u32,

@@ -335,7 +335,7 @@ impl FrameReport {
         if has_pose {
             let _ = write!(out, " {:>26}", "position_m (x, y, z)");
         }
-        let has_arena = (0..self.markers.len()).any(|k| self.place(k).is_some());
+        let has_arena = self.places.iter().any(Option::is_some);
         if has_arena {
             let _ = write!(out, " {:>36}", "arena_m (x, y, z), yaw_deg");
         }

@@ -135,6 +135,26 @@ fn cube_scene(
     scene
 }
 
+/// A session reading the cube's 40 mm markers of `family` through
+/// `camera` and reporting the pose of `boards`.
+fn cube_session(
+    camera: whycode::camera::Camera,
+    family: &Family,
+    boards: Vec<Board>,
+    tracking: bool,
+) -> Session {
+    Session::new(SessionConfig {
+        boards,
+        ..SessionConfig::detector(DetectorConfig {
+            target: Target::WhyCode(family.clone()),
+            camera: Some(camera),
+            diameter_m: Some(0.04),
+            tracking,
+            ..Default::default()
+        })
+    })
+}
+
 /// A marker on each of the first `faces` of a 6 cm cube (+z, +x, +y faces;
 /// each marker's +z out of its face) and the bundle describing them.
 fn cube(faces: usize) -> (Vec<Face>, Vec<Board>) {
@@ -188,16 +208,9 @@ fn a_bundle_on_a_cube_gives_the_cube_pose() {
     scene.noise = 1.5;
     let image = simulate::render(&scene).0;
 
-    let mut session = Session::new(SessionConfig {
-        boards,
-        ..SessionConfig::detector(DetectorConfig {
-            target: Target::WhyCode(family),
-            camera: Some(truth),
-            diameter_m: Some(0.04),
-            ..Default::default()
-        })
-    });
-    let report = session.process(Frame::new(&image, "cube")).unwrap();
+    let report = cube_session(truth, &family, boards, false)
+        .process(Frame::new(&image, "cube"))
+        .unwrap();
     let (found, poses) = (report.markers, report.boards);
     assert_eq!(poses.len(), 1, "{found:?}");
     let pose = &poses[0];
@@ -228,19 +241,10 @@ fn a_tracked_board_is_smoothed_over_the_frames() {
     )
     .unwrap()
     .matrix();
-    let session = |tracking: bool| {
-        Session::new(SessionConfig {
-            boards: boards.clone(),
-            ..SessionConfig::detector(DetectorConfig {
-                target: Target::WhyCode(family.clone()),
-                camera: Some(truth),
-                diameter_m: Some(0.04),
-                tracking,
-                ..Default::default()
-            })
-        })
-    };
-    let (mut tracked, mut single) = (session(true), session(false));
+    let (mut tracked, mut single) = (
+        cube_session(truth, &family, boards.clone(), true),
+        cube_session(truth, &family, boards, false),
+    );
     let (mut smoothed_sq, mut raw_sq, mut counted) = (0.0, 0.0, 0);
     for frame in 0u32..40 {
         let cube_position = Vector3::new(-0.02 + 0.0003 * f64::from(frame), -0.02, 0.7);
@@ -294,16 +298,9 @@ fn a_bundle_of_positions_only_gives_the_cube_pose() {
     let cube_position = Vector3::new(0.03, -0.02, 0.45);
     let scene = cube_scene(truth, &family, &faces, &cube_rotation, cube_position);
     let image = simulate::render(&scene).0;
-    let mut session = Session::new(SessionConfig {
-        boards,
-        ..SessionConfig::detector(DetectorConfig {
-            target: Target::WhyCode(family),
-            camera: Some(truth),
-            diameter_m: Some(0.04),
-            ..Default::default()
-        })
-    });
-    let report = session.process(Frame::new(&image, "cube")).unwrap();
+    let report = cube_session(truth, &family, boards, false)
+        .process(Frame::new(&image, "cube"))
+        .unwrap();
     let (found, poses) = (report.markers, report.boards);
     assert_eq!(poses.len(), 1, "no pose from positions only: {found:?}");
     let pose = &poses[0];

@@ -22,7 +22,7 @@ use whycode::image_io;
 use whycode::manifest::Manifest;
 use whycode::render::job::{MarkerJob, PrintError, SheetJob};
 use whycode::render::template::{builtin_names, Template};
-use whycode::session::{Frame, FrameError, FrameReport, Session, SessionConfig};
+use whycode::session::{Frame, FrameReport, Session, SessionConfig};
 use whycode::spec::{cli_option, Bits, CalibrateSpec, DetectSpec, SpecError, TargetSpec};
 use whycode::units::{trim_float, Length};
 use whycode::validate::{self, annotate, PhotoReport};
@@ -700,15 +700,6 @@ pub fn live_stride() -> usize {
     11
 }
 
-/// A frame's problem (a camera calibrated at another size, an arena
-/// measured in another frame) in the command line's words.
-fn frame_problem(name: &str, problem: FrameError) -> anyhow::Error {
-    match problem {
-        FrameError::Camera { problem, .. } => anyhow::anyhow!("{name}: {problem}"),
-        FrameError::Arena(problem) => anyhow::anyhow!("{name}: {problem}"),
-    }
-}
-
 #[wasm_bindgen]
 impl Live {
     /// A detector for the options (JSON, see [`LiveOptions`]): the marker
@@ -757,7 +748,7 @@ impl Live {
         let mut report = self
             .session
             .process(Frame::new(&self.grey, "camera"))
-            .map_err(|problem| js_error(frame_problem("the camera's frames", problem)))?;
+            .map_err(|problem| JsError::new(&format!("the camera's frames: {problem}")))?;
         // The library has no clock here; the page shows its own timing.
         report.elapsed_ms = 0.0;
         let mut out = Vec::with_capacity(report.markers.len() * live_stride());
@@ -799,7 +790,7 @@ impl Live {
             config.detector.tracking = false;
             let mut report = Session::new(config)
                 .process(Frame::new(&grey, name))
-                .map_err(|problem| frame_problem(name, problem))?;
+                .map_err(|problem| anyhow::anyhow!("{name}: {problem}"))?;
             report.elapsed_ms = 0.0;
             Ok(report.to_json())
         };
