@@ -82,7 +82,7 @@ pub enum LoadProblem {
         /// Height in the header, pixels.
         height: u32,
         /// What the reader accepts.
-        limit: crate::image_io::SizeLimit,
+        limit: crate::limits::SizeLimit,
     },
 }
 

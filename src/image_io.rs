@@ -7,44 +7,7 @@ use std::path::{Path, PathBuf};
 use crate::error::{FileKind, LoadError, LoadProblem, WriteError};
 use image::{GrayImage, ImageBuffer};
 
-/// Largest image side accepted by [`load_gray`].
-pub const MAX_SIDE: u32 = 30_000;
-/// Largest image area accepted by [`load_gray`], pixels.
-pub const MAX_PIXELS: u64 = 400_000_000;
-
-/// The largest image a reader accepts, checked against the file's header
-/// before anything is decoded.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct SizeLimit {
-    /// Longest side, pixels.
-    pub max_side: u32,
-    /// Largest area, pixels.
-    pub max_pixels: u64,
-}
-
-impl SizeLimit {
-    /// What [`load_gray`] accepts: [`MAX_SIDE`] and [`MAX_PIXELS`].
-    pub const FILES: SizeLimit = SizeLimit {
-        max_side: MAX_SIDE,
-        max_pixels: MAX_PIXELS,
-    };
-
-    /// What a compressed frame of a stream (a bag's or a topic's
-    /// CompressedImage) may decode to: 64 megapixels, past any camera that
-    /// streams, because a small PNG message can declare a huge image and
-    /// each one would be decoded, frame after frame.
-    pub const FRAMES: SizeLimit = SizeLimit {
-        max_side: 16_384,
-        max_pixels: 64_000_000,
-    };
-
-    /// Whether an image of `width` x `height` pixels is within the limit.
-    pub fn admits(&self, width: u32, height: u32) -> bool {
-        width <= self.max_side
-            && height <= self.max_side
-            && u64::from(width) * u64::from(height) <= self.max_pixels
-    }
-}
+pub use crate::limits::{SizeLimit, MAX_PIXELS, MAX_SIDE};
 
 /// Why an image could not be written.
 #[derive(Debug, thiserror::Error)]

@@ -60,6 +60,7 @@ pub mod image_io;
 pub mod input;
 #[cfg(feature = "files")]
 pub mod io;
+pub mod limits;
 pub mod manifest;
 pub mod math;
 mod parallel;
@@ -72,6 +73,7 @@ pub mod ros;
 pub mod session;
 pub mod simulate;
 pub mod spec;
+mod spec_error;
 pub mod units;
 pub mod validate;
 

@@ -122,7 +122,7 @@ impl Manifest {
             ));
         }
         let [w, h] = self.page_size_mm;
-        let side = 0.0..=crate::render::template::MAX_PAGE_MM;
+        let side = 0.0..=crate::limits::MAX_PAGE_MM;
         if !(w > 0.0 && h > 0.0 && side.contains(&w) && side.contains(&h)) {
             return Err(format!("page size {w} x {h} mm is not a page"));
         }
@@ -156,12 +156,12 @@ impl Manifest {
                     m.id, m.page
                 ));
             }
-            if !crate::spec::limits::MARKER_DIAMETER_MM.contains(m.diameter_mm) {
+            if !crate::limits::MARKER_DIAMETER_MM.contains(m.diameter_mm) {
                 return Err(format!(
                     "marker ID {} on page {}: diameter {}",
                     m.id,
                     m.page,
-                    crate::spec::limits::MARKER_DIAMETER_MM
+                    crate::limits::MARKER_DIAMETER_MM
                         .check(m.diameter_mm)
                         .unwrap_err()
                 ));

@@ -239,7 +239,8 @@ fn family_counts(
     bits: Vec<u32>,
     distances: Vec<u32>,
 ) -> PyResult<Py<pyo3::types::PyDict>> {
-    let table = guard(|| CountTable::new(&bits, &distances).map_err(crate::spec_error))?;
+    let table =
+        guard(|| CountTable::new(&bits, &distances).map_err(|e| crate::spec_error(e.into())))?;
     let dict = pyo3::types::PyDict::new(py);
     for (key, count) in table.entries() {
         dict.set_item(key, count)?;

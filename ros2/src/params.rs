@@ -12,8 +12,9 @@ use whycode::arena::Arena;
 use whycode::board::Board;
 use whycode::detect::Target;
 use whycode::family::{DEFAULT_BITS, DEFAULT_DISTANCE};
+use whycode::limits;
 use whycode::session::SessionConfig;
-use whycode::spec::{limits, DetectSpec, TargetSpec};
+use whycode::spec::{DetectSpec, TargetSpec};
 use whycode::units::Length;
 use whycode::Camera;
 

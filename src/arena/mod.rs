@@ -33,10 +33,10 @@ use crate::camera::Camera;
 use crate::detect::Detection;
 use crate::error::{FileKind, LoadError, LoadProblem};
 use crate::family::MatchStatus;
+use crate::limits;
 use crate::math::homography::Homography;
 use crate::math::least_squares::{levenberg_marquardt, numeric_jacobian};
 use crate::math::Ellipse;
-use crate::spec::limits;
 
 /// A floor frame and how the image maps to it.
 #[derive(Debug, Clone, PartialEq)]

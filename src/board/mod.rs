@@ -250,11 +250,9 @@ impl Board {
                             ));
                         }
                         let mm = m.diameter * 1000.0;
-                        crate::spec::limits::MARKER_DIAMETER_MM
-                            .check(mm)
-                            .map_err(|e| {
-                                format!("bundle {} ID {}: diameter {e}", bundle.name, m.id)
-                            })?;
+                        crate::limits::MARKER_DIAMETER_MM.check(mm).map_err(|e| {
+                            format!("bundle {} ID {}: diameter {e}", bundle.name, m.id)
+                        })?;
                         if ![m.x, m.y, m.z].iter().all(|v| v.is_finite()) {
                             return Err(format!(
                                 "bundle {} ID {}: position is not a number",

@@ -4,9 +4,10 @@
 use anyhow::{bail, Result};
 use std::path::PathBuf;
 use whycode::detect::Target;
+use whycode::limits;
 use whycode::render::job::PrintError;
 use whycode::render::RenderError;
-use whycode::spec::{cli_option, limits, Bits, SpecError, TargetSpec};
+use whycode::spec::{cli_option, Bits, SpecError, TargetSpec};
 use whycode::units::Length;
 
 /// Which ID family: generated from `--bits` and `--distance`, or loaded

@@ -194,7 +194,9 @@ fn family_text(family: &Family, format: Format) -> String {
 }
 
 fn counts_text(bits: &[u32], distances: &[u32], format: Format) -> Result<String> {
-    let counts = CountTable::new(bits, distances).map_err(spec_error)?.counts;
+    let counts = CountTable::new(bits, distances)
+        .map_err(|e| spec_error(e.into()))?
+        .counts;
     let cell = |c: Option<usize>| c.map_or("-".to_string(), |c| c.to_string());
     let mut out = String::new();
     match format {

@@ -1,8 +1,27 @@
 //! How many IDs each (bits, distance) family holds: the matrix behind
 //! `whycode ids --counts`, Python's `family_counts` and the page's table.
 
+use super::FamilyError;
 use super::{Family, MAX_BITS, MIN_BITS};
-use crate::spec::SpecError;
+
+/// A count table that cannot be made.
+#[derive(Debug, thiserror::Error)]
+pub enum CountsError {
+    /// A bit count outside the families this crate makes.
+    #[error("{0} is outside {MIN_BITS}..{MAX_BITS}")]
+    Bits(u32),
+    /// A distance no family of the table's bit counts has.
+    #[error("{distance} is outside 1..{max_bits} (1 to the largest bit count)")]
+    Distance {
+        /// The distance asked for.
+        distance: u32,
+        /// The table's largest bit count.
+        max_bits: u32,
+    },
+    /// A family that could not be generated.
+    #[error(transparent)]
+    Family(FamilyError),
+}
 
 /// Family sizes for every bit count and distance asked for.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -19,23 +38,16 @@ pub struct CountTable {
 
 impl CountTable {
     /// Generates every family of the table.
-    pub fn new(bits: &[u32], distances: &[u32]) -> Result<CountTable, SpecError> {
-        for &n in bits {
-            if !(MIN_BITS..=MAX_BITS).contains(&n) {
-                return Err(SpecError::invalid(
-                    "bits",
-                    format!("{n} is outside {MIN_BITS}..{MAX_BITS}"),
-                ));
-            }
+    pub fn new(bits: &[u32], distances: &[u32]) -> Result<CountTable, CountsError> {
+        if let Some(&n) = bits.iter().find(|n| !(MIN_BITS..=MAX_BITS).contains(*n)) {
+            return Err(CountsError::Bits(n));
         }
         let max_bits = bits.iter().max().copied().unwrap_or(0);
-        for &d in distances {
-            if d == 0 || d > max_bits {
-                return Err(SpecError::invalid(
-                    "distance",
-                    format!("{d} is outside 1..{max_bits} (1 to the largest bit count)"),
-                ));
-            }
+        if let Some(&d) = distances.iter().find(|&&d| d == 0 || d > max_bits) {
+            return Err(CountsError::Distance {
+                distance: d,
+                max_bits,
+            });
         }
         let counts = distances
             .iter()
@@ -43,18 +55,14 @@ impl CountTable {
                 bits.iter()
                     .map(|&n| {
                         Ok(if d <= n {
-                            Some(
-                                Family::generate(n, d)
-                                    .map_err(|e| SpecError::of("distance", e))?
-                                    .len(),
-                            )
+                            Some(Family::generate(n, d).map_err(CountsError::Family)?.len())
                         } else {
                             None
                         })
                     })
-                    .collect::<Result<Vec<_>, SpecError>>()
+                    .collect::<Result<Vec<_>, CountsError>>()
             })
-            .collect::<Result<Vec<_>, SpecError>>()?;
+            .collect::<Result<Vec<_>, CountsError>>()?;
         Ok(CountTable {
             bits: bits.to_vec(),
             distances: distances.to_vec(),

@@ -9,7 +9,7 @@ pub mod lookup;
 pub mod necklace;
 mod stats;
 
-pub use counts::CountTable;
+pub use counts::{CountTable, CountsError};
 pub use file::{FAMILY_FILE_FORMAT, FAMILY_FILE_VERSION};
 pub use id_list::{check_id_list, parse_id_list, IdListError, MAX_LISTED_IDS};
 pub use lookup::{Decoded, Decoder, MatchStatus};

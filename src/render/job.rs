@@ -13,7 +13,8 @@ use crate::detect::Target;
 use crate::family::Family;
 use crate::fileset::FileDigest;
 use crate::geometry::Marker;
-use crate::spec::{limits, within, SpecError};
+use crate::limits;
+use crate::spec_error::{within, SpecError};
 use std::path::{Path, PathBuf};
 
 /// Why a print job made no files: an option's value (which front ends word

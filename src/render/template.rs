@@ -81,8 +81,7 @@ fn zero_or_length(field: &str, text: &str) -> Result<f64, String> {
     length(field, text)
 }
 
-/// The longest page side a template or manifest may have, mm.
-pub const MAX_PAGE_MM: f64 = 10_000.0;
+pub use crate::limits::MAX_PAGE_MM;
 
 impl Template {
     /// Parses a template's TOML text; `name` (the file's name) starts every

@@ -24,6 +24,7 @@ mod frame_folders;
 mod fuzz_bounded;
 mod ids_cli;
 mod library_errors;
+mod module_graph;
 mod output_files;
 mod output_streams;
 mod pose_properties;

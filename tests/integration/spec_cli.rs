@@ -1,6 +1,6 @@
 //! The command line fills the library's specs: options that do not apply
 //! are refused rather than ignored, and every quantity is held to the one
-//! table of plausible ranges (`whycode::spec::limits`).
+//! table of plausible ranges (`whycode::limits`).
 
 use crate::support::{stderr, whycode_in};
 

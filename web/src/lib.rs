@@ -127,7 +127,7 @@ pub fn family_table(bits: u32, distance: u32, limit: usize) -> Result<String, Js
 #[wasm_bindgen]
 pub fn counts(bits: &[u32], distances: &[u32]) -> Result<String, JsError> {
     let inner = || -> Result<String> {
-        let table = CountTable::new(bits, distances).map_err(spec_error)?;
+        let table = CountTable::new(bits, distances).map_err(|e| spec_error(e.into()))?;
         Ok(
             serde_json::json!({ "bits": bits, "distances": distances, "counts": table.counts })
                 .to_string(),

@@ -12,7 +12,7 @@ use super::RenderError;
 use crate::family::{check_id_list, Family, MAX_LISTED_IDS};
 use crate::geometry::Marker;
 use crate::manifest::{FamilyRef, Manifest, PrintedMarker};
-use crate::spec::SpecError;
+use crate::spec_error::SpecError;
 use crate::units::trim_float;
 use footer::push_footer;
 use packing::{best_packing, layout_area, Cell};

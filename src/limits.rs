@@ -168,6 +168,48 @@ pub const MARKER_HEIGHT_M: Limit = Limit {
     unit: "m",
 };
 
+/// Largest image side accepted by [`crate::image_io::load_gray`].
+pub const MAX_SIDE: u32 = 30_000;
+/// Largest image area accepted by [`crate::image_io::load_gray`], pixels.
+pub const MAX_PIXELS: u64 = 400_000_000;
+
+/// The largest image a reader accepts, checked against the file's header
+/// before anything is decoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SizeLimit {
+    /// Longest side, pixels.
+    pub max_side: u32,
+    /// Largest area, pixels.
+    pub max_pixels: u64,
+}
+
+impl SizeLimit {
+    /// What [`crate::image_io::load_gray`] accepts: [`MAX_SIDE`] and [`MAX_PIXELS`].
+    pub const FILES: SizeLimit = SizeLimit {
+        max_side: MAX_SIDE,
+        max_pixels: MAX_PIXELS,
+    };
+
+    /// What a compressed frame of a stream (a bag's or a topic's
+    /// CompressedImage) may decode to: 64 megapixels, past any camera that
+    /// streams, because a small PNG message can declare a huge image and
+    /// each one would be decoded, frame after frame.
+    pub const FRAMES: SizeLimit = SizeLimit {
+        max_side: 16_384,
+        max_pixels: 64_000_000,
+    };
+
+    /// Whether an image of `width` x `height` pixels is within the limit.
+    pub fn admits(&self, width: u32, height: u32) -> bool {
+        width <= self.max_side
+            && height <= self.max_side
+            && u64::from(width) * u64::from(height) <= self.max_pixels
+    }
+}
+
+/// The longest page side a template or manifest may have, mm.
+pub const MAX_PAGE_MM: f64 = 10_000.0;
+
 #[cfg(test)]
 mod tests {
     use super::*;
