@@ -1,22 +1,9 @@
 //! The original project's own test files: a real photo of legacy markers
 //! and a printed sheet of 8-bit WhyCode markers.
 
-use std::path::PathBuf;
-
+use crate::support::{compat_fixture, have_tool};
 use whycode::detect::{Detection, Detector, DetectorConfig, Target};
 use whycode::image_io::load_gray;
-
-fn compat(name: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/compat")
-        .join(name);
-    if path.exists() {
-        Some(path)
-    } else {
-        eprintln!("skipping: fixture {} is absent", path.display());
-        None
-    }
-}
 
 /// Writes the image with the detections drawn to /tmp when
 /// WHYCODE_ANNOTATE is set, to look at.
@@ -52,7 +39,7 @@ fn annotate(image: &image::GrayImage, detections: &[Detection], name: &str) {
 
 #[test]
 fn many_png_finds_every_legacy_marker_and_nothing_else() {
-    let Some(path) = compat("many.png") else {
+    let Some(path) = compat_fixture("many.png") else {
         return;
     };
     let image = load_gray(&path).unwrap();
@@ -80,21 +67,20 @@ fn many_png_finds_every_legacy_marker_and_nothing_else() {
 
 #[test]
 fn tags_35_reads_every_id_the_original_reads() {
-    let Some(pdf) = compat("tags_35.pdf") else {
+    let Some(pdf) = compat_fixture("tags_35.pdf") else {
         return;
     };
     let dir = tempfile::tempdir().unwrap();
     let prefix = dir.path().join("page");
+    if !have_tool("pdftoppm", "poppler-utils") {
+        return;
+    }
     let status = std::process::Command::new("pdftoppm")
         .args(["-r", "150", "-png", "-singlefile"])
         .arg(&pdf)
         .arg(&prefix)
         .status();
-    let Ok(status) = status else {
-        eprintln!("skipping: pdftoppm is not installed");
-        return;
-    };
-    assert!(status.success());
+    assert!(status.expect("pdftoppm runs").success());
     let image = load_gray(&prefix.with_extension("png")).unwrap();
     let family = whycode::family::Family::generate(8, 1).unwrap();
     let mut detector = Detector::new(DetectorConfig {

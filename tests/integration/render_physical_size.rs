@@ -2,16 +2,12 @@
 //! pdftoppm at 600 dpi) show the black disc at the asked diameter and the
 //! page at the exact paper size.
 
-use crate::support::run_ok;
+use crate::support::{have_tool, run_ok};
 
 use std::path::Path;
 use std::process::Command;
 
 const DPI: f64 = 600.0;
-
-fn have(tool: &str) -> bool {
-    Command::new(tool).arg("-v").output().is_ok()
-}
 
 /// Rasterises page `page` of a PDF to a grey image with pdftoppm.
 fn pdftoppm(pdf: &Path, page: u32) -> image::GrayImage {
@@ -79,8 +75,7 @@ fn disc_diameters(img: &image::GrayImage, cx: f64, cy: f64, search_px: usize) ->
 
 #[test]
 fn single_marker_pdf_has_the_asked_diameter_and_page_size() {
-    if !have("pdftoppm") {
-        eprintln!("skipping: pdftoppm (poppler-utils) is not installed");
+    if !have_tool("pdftoppm", "poppler-utils") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -135,8 +130,7 @@ fn single_marker_pdf_has_the_asked_diameter_and_page_size() {
 
 #[test]
 fn sheet_pdf_puts_markers_where_the_manifest_says_at_their_size() {
-    if !have("pdftoppm") {
-        eprintln!("skipping: pdftoppm (poppler-utils) is not installed");
+    if !have_tool("pdftoppm", "poppler-utils") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -203,8 +197,7 @@ fn sheet_pdf_puts_markers_where_the_manifest_says_at_their_size() {
 
 #[test]
 fn scale_bar_is_as_long_as_it_says() {
-    if !have("pdftoppm") {
-        eprintln!("skipping: pdftoppm (poppler-utils) is not installed");
+    if !have_tool("pdftoppm", "poppler-utils") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -10,7 +10,7 @@ pub mod reference;
 pub mod ring_view;
 pub mod sheets;
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 use whycode::camera::Camera;
@@ -18,6 +18,52 @@ use whycode::geometry::Marker;
 /// The library's seeded generator, so test scenes draw like the simulator.
 pub use whycode::math::Pcg32;
 use whycode::simulate::{self, LooseMarker, Placement, Scene, SceneObject, TrueMarker};
+
+/// Says that `what` is missing and the test skips, or fails the test where
+/// a missing one means a broken run: `.ci/run` installs the tools and sets
+/// `WHYCODE_REQUIRE_TOOLS=1`; a CI system (`CI` set) or
+/// `WHYCODE_REQUIRE_FIXTURES=1` requires the fixtures too. So a check that
+/// did not run never reads as passed there, while a user's machine without
+/// the original project's files still runs the rest.
+fn skip_or_fail(what: &str, required_by: &str) {
+    let set = |name: &str| std::env::var_os(name).is_some_and(|v| v == "1");
+    let ci = std::env::var_os("CI").is_some_and(|v| !v.is_empty() && v != "false");
+    assert!(
+        !(set(required_by) || ci),
+        "{what} is missing, and this run requires it"
+    );
+    eprintln!("skipping: {what} is missing");
+}
+
+/// Whether the command-line `tool` (from the Debian `package`) runs; when it
+/// does not, the test skips, or fails under `.ci/run` and CI.
+pub fn have_tool(tool: &str, package: &str) -> bool {
+    let runs = Command::new(tool).arg("--version").output().is_ok();
+    if !runs {
+        skip_or_fail(
+            &format!("{tool} (apt-get install {package})"),
+            "WHYCODE_REQUIRE_TOOLS",
+        );
+    }
+    runs
+}
+
+/// The original project's file `name` in `../shared/compat/`, or `None`
+/// when the folder is absent, as it is on a user's machine (the test skips;
+/// under CI it fails).
+pub fn compat_fixture(name: &str) -> Option<PathBuf> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/compat")
+        .join(name);
+    if path.exists() {
+        return Some(path);
+    }
+    skip_or_fail(
+        &format!("the fixture {}", path.display()),
+        "WHYCODE_REQUIRE_FIXTURES",
+    );
+    None
+}
 
 /// Runs the `whycode` binary built for this test run.
 pub fn whycode(args: &[&str]) -> Output {
