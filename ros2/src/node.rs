@@ -8,7 +8,7 @@
 //! camera, the newest frame waits and older ones are dropped, never queued.
 
 use crate::args::{LogLevel, RosArgs};
-use crate::image::{Converter, FrameError, GrayView};
+use crate::image::{Converter, GrayView};
 use crate::log::Logger;
 use crate::msg::{
     CameraInfo, CompatMarker, CompatMarkerArray, CompressedImage, Header, Image, MarkerArray,
@@ -646,6 +646,26 @@ impl ParameterGate {
     }
 }
 
+/// A frame's grey pixels: the message's own bytes when they are grey
+/// already, a decoded image otherwise.
+enum Grey<'a> {
+    Borrowed(GrayView<'a>),
+    Owned(image::GrayImage),
+}
+
+impl Grey<'_> {
+    fn as_view(&self) -> GrayView<'_> {
+        match self {
+            Grey::Borrowed(view) => GrayView::from_raw(view.width(), view.height(), view.as_raw())
+                .expect("a whole image"),
+            Grey::Owned(image) => {
+                GrayView::from_raw(image.width(), image.height(), image.as_raw().as_slice())
+                    .expect("a whole image")
+            }
+        }
+    }
+}
+
 impl Pipeline {
     /// Logs what the settings mean for the output, once at start and after
     /// each change.
@@ -779,28 +799,31 @@ impl Pipeline {
 
     fn on_frame(&mut self, frame: Frame, info: &MessageInfo, taken: Instant) {
         self.count_gap(info);
-        let header = frame.header().clone();
-        let owned;
         let mut converter = std::mem::take(&mut self.converter);
-        let result: Result<GrayView, FrameError> = match &frame {
-            Frame::Raw(msg) => converter.gray(msg),
-            Frame::Compressed(msg) => {
-                match converter.gray_compressed(msg, &self.topics.compressed) {
-                    Ok(gray) => {
-                        owned = gray;
-                        Ok(GrayView::from_raw(
-                            owned.width(),
-                            owned.height(),
-                            owned.as_raw().as_slice(),
-                        )
-                        .expect("a whole image"))
-                    }
-                    Err(e) => Err(e),
-                }
+        if let Some(gray) = self.grey_frame(&mut converter, &frame) {
+            let gray = gray.as_view();
+            if let Some(report) = self.process(&gray) {
+                self.publish(&report, &gray, frame.header(), info, taken);
             }
+        }
+        self.converter = converter;
+    }
+
+    /// The frame's grey pixels, or `None` (skipped, and said why) when the
+    /// message cannot be read as an image.
+    fn grey_frame<'a>(
+        &mut self,
+        converter: &'a mut Converter,
+        frame: &'a Frame,
+    ) -> Option<Grey<'a>> {
+        let result = match frame {
+            Frame::Raw(msg) => converter.gray(msg).map(Grey::Borrowed),
+            Frame::Compressed(msg) => converter
+                .gray_compressed(msg, &self.topics.compressed)
+                .map(Grey::Owned),
         };
-        let gray = match result {
-            Ok(gray) => gray,
+        match result {
+            Ok(gray) => Some(gray),
             Err(e) => {
                 let topic = match frame {
                     Frame::Raw(_) => &self.topics.image,
@@ -808,43 +831,55 @@ impl Pipeline {
                 };
                 let message = format!("{topic}: frame skipped: {e}");
                 self.skip(&e.cause(), &message);
-                self.converter = converter;
-                return;
+                None
             }
-        };
+        }
+    }
+
+    /// The session's report of one frame, or `None` (skipped, and said why)
+    /// when the camera or arena does not fit it.
+    fn process(&mut self, gray: &GrayView) -> Option<FrameReport> {
         let (width, height) = gray.dimensions();
         let processed = self.session.process(SessionFrame {
-            image: &gray,
+            image: gray,
             name: String::new(),
             stream: None,
             camera: self.camera_info,
         });
-        let report = match processed {
-            Ok(report) => report,
-            Err(problem) => {
-                let reason = match problem {
-                    SessionError::Camera {
-                        from_stream: true,
-                        problem,
-                    } => format!(
-                        "the calibration from {} does not fit this image: {problem}",
-                        self.topics.camera_info
-                    ),
-                    SessionError::Camera { problem, .. } => {
-                        format!("the arena file's calibration does not fit this image: {problem}")
-                    }
-                    SessionError::Arena(problem) => problem,
-                };
-                self.skip(
-                    &format!("fit {width}x{height}"),
-                    &format!("frame skipped: {reason}"),
-                );
-                self.converter = converter;
-                return;
-            }
+        let problem = match processed {
+            Ok(report) => return Some(report),
+            Err(problem) => problem,
         };
-        let detect_ms = report.elapsed_ms;
+        let reason = match problem {
+            SessionError::Camera {
+                from_stream: true,
+                problem,
+            } => format!(
+                "the calibration from {} does not fit this image: {problem}",
+                self.topics.camera_info
+            ),
+            SessionError::Camera { problem, .. } => {
+                format!("the arena file's calibration does not fit this image: {problem}")
+            }
+            SessionError::Arena(problem) => problem,
+        };
+        self.skip(
+            &format!("fit {width}x{height}"),
+            &format!("frame skipped: {reason}"),
+        );
+        None
+    }
 
+    /// Publishes one frame's results: /tf, the marker arrays (ours, the
+    /// original's, the arena's) and the debug image, and counts its times.
+    fn publish(
+        &mut self,
+        report: &FrameReport,
+        gray: &GrayView,
+        header: &Header,
+        info: &MessageInfo,
+        taken: Instant,
+    ) {
         let parent = if self.settings.camera_frame.is_empty() {
             header.frame_id.clone()
         } else {
@@ -858,35 +893,11 @@ impl Pipeline {
             markers,
             transforms,
             poses,
-        } = self.describe(&report, &stamped);
+        } = self.describe(report, &stamped);
         if self.settings.publish_tf && !transforms.is_empty() {
-            if parent.is_empty() {
-                self.log.once(
-                    LogLevel::Warn,
-                    "no frame_id",
-                    "the images carry no frame_id and camera_frame is not set: no /tf",
-                );
-            } else if let Err(e) = self.tf.publish(TfMessage { transforms }) {
-                self.log.once(
-                    LogLevel::Warn,
-                    "tf publish",
-                    &format!("{}: publish failed: {e}", self.topics.tf),
-                );
-            }
+            self.publish_tf(&parent, transforms);
         }
-        let published = Instant::now();
-        let arrival_ms = info
-            .received_timestamp()
-            .map(|t| (wall_clock_nanos() - t.to_nanos()) as f64 * 1e-6);
-        self.stats.frames += 1;
-        self.stats.detect_ms.push(detect_ms);
-        self.stats
-            .take_to_tf_ms
-            .push((published - taken).as_secs_f64() * 1e3);
-        if let Some(ms) = arrival_ms {
-            self.stats.arrival_to_tf_ms.push(ms);
-        }
-
+        self.count_times(report.elapsed_ms, info, taken);
         if self.settings.compat_markers {
             self.publish_compat(&markers, &poses);
         }
@@ -912,9 +923,41 @@ impl Pipeline {
             );
         }
         if self.settings.debug_image {
-            self.publish_debug(&gray, &report.markers, &stamped);
+            self.publish_debug(gray, &report.markers, &stamped);
         }
-        self.converter = converter;
+    }
+
+    fn publish_tf(&self, parent: &str, transforms: Vec<TransformStamped>) {
+        if parent.is_empty() {
+            self.log.once(
+                LogLevel::Warn,
+                "no frame_id",
+                "the images carry no frame_id and camera_frame is not set: no /tf",
+            );
+        } else if let Err(e) = self.tf.publish(TfMessage { transforms }) {
+            self.log.once(
+                LogLevel::Warn,
+                "tf publish",
+                &format!("{}: publish failed: {e}", self.topics.tf),
+            );
+        }
+    }
+
+    /// The frame's detection time, and the times from taking it off the
+    /// topic (and from its arrival) to publishing /tf.
+    fn count_times(&mut self, detect_ms: f64, info: &MessageInfo, taken: Instant) {
+        let published = Instant::now();
+        let arrival_ms = info
+            .received_timestamp()
+            .map(|t| (wall_clock_nanos() - t.to_nanos()) as f64 * 1e-6);
+        self.stats.frames += 1;
+        self.stats.detect_ms.push(detect_ms);
+        self.stats
+            .take_to_tf_ms
+            .push((published - taken).as_secs_f64() * 1e3);
+        if let Some(ms) = arrival_ms {
+            self.stats.arrival_to_tf_ms.push(ms);
+        }
     }
 
     /// The detections as a marker array and as transforms: one per
