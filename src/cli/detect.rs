@@ -268,8 +268,8 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
 
     let mut out = output::Stdout::new();
     let mut failures = 0;
-    let several = total > 1;
     let columns = CsvColumns::of(&config);
+    let rows = Rows::new(args.format.format, columns, total > 1);
     if args.format.format == Format::Csv {
         out.line(columns.header())?;
     }
@@ -283,11 +283,7 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
                 if let Some(frame_timings) = &frame.timings {
                     timings += frame_timings;
                 }
-                match args.format.format {
-                    Format::Json => out.line(frame.to_json())?,
-                    Format::Csv => out.write(&frame.to_csv_rows(columns))?,
-                    Format::Table => out.write(&frame.to_table(several))?,
-                }
+                rows.print(&mut out, &frame)?;
             }
             Err(err) => {
                 out.flush()?;
@@ -318,6 +314,33 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// How each frame's report is printed, images and recordings alike.
+pub(super) struct Rows {
+    format: Format,
+    columns: CsvColumns,
+    /// Whether the table names each frame (more than one is printed).
+    several: bool,
+}
+
+impl Rows {
+    pub(super) fn new(format: Format, columns: CsvColumns, several: bool) -> Rows {
+        Rows {
+            format,
+            columns,
+            several,
+        }
+    }
+
+    /// One frame's JSON line, CSV rows or table.
+    pub(super) fn print(&self, out: &mut output::Stdout, report: &FrameReport) -> Result<()> {
+        match self.format {
+            Format::Json => out.line(report.to_json()),
+            Format::Csv => out.write(&report.to_csv_rows(self.columns)),
+            Format::Table => out.write(&report.to_table(self.several)),
+        }
+    }
 }
 
 /// The session the options ask for; a recording's camera may come later

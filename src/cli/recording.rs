@@ -4,15 +4,16 @@
 //! as a bag and the annotated frames as a video or a folder of images.
 
 use super::args::Format;
+use super::detect::Rows;
 use super::output;
 use anyhow::{anyhow, bail, Context, Result};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use whycode::recording::output::{AnnotatedVideo, DetectionsBag};
-use whycode::recording::{Kind, ReadOptions, Recording, Summary};
+use whycode::recording::{Frame as RecordedFrame, Kind, ReadOptions, Recording, Summary};
 use whycode::ros::describe::describe_frame;
 use whycode::ros::msg::{Header, Time};
-use whycode::session::report::{CsvColumns, StreamPosition};
+use whycode::session::report::{CsvColumns, FrameReport, StreamPosition};
 use whycode::session::{Frame, FrameError, Session, SessionConfig};
 
 /// Where the annotated frames go.
@@ -61,37 +62,12 @@ pub fn is_recording(path: &Path) -> bool {
 pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
     let recording = Recording::open(path)?;
     let mut frames = recording.frames(&run.read)?;
-    let progress = if std::io::stderr().is_terminal() {
-        let bar = indicatif::ProgressBar::no_length();
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{pos}/{len} frames, {per_sec}, {eta} left {wide_bar}",
-            )
-            .expect("a valid template"),
-        );
-        bar
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let progress = progress_bar();
     let mut config = run.config.clone();
     config.detector.tracking = true;
     let mut session = Session::new(config);
-    let mut bag = run
-        .output
-        .map(|_| DetectionsBag::new())
-        .transpose()
-        .context("cannot start the detections bag")?;
-    let mut video = match run.annotate {
-        Annotate::Video(target) => {
-            let staged = whycode::io::StagedFile::new(target)?;
-            let writer = AnnotatedVideo::new(target, staged.path());
-            Some((writer, staged))
-        }
-        _ => None,
-    };
-    if let Some(n) = frames.expected() {
-        progress.set_length(n);
-    }
+    let mut outputs = Outputs::new(run)?;
+    let rows = Rows::new(run.format, CsvColumns::of(&run.config), true);
     let mut summary = Summary::default();
     let shown = path.display().to_string();
     let mut result: Result<()> = Ok(());
@@ -103,78 +79,10 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
                 break;
             }
         };
-        let report = session
-            .process(Frame {
-                image: &frame.image,
-                name: shown.clone(),
-                stream: Some(StreamPosition {
-                    frame: frame.index,
-                    stamp_ns: frame.stamp_ns,
-                    topic: frame.topic.clone(),
-                }),
-                camera: frame.camera,
-            })
-            .map_err(|problem| match problem {
-                camera @ FrameError::Camera { .. } => anyhow!(
-                    "{shown}: frame {}: the camera does not fit: {camera}",
-                    frame.index
-                ),
-                FrameError::Arena(problem) => anyhow!("{shown}: frame {}: {problem}", frame.index),
-            })?;
+        let report = process(&mut session, &frame, &shown)?;
         summary.observe(frame.index, &report.markers);
-        if let Some(bag) = &mut bag {
-            let header = Header {
-                stamp: Time {
-                    sec: frame.stamp_ns.div_euclid(1_000_000_000) as i32,
-                    nanosec: frame.stamp_ns.rem_euclid(1_000_000_000) as u32,
-                },
-                frame_id: if frame.frame_id.is_empty() {
-                    "camera".into()
-                } else {
-                    frame.frame_id.clone()
-                },
-            };
-            let computed_for = session.detector_config().diameter_m;
-            let described = describe_frame(
-                &report,
-                &header,
-                computed_for,
-                |id| {
-                    (
-                        Some(format!("{}{id}", whycode::ros::DEFAULT_FRAME_PREFIX)),
-                        computed_for,
-                    )
-                },
-                session
-                    .arena()
-                    .map(|arena| (arena, whycode::ros::DEFAULT_ARENA_FRAME)),
-            );
-            bag.add(frame.stamp_ns, &described)
-                .context("cannot write the detections bag")?;
-        }
-        match run.annotate {
-            Annotate::None => {}
-            Annotate::Folder(dir) => {
-                let png = whycode::session::annotate::annotated_png(&frame.image, &report.markers)?;
-                whycode::io::write_atomic(
-                    &dir.join(format!("frame_{:06}.png", frame.index)),
-                    &png,
-                )?;
-            }
-            Annotate::Video(_) => {
-                let rgb = whycode::session::annotate::annotated_rgb(&frame.image, &report.markers)?;
-                if let Some((writer, _)) = &mut video {
-                    writer.push(rgb, frame.stamp_ns)?;
-                }
-            }
-        }
-        progress.suspend(|| -> Result<()> {
-            match run.format {
-                Format::Json => out.line(report.to_json()),
-                Format::Csv => out.write(&report.to_csv_rows(CsvColumns::of(&run.config))),
-                Format::Table => out.write(&report.to_table(true)),
-            }
-        })?;
+        outputs.frame(&frame, &report, &session)?;
+        progress.suspend(|| rows.print(out, &report))?;
         progress.inc(1);
         if let (None, Some(n)) = (progress.length(), frames.expected()) {
             progress.set_length(n);
@@ -190,26 +98,153 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
     }
     drop(frames);
     result?;
-    if let Some(bag) = bag {
-        let bytes = bag.finish().context("cannot finish the detections bag")?;
-        let target = run.output.expect("a bag only with an output");
-        whycode::io::write_atomic(target, &bytes)?;
-        output::say(format_args!("wrote the detections to {}", target.display()));
-    }
-    if let Some((writer, staged)) = video {
-        writer.finish()?;
-        staged.commit()?;
-        if let Annotate::Video(target) = run.annotate {
-            output::say(format_args!(
-                "wrote the annotated video {}",
-                target.display()
-            ));
-        }
-    }
+    outputs.finish(run)?;
     for line in summary.lines(&skipped) {
         output::say(format_args!("{shown}: {line}"));
     }
     Ok(())
+}
+
+/// A bar of frames read when stderr is a terminal (its length comes once
+/// the recording says how many frames it holds).
+fn progress_bar() -> indicatif::ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::no_length();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{pos}/{len} frames, {per_sec}, {eta} left {wide_bar}",
+        )
+        .expect("a valid template"),
+    );
+    bar
+}
+
+/// One recorded frame through the session; a camera or arena that does
+/// not fit ends the stream.
+fn process(session: &mut Session, frame: &RecordedFrame, shown: &str) -> Result<FrameReport> {
+    session
+        .process(Frame {
+            image: &frame.image,
+            name: shown.to_string(),
+            stream: Some(StreamPosition {
+                frame: frame.index,
+                stamp_ns: frame.stamp_ns,
+                topic: frame.topic.clone(),
+            }),
+            camera: frame.camera,
+        })
+        .map_err(|problem| match problem {
+            camera @ FrameError::Camera { .. } => anyhow!(
+                "{shown}: frame {}: the camera does not fit: {camera}",
+                frame.index
+            ),
+            FrameError::Arena(problem) => anyhow!("{shown}: frame {}: {problem}", frame.index),
+        })
+}
+
+/// The files a recording's run writes besides stdout: the detections bag
+/// and the annotated frames (a video, or images in a folder).
+struct Outputs<'a> {
+    bag: Option<DetectionsBag>,
+    annotate: &'a Annotate,
+    video: Option<(AnnotatedVideo, whycode::io::StagedFile)>,
+}
+
+impl<'a> Outputs<'a> {
+    fn new(run: &Run<'a>) -> Result<Outputs<'a>> {
+        let bag = run
+            .output
+            .map(|_| DetectionsBag::new())
+            .transpose()
+            .context("cannot start the detections bag")?;
+        let video = match run.annotate {
+            Annotate::Video(target) => {
+                let staged = whycode::io::StagedFile::new(target)?;
+                let writer = AnnotatedVideo::new(target, staged.path());
+                Some((writer, staged))
+            }
+            _ => None,
+        };
+        Ok(Outputs {
+            bag,
+            annotate: run.annotate,
+            video,
+        })
+    }
+
+    /// Adds one frame's messages to the bag and its picture to the video
+    /// or folder.
+    fn frame(
+        &mut self,
+        frame: &RecordedFrame,
+        report: &FrameReport,
+        session: &Session,
+    ) -> Result<()> {
+        if let Some(bag) = &mut self.bag {
+            let header = Header {
+                stamp: Time {
+                    sec: frame.stamp_ns.div_euclid(1_000_000_000) as i32,
+                    nanosec: frame.stamp_ns.rem_euclid(1_000_000_000) as u32,
+                },
+                frame_id: if frame.frame_id.is_empty() {
+                    "camera".into()
+                } else {
+                    frame.frame_id.clone()
+                },
+            };
+            let computed_for = session.detector_config().diameter_m;
+            let prefix = whycode::ros::DEFAULT_FRAME_PREFIX;
+            let described = describe_frame(
+                report,
+                &header,
+                computed_for,
+                |id| (Some(format!("{prefix}{id}")), computed_for),
+                session
+                    .arena()
+                    .map(|arena| (arena, whycode::ros::DEFAULT_ARENA_FRAME)),
+            );
+            bag.add(frame.stamp_ns, &described)
+                .context("cannot write the detections bag")?;
+        }
+        match self.annotate {
+            Annotate::None => {}
+            Annotate::Folder(dir) => {
+                let png = whycode::session::annotate::annotated_png(&frame.image, &report.markers)?;
+                let name = format!("frame_{:06}.png", frame.index);
+                whycode::io::write_atomic(&dir.join(name), &png)?;
+            }
+            Annotate::Video(_) => {
+                let rgb = whycode::session::annotate::annotated_rgb(&frame.image, &report.markers)?;
+                if let Some((writer, _)) = &mut self.video {
+                    writer.push(rgb, frame.stamp_ns)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Writes the bag and the video, each whole or not at all.
+    fn finish(self, run: &Run) -> Result<()> {
+        if let Some(bag) = self.bag {
+            let bytes = bag.finish().context("cannot finish the detections bag")?;
+            let target = run.output.expect("a bag only with an output");
+            whycode::io::write_atomic(target, &bytes)?;
+            output::say(format_args!("wrote the detections to {}", target.display()));
+        }
+        if let Some((writer, staged)) = self.video {
+            writer.finish()?;
+            staged.commit()?;
+            if let Annotate::Video(target) = self.annotate {
+                output::say(format_args!(
+                    "wrote the annotated video {}",
+                    target.display()
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The CSV header, when the format has one.
