@@ -22,7 +22,7 @@ use super::ring::RingRead;
 use super::segment::Gray;
 use super::threshold::ThresholdMap;
 use super::{preload_disc, rectify, Candidate, Detection, Detector, Finds, Stage, SCAN_CHUNK};
-use crate::family::{Family, MatchStatus};
+use crate::family::Family;
 use track::{PoseMemory, Track};
 
 /// A tracked frame looks for new markers in one of this many row bands.
@@ -151,50 +151,6 @@ impl Detector {
     pub(super) fn settled(&self, index: usize) -> bool {
         let track = &self.tracks[index];
         track.id != 0 && track.id_streak >= SETTLED_STREAK
-    }
-
-    /// Tracked markers report what the ID filter believes after this
-    /// frame's reading, not the single reading: one misread (motion blur,
-    /// a glint) does not change a marker's ID, and a marker whose readings
-    /// disagree is "unknown" until they settle.
-    pub(super) fn filter_identity(
-        &mut self,
-        gray: Gray<'_>,
-        c: &Candidate,
-        index: usize,
-        d: &mut Detection,
-        followed: bool,
-    ) {
-        let Some(family) = self.config.target.family() else {
-            return;
-        };
-        let track = &mut self.tracks[index];
-        let previous_yaw = track.yaw;
-        let estimate = track.observe_reading(family.len(), d);
-        if followed || estimate.id == d.id {
-            if estimate.id != 0 {
-                d.confidence = estimate.probability;
-            }
-            return;
-        }
-        // This frame's reading, if it named something, contradicts the
-        // belief that is reported instead.
-        let contradicted = d.id != 0 || d.status == Some(MatchStatus::Rejected);
-        d.confidence = if contradicted && estimate.id != 0 {
-            idfilter::IdFilter::contradicted(estimate, d.confidence)
-        } else {
-            estimate.probability
-        };
-        d.id = estimate.id;
-        d.code = family.code(estimate.id);
-        // The reading's yaw belongs to the code it read; the believed code's
-        // edges give the yaw instead.
-        d.yaw = match (d.code, previous_yaw) {
-            (Some(code), Some(yaw)) => {
-                rectify::follow_ring(gray, &c.outer, family.bits(), code, yaw)
-            }
-            _ => None,
-        };
     }
 
     pub(super) fn update_tracks(
