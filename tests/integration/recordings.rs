@@ -457,3 +457,36 @@ fn bad_videos_and_a_missing_ffmpeg_are_one_line() {
         "{err}"
     );
 }
+
+#[test]
+fn a_frame_size_ffmpeg_reports_past_the_cap_is_refused_before_it_is_allocated() {
+    // An ffmpeg that reports 100000x100000-pixel frames (10 GB each), as a
+    // crafted file's metadata can make the real one do: the reader must
+    // refuse the size it is told before allocating a frame of it.
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fake = d.join("ffmpeg");
+    std::fs::write(
+        &fake,
+        "#!/bin/sh\n\
+         echo '[Parsed_showinfo_1 @ 0x5] n:   0 pts:      0 pts_time:0 pos: 1 fmt:gray sar:1/1 s:100000x100000 i:P' >&2\n\
+         exit 0\n",
+    )
+    .unwrap();
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    std::fs::write(d.join("huge.mp4"), b"not really a video").unwrap();
+    let out = crate::support::whycode_env(
+        d,
+        &["detect", "--format", "json", "huge.mp4"],
+        ("WHYCODE_FFMPEG", fake.to_str().unwrap()),
+    );
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("whycode: error: huge.mp4: ")
+            && err.contains("ffmpeg reports frames of 100000x100000 pixels"),
+        "{err}"
+    );
+}
