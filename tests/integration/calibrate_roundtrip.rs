@@ -99,6 +99,26 @@ fn each_refusal_is_one_line() {
     );
 }
 
+/// Views tilted 20-30° about one axis are not "nearly fronto-parallel":
+/// they calibrate.
+#[test]
+fn views_tilted_20_to_30_degrees_about_one_axis_are_not_called_face_on() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("camera.yaml");
+    let tilted: Vec<_> = (0..5)
+        .map(|k| {
+            let tilt = (20.0 + 2.5 * k as f64).to_radians() * if k % 2 == 0 { 1.0 } else { -1.0 };
+            layout::centred(0.45 + 0.02 * k as f64, tilt, 0.0, 0.3 * k as f64)
+        })
+        .collect();
+    let (manifest, photos) = photos(dir.path(), &tilted);
+    let report = run_ok(&args(&manifest, &photos, &out));
+    assert!(report.contains("overall RMS"), "{report}");
+    let camera = Camera::load(&out).unwrap();
+    let truth = calibration::lens();
+    assert!((camera.fx / truth.fx - 1.0).abs() < 0.01, "{report}");
+}
+
 /// On a small marker seen nearly face-on the detector's pick between the
 /// two poses its outline allows is close to a coin toss, and the wrong
 /// one's centre is off by a few tenths of a pixel. Calibration and boards
