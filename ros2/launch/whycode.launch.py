@@ -6,6 +6,11 @@ package, so the Node action has no package.
 
     ros2 launch ros2/launch/whycode.launch.py camera:=/camera diameter:=0.05
     ros2 launch ros2/launch/whycode.launch.py cameras:=/left,/right
+
+Without arguments the node runs on its own defaults (whycode.params.yaml
+holds them): no diameter, so markers without poses. params_file:=FILE loads
+a setup's own parameters instead (example.params.yaml names markers and
+sizes them).
 """
 
 import os
@@ -23,6 +28,7 @@ def nodes(context):
         "camera"
     ).perform(context)
     diameter = float(LaunchConfiguration("diameter").perform(context))
+    params_file = LaunchConfiguration("params_file").perform(context)
     made = []
     for camera in [c.strip().rstrip("/") for c in cameras.split(",") if c.strip()]:
         # /left -> whycode_left; one node per camera, its own ~/markers.
@@ -33,7 +39,7 @@ def nodes(context):
                 name=f"whycode_{suffix}" if suffix else "whycode",
                 output="screen",
                 parameters=[
-                    os.path.join(HERE, "whycode.params.yaml"),
+                    params_file,
                     {"diameter": diameter},
                 ],
                 remappings=[
@@ -52,7 +58,16 @@ def generate_launch_description():
             DeclareLaunchArgument(
                 "cameras", default_value="", description="comma-separated cameras, one node each"
             ),
-            DeclareLaunchArgument("diameter", default_value="0.05"),
+            DeclareLaunchArgument(
+                "diameter",
+                default_value="0.0",
+                description="marker diameter, metres; 0: no poses (the node's default)",
+            ),
+            DeclareLaunchArgument(
+                "params_file",
+                default_value=os.path.join(HERE, "whycode.params.yaml"),
+                description="the node's parameters",
+            ),
             OpaqueFunction(function=nodes),
         ]
     )

@@ -686,18 +686,31 @@ whycode:
         assert!(!node_matches("/*/whycode", "/whycode"));
     }
 
+    /// The launch files load whycode.params.yaml: launching without
+    /// arguments must behave as the node with no parameters.
     #[test]
-    fn the_shipped_params_file_is_read() {
+    fn the_shipped_params_file_holds_the_node_defaults() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("launch/whycode.params.yaml");
         let text = std::fs::read_to_string(&path).unwrap();
         let params = params_from_yaml(&text, "/robot/whycode_left").unwrap();
         let names: Vec<&str> = params.iter().map(|(n, _)| n.as_str()).collect();
         assert!(
-            names.contains(&"tag.ids") && names.contains(&"diameter"),
+            names.contains(&"bits") && names.contains(&"diameter"),
             "{names:?}"
         );
         let settings = crate::params::Settings::from_parameters(&params).unwrap();
+        assert_eq!(settings, crate::params::Settings::default());
+    }
+
+    #[test]
+    fn the_example_params_file_names_and_sizes_markers() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("launch/example.params.yaml");
+        let text = std::fs::read_to_string(&path).unwrap();
+        let params = params_from_yaml(&text, "/whycode").unwrap();
+        let settings = crate::params::Settings::from_parameters(&params).unwrap();
         crate::params::detector_config(&settings, None).unwrap();
+        assert_eq!(settings.tag(2), ("charger".into(), Some(0.1)));
+        assert_eq!(settings.tag(3), ("whycode_3".into(), Some(0.05)));
     }
 
     #[test]
