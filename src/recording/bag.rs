@@ -34,6 +34,11 @@ impl ChannelInfo {
 }
 
 impl Bag {
+    /// The bag's file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
     /// Maps the bag and reads its summary (or, for a bag written without
     /// one, walks its records once for the channels).
     pub fn open(path: &Path) -> Result<Bag, RecordingError> {

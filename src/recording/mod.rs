@@ -174,6 +174,17 @@ pub enum RecordingError {
     /// The recording is not a regular file (a FIFO, a device, a folder).
     #[error(transparent)]
     File(#[from] crate::error::LoadError),
+    /// `--start` (and `--end`) leave no frame: past the recording's end, or
+    /// a window between two frames.
+    #[error("{}: no frame {}", path.display(), window_words(*start_ns, *end_ns))]
+    EmptyWindow {
+        /// The recording.
+        path: PathBuf,
+        /// The window's start, nanoseconds from the first frame.
+        start_ns: Option<i64>,
+        /// The window's end, nanoseconds from the first frame.
+        end_ns: Option<i64>,
+    },
     /// ffmpeg could not read the video (or write one).
     #[error("{}: {problem}", path.display())]
     Video {
@@ -198,6 +209,25 @@ fn open_file(path: &Path) -> Result<std::fs::File, RecordingError> {
             source,
         }),
         Err(err) => Err(err.into()),
+    }
+}
+
+/// "from 1:00 to 1:30 into it", "from 1:00 on", "up to 0:05".
+fn window_words(start_ns: Option<i64>, end_ns: Option<i64>) -> String {
+    let at = |ns: i64| {
+        let seconds = ns as f64 / 1e9;
+        if seconds >= 60.0 {
+            let minutes = (seconds / 60.0).floor();
+            format!("{minutes}:{:06.3}", seconds - 60.0 * minutes)
+        } else {
+            format!("{} s", crate::units::format_number(seconds))
+        }
+    };
+    match (start_ns, end_ns) {
+        (Some(s), Some(e)) => format!("between {} and {}", at(s), at(e)),
+        (Some(s), None) => format!("at or after {}", at(s)),
+        (None, Some(e)) => format!("up to {}", at(e)),
+        (None, None) => "at all".to_string(),
     }
 }
 
@@ -257,18 +287,36 @@ impl Recording {
 
     /// The frames, in order.
     pub fn frames(&self, options: &ReadOptions) -> Result<Frames<'_>, RecordingError> {
-        Ok(match self {
-            Recording::Bag(bag) => Frames::Bag(Box::new(bag.frames(options)?)),
-            Recording::Video(path) => Frames::Video(video::VideoFrames::open(path, options)?),
+        let (source, path) = match self {
+            Recording::Bag(bag) => (Source::Bag(Box::new(bag.frames(options)?)), bag.path()),
+            Recording::Video(path) => (
+                Source::Video(video::VideoFrames::open(path, options)?),
+                path.as_path(),
+            ),
+        };
+        Ok(Frames {
+            source,
+            path: path.to_path_buf(),
+            window: (options.start_ns.is_some() || options.end_ns.is_some())
+                .then_some((options.start_ns, options.end_ns)),
+            given: 0,
         })
     }
 }
 
-/// A recording's frames, one at a time.
-pub enum Frames<'a> {
-    /// From a bag.
+/// A recording's frames, one at a time. A window (`--start`, `--end`) that
+/// holds no frame ends the stream with [`RecordingError::EmptyWindow`],
+/// so a run past the recording's end writes nothing rather than empty
+/// outputs.
+pub struct Frames<'a> {
+    source: Source<'a>,
+    path: PathBuf,
+    window: Option<(Option<i64>, Option<i64>)>,
+    given: u64,
+}
+
+enum Source<'a> {
     Bag(Box<bag::BagFrames<'a>>),
-    /// From a video.
     Video(video::VideoFrames),
 }
 
@@ -276,17 +324,17 @@ impl Frames<'_> {
     /// How many frames the stream will give, when the recording says
     /// (a bag's message count, a video's duration times its rate).
     pub fn expected(&self) -> Option<u64> {
-        match self {
-            Frames::Bag(b) => b.expected(),
-            Frames::Video(v) => v.expected(),
+        match &self.source {
+            Source::Bag(b) => b.expected(),
+            Source::Video(v) => v.expected(),
         }
     }
 
     /// The frames skipped so far (CompressedImages that do not decode).
     pub fn skipped(&self) -> &Skipped {
-        match self {
-            Frames::Bag(b) => b.skipped(),
-            Frames::Video(v) => v.skipped(),
+        match &self.source {
+            Source::Bag(b) => b.skipped(),
+            Source::Video(v) => v.skipped(),
         }
     }
 }
@@ -295,10 +343,23 @@ impl Iterator for Frames<'_> {
     type Item = Result<Frame, RecordingError>;
 
     fn next(&mut self) -> Option<Self::Item> {
-        match self {
-            Frames::Bag(b) => b.next(),
-            Frames::Video(v) => v.next(),
+        let next = match &mut self.source {
+            Source::Bag(b) => b.next(),
+            Source::Video(v) => v.next(),
+        };
+        match (&next, self.window) {
+            (Some(Ok(_)), _) => self.given += 1,
+            (None, Some((start_ns, end_ns))) if self.given == 0 => {
+                self.window = None;
+                return Some(Err(RecordingError::EmptyWindow {
+                    path: self.path.clone(),
+                    start_ns,
+                    end_ns,
+                }));
+            }
+            _ => {}
         }
+        next
     }
 }
 

@@ -490,3 +490,42 @@ fn a_frame_size_ffmpeg_reports_past_the_cap_is_refused_before_it_is_allocated() 
         "{err}"
     );
 }
+
+#[test]
+fn a_start_past_the_end_is_an_error_that_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_video(
+        d,
+        "run.mp4",
+        10,
+        &["-c:v", "libx264", "-pix_fmt", "yuv420p"],
+    );
+    let out = whycode_in(
+        d,
+        &[
+            "detect",
+            "--start",
+            "1:00",
+            "--annotate",
+            "seen.mp4",
+            "--output",
+            "seen.mcap",
+            "run.mp4",
+        ],
+    );
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert_eq!(
+        err.trim_end(),
+        "whycode: error: run.mp4: no frame at or after 1:00.000"
+    );
+    assert!(out.stdout.is_empty());
+    assert!(!d.join("seen.mp4").exists() && !d.join("seen.mcap").exists());
+    // A window that holds frames is read as before.
+    let out = whycode_in(
+        d,
+        &["detect", "--start", "0.1", "--format", "json", "run.mp4"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+}
