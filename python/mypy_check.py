@@ -32,7 +32,7 @@ def summary() -> dict[str, object]:
     codes: list[str] = [c.binary for c in family]
     decoded: whycode.Decoded = family.decode(0b00000111)
     counts: dict[tuple[int, int], int] = whycode.family_counts([8], [2])
-    svg: bytes = whycode.render_marker(1, diameter=0.05, format="svg")
+    svg: bytes = whycode.render_marker(1, diameter="50mm", format="svg")
     pages, manifest = whycode.render_sheet([1, 2], family=family, format="pdf")
     image, truth = whycode.simulate(ids=[1, 2], size=(640, 480))
     report: dict[str, Any] = whycode.validate("swarm.json", [image])

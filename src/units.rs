@@ -37,6 +37,23 @@ impl Length {
         self.mm / 25.4
     }
 
+    /// A length whose bare numbers are metres, as the reference tools take a
+    /// detector's marker diameter and an arena's size.
+    pub fn parse_metres(text: &str) -> Result<Length, String> {
+        Length::parse_with_default_unit(text, "m")
+    }
+
+    /// A height above a floor: a length whose bare numbers are metres, or
+    /// 0 (on the floor) with or without a unit.
+    pub fn parse_height(text: &str) -> Result<Length, String> {
+        let t = text.trim();
+        let number = t.trim_end_matches(|c: char| c.is_ascii_alphabetic());
+        if number.parse::<f64>().is_ok_and(|v| v == 0.0) {
+            return Ok(Length::from_mm(0.0));
+        }
+        Length::parse_metres(text)
+    }
+
     /// Parses a length whose bare numbers mean `default_unit` (e.g. "m" for a
     /// detector's marker diameter, where the reference tools take metres).
     pub fn parse_with_default_unit(text: &str, default_unit: &str) -> Result<Length, String> {
@@ -175,6 +192,15 @@ impl FromStr for Angle {
             rad: value * to_rad,
         })
     }
+}
+
+/// A length in image pixels: `2px`, or a bare number of pixels.
+pub fn parse_pixels(text: &str) -> Result<f64, String> {
+    let t = text.trim();
+    let number = t.strip_suffix("px").unwrap_or(t).trim();
+    number
+        .parse::<f64>()
+        .map_err(|_| format!("'{text}' is not a length in pixels (write e.g. 2px)"))
 }
 
 /// Formats a number the way a person would type it back: plain for

@@ -178,9 +178,10 @@ def main() -> None:
                 for seed in seeds:
                     scene += 1
                     clean, truth = whycode.simulate(
-                        ids=range(1, 13), diameter=DIAMETER_M, camera=camera,
-                        camera_distance=distance, tilt=tilt, pan=10 * seed - 15,
-                        roll=17 * seed, background="table", seed=seed)
+                        ids=range(1, 13), diameter=f"{DIAMETER_M}m", camera=camera,
+                        camera_distance=f"{distance}m", tilt=f"{tilt}deg",
+                        pan=f"{10 * seed - 15}deg", roll=f"{17 * seed}deg",
+                        background="table", seed=seed)
                     for name, (run, dictionary, bits) in runners.items():
                         frame = clean if dictionary is None else tag_frame(clean, truth, dictionary, bits)
                         frame = degrade(frame, blur, noise, seed * 1000 + scene)
@@ -194,7 +195,7 @@ def main() -> None:
     # Empty clutter: the scene's one marker is 1 km away (a twentieth of a
     # pixel), as far as a simulated camera may be.
     for seed in range(1, 21 if not args.quick else 6):
-        clutter, _ = whycode.simulate(ids=[1], camera=camera, camera_distance=1000.0,
+        clutter, _ = whycode.simulate(ids=[1], camera=camera, camera_distance="1000.0m",
                                       background="clutter", noise=3, seed=seed)
         for name, (run, _, _) in runners.items():
             start = time.perf_counter()

@@ -26,8 +26,8 @@ def median_ns(call, repeats: int = REPEATS) -> float:  # type: ignore[no-untyped
 
 
 def main() -> None:
-    grey, _ = whycode.simulate(ids=range(1, 5), size=(640, 480), camera_distance=1.0,
-                               tilt=20, background="table", noise=2)
+    grey, _ = whycode.simulate(ids=range(1, 5), size=(640, 480), camera_distance="1.0m",
+                               tilt="20deg", background="table", noise=2)
     detector = whycode.Detector()
     assert len(detector.detect(grey)) == 4
     layouts = {

@@ -68,8 +68,8 @@ impl PyArena {
             },
             ids,
             size: Some([
-                crate::length(&size.0, "size")?,
-                crate::length(&size.1, "size")?,
+                crate::metres(&size.0, "size")?,
+                crate::metres(&size.1, "size")?,
             ]),
             camera: camera.map(|c| c.camera),
             marker_height: marker_height.map(height).transpose()?,
@@ -136,12 +136,9 @@ impl PyArena {
     }
 }
 
-/// A height: like a length, but 0 (on the floor) is fine.
+/// A height: like a length in metres, but 0 (on the floor) is fine.
 fn height(value: &Bound<'_, PyAny>) -> PyResult<whycode::units::Length> {
-    if value.extract::<f64>().is_ok_and(|v| v == 0.0) {
-        return Ok(whycode::units::Length::from_m(0.0));
-    }
-    crate::length(value, "marker_height")
+    crate::quantity(value, "marker_height", whycode::units::Length::parse_height)
 }
 
 /// `arena=` as `Detector` takes it: an `Arena` or an arena file's path.

@@ -35,8 +35,11 @@ fn calibrate_photos<'py>(
     fix_aspect: bool,
     no_tangential: bool,
     no_k3: bool,
-    print_scale: Option<f64>,
+    print_scale: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(PyCamera, Bound<'py, PyAny>)> {
+    let print_scale = print_scale
+        .map(|s| crate::quantity(s, "print_scale", whycode::units::parse_scale))
+        .transpose()?;
     let options = guard(|| {
         CalibrateSpec {
             fix_principal_point,

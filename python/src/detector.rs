@@ -123,7 +123,7 @@ impl PyDetector {
                 None if legacy => TargetSpec::legacy(),
                 None => TargetSpec::default(),
             },
-            diameter: diameter.map(|d| crate::length(d, "diameter")).transpose()?,
+            diameter: diameter.map(|d| crate::metres(d, "diameter")).transpose()?,
             camera: camera.map(|c| c.camera),
             max_markers,
             tracking,

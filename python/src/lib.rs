@@ -168,25 +168,40 @@ pub(crate) fn json_to_py<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py
     py.import("json")?.call_method1("loads", (text,))
 }
 
-/// A length argument: a number in metres, or text with a unit ("50mm"),
-/// parsed as the CLI parses it.
-pub(crate) fn length(value: &Bound<'_, PyAny>, what: &str) -> PyResult<whycode::units::Length> {
-    use whycode::units::Length;
-    let length = if let Ok(text) = value.extract::<String>() {
-        Length::parse_with_default_unit(&text, "m")
-            .map_err(|e| Error::value(format!("{what}: {e}")))?
+/// A quantity argument, read as the command line reads it: text as typed
+/// there ("50mm", "30deg", "97%"), and a number as that number typed
+/// without a unit. One rule for every quantity in both front ends, and the
+/// command line's words when it is refused (`tilt=30` is refused as
+/// `--tilt 30` is; `Detector(diameter=0.05)` is metres, as `detect
+/// --diameter 0.05` is).
+pub(crate) fn quantity<T, E: std::fmt::Display>(
+    value: &Bound<'_, PyAny>,
+    what: &str,
+    parse: impl Fn(&str) -> std::result::Result<T, E>,
+) -> PyResult<T> {
+    let text = if let Ok(text) = value.extract::<String>() {
+        text
+    } else if let Ok(number) = value.extract::<f64>() {
+        whycode::units::format_number(number)
     } else {
-        let m: f64 = value.extract().map_err(|_| {
-            Error::value(format!(
-                "{what}: expected a number of metres or text with a unit like '50mm'"
-            ))
-        })?;
-        Length::from_m(m)
+        return Err(Error::value(format!(
+            "{what}: expected a number or text with a unit, like '50mm' or '30deg'"
+        ))
+        .into());
     };
-    if !(length.mm().is_finite() && length.mm() > 0.0) {
-        return Err(Error::value(format!("{what}: must be a positive length")).into());
-    }
-    Ok(length)
+    parse(&text).map_err(|e| Error::value(format!("{what}: {e}")).into())
+}
+
+/// A length that needs a unit, as the command line's `--diameter` of
+/// `marker` and `sheet` does.
+pub(crate) fn length(value: &Bound<'_, PyAny>, what: &str) -> PyResult<whycode::units::Length> {
+    quantity(value, what, str::parse)
+}
+
+/// A length whose bare numbers are metres, as the command line's `detect
+/// --diameter` and `arena --size` take it.
+pub(crate) fn metres(value: &Bound<'_, PyAny>, what: &str) -> PyResult<whycode::units::Length> {
+    quantity(value, what, whycode::units::Length::parse_metres)
 }
 
 /// A class made at run time, `type(name, bases, {...})`: the exceptions

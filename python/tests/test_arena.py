@@ -45,7 +45,7 @@ def test_arena_matches_the_cli(with_camera: bool, tmp_path: Path, cli: Callable[
 
 
 def test_arena_refusals_are_value_errors(tmp_path: Path, cli: Callable[..., Any]) -> None:
-    image, _ = whycode.simulate(ids=range(1, 9), diameter=0.05, seed=3)
+    image, _ = whycode.simulate(ids=range(1, 9), diameter="0.05m", seed=3)
     with pytest.raises(whycode.WhycodeValueError, match="corner ID 99 is not among"):
         whycode.Arena.measure(image, (0.3, 0.1), ids=[5, 8, 4, 99])
     with pytest.raises(whycode.WhycodeValueError, match="ids: give four IDs"):

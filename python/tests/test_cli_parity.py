@@ -74,7 +74,7 @@ def written_truth(path: Path, image: str) -> Any:
 def test_simulate_detect_validate_match_the_cli(sheet: Path, tmp_path: Path,
                                                 cli: Callable[..., Any],
                                                 cli_json: Callable[..., Any]) -> None:
-    image, truth = whycode.simulate(manifest=sheet, tilt=25, pan=-10, blur=1.5, noise=3, seed=7)
+    image, truth = whycode.simulate(manifest=sheet, tilt="25deg", pan="-10deg", blur=1.5, noise=3, seed=7)
     cli("simulate", "--manifest", "swarm.json", "--tilt", "25deg", "--pan", "-10deg",
         "--blur", "1.5px", "--noise", "3", "--seed", "7", "-o", "view.png")
     assert np.array_equal(image, whycode.load_image(tmp_path / "view.png"))
@@ -109,8 +109,8 @@ def test_pose_matches_the_cli(tmp_path: Path, cli: Callable[..., Any],
     (tmp_path / "cam.yaml").write_text(camera.to_ros_yaml())
     assert whycode.Camera.load(tmp_path / "cam.yaml") == camera
     image, truth = whycode.simulate(family=whycode.Family(12, 2), ids=range(1, 10),
-                                    diameter=0.05, camera=camera, camera_distance=0.7,
-                                    tilt=30, noise=2, seed=3)
+                                    diameter="0.05m", camera=camera, camera_distance="0.7m",
+                                    tilt="30deg", noise=2, seed=3)
     cli("simulate", "--bits", "12", "--distance", "2", "--ids", "1-9", "--diameter", "50mm",
         "--camera", "cam.yaml", "--camera-distance", "0.7m", "--tilt", "30deg", "--noise", "2",
         "--seed", "3", "-o", "loose.png")
@@ -133,7 +133,7 @@ def test_pose_matches_the_cli(tmp_path: Path, cli: Callable[..., Any],
 def test_every_loose_layout_matches_the_cli(layout: Literal["grid", "scatter"], tmp_path: Path,
                                             cli: Callable[..., Any]) -> None:
     image, truth = whycode.simulate(ids=range(1, 9), layout=layout, size=(640, 480),
-                                    camera_distance="0.9m", tilt=15, seed=4)
+                                    camera_distance="0.9m", tilt="15deg", seed=4)
     cli("simulate", "--ids", "1-8", "--layout", layout, "--size", "640x480",
         "--camera-distance", "0.9m", "--tilt", "15deg", "--seed", "4", "-o", f"{layout}.png")
     assert np.array_equal(image, whycode.load_image(tmp_path / f"{layout}.png"))
@@ -161,6 +161,32 @@ def test_options_of_the_other_subject_are_refused_not_ignored(sheet: Path) -> No
         whycode.simulate(ids=[1, 2], print_scale=0.97)
 
 
+def test_quantities_are_read_as_the_cli_reads_them(cli: Callable[..., Any]) -> None:
+    """A number means what it means typed on the command line without a
+    unit, and a refusal carries the CLI's words."""
+    for name, value, call in [
+        ("tilt", "30", lambda: whycode.simulate(ids=[1], tilt=30)),
+        ("camera_distance", "0.6", lambda: whycode.simulate(ids=[1], camera_distance=0.6)),
+        ("diameter", "0.05", lambda: whycode.simulate(ids=[1], diameter=0.05)),
+    ]:
+        option = "--" + name.replace("_", "-")
+        out = cli("simulate", "--ids", "1", option, value, "-o", "q.png", ok=False)
+        assert out.returncode != 0
+        with pytest.raises(ValueError) as err:
+            call()
+        message = str(err.value)
+        assert message.startswith(f"{name}: '{value}' has no unit"), message
+        assert message.removeprefix(f"{name}: ") in out.stderr, (message, out.stderr)
+    with pytest.raises(ValueError, match="^diameter: '0.05' has no unit"):
+        whycode.render_marker(1, diameter=0.05)
+    # Where the command line takes bare metres or pixels, so does Python.
+    image, _ = whycode.simulate(ids=[1, 2], size=(320, 240), camera_distance="0.5m",
+                                tilt="20deg", blur=1, print_scale=None, seed=2)
+    assert len(whycode.Detector(diameter=0.05).detect(image)) == 2
+    assert whycode.simulate(ids=[1], size=(320, 240), blur="1px", seed=2)[0].tobytes() == \
+        whycode.simulate(ids=[1], size=(320, 240), blur=1.0, seed=2)[0].tobytes()
+
+
 def test_compat_files_match_the_cli(cli_json: Callable[..., Any]) -> None:
     if not COMPAT.is_dir():
         if REQUIRED:
@@ -184,8 +210,8 @@ def write_pnm(path: Path, array: np.ndarray) -> None:
 
 def test_colour_and_16_bit_arrays_match_the_cli_on_the_same_pixels(
         tmp_path: Path, cli_json: Callable[..., Any]) -> None:
-    grey, _ = whycode.simulate(ids=range(1, 7), size=(480, 360), camera_distance=0.6,
-                               tilt=20, noise=2)
+    grey, _ = whycode.simulate(ids=range(1, 7), size=(480, 360), camera_distance="0.6m",
+                               tilt="20deg", noise=2)
     rng = np.random.default_rng(1)
     tint = rng.integers(0, 30, size=grey.shape + (3,))
     bgr = np.clip(grey[..., None].astype(int) - tint, 0, 255).astype(np.uint8)

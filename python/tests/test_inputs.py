@@ -8,8 +8,8 @@ import whycode
 
 @pytest.fixture(scope="module")
 def grey() -> np.ndarray:
-    image, _ = whycode.simulate(ids=range(1, 7), size=(480, 360), camera_distance=0.6,
-                                tilt=15, noise=2)
+    image, _ = whycode.simulate(ids=range(1, 7), size=(480, 360), camera_distance="0.6m",
+                                tilt="15deg", noise=2)
     return image
 
 
@@ -136,8 +136,8 @@ def test_timings_give_each_stage_of_the_last_frame(grey: np.ndarray,
 
 def test_a_calibration_for_another_resolution_is_rescaled_or_refused() -> None:
     small = whycode.Camera.ideal(640, 360, 70.0)
-    image, truth = whycode.simulate(ids=range(1, 5), diameter=0.05, camera=small,
-                                    camera_distance=0.9, noise=2, seed=4)
+    image, truth = whycode.simulate(ids=range(1, 5), diameter="0.05m", camera=small,
+                                    camera_distance="0.9m", noise=2, seed=4)
     assert image.shape == (360, 640)
     # The same sensor calibrated at twice the resolution: the detector
     # rescales it, and the poses are those of the calibration that fits.
@@ -165,8 +165,8 @@ def rodrigues(rvec: np.ndarray) -> np.ndarray:
 
 def test_markers_carry_what_opencv_users_draw_and_solve_with() -> None:
     camera = whycode.Camera.ideal(640, 480, 60.0)
-    image, _ = whycode.simulate(ids=range(1, 4), diameter=0.05, camera=camera,
-                                camera_distance=0.6, tilt=25, noise=2, seed=5)
+    image, _ = whycode.simulate(ids=range(1, 4), diameter="0.05m", camera=camera,
+                                camera_distance="0.6m", tilt="25deg", noise=2, seed=5)
     found = whycode.Detector(diameter="50mm", camera=camera).detect(image)
     assert len(found) == 3
     for m in found:
@@ -182,7 +182,7 @@ def test_markers_carry_what_opencv_users_draw_and_solve_with() -> None:
 
 
 def test_draw_returns_bgr_over_the_colours_given() -> None:
-    image, _ = whycode.simulate(ids=range(1, 4), size=(320, 240), camera_distance=0.5, seed=2)
+    image, _ = whycode.simulate(ids=range(1, 4), size=(320, 240), camera_distance="0.5m", seed=2)
     markers = whycode.Detector().detect(image)
     assert len(markers) == 3
     drawn = whycode.draw(image, markers)
@@ -202,7 +202,7 @@ def test_tracked_markers_keep_their_track_numbers() -> None:
     detector = whycode.Detector(tracking=True)
     numbers = []
     for seed in (1, 1, 1):
-        image, _ = whycode.simulate(ids=range(1, 4), size=(320, 240), camera_distance=0.5,
+        image, _ = whycode.simulate(ids=range(1, 4), size=(320, 240), camera_distance="0.5m",
                                     seed=seed)
         found = sorted(detector.detect(image), key=lambda m: m.id)
         numbers.append([m.track for m in found])

@@ -25,7 +25,7 @@ def write_video(folder: pathlib.Path, frames: list[np.ndarray]) -> pathlib.Path:
 
 def test_a_video_yields_its_frames_stamps_and_markers(tmp_path: pathlib.Path) -> None:
     frames = [
-        whycode.simulate(ids=[1, 2, 3], size=(320, 240), camera_distance=0.5, seed=k)[0]
+        whycode.simulate(ids=[1, 2, 3], size=(320, 240), camera_distance="0.5m", seed=k)[0]
         for k in range(6)
     ]
     video = write_video(tmp_path, frames)

@@ -15,8 +15,8 @@ CALLS = 200
 
 @pytest.fixture(scope="module")
 def frame() -> tuple[np.ndarray, list[dict[str, object]]]:
-    image, _ = whycode.simulate(ids=range(1, 10), size=(320, 240), camera_distance=0.9,
-                                tilt=20, noise=2, seed=5)
+    image, _ = whycode.simulate(ids=range(1, 10), size=(320, 240), camera_distance="0.9m",
+                                tilt="20deg", noise=2, seed=5)
     expected = [m.as_dict() for m in whycode.Detector().detect(image)]
     assert len(expected) == 9
     return image, expected

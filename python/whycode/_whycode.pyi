@@ -9,8 +9,15 @@ import numpy.typing as npt
 __version__: str
 
 StrPath = Union[str, "os.PathLike[str]"]
-Length = Union[float, str]
-"""A length: a number in metres, or text with a unit ("50mm", "2in")."""
+Quantity = Union[float, str]
+"""A quantity, given as on the command line: text with its unit ("50mm",
+"2in", "30deg", "2px", "97%"); a number means what it means typed there
+without a unit (metres for a detector's diameter, an arena's size and a
+marker height; pixels for blur; a ratio for a print scale; refused for
+the other lengths and for angles, with the command line's message)."""
+Length = Quantity
+"""A length: text with a unit ("50mm", "2in"), or a number where the
+command line takes bare metres."""
 ImageArray = Union[npt.NDArray[np.uint8], npt.NDArray[np.uint16]]
 """HxW grey, HxWx3 BGR or HxWx4 BGRA, uint8 or uint16."""
 
@@ -161,7 +168,7 @@ def calibrate(
     fix_aspect: bool = False,
     no_tangential: bool = False,
     no_k3: bool = False,
-    print_scale: Optional[float] = None,
+    print_scale: Optional[Quantity] = None,
 ) -> tuple[Camera, dict[str, Any]]:
     """A camera from photos of a printed sheet, as ``whycode calibrate``: (camera, report)."""
 
@@ -329,26 +336,26 @@ def simulate(
     *,
     manifest: Optional[StrPath] = None,
     page: Optional[int] = None,
-    print_scale: Optional[float] = None,
+    print_scale: Optional[Quantity] = None,
     family: Optional[Family] = None,
     ids: Optional[Sequence[int]] = None,
     diameter: Optional[Length] = None,
     layout: Optional[Literal["grid", "scatter"]] = None,
     camera: Optional[Camera] = None,
     size: Optional[tuple[int, int]] = None,
-    fov: Optional[float] = None,
+    fov: Optional[Quantity] = None,
     camera_distance: Optional[Length] = None,
-    tilt: float = 0.0,
-    pan: float = 0.0,
-    roll: float = 0.0,
+    tilt: Optional[Quantity] = None,
+    pan: Optional[Quantity] = None,
+    roll: Optional[Quantity] = None,
     background: Optional[Literal["grey", "table", "clutter"]] = None,
     gradient: float = 1.0,
-    gradient_angle: float = 0.0,
+    gradient_angle: Optional[Quantity] = None,
     exposure: Optional[float] = None,
     dark: bool = False,
-    blur: float = 0.0,
-    motion_blur: float = 0.0,
-    motion_angle: float = 0.0,
+    blur: Optional[Quantity] = None,
+    motion_blur: Optional[Quantity] = None,
+    motion_angle: Optional[Quantity] = None,
     noise: float = 0.0,
     jpeg: Optional[int] = None,
     blot: Sequence[int] = (),

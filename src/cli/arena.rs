@@ -42,7 +42,7 @@ pub struct ArenaArgs {
     ids: Option<Vec<u32>>,
     /// The rectangle's sides along x and along y: 2m,1.5m (bare numbers
     /// are metres)
-    #[arg(long, value_name = "X,Y", value_parser = super::detect::parse_diameter, value_delimiter = ',', required = true)]
+    #[arg(long, value_name = "X,Y", value_parser = Length::parse_metres, value_delimiter = ',', required = true)]
     size: Vec<Length>,
     /// The calibrated camera that took the photo (ROS or OpenCV YAML/XML)
     #[arg(long, value_name = "FILE")]
@@ -50,7 +50,7 @@ pub struct ArenaArgs {
     /// Height above the floor of the markers `detect` will locate (on
     /// robots): 0.12 (metres), 12cm [default: 0, on the floor]; needs
     /// --camera
-    #[arg(long, value_name = "LENGTH", value_parser = super::detect::parse_height, allow_hyphen_values = true)]
+    #[arg(long, value_name = "LENGTH", value_parser = Length::parse_height, allow_hyphen_values = true)]
     marker_height: Option<Length>,
     #[command(flatten)]
     kind: MarkerKindArgs,

@@ -64,7 +64,7 @@ pub struct DetectArgs {
     #[arg(
         long,
         value_name = "LENGTH",
-        value_parser = parse_diameter,
+        value_parser = Length::parse_metres,
         allow_hyphen_values = true
     )]
     diameter: Option<Length>,
@@ -94,7 +94,7 @@ pub struct DetectArgs {
     #[arg(
         long,
         value_name = "LENGTH",
-        value_parser = parse_height,
+        value_parser = Length::parse_height,
         requires = "arena",
         allow_hyphen_values = true
     )]
@@ -160,22 +160,6 @@ pub struct DetectArgs {
     /// line, and milliseconds per stage over all images on standard error
     #[arg(long)]
     timings: bool,
-}
-
-/// A height above a floor: a length whose bare numbers are metres, or 0
-/// (on the floor) with or without a unit.
-pub(super) fn parse_height(text: &str) -> Result<Length, String> {
-    let t = text.trim();
-    let number = t.trim_end_matches(|c: char| c.is_ascii_alphabetic());
-    if number.parse::<f64>().is_ok_and(|v| v == 0.0) {
-        return Ok(Length::from_mm(0.0));
-    }
-    parse_diameter(text)
-}
-
-/// A length whose bare numbers are metres.
-pub(super) fn parse_diameter(text: &str) -> Result<Length, String> {
-    Length::parse_with_default_unit(text, "m")
 }
 
 /// One unit of work: an independent image, or a folder's frames in order.

@@ -99,10 +99,10 @@ struct SimulateOptions {
     #[arg(long, value_parser = parse_plain_number, allow_hyphen_values = true)]
     exposure: Option<f64>,
     /// Focus blur: Gaussian sigma in pixels, e.g. 2px
-    #[arg(long, default_value = "0px", value_parser = parse_pixels, allow_hyphen_values = true)]
+    #[arg(long, default_value = "0px", value_parser = whycode::units::parse_pixels, allow_hyphen_values = true)]
     blur: f64,
     /// Motion blur: length of the smear in pixels, e.g. 6px
-    #[arg(long, default_value = "0px", value_parser = parse_pixels, allow_hyphen_values = true)]
+    #[arg(long, default_value = "0px", value_parser = whycode::units::parse_pixels, allow_hyphen_values = true)]
     motion_blur: f64,
     /// Direction of the motion blur (image angle)
     #[arg(long, default_value = "0deg", allow_hyphen_values = true)]
@@ -141,14 +141,6 @@ enum BackgroundArg {
     Grey,
     Table,
     Clutter,
-}
-
-fn parse_pixels(text: &str) -> Result<f64, String> {
-    let t = text.trim();
-    let number = t.strip_suffix("px").unwrap_or(t).trim();
-    number
-        .parse::<f64>()
-        .map_err(|_| format!("'{text}' is not a length in pixels (write e.g. 2px)"))
 }
 
 fn parse_size(text: &str) -> Result<(u32, u32), String> {
