@@ -182,7 +182,9 @@ def test_quantities_are_read_as_the_cli_reads_them(cli: Callable[..., Any]) -> N
     # Where the command line takes bare metres or pixels, so does Python.
     image, _ = whycode.simulate(ids=[1, 2], size=(320, 240), camera_distance="0.5m",
                                 tilt="20deg", blur=1, print_scale=None, seed=2)
-    assert len(whycode.Detector(diameter=0.05).detect(image)) == 2
+    assert len(whycode.Detector().detect(image)) == 2
+    with pytest.raises(ValueError, match="give camera too"):
+        whycode.Detector(diameter=0.05)  # metres, as `detect --diameter 0.05`: no unit error
     assert whycode.simulate(ids=[1], size=(320, 240), blur="1px", seed=2)[0].tobytes() == \
         whycode.simulate(ids=[1], size=(320, 240), blur=1.0, seed=2)[0].tobytes()
 
