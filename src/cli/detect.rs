@@ -164,7 +164,7 @@ pub struct DetectArgs {
 
 /// A height above a floor: a length whose bare numbers are metres, or 0
 /// (on the floor) with or without a unit.
-pub(super) fn parse_height(text: &str) -> Result<Length, String> {
+pub(super) fn parse_height(text: &str) -> Result<Length, whycode::units::LengthError> {
     let t = text.trim();
     let number = t.trim_end_matches(|c: char| c.is_ascii_alphabetic());
     if number.parse::<f64>().is_ok_and(|v| v == 0.0) {
@@ -174,7 +174,7 @@ pub(super) fn parse_height(text: &str) -> Result<Length, String> {
 }
 
 /// A length whose bare numbers are metres.
-pub(super) fn parse_diameter(text: &str) -> Result<Length, String> {
+pub(super) fn parse_diameter(text: &str) -> Result<Length, whycode::units::LengthError> {
     Length::parse_with_default_unit(text, "m")
 }
 

@@ -27,7 +27,7 @@ pub use calibrate::CalibrateSpec;
 pub use detect::DetectSpec;
 pub use limits::{Limit, OutOfRange};
 #[cfg(feature = "recordings")]
-pub use recording::RecordingSpec;
+pub use recording::{NotATime, RecordingSpec};
 pub use scene::{BackgroundKind, Layout, SceneSpec};
 pub use target::{Bits, TargetSpec};
 
