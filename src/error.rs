@@ -202,11 +202,11 @@ impl WriteError {
     }
 }
 
-/// Returns early from a reader's checks with the problem in words (the
-/// `Err(String)` that becomes a [`LoadProblem::Invalid`]).
+/// Returns early from a reader's checks with the problem in words, a
+/// [`LoadProblem::Invalid`] for the reader to put its file's name to.
 macro_rules! refuse {
     ($($arg:tt)*) => {
-        return Err(format!($($arg)*))
+        return Err($crate::error::LoadProblem::Invalid(format!($($arg)*)))
     };
 }
 pub(crate) use refuse;

@@ -104,8 +104,8 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
             .and_then(|mut source| source.read_to_end(&mut bytes))
             .map_err(io)?;
         check_jpeg_complete(path, &bytes)?;
-        let decoded = decode_jpeg_strictly(&bytes)
-            .map_err(|problem| image_error(path, LoadProblem::Invalid(problem)))?;
+        let decoded =
+            decode_jpeg_strictly(&bytes).map_err(|damage| image_error(path, damage.into()))?;
         let gray = to_gray(decoded);
         if zeroed_scan(&bytes) && same_in_every_block(&gray) {
             return Err(image_error(
@@ -120,14 +120,13 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
     }
     if format == image::ImageFormat::Png {
         check_palette_indices(open().map_err(io)?)
-            .map_err(|problem| image_error(path, LoadProblem::Invalid(problem)))?;
+            .map_err(|damage| image_error(path, damage.into()))?;
     }
     if format == image::ImageFormat::Png
         && u64::from(width) * u64::from(height) > ROW_BY_ROW_PNG_PIXELS
     {
         let source = open().map_err(io)?;
-        let rows = png_rows_to_gray(source)
-            .map_err(|problem| image_error(path, LoadProblem::Invalid(problem)))?;
+        let rows = png_rows_to_gray(source).map_err(|damage| image_error(path, damage.into()))?;
         if let Some(gray) = rows {
             return Ok((gray, format));
         }
@@ -142,13 +141,51 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
     Ok((to_gray(reader.decode().map_err(decode)?), format))
 }
 
+/// Damage the strict decoders below find in a file the `image` crate would
+/// decode without a word. A decoder's own error is quoted in the message,
+/// not chained as a source, so that the message is the whole line.
+#[derive(Debug, thiserror::Error)]
+enum Damage {
+    /// The JPEG decoder's refusal.
+    #[error("damaged JPEG: {0}")]
+    Jpeg(zune_jpeg::errors::DecodeErrors),
+    /// A JPEG without a frame header.
+    #[error("damaged JPEG: no frame header")]
+    NoFrameHeader,
+    /// A JPEG whose pixels stop short of its header's size.
+    #[error("damaged JPEG: fewer pixels than its header gives")]
+    ShortJpeg,
+    /// The PNG decoder's refusal.
+    #[error("damaged PNG: {0}")]
+    Png(png::DecodingError),
+    /// A palette index past the palette's end.
+    #[error(
+        "damaged PNG: pixel index {highest} runs past its palette of {colours} colour{}",
+        if *colours == 1 { "" } else { "s" }
+    )]
+    PastPalette {
+        /// The highest index in the pixels.
+        highest: u16,
+        /// How many colours the palette has.
+        colours: usize,
+    },
+    /// A PNG row of another length than its header gives.
+    #[error("a PNG row of another length than its header gives")]
+    RowLength,
+}
+
+impl From<Damage> for LoadProblem {
+    fn from(damage: Damage) -> LoadProblem {
+        LoadProblem::Invalid(damage.to_string())
+    }
+}
+
 /// A JPEG decoded as the `image` crate decodes it (the same decoder,
 /// asked for the same colours), but in the decoder's strict mode: leniently,
 /// a scan of zeros or a corrupt Huffman stream decodes "without error" to
 /// grey or garbage, which would read as a photo with no markers in it.
-fn decode_jpeg_strictly(bytes: &[u8]) -> Result<image::DynamicImage, String> {
+fn decode_jpeg_strictly(bytes: &[u8]) -> Result<image::DynamicImage, Damage> {
     use zune_core::colorspace::ColorSpace;
-    let damaged = |e: zune_jpeg::errors::DecodeErrors| format!("damaged JPEG: {e}");
     let options = zune_core::options::DecoderOptions::default()
         .set_strict_mode(true)
         .set_max_width(usize::MAX)
@@ -157,26 +194,27 @@ fn decode_jpeg_strictly(bytes: &[u8]) -> Result<image::DynamicImage, String> {
         zune_core::bytestream::ZCursor::new(bytes),
         options,
     );
-    decoder.decode_headers().map_err(damaged)?;
-    let (width, height) = decoder
-        .dimensions()
-        .ok_or_else(|| "damaged JPEG: no frame header".to_string())?;
+    decoder.decode_headers().map_err(Damage::Jpeg)?;
+    let (width, height) = decoder.dimensions().ok_or(Damage::NoFrameHeader)?;
     let colours = match decoder.input_colorspace() {
         Some(c @ (ColorSpace::RGB | ColorSpace::RGBA | ColorSpace::Luma | ColorSpace::LumaA)) => c,
         _ => ColorSpace::RGB,
     };
     decoder.set_options(decoder.options().jpeg_set_out_colorspace(colours));
-    let pixels = decoder.decode().map_err(damaged)?;
+    let pixels = decoder.decode().map_err(Damage::Jpeg)?;
     let (w, h) = (width as u32, height as u32);
-    let short = || "damaged JPEG: fewer pixels than its header gives".to_string();
     use image::DynamicImage as Dyn;
     Ok(match colours {
-        ColorSpace::Luma => Dyn::ImageLuma8(ImageBuffer::from_raw(w, h, pixels).ok_or_else(short)?),
-        ColorSpace::LumaA => {
-            Dyn::ImageLumaA8(ImageBuffer::from_raw(w, h, pixels).ok_or_else(short)?)
+        ColorSpace::Luma => {
+            Dyn::ImageLuma8(ImageBuffer::from_raw(w, h, pixels).ok_or(Damage::ShortJpeg)?)
         }
-        ColorSpace::RGBA => Dyn::ImageRgba8(ImageBuffer::from_raw(w, h, pixels).ok_or_else(short)?),
-        _ => Dyn::ImageRgb8(ImageBuffer::from_raw(w, h, pixels).ok_or_else(short)?),
+        ColorSpace::LumaA => {
+            Dyn::ImageLumaA8(ImageBuffer::from_raw(w, h, pixels).ok_or(Damage::ShortJpeg)?)
+        }
+        ColorSpace::RGBA => {
+            Dyn::ImageRgba8(ImageBuffer::from_raw(w, h, pixels).ok_or(Damage::ShortJpeg)?)
+        }
+        _ => Dyn::ImageRgb8(ImageBuffer::from_raw(w, h, pixels).ok_or(Damage::ShortJpeg)?),
     })
 }
 
@@ -217,11 +255,10 @@ fn same_in_every_block(gray: &GrayImage) -> bool {
 /// The PNG decoder turns a palette index past the palette's end into
 /// black without a word: a damaged file would read as a picture with dark
 /// blots. Only an indexed file is read (a second time, as raw indices).
-fn check_palette_indices<R: std::io::BufRead + std::io::Seek>(source: R) -> Result<(), String> {
-    let damaged = |e: png::DecodingError| format!("damaged PNG: {e}");
+fn check_palette_indices<R: std::io::BufRead + std::io::Seek>(source: R) -> Result<(), Damage> {
     let mut decoder = png::Decoder::new(source);
     decoder.set_transformations(png::Transformations::IDENTITY);
-    let mut reader = decoder.read_info().map_err(damaged)?;
+    let mut reader = decoder.read_info().map_err(Damage::Png)?;
     let info = reader.info();
     if info.color_type != png::ColorType::Indexed {
         return Ok(());
@@ -235,7 +272,7 @@ fn check_palette_indices<R: std::io::BufRead + std::io::Seek>(source: R) -> Resu
     let per_byte = 8 / depth as usize;
     let mask = (1u16 << depth) - 1;
     let mut highest = 0u16;
-    while let Some(row) = reader.next_row().map_err(damaged)? {
+    while let Some(row) = reader.next_row().map_err(Damage::Png)? {
         // Interlaced passes are narrower than the image; count their own width.
         let pixels = (row.data().len() * per_byte).min(width);
         for k in 0..pixels {
@@ -245,10 +282,7 @@ fn check_palette_indices<R: std::io::BufRead + std::io::Seek>(source: R) -> Resu
         }
     }
     if usize::from(highest) >= colours {
-        return Err(format!(
-            "damaged PNG: pixel index {highest} runs past its palette of {colours} colour{}",
-            if colours == 1 { "" } else { "s" }
-        ));
+        return Err(Damage::PastPalette { highest, colours });
     }
     Ok(())
 }
@@ -260,14 +294,13 @@ fn check_palette_indices<R: std::io::BufRead + std::io::Seek>(source: R) -> Resu
 /// interlaced file, whose rows come in passes: it is decoded whole.
 fn png_rows_to_gray<R: std::io::BufRead + std::io::Seek>(
     source: R,
-) -> Result<Option<GrayImage>, String> {
-    let damaged = |e: png::DecodingError| format!("damaged PNG: {e}");
+) -> Result<Option<GrayImage>, Damage> {
     use image::DynamicImage as Dyn;
     let mut decoder = png::Decoder::new(source);
     // Palette and low-bit grey to 8 bits, transparency to alpha: what the
     // `image` crate's own PNG decoder asks for.
     decoder.set_transformations(png::Transformations::EXPAND);
-    let mut reader = decoder.read_info().map_err(damaged)?;
+    let mut reader = decoder.read_info().map_err(Damage::Png)?;
     if reader.info().interlaced {
         return Ok(None);
     }
@@ -290,11 +323,10 @@ fn png_rows_to_gray<R: std::io::BufRead + std::io::Seek>(
             _ => Dyn::ImageRgba16(ImageBuffer::from_raw(width, 1, raw)?),
         })
     };
-    let malformed = || "a PNG row of another length than its header gives".to_string();
     let pixels = width as usize * height as usize;
     if depth == png::BitDepth::Sixteen {
         let mut wide: Vec<u16> = Vec::with_capacity(pixels);
-        while let Some(row) = reader.next_row().map_err(damaged)? {
+        while let Some(row) = reader.next_row().map_err(Damage::Png)? {
             let raw = row
                 .data()
                 .chunks_exact(2)
@@ -302,21 +334,21 @@ fn png_rows_to_gray<R: std::io::BufRead + std::io::Seek>(
                 .collect();
             wide.extend(
                 wide_row_of(raw)
-                    .ok_or_else(malformed)?
+                    .ok_or(Damage::RowLength)?
                     .into_luma16()
                     .into_raw(),
             );
         }
-        let wide = ImageBuffer::from_raw(width, height, wide).ok_or_else(malformed)?;
+        let wide = ImageBuffer::from_raw(width, height, wide).ok_or(Damage::RowLength)?;
         return Ok(Some(stretched_to_8_bits(wide)));
     }
     let mut grey: Vec<u8> = Vec::with_capacity(pixels);
-    while let Some(row) = reader.next_row().map_err(damaged)? {
-        let row = row_of(row.data().to_vec()).ok_or_else(malformed)?;
+    while let Some(row) = reader.next_row().map_err(Damage::Png)? {
+        let row = row_of(row.data().to_vec()).ok_or(Damage::RowLength)?;
         grey.extend(row.into_luma8().into_raw());
     }
     Ok(Some(
-        GrayImage::from_raw(width, height, grey).ok_or_else(malformed)?,
+        GrayImage::from_raw(width, height, grey).ok_or(Damage::RowLength)?,
     ))
 }
 

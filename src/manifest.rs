@@ -3,7 +3,7 @@
 //! out a photographed sheet from it and `validate` reads it to know which
 //! marker should be where.
 
-use crate::error::{FileKind, LoadError, LoadProblem};
+use crate::error::{refuse, FileKind, LoadError, LoadProblem};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -92,20 +92,17 @@ impl Manifest {
     /// Parses and checks a manifest's text; `name` (the file's name) starts
     /// every error message. For callers without files, such as the browser.
     pub fn from_json(name: &str, text: &str) -> Result<Manifest, LoadError> {
-        let invalid = |problem| {
-            LoadError::new(
-                Path::new(name),
-                FileKind::Manifest,
-                LoadProblem::Invalid(problem),
-            )
-        };
-        let manifest: Manifest = serde_json::from_str(text)
-            .map_err(|e| invalid(format!("not a whycode sheet manifest: {e}")))?;
+        let invalid = |problem| LoadError::new(Path::new(name), FileKind::Manifest, problem);
+        let manifest: Manifest = serde_json::from_str(text).map_err(|e| {
+            invalid(LoadProblem::Invalid(format!(
+                "not a whycode sheet manifest: {e}"
+            )))
+        })?;
         if manifest.version > MANIFEST_VERSION {
-            return Err(invalid(format!(
+            return Err(invalid(LoadProblem::Invalid(format!(
                 "manifest version {} is newer than this tool reads ({MANIFEST_VERSION})",
                 manifest.version
-            )));
+            ))));
         }
         manifest.check().map_err(invalid)?;
         Ok(manifest)
@@ -114,36 +111,33 @@ impl Manifest {
     /// What validation relies on: a hand-edited or foreign file that breaks
     /// it would otherwise give a verdict about nothing ("0 printed: OK") or
     /// about the wrong marker.
-    fn check(&self) -> std::result::Result<(), String> {
+    fn check(&self) -> std::result::Result<(), LoadProblem> {
         if self.format != "whycode-sheet" {
-            return Err(format!(
-                "format is '{}', not a whycode sheet manifest",
-                self.format
-            ));
+            refuse!("format is '{}', not a whycode sheet manifest", self.format);
         }
         let [w, h] = self.page_size_mm;
         let side = 0.0..=crate::limits::MAX_PAGE_MM;
         if !(w > 0.0 && h > 0.0 && side.contains(&w) && side.contains(&h)) {
-            return Err(format!("page size {w} x {h} mm is not a page"));
+            refuse!("page size {w} x {h} mm is not a page");
         }
         if self.markers.is_empty() {
-            return Err("lists no markers".to_string());
+            refuse!("lists no markers");
         }
         if self.pages == 0 {
-            return Err("pages is 0, but a sheet has at least one page".to_string());
+            refuse!("pages is 0, but a sheet has at least one page");
         }
         if let Some(problem) = self.files.iter().find_map(|f| f.problem()) {
-            return Err(problem);
+            return Err(LoadProblem::Invalid(problem));
         }
         // Every page of a sheet holds a marker; a huge count (found by
         // fuzzing: 2147483647) made validation walk billions of empty pages.
         if self.pages as usize > self.markers.len() {
-            return Err(format!(
+            refuse!(
                 "pages is {}, but its {} markers fill at most {} pages",
                 self.pages,
                 self.markers.len(),
                 self.markers.len()
-            ));
+            );
         }
         let mut seen = std::collections::HashSet::new();
         let mut used_pages = std::collections::BTreeSet::new();
@@ -151,45 +145,44 @@ impl Manifest {
             used_pages.insert(m.page);
             let inside = (0.0..=w).contains(&m.x_mm) && (0.0..=h).contains(&m.y_mm);
             if !(m.diameter_mm.is_finite() && m.diameter_mm > 0.0 && inside) {
-                return Err(format!(
+                refuse!(
                     "marker ID {} on page {} has an impossible place or size",
-                    m.id, m.page
-                ));
+                    m.id,
+                    m.page
+                );
             }
             if !crate::limits::MARKER_DIAMETER_MM.contains(m.diameter_mm) {
-                return Err(format!(
+                refuse!(
                     "marker ID {} on page {}: diameter {}",
                     m.id,
                     m.page,
                     crate::limits::MARKER_DIAMETER_MM
                         .check(m.diameter_mm)
                         .unwrap_err()
-                ));
+                );
             }
             if m.page == 0 || m.page > self.pages {
                 let pages = match self.pages {
                     1 => "one page".to_string(),
                     n => format!("pages 1-{n}"),
                 };
-                return Err(format!(
+                refuse!(
                     "marker ID {} is on page {}, but the sheet has {pages}",
-                    m.id, m.page
-                ));
+                    m.id,
+                    m.page
+                );
             }
             if !self.legacy && !seen.insert(m.id) {
-                return Err(format!(
+                refuse!(
                     "ID {} is listed more than once, so its markers cannot be told apart",
                     m.id
-                ));
+                );
             }
         }
         // Every page of a sheet holds a marker: a page with none is a
         // record that does not match what was printed.
         if let Some(empty) = (1..=self.pages).find(|p| !used_pages.contains(p)) {
-            return Err(format!(
-                "pages is {}, but no marker is on page {empty}",
-                self.pages
-            ));
+            refuse!("pages is {}, but no marker is on page {empty}", self.pages);
         }
         self.check_ids()?;
         self.check_overlaps()
@@ -198,19 +191,19 @@ impl Manifest {
     /// Every ID must be a member of the family, printed with its own code:
     /// anything else would be reported as misread or missing, blaming the
     /// print for a broken record.
-    fn check_ids(&self) -> std::result::Result<(), String> {
+    fn check_ids(&self) -> std::result::Result<(), LoadProblem> {
         let family = match (self.legacy, self.family) {
             (true, _) => return Ok(()),
             (false, None) => {
-                return Err("names no family, and is not a legacy WhyCon sheet".to_string())
+                refuse!("names no family, and is not a legacy WhyCon sheet")
             }
             (false, Some(f)) => crate::family::Family::generate(f.bits, f.distance)
-                .map_err(|e| format!("family: {e}"))?,
+                .map_err(|e| LoadProblem::Invalid(format!("family: {e}")))?,
         };
         for m in &self.markers {
             match family.code(m.id) {
                 None => {
-                    return Err(format!(
+                    refuse!(
                         "marker ID {} on page {} is not in the {}-bit family with distance {} \
                          (IDs 1-{})",
                         m.id,
@@ -218,13 +211,16 @@ impl Manifest {
                         family.bits(),
                         family.distance(),
                         family.len()
-                    ))
+                    )
                 }
                 Some(code) if code != m.code => {
-                    return Err(format!(
+                    refuse!(
                         "marker ID {} on page {} has code {}, but ID {} is code {code}",
-                        m.id, m.page, m.code, m.id
-                    ))
+                        m.id,
+                        m.page,
+                        m.code,
+                        m.id
+                    )
                 }
                 Some(_) => {}
             }
@@ -234,7 +230,7 @@ impl Manifest {
 
     /// Printed discs cannot overlap: two markers at one place are a broken
     /// record (a copied line), and validation could match either.
-    fn check_overlaps(&self) -> std::result::Result<(), String> {
+    fn check_overlaps(&self) -> std::result::Result<(), LoadProblem> {
         let mut order: Vec<&PrintedMarker> = self.markers.iter().collect();
         order.sort_by(|a, b| a.page.cmp(&b.page).then(a.x_mm.total_cmp(&b.x_mm)));
         let widest = order.iter().map(|m| m.diameter_mm).fold(0.0, f64::max);
@@ -252,12 +248,12 @@ impl Manifest {
                             format!("ID {}", m.id)
                         }
                     };
-                    return Err(format!(
+                    refuse!(
                         "markers {} and {} on page {} overlap ({apart:.1} mm apart)",
                         name(a),
                         name(b),
                         a.page
-                    ));
+                    );
                 }
             }
         }

@@ -39,13 +39,13 @@ impl Length {
 
     /// A length whose bare numbers are metres, as the reference tools take a
     /// detector's marker diameter and an arena's size.
-    pub fn parse_metres(text: &str) -> Result<Length, String> {
+    pub fn parse_metres(text: &str) -> Result<Length, LengthError> {
         Length::parse_with_default_unit(text, "m")
     }
 
     /// A height above a floor: a length whose bare numbers are metres, or
     /// 0 (on the floor) with or without a unit.
-    pub fn parse_height(text: &str) -> Result<Length, String> {
+    pub fn parse_height(text: &str) -> Result<Length, LengthError> {
         let t = text.trim();
         let number = t.trim_end_matches(|c: char| c.is_ascii_alphabetic());
         if number.parse::<f64>().is_ok_and(|v| v == 0.0) {
@@ -56,7 +56,7 @@ impl Length {
 
     /// Parses a length whose bare numbers mean `default_unit` (e.g. "m" for a
     /// detector's marker diameter, where the reference tools take metres).
-    pub fn parse_with_default_unit(text: &str, default_unit: &str) -> Result<Length, String> {
+    pub fn parse_with_default_unit(text: &str, default_unit: &str) -> Result<Length, LengthError> {
         let t = text.trim();
         if !t.is_empty() && t.parse::<f64>().is_ok() {
             return format!("{t}{default_unit}").parse();
@@ -65,14 +65,47 @@ impl Length {
     }
 }
 
-impl FromStr for Length {
-    type Err = String;
+/// Text that is not a length (see [`Length`]); `text` is as given.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LengthError {
+    /// No number first.
+    #[error("'{text}' is not a length (write e.g. 50mm, 5cm, 0.05m or 2in)")]
+    NotANumber {
+        /// The text.
+        text: String,
+    },
+    /// A number without a unit.
+    #[error("'{text}' has no unit (write e.g. {value}mm, {value}cm, {value}m or {value}in)")]
+    NoUnit {
+        /// The text.
+        text: String,
+        /// The number.
+        value: f64,
+    },
+    /// A unit that is not one of the lengths'.
+    #[error("'{text}': unknown unit '{unit}' (use mm, cm, m or in)")]
+    UnknownUnit {
+        /// The text.
+        text: String,
+        /// The unit.
+        unit: String,
+    },
+    /// Zero, negative, or too large to hold.
+    #[error("'{text}' must be a positive length")]
+    NotPositive {
+        /// The text.
+        text: String,
+    },
+}
 
-    fn from_str(text: &str) -> Result<Length, String> {
+impl FromStr for Length {
+    type Err = LengthError;
+
+    fn from_str(text: &str) -> Result<Length, LengthError> {
         let t = text.trim();
         let (number, unit) = t.split_at(number_prefix_len(t));
-        let value: f64 = number.parse().map_err(|_| {
-            format!("'{text}' is not a length (write e.g. 50mm, 5cm, 0.05m or 2in)")
+        let value: f64 = number.parse().map_err(|_| LengthError::NotANumber {
+            text: text.to_string(),
         })?;
         let factor = match unit.trim() {
             "mm" => 1.0,
@@ -81,19 +114,23 @@ impl FromStr for Length {
             "in" | "\"" | "inch" | "inches" => 25.4,
             "pt" => 25.4 / 72.0,
             "" => {
-                return Err(format!(
-                    "'{text}' has no unit (write e.g. {value}mm, {value}cm, {value}m or {value}in)"
-                ))
+                return Err(LengthError::NoUnit {
+                    text: text.to_string(),
+                    value,
+                })
             }
             other => {
-                return Err(format!(
-                    "'{text}': unknown unit '{other}' (use mm, cm, m or in)"
-                ))
+                return Err(LengthError::UnknownUnit {
+                    text: text.to_string(),
+                    unit: other.to_string(),
+                })
             }
         };
         let mm = value * factor;
         if !mm.is_finite() || mm <= 0.0 {
-            return Err(format!("'{text}' must be a positive length"));
+            return Err(LengthError::NotPositive {
+                text: text.to_string(),
+            });
         }
         Ok(Length { mm })
     }
@@ -163,10 +200,35 @@ impl Angle {
     }
 }
 
-impl FromStr for Angle {
-    type Err = String;
+/// Text that is not an angle (see [`Angle`]); `text` is as given.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AngleError {
+    /// A number without a unit.
+    #[error("'{text}' has no unit (write e.g. {}deg or {}rad)", format_number(*value), format_number(*value))]
+    NoUnit {
+        /// The text.
+        text: String,
+        /// The number.
+        value: f64,
+    },
+    /// No number before the unit.
+    #[error("'{text}' is not an angle (write e.g. 30deg or 0.5rad)")]
+    NotANumber {
+        /// The text.
+        text: String,
+    },
+    /// An infinite angle.
+    #[error("'{text}' is not a finite angle")]
+    NotFinite {
+        /// The text.
+        text: String,
+    },
+}
 
-    fn from_str(text: &str) -> Result<Angle, String> {
+impl FromStr for Angle {
+    type Err = AngleError;
+
+    fn from_str(text: &str) -> Result<Angle, AngleError> {
         let t = text.trim();
         let (number, to_rad) = if let Some(n) = t.strip_suffix("deg").or(t.strip_suffix('°')) {
             (n, std::f64::consts::PI / 180.0)
@@ -174,19 +236,20 @@ impl FromStr for Angle {
             (n, 1.0)
         } else {
             if let Ok(value) = t.parse::<f64>() {
-                let value = format_number(value);
-                return Err(format!(
-                    "'{text}' has no unit (write e.g. {value}deg or {value}rad)"
-                ));
+                return Err(AngleError::NoUnit {
+                    text: text.to_string(),
+                    value,
+                });
             }
             (t, std::f64::consts::PI / 180.0)
         };
-        let value: f64 = number
-            .trim()
-            .parse()
-            .map_err(|_| format!("'{text}' is not an angle (write e.g. 30deg or 0.5rad)"))?;
+        let value: f64 = number.trim().parse().map_err(|_| AngleError::NotANumber {
+            text: text.to_string(),
+        })?;
         if !value.is_finite() {
-            return Err(format!("'{text}' is not a finite angle"));
+            return Err(AngleError::NotFinite {
+                text: text.to_string(),
+            });
         }
         Ok(Angle {
             rad: value * to_rad,
@@ -194,13 +257,18 @@ impl FromStr for Angle {
     }
 }
 
+/// Text that is not a length in pixels.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("'{0}' is not a length in pixels (write e.g. 2px)")]
+pub struct NotPixels(pub String);
+
 /// A length in image pixels: `2px`, or a bare number of pixels.
-pub fn parse_pixels(text: &str) -> Result<f64, String> {
+pub fn parse_pixels(text: &str) -> Result<f64, NotPixels> {
     let t = text.trim();
     let number = t.strip_suffix("px").unwrap_or(t).trim();
     number
         .parse::<f64>()
-        .map_err(|_| format!("'{text}' is not a length in pixels (write e.g. 2px)"))
+        .map_err(|_| NotPixels(text.to_string()))
 }
 
 /// Formats a number the way a person would type it back: plain for
@@ -228,13 +296,23 @@ pub fn trim_float(v: f64) -> String {
 
 /// A printer's scale as people write it: 0.97 or 97% (the command line's
 /// `--print-scale`, the browser page's field).
-pub fn parse_scale(text: &str) -> Result<f64, String> {
+pub fn parse_scale(text: &str) -> Result<f64, NotAScale> {
     let t = text.trim();
     match t.strip_suffix('%') {
         Some(p) => p.trim().parse::<f64>().map(|p| p / 100.0),
         None => t.parse::<f64>(),
     }
-    .map_err(|_| format!("'{text}' is not a scale (write e.g. 0.97 or 97%)"))
+    .map_err(|_| NotAScale {
+        text: text.to_string(),
+    })
+}
+
+/// Text that [`parse_scale`] cannot read as a scale; `text` is as given.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("'{text}' is not a scale (write e.g. 0.97 or 97%)")]
+pub struct NotAScale {
+    /// The text.
+    pub text: String,
 }
 
 #[cfg(test)]
@@ -256,6 +334,7 @@ mod tests {
         assert!("2em"
             .parse::<Length>()
             .unwrap_err()
+            .to_string()
             .contains("unknown unit 'em'"));
         assert_eq!(
             Length::parse_with_default_unit("0.122", "m").unwrap().mm(),
@@ -267,7 +346,11 @@ mod tests {
     fn angles_parse() {
         assert!((("30deg".parse::<Angle>().unwrap().degrees()) - 30.0).abs() < 1e-12);
         assert!((("0.5rad".parse::<Angle>().unwrap().radians()) - 0.5).abs() < 1e-12);
-        assert!("45".parse::<Angle>().unwrap_err().contains("has no unit"));
+        assert!("45"
+            .parse::<Angle>()
+            .unwrap_err()
+            .to_string()
+            .contains("has no unit"));
         assert!((("-45deg".parse::<Angle>().unwrap().degrees()) + 45.0).abs() < 1e-12);
     }
 }

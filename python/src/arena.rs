@@ -6,7 +6,6 @@ use crate::{guard, Error};
 use pyo3::prelude::*;
 use std::path::PathBuf;
 use whycode::arena::{Arena, Mapping};
-use whycode::error::{FileKind, LoadError};
 use whycode::spec::{ArenaSpec, TargetSpec};
 
 /// A floor frame: four corner markers of a rectangle of known size, and
@@ -36,8 +35,7 @@ impl PyArena {
     fn from_yaml(text: &str) -> PyResult<PyArena> {
         Ok(guard(|| {
             Ok(PyArena {
-                arena: Arena::parse(text)
-                    .map_err(|problem| LoadError::invalid_text(FileKind::Arena, problem))?,
+                arena: Arena::parse(text)?,
             })
         })?)
     }

@@ -282,7 +282,7 @@ pub fn run(
     let mut built_in = Vec::new();
     for (name, value) in args.parameters(&fqn, &base)? {
         if params::NAMES.contains(&name.as_str()) {
-            settings = settings.with(&name, &value)?;
+            settings = settings.with(&name, &value).map_err(|e| e.to_string())?;
         } else if params::BUILT_IN.contains(&name.as_str()) {
             built_in.push((name, value));
         } else {
@@ -292,7 +292,7 @@ pub fn run(
             ));
         }
     }
-    let config = params::detector_config(&settings, None)?;
+    let config = params::detector_config(&settings, None).map_err(|e| e.to_string())?;
     let topics = Topics::resolve(args, &base, &namespace)?;
 
     let domain = domain_id()?;
@@ -575,7 +575,9 @@ struct Checked {
 }
 
 impl ParameterGate {
-    /// The validator: the whole settings with this change must hold.
+    /// The validator: the whole settings with this change must hold. The
+    /// refusal is text because ros2-client sends it as the reason of the
+    /// SetParameters response (its `SetParametersResult`).
     fn check(&self, name: &str, value: &ParameterValue) -> Result<(), String> {
         let current = self.current.lock().expect("settings lock").clone();
         let refuse = |reason: String| {
@@ -589,7 +591,7 @@ impl ParameterGate {
         };
         let next = match current.with(name, value) {
             Ok(next) => next,
-            Err(e) => return refuse(e),
+            Err(e) => return refuse(e.to_string()),
         };
         if next == current {
             return Ok(());
@@ -597,7 +599,7 @@ impl ParameterGate {
         let config = if Settings::change_of(name) == Change::Detector {
             match params::detector_config(&next, None) {
                 Ok(config) => Some(config),
-                Err(e) => return refuse(e),
+                Err(e) => return refuse(e.to_string()),
             }
         } else {
             None
@@ -623,13 +625,14 @@ impl ParameterGate {
         let (next, config) = match checked {
             Some(c) => (c.settings, c.config),
             None => {
-                let next = current.with(name, value)?;
+                let next = current.with(name, value).map_err(|e| e.to_string())?;
                 if next == *current {
                     return Ok(());
                 }
                 let config = (Settings::change_of(name) == Change::Detector)
                     .then(|| params::detector_config(&next, None))
-                    .transpose()?;
+                    .transpose()
+                    .map_err(|e| e.to_string())?;
                 (next, config)
             }
         };

@@ -149,12 +149,123 @@ pub const NAMES: [&str; 20] = [
 /// Parameters the ROS client library keeps itself.
 pub const BUILT_IN: [&str; 1] = ["use_sim_time"];
 
+/// A parameter value the node refuses: the parameter and what is wrong.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("parameter {name}: {problem}")]
+pub struct ParamError {
+    /// The parameter, as the user named it.
+    pub name: String,
+    /// What is wrong with its value.
+    pub problem: ParamProblem,
+}
+
+/// What is wrong with a parameter's value.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParamProblem {
+    /// A value of the wrong type or outside the parameter's range.
+    #[error("{value} is not {expected}")]
+    Wrong {
+        /// The value as the user wrote it.
+        value: String,
+        /// What the parameter takes, in words.
+        expected: &'static str,
+    },
+    /// A marker diameter outside the toolkit's plausible sizes.
+    #[error(
+        "{metres} m is not a plausible marker diameter ({} to {} metres{})",
+        limits::MARKER_DIAMETER_MM.min / 1000.0,
+        limits::MARKER_DIAMETER_MM.max / 1000.0,
+        if *zero_unsets { ", or 0: none" } else { "" }
+    )]
+    Diameter {
+        /// The diameter given, metres.
+        metres: f64,
+        /// Whether 0 ("not set") is taken.
+        zero_unsets: bool,
+    },
+    /// An ID listed twice in `tag.ids`.
+    #[error("ID {0} is listed twice")]
+    IdTwice(u32),
+    /// A frame listed twice in `tag.frames`.
+    #[error("frame '{0}' is listed twice")]
+    FrameTwice(String),
+    /// An empty frame name.
+    #[error("a frame name must not be empty")]
+    EmptyFrame,
+    /// A frame name starting with '/', which tf2 refuses.
+    #[error("frame '{0}': tf2 frame names do not start with '/'")]
+    RootedFrame(String),
+    /// A frame name with a character tf2 does not allow.
+    #[error("frame '{frame}': '{character}' is not allowed")]
+    FrameCharacter {
+        /// The frame name.
+        frame: String,
+        /// The first character not allowed.
+        character: char,
+    },
+    /// A parameter this node does not have.
+    #[error("no such parameter (there are: {})", NAMES.join(", "))]
+    Unknown,
+    /// More `tag.frames` or `tag.sizes` than `tag.ids`.
+    #[error("{count} values for {ids} tag.ids")]
+    MoreThanIds {
+        /// How many values were given.
+        count: usize,
+        /// How many `tag.ids` there are.
+        ids: usize,
+    },
+}
+
+/// Why the settings make no detector configuration.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    /// A parameter's file (a board, the arena) cannot be read or used.
+    #[error("parameter {name}: {}", whycode::error::one_line(error))]
+    File {
+        /// The parameter naming the file.
+        name: &'static str,
+        /// Why it cannot be used.
+        error: whycode::LoadError,
+    },
+    /// What the library refused, worded in this node's parameter names.
+    #[error("{}", in_parameters(.0))]
+    Spec(whycode::spec::SpecError),
+    /// `tag.ids` lists an ID the family does not have.
+    #[error(
+        "parameter tag.ids: the {bits}-bit family of distance {distance} has IDs 1 to {count}, \
+         not {id}"
+    )]
+    ForeignId {
+        /// The ID.
+        id: u32,
+        /// The family's code length.
+        bits: u32,
+        /// The family's minimum distance.
+        distance: u32,
+        /// How many IDs the family has.
+        count: usize,
+    },
+}
+
+/// A spec error with the option named as this node's parameter.
+fn in_parameters(err: &whycode::spec::SpecError) -> String {
+    err.message_with(|option| {
+        // The spec's names for what this node's parameters call so.
+        let name = match option {
+            "arena" => "arena_file",
+            "board" => "boards",
+            other => other,
+        };
+        format!("parameter {name}")
+    })
+}
+
 impl Settings {
     /// Defaults overridden by `values` in order; the first refused value
     /// is the error, naming the parameter.
     pub fn from_parameters<'a>(
         values: impl IntoIterator<Item = &'a (String, ParameterValue)>,
-    ) -> Result<Settings, String> {
+    ) -> Result<Settings, ParamError> {
         let mut settings = Settings::default();
         for (name, value) in values {
             if BUILT_IN.contains(&name.as_str()) {
@@ -167,10 +278,12 @@ impl Settings {
 
     /// These settings with one parameter changed, checked on its own and
     /// against the others.
-    pub fn with(&self, name: &str, value: &ParameterValue) -> Result<Settings, String> {
+    pub fn with(&self, name: &str, value: &ParameterValue) -> Result<Settings, ParamError> {
         let mut next = self.clone();
-        next.set(name, value)
-            .map_err(|e| format!("parameter {name}: {e}"))?;
+        next.set(name, value).map_err(|problem| ParamError {
+            name: name.to_string(),
+            problem,
+        })?;
         next.check_tags()?;
         Ok(next)
     }
@@ -185,7 +298,7 @@ impl Settings {
         }
     }
 
-    fn set(&mut self, name: &str, value: &ParameterValue) -> Result<(), String> {
+    fn set(&mut self, name: &str, value: &ParameterValue) -> Result<(), ParamProblem> {
         match name {
             "bits" => {
                 self.bits = match value {
@@ -208,7 +321,7 @@ impl Settings {
                 self.image_transport = match string(value)?.as_str() {
                     "raw" => Transport::Raw,
                     "compressed" => Transport::Compressed,
-                    other => return Err(format!("'{other}' is not raw or compressed")),
+                    _ => return Err(wrong(value, "raw or compressed")),
                 }
             }
             "camera_frame" => {
@@ -227,12 +340,14 @@ impl Settings {
                 let ids = integers(value)?;
                 let mut checked = Vec::with_capacity(ids.len());
                 for id in ids {
-                    let id = u32::try_from(id)
-                        .ok()
-                        .filter(|&id| id > 0)
-                        .ok_or_else(|| format!("{id} is not an ID (IDs start at 1)"))?;
+                    let id = u32::try_from(id).ok().filter(|&id| id > 0).ok_or_else(|| {
+                        ParamProblem::Wrong {
+                            value: id.to_string(),
+                            expected: "an ID (IDs start at 1)",
+                        }
+                    })?;
                     if checked.contains(&id) {
-                        return Err(format!("ID {id} is listed twice"));
+                        return Err(ParamProblem::IdTwice(id));
                     }
                     checked.push(id);
                 }
@@ -243,7 +358,7 @@ impl Settings {
                 for (k, frame) in frames.iter().enumerate() {
                     check_frame(frame)?;
                     if frames[..k].contains(frame) {
-                        return Err(format!("frame '{frame}' is listed twice"));
+                        return Err(ParamProblem::FrameTwice(frame.clone()));
                     }
                 }
                 self.tag_frames = frames;
@@ -264,27 +379,25 @@ impl Settings {
                 check_frame(&frame)?;
                 self.arena_frame = frame;
             }
-            _ => {
-                return Err(format!(
-                    "no such parameter (there are: {})",
-                    NAMES.join(", ")
-                ))
-            }
+            _ => return Err(ParamProblem::Unknown),
         }
         Ok(())
     }
 
     /// `tag.frames` and `tag.sizes` name the first of `tag.ids`: never more.
-    fn check_tags(&self) -> Result<(), String> {
+    fn check_tags(&self) -> Result<(), ParamError> {
         for (name, count) in [
             ("tag.frames", self.tag_frames.len()),
             ("tag.sizes", self.tag_sizes.len()),
         ] {
             if count > self.tag_ids.len() {
-                return Err(format!(
-                    "parameter {name}: {count} values for {} tag.ids",
-                    self.tag_ids.len()
-                ));
+                return Err(ParamError {
+                    name: name.to_string(),
+                    problem: ParamProblem::MoreThanIds {
+                        count,
+                        ids: self.tag_ids.len(),
+                    },
+                });
             }
         }
         Ok(())
@@ -360,12 +473,10 @@ impl Settings {
 pub fn detector_config(
     settings: &Settings,
     camera: Option<Camera>,
-) -> Result<SessionConfig, String> {
+) -> Result<SessionConfig, ConfigError> {
     let family_file = !settings.family_file.is_empty();
     let names_family = !settings.legacy && !family_file;
-    let in_parameter = |name: &str, err: whycode::LoadError| {
-        format!("parameter {name}: {}", whycode::error::one_line(&err))
-    };
+    let in_parameter = |name, error| ConfigError::File { name, error };
     let mut boards = Vec::new();
     for path in &settings.boards {
         boards.extend(Board::load(Path::new(path)).map_err(|e| in_parameter("boards", e))?);
@@ -393,29 +504,19 @@ pub fn detector_config(
         arena,
         ..DetectSpec::default()
     };
-    let config = spec.build().map_err(|e| {
-        e.message_with(|option| {
-            // The spec's names for what this node's parameters call so.
-            let name = match option {
-                "arena" => "arena_file",
-                "board" => "boards",
-                other => other,
-            };
-            format!("parameter {name}")
-        })
-    })?;
+    let config = spec.build().map_err(ConfigError::Spec)?;
     if let Target::WhyCode(family) = &config.detector.target {
-        if let Some(id) = settings
+        if let Some(&id) = settings
             .tag_ids
             .iter()
             .find(|&&id| family.code(id).is_none())
         {
-            return Err(format!(
-                "parameter tag.ids: the {}-bit family of distance {} has IDs 1 to {}, not {id}",
-                family.bits(),
-                family.distance(),
-                family.len()
-            ));
+            return Err(ConfigError::ForeignId {
+                id,
+                bits: family.bits(),
+                distance: family.distance(),
+                count: family.len(),
+            });
         }
     }
     Ok(config)
@@ -424,38 +525,46 @@ pub fn detector_config(
 fn integer(
     value: &ParameterValue,
     range: std::ops::RangeInclusive<u32>,
-    what: &str,
-) -> Result<u32, String> {
+    expected: &'static str,
+) -> Result<u32, ParamProblem> {
     match value {
         ParameterValue::Integer(i) => u32::try_from(*i)
             .ok()
             .filter(|v| range.contains(v))
-            .ok_or_else(|| format!("{i} is not {what}")),
-        other => Err(format!("{} is not {what}", shown(other))),
+            .ok_or_else(|| wrong(value, expected)),
+        other => Err(wrong(other, expected)),
+    }
+}
+
+/// `value` is not what the parameter takes.
+fn wrong(value: &ParameterValue, expected: &'static str) -> ParamProblem {
+    ParamProblem::Wrong {
+        value: shown(value),
+        expected,
     }
 }
 
 /// A number: integers are taken for doubles (`-p diameter:=1` is YAML's
 /// integer 1).
-fn number(value: &ParameterValue) -> Result<f64, String> {
+fn number(value: &ParameterValue) -> Result<f64, ParamProblem> {
     match value {
         ParameterValue::Double(d) => Ok(*d),
         ParameterValue::Integer(i) => Ok(*i as f64),
-        other => Err(format!("{} is not a number", shown(other))),
+        other => Err(wrong(other, "a number")),
     }
 }
 
-fn boolean(value: &ParameterValue) -> Result<bool, String> {
+fn boolean(value: &ParameterValue) -> Result<bool, ParamProblem> {
     match value {
         ParameterValue::Boolean(b) => Ok(*b),
-        other => Err(format!("{} is not true or false", shown(other))),
+        other => Err(wrong(other, "true or false")),
     }
 }
 
-fn string(value: &ParameterValue) -> Result<String, String> {
+fn string(value: &ParameterValue) -> Result<String, ParamProblem> {
     match value {
         ParameterValue::String(s) => Ok(s.clone()),
-        other => Err(format!("{} is not a string", shown(other))),
+        other => Err(wrong(other, "a string")),
     }
 }
 
@@ -471,61 +580,60 @@ fn is_empty_list(value: &ParameterValue) -> bool {
     }
 }
 
-fn integers(value: &ParameterValue) -> Result<Vec<i64>, String> {
+fn integers(value: &ParameterValue) -> Result<Vec<i64>, ParamProblem> {
     match value {
         ParameterValue::IntegerArray(v) => Ok(v.clone()),
         v if is_empty_list(v) => Ok(Vec::new()),
-        other => Err(format!("{} is not a list of integers", shown(other))),
+        other => Err(wrong(other, "a list of integers")),
     }
 }
 
-fn numbers(value: &ParameterValue) -> Result<Vec<f64>, String> {
+fn numbers(value: &ParameterValue) -> Result<Vec<f64>, ParamProblem> {
     match value {
         ParameterValue::DoubleArray(v) => Ok(v.clone()),
         ParameterValue::IntegerArray(v) => Ok(v.iter().map(|&i| i as f64).collect()),
         v if is_empty_list(v) => Ok(Vec::new()),
-        other => Err(format!("{} is not a list of numbers", shown(other))),
+        other => Err(wrong(other, "a list of numbers")),
     }
 }
 
-fn strings(value: &ParameterValue) -> Result<Vec<String>, String> {
+fn strings(value: &ParameterValue) -> Result<Vec<String>, ParamProblem> {
     match value {
         ParameterValue::StringArray(v) => Ok(v.clone()),
         v if is_empty_list(v) => Ok(Vec::new()),
-        other => Err(format!("{} is not a list of strings", shown(other))),
+        other => Err(wrong(other, "a list of strings")),
     }
 }
 
 /// A diameter in metres within the toolkit's plausible marker sizes (or
 /// 0, "not set", where `zero_unsets`).
-fn diameter(metres: f64, zero_unsets: bool) -> Result<f64, String> {
+fn diameter(metres: f64, zero_unsets: bool) -> Result<f64, ParamProblem> {
     if (zero_unsets && metres == 0.0) || limits::MARKER_DIAMETER_MM.contains(metres * 1000.0) {
         Ok(metres)
     } else {
-        Err(format!(
-            "{metres} m is not a plausible marker diameter ({} to {} metres{})",
-            limits::MARKER_DIAMETER_MM.min / 1000.0,
-            limits::MARKER_DIAMETER_MM.max / 1000.0,
-            if zero_unsets { ", or 0: none" } else { "" }
-        ))
+        Err(ParamProblem::Diameter {
+            metres,
+            zero_unsets,
+        })
     }
 }
 
 /// tf2 frame names: no leading slash, no spaces, not empty.
-fn check_frame(frame: &str) -> Result<(), String> {
+fn check_frame(frame: &str) -> Result<(), ParamProblem> {
     if frame.is_empty() {
-        return Err("a frame name must not be empty".into());
+        return Err(ParamProblem::EmptyFrame);
     }
     if frame.starts_with('/') {
-        return Err(format!(
-            "frame '{frame}': tf2 frame names do not start with '/'"
-        ));
+        return Err(ParamProblem::RootedFrame(frame.to_string()));
     }
-    if let Some(bad) = frame
+    if let Some(character) = frame
         .chars()
         .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '_' | '/' | '-' | '.')))
     {
-        return Err(format!("frame '{frame}': '{bad}' is not allowed"));
+        return Err(ParamProblem::FrameCharacter {
+            frame: frame.to_string(),
+            character,
+        });
     }
     Ok(())
 }
@@ -596,6 +704,8 @@ mod tests {
             ("colour", int(1), "no such parameter"),
         ] {
             let err = s.with(name, &value).unwrap_err();
+            assert_eq!(err.name, name);
+            let err = err.to_string();
             assert!(err.starts_with(&format!("parameter {name}: ")), "{err}");
             assert!(err.contains(needle), "{name}: {err}");
         }
@@ -649,7 +759,8 @@ mod tests {
         // More frames than IDs is refused, and the settings stay.
         let err = s
             .with("tag.ids", &ParameterValue::IntegerArray(vec![]))
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("1 values for 0 tag.ids"), "{err}");
     }
 
@@ -710,7 +821,7 @@ mod tests {
         let s = s
             .with("arena_file", &text(&missing.display().to_string()))
             .unwrap();
-        let err = detector_config(&s, None).unwrap_err();
+        let err = detector_config(&s, None).unwrap_err().to_string();
         assert!(
             err.starts_with(&format!(
                 "parameter arena_file: {}: cannot read arena file",
@@ -718,7 +829,7 @@ mod tests {
             )),
             "{err}"
         );
-        let err = s.with("arena_frame", &text("")).unwrap_err();
+        let err = s.with("arena_frame", &text("")).unwrap_err().to_string();
         assert!(err.starts_with("parameter arena_frame: "), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -727,7 +838,7 @@ mod tests {
     fn impossible_families_and_foreign_ids_are_refused() {
         let s = Settings::default().with("bits", &int(4)).unwrap();
         let s = s.with("distance", &int(5)).unwrap();
-        let err = detector_config(&s, None).unwrap_err();
+        let err = detector_config(&s, None).unwrap_err().to_string();
         assert_eq!(
             err,
             "parameter distance: distance must be between 1 and the bit count 4, got 5"
@@ -735,12 +846,12 @@ mod tests {
         let s = Settings::default()
             .with("tag.ids", &ParameterValue::IntegerArray(vec![1, 5000]))
             .unwrap();
-        let err = detector_config(&s, None).unwrap_err();
+        let err = detector_config(&s, None).unwrap_err().to_string();
         assert!(err.contains("not 5000"), "{err}");
         let s = Settings::default()
             .with("family_file", &text("/nonexistent/family.json"))
             .unwrap();
-        let err = detector_config(&s, None).unwrap_err();
+        let err = detector_config(&s, None).unwrap_err().to_string();
         assert!(err.contains("/nonexistent/family.json"), "{err}");
     }
 }

@@ -840,114 +840,130 @@ impl Arena {
     /// Reads an arena file (see [`Arena::to_yaml`]).
     pub fn load(path: &Path) -> Result<Arena, LoadError> {
         let text = crate::input::read_text(path, FileKind::Arena)?;
-        Arena::parse(&text)
-            .map_err(|problem| LoadError::new(path, FileKind::Arena, LoadProblem::Invalid(problem)))
+        Arena::parse(&text).map_err(|err| err.in_file(path))
     }
 
     /// An arena file's text, checked: every number in its plausible range,
-    /// the rotation a rotation, the map invertible.
-    pub fn parse(text: &str) -> Result<Arena, String> {
-        let file: ArenaFile = serde_yaml::from_str(text)
-            .map_err(|e| format!("not an arena file: {}", crate::error::one_line(&e)))?;
-        if file.format != FORMAT || file.version != 1 {
-            return Err(format!(
-                "format {} version {} is not {FORMAT} version 1",
-                file.format, file.version
-            ));
-        }
-        for side in file.size {
-            limits::ARENA_SIDE_M
-                .check(side)
-                .map_err(|e| format!("size: {e}"))?;
-        }
-        limits::MARKER_HEIGHT_M
-            .check(file.marker_height)
-            .map_err(|e| format!("marker_height: {e}"))?;
-        if !(file.corner_error >= 0.0 && file.corner_error.is_finite()) {
-            return Err("corner_error is not a length".into());
-        }
-        let mapping = match (file.camera, file.floor, file.image_to_floor) {
-            (Some(camera), Some(floor), None) => {
-                check_camera(&camera)?;
-                let rotation = from_rows(&floor.rotation);
-                let orthonormal = (rotation.transpose() * rotation - Matrix3::identity()).norm();
-                if !(orthonormal < 1e-6 && rotation.determinant() > 0.0) {
-                    return Err("floor rotation is not a rotation".into());
-                }
-                let translation = Vector3::from(floor.translation);
-                if !translation.iter().all(|v| v.is_finite())
-                    || !limits::CAMERA_DISTANCE_M.contains(translation.norm())
-                {
-                    return Err(format!(
-                        "floor translation is not a plausible distance ({} to {} m)",
-                        limits::CAMERA_DISTANCE_M.min,
-                        limits::CAMERA_DISTANCE_M.max
-                    ));
-                }
-                Mapping::Floor {
-                    camera,
-                    rotation,
-                    translation,
-                }
-            }
-            (None, None, Some(map)) => {
-                for side in [map.width, map.height] {
-                    limits::IMAGE_SIDE_PX
-                        .check(f64::from(side))
-                        .map_err(|e| format!("image_to_floor size: {e}"))?;
-                }
-                let floor_to_image = from_rows(&map.floor_to_image);
-                if !floor_to_image.iter().all(|v| v.is_finite())
-                    || floor_to_image.try_inverse().is_none()
-                {
-                    return Err("image_to_floor is not an invertible map".into());
-                }
-                if file.marker_height != 0.0 {
-                    return Err(
-                        "marker_height: an arena made without a camera maps the floor only".into(),
-                    );
-                }
-                Mapping::Homography {
-                    width: map.width,
-                    height: map.height,
-                    floor_to_image,
-                }
-            }
-            _ => {
-                return Err(
-                    "give either camera and floor (made with a camera) or image_to_floor".into(),
-                )
-            }
-        };
-        let arena = Arena {
-            ids: file.ids,
-            size_m: file.size,
-            marker_height_m: file.marker_height,
-            corner_error_m: file.corner_error,
-            mapping,
-        };
-        if let Some(problem) = arena.height_problem(arena.marker_height_m) {
-            return Err(format!("marker_height: {problem}"));
-        }
-        Ok(arena)
+    /// the rotation a rotation, the map invertible. [`Arena::load`] adds
+    /// the file's name to the error.
+    pub fn parse(text: &str) -> Result<Arena, LoadError> {
+        parse_arena(text).map_err(|problem| LoadError {
+            path: None,
+            kind: FileKind::Arena,
+            problem,
+        })
     }
 }
 
-fn check_camera(camera: &Camera) -> Result<(), String> {
+/// The checks behind [`Arena::parse`].
+fn parse_arena(text: &str) -> Result<Arena, LoadProblem> {
+    let file: ArenaFile = serde_yaml::from_str(text)
+        .map_err(|e| invalid(format!("not an arena file: {}", crate::error::one_line(&e))))?;
+    if file.format != FORMAT || file.version != 1 {
+        return Err(invalid(format!(
+            "format {} version {} is not {FORMAT} version 1",
+            file.format, file.version
+        )));
+    }
+    for side in file.size {
+        limits::ARENA_SIDE_M
+            .check(side)
+            .map_err(|e| invalid(format!("size: {e}")))?;
+    }
+    limits::MARKER_HEIGHT_M
+        .check(file.marker_height)
+        .map_err(|e| invalid(format!("marker_height: {e}")))?;
+    if !(file.corner_error >= 0.0 && file.corner_error.is_finite()) {
+        return Err(invalid("corner_error is not a length"));
+    }
+    let mapping = match (file.camera, file.floor, file.image_to_floor) {
+        (Some(camera), Some(floor), None) => {
+            check_camera(&camera)?;
+            let rotation = from_rows(&floor.rotation);
+            let orthonormal = (rotation.transpose() * rotation - Matrix3::identity()).norm();
+            if !(orthonormal < 1e-6 && rotation.determinant() > 0.0) {
+                return Err(invalid("floor rotation is not a rotation"));
+            }
+            let translation = Vector3::from(floor.translation);
+            if !translation.iter().all(|v| v.is_finite())
+                || !limits::CAMERA_DISTANCE_M.contains(translation.norm())
+            {
+                return Err(invalid(format!(
+                    "floor translation is not a plausible distance ({} to {} m)",
+                    limits::CAMERA_DISTANCE_M.min,
+                    limits::CAMERA_DISTANCE_M.max
+                )));
+            }
+            Mapping::Floor {
+                camera,
+                rotation,
+                translation,
+            }
+        }
+        (None, None, Some(map)) => {
+            for side in [map.width, map.height] {
+                limits::IMAGE_SIDE_PX
+                    .check(f64::from(side))
+                    .map_err(|e| invalid(format!("image_to_floor size: {e}")))?;
+            }
+            let floor_to_image = from_rows(&map.floor_to_image);
+            if !floor_to_image.iter().all(|v| v.is_finite())
+                || floor_to_image.try_inverse().is_none()
+            {
+                return Err(invalid("image_to_floor is not an invertible map"));
+            }
+            if file.marker_height != 0.0 {
+                return Err(invalid(
+                    "marker_height: an arena made without a camera maps the floor only",
+                ));
+            }
+            Mapping::Homography {
+                width: map.width,
+                height: map.height,
+                floor_to_image,
+            }
+        }
+        _ => {
+            return Err(invalid(
+                "give either camera and floor (made with a camera) or image_to_floor",
+            ))
+        }
+    };
+    let arena = Arena {
+        ids: file.ids,
+        size_m: file.size,
+        marker_height_m: file.marker_height,
+        corner_error_m: file.corner_error,
+        mapping,
+    };
+    if let Some(problem) = arena.height_problem(arena.marker_height_m) {
+        return Err(invalid(format!("marker_height: {problem}")));
+    }
+    Ok(arena)
+}
+
+/// What is wrong with an arena file, in words.
+fn invalid(problem: impl Into<String>) -> LoadProblem {
+    LoadProblem::Invalid(problem.into())
+}
+
+fn check_camera(camera: &Camera) -> Result<(), LoadProblem> {
     for side in [camera.width, camera.height] {
         limits::IMAGE_SIDE_PX
             .check(f64::from(side))
-            .map_err(|e| format!("camera size: {e}"))?;
+            .map_err(|e| invalid(format!("camera size: {e}")))?;
     }
     let finite = [camera.fx, camera.fy, camera.cx, camera.cy]
         .iter()
         .chain(&camera.distortion)
         .all(|v| v.is_finite());
     if !(finite && camera.fx > 0.0 && camera.fy > 0.0) {
-        return Err("camera: focal lengths must be positive numbers".into());
+        return Err(invalid("camera: focal lengths must be positive numbers"));
     }
     // The checks a --camera file gets: an arena's camera is used the same way.
-    camera.check_plausible().map_err(|e| format!("camera: {e}"))
+    camera
+        .check_plausible()
+        .map_err(|e| invalid(format!("camera: {e}")))
 }
 
 #[cfg(test)]
@@ -978,14 +994,13 @@ mod tests {
     fn nonsense_files_are_refused_in_one_line() {
         let text = homography_arena().to_yaml();
         let bad_size = text.replace("- 2.0\n", "- 2000.0\n");
-        let err = Arena::parse(&bad_size).unwrap_err();
+        let message = |text: &str| Arena::parse(text).unwrap_err().to_string();
+        let err = message(&bad_size);
         assert!(err.starts_with("size: 2000 m is outside"), "{err}");
         let singular = text.replace("- 300.0", "- 0.0");
-        assert!(Arena::parse(&singular).unwrap_err().contains("invertible"));
+        assert!(message(&singular).contains("invertible"));
         let other = text.replace("whycode-arena", "whycode-sheet");
-        assert!(Arena::parse(&other).unwrap_err().contains("version"));
-        assert!(Arena::parse("ids: [1]")
-            .unwrap_err()
-            .starts_with("not an arena file"));
+        assert!(message(&other).contains("version"));
+        assert!(message("ids: [1]").starts_with("not an arena file"));
     }
 }

@@ -22,7 +22,7 @@ use serde::Deserialize;
 
 use crate::camera::Camera;
 use crate::detect::Detection;
-use crate::error::{FileKind, LoadError, LoadProblem};
+use crate::error::{refuse, FileKind, LoadError, LoadProblem};
 use crate::family::MatchStatus;
 use crate::manifest::Manifest;
 use crate::math::least_squares::{levenberg_marquardt, numeric_jacobian};
@@ -195,11 +195,9 @@ impl Board {
     /// The boards of a file already read (the page's uploads): `path` names
     /// the boards and the errors as [`Board::load`] does.
     pub fn from_text(path: &Path, text: &str) -> Result<Vec<Board>, LoadError> {
-        let invalid =
-            |problem: String| LoadError::new(path, FileKind::Board, LoadProblem::Invalid(problem));
         if text.trim_start().starts_with('{') {
             let manifest = Manifest::from_json(&path.display().to_string(), text)
-                .map_err(|e| invalid(e.problem.to_string()))?;
+                .map_err(|e| LoadError::new(path, FileKind::Board, e.problem))?;
             let stem = path
                 .file_stem()
                 .map(|s| frame_safe(&s.to_string_lossy()))
@@ -215,89 +213,102 @@ impl Board {
                 })
                 .collect());
         }
-        Board::parse_bundles(text).map_err(invalid)
+        Board::parse_bundles(text).map_err(|err| err.in_file(path))
     }
 
-    /// The bundles of a bundle file's text (see [`Board::load`]).
-    pub fn parse_bundles(text: &str) -> Result<Vec<Board>, String> {
-        let file: BundleFile = serde_yaml::from_str(text).map_err(|e| {
-            format!(
-                "neither a sheet manifest nor a marker bundle: {}",
-                crate::error::one_line(&e)
-            )
-        })?;
-        if file.bundles.is_empty() {
-            return Err("lists no bundles".into());
-        }
-        file.bundles
-            .into_iter()
-            .map(|bundle| {
-                if let Some(problem) = name_problem(&bundle.name) {
-                    return Err(format!("bundle {problem}"));
-                }
-                if bundle.layout.is_empty() {
-                    return Err(format!("bundle {} lists no markers", bundle.name));
-                }
-                let mut ids = std::collections::HashSet::new();
-                let markers = bundle
-                    .layout
-                    .iter()
-                    .map(|m| {
-                        if !ids.insert(m.id) {
-                            return Err(format!(
-                                "bundle {}: ID {} listed twice",
-                                bundle.name, m.id
-                            ));
-                        }
-                        let mm = m.diameter * 1000.0;
-                        crate::limits::MARKER_DIAMETER_MM.check(mm).map_err(|e| {
-                            format!("bundle {} ID {}: diameter {e}", bundle.name, m.id)
-                        })?;
-                        if ![m.x, m.y, m.z].iter().all(|v| v.is_finite()) {
-                            return Err(format!(
-                                "bundle {} ID {}: position is not a number",
-                                bundle.name, m.id
-                            ));
-                        }
-                        let rotation = match (m.qw, m.qx, m.qy, m.qz) {
-                            (None, None, None, None) => None,
-                            (Some(w), Some(x), Some(y), Some(z)) => {
-                                let q = nalgebra::Quaternion::new(w, x, y, z);
-                                if !(q.norm() > 1e-6 && q.norm().is_finite()) {
-                                    return Err(format!(
-                                        "bundle {} ID {}: orientation is not a rotation",
-                                        bundle.name, m.id
-                                    ));
-                                }
-                                Some(
-                                    *UnitQuaternion::from_quaternion(q)
-                                        .to_rotation_matrix()
-                                        .matrix(),
-                                )
-                            }
-                            _ => {
-                                return Err(format!(
-                                    "bundle {} ID {}: give all of qw, qx, qy, qz or none",
-                                    bundle.name, m.id
-                                ))
-                            }
-                        };
-                        Ok(BoardMarker {
-                            id: m.id,
-                            diameter_m: m.diameter,
-                            position: Vector3::new(m.x, m.y, m.z),
-                            rotation,
-                            ring: None,
-                        })
-                    })
-                    .collect::<Result<Vec<_>, String>>()?;
-                Ok(Board {
-                    name: bundle.name,
-                    markers,
-                })
-            })
-            .collect()
+    /// The bundles of a bundle file's text (see [`Board::load`], which
+    /// adds the file's name to the error).
+    pub fn parse_bundles(text: &str) -> Result<Vec<Board>, LoadError> {
+        bundles(text).map_err(|problem| LoadError {
+            path: None,
+            kind: FileKind::Board,
+            problem,
+        })
     }
+}
+
+/// The checks behind [`Board::parse_bundles`].
+fn bundles(text: &str) -> Result<Vec<Board>, LoadProblem> {
+    let file: BundleFile = serde_yaml::from_str(text).map_err(|e| {
+        LoadProblem::Invalid(format!(
+            "neither a sheet manifest nor a marker bundle: {}",
+            crate::error::one_line(&e)
+        ))
+    })?;
+    if file.bundles.is_empty() {
+        refuse!("lists no bundles");
+    }
+    file.bundles
+        .into_iter()
+        .map(|bundle| {
+            if let Some(problem) = name_problem(&bundle.name) {
+                refuse!("bundle {problem}");
+            }
+            if bundle.layout.is_empty() {
+                refuse!("bundle {} lists no markers", bundle.name);
+            }
+            let mut ids = std::collections::HashSet::new();
+            let markers = bundle
+                .layout
+                .iter()
+                .map(|m| {
+                    if !ids.insert(m.id) {
+                        refuse!("bundle {}: ID {} listed twice", bundle.name, m.id);
+                    }
+                    let mm = m.diameter * 1000.0;
+                    crate::limits::MARKER_DIAMETER_MM.check(mm).map_err(|e| {
+                        LoadProblem::Invalid(format!(
+                            "bundle {} ID {}: diameter {e}",
+                            bundle.name, m.id
+                        ))
+                    })?;
+                    if ![m.x, m.y, m.z].iter().all(|v| v.is_finite()) {
+                        refuse!(
+                            "bundle {} ID {}: position is not a number",
+                            bundle.name,
+                            m.id
+                        );
+                    }
+                    let rotation = match (m.qw, m.qx, m.qy, m.qz) {
+                        (None, None, None, None) => None,
+                        (Some(w), Some(x), Some(y), Some(z)) => {
+                            let q = nalgebra::Quaternion::new(w, x, y, z);
+                            if !(q.norm() > 1e-6 && q.norm().is_finite()) {
+                                refuse!(
+                                    "bundle {} ID {}: orientation is not a rotation",
+                                    bundle.name,
+                                    m.id
+                                );
+                            }
+                            Some(
+                                *UnitQuaternion::from_quaternion(q)
+                                    .to_rotation_matrix()
+                                    .matrix(),
+                            )
+                        }
+                        _ => {
+                            refuse!(
+                                "bundle {} ID {}: give all of qw, qx, qy, qz or none",
+                                bundle.name,
+                                m.id
+                            )
+                        }
+                    };
+                    Ok(BoardMarker {
+                        id: m.id,
+                        diameter_m: m.diameter,
+                        position: Vector3::new(m.x, m.y, m.z),
+                        rotation,
+                        ring: None,
+                    })
+                })
+                .collect::<Result<Vec<_>, LoadProblem>>()?;
+            Ok(Board {
+                name: bundle.name,
+                markers,
+            })
+        })
+        .collect()
 }
 
 /// A board's pose in one image.

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::error::{refuse, FileKind, LoadError};
+use crate::error::{refuse, FileKind, LoadError, LoadProblem};
 use serde_yaml::Value;
 
 use super::Camera;
@@ -25,6 +25,91 @@ pub struct OtherCamera {
     pub calibration: [u32; 2],
 }
 
+/// A calibration no real lens gives (see [`Camera::check_plausible`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ImplausibleCamera {
+    /// A focal length that gives a field of view outside 0.1-175°.
+    #[error(
+        "camera_matrix: {axis} = {} gives a {fov:.3}° field of view across {side} pixels; \
+         a real lens gives 0.1-175°",
+        short_number(*focal)
+    )]
+    FieldOfView {
+        /// "fx" or "fy".
+        axis: &'static str,
+        /// The focal length, pixels.
+        focal: f64,
+        /// The field of view it gives, degrees.
+        fov: f64,
+        /// The image side it spans, pixels.
+        side: f64,
+    },
+    /// Pixels far from square.
+    #[error("camera_matrix: fx/fy = {aspect:.3}; real pixels are not that far from square")]
+    NotSquare {
+        /// fx / fy.
+        aspect: f64,
+    },
+    /// A principal point far outside the image.
+    #[error(
+        "camera_matrix: principal point {axis} = {} lies far outside the {width}x{height} image",
+        short_number(*value)
+    )]
+    PrincipalPoint {
+        /// "cx" or "cy".
+        axis: &'static str,
+        /// Its value, pixels.
+        value: f64,
+        /// The image's width, pixels.
+        width: u32,
+        /// The image's height, pixels.
+        height: u32,
+    },
+    /// Distortion no lens gives.
+    #[error(
+        "distortion_coefficients [{}] are not a real lens: {problem}",
+        coefficients.map(short_number).join(", ")
+    )]
+    Distortion {
+        /// k1, k2, p1, p2, k3.
+        coefficients: [f64; 5],
+        /// What it does to the image.
+        problem: LensProblem,
+    },
+}
+
+/// What implausible distortion does to the image, walking from the
+/// principal point towards `pixel` (an image corner or edge middle).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LensProblem {
+    /// Distortion that cannot be inverted at a pixel on the way.
+    #[error("pixel ({:.0}, {:.0}) has no undistorted position", pixel[0], pixel[1])]
+    NoInverse {
+        /// The pixel without one.
+        pixel: [f64; 2],
+    },
+    /// Distortion that folds the image over.
+    #[error("the image folds over itself towards pixel ({:.0}, {:.0})", pixel[0], pixel[1])]
+    FoldsOver {
+        /// The corner or edge middle it folds towards.
+        pixel: [f64; 2],
+    },
+    /// Distortion that shrinks or stretches the edge more than four times.
+    #[error(
+        "pixel ({:.0}, {:.0}) would lie at {:.3}% of its distance from the centre without \
+         distortion (a real lens: 25-400%)",
+        pixel[0],
+        pixel[1],
+        ratio * 100.0
+    )]
+    Stretched {
+        /// The corner or edge middle.
+        pixel: [f64; 2],
+        /// Its distance from the centre without distortion over that with.
+        ratio: f64,
+    },
+}
+
 impl Camera {
     /// Read a calibration file: a ROS `camera_info` YAML (as written by
     /// `camera_calibration`, or the message form with `K`/`D` or `k`/`d`),
@@ -40,7 +125,10 @@ impl Camera {
     /// Parse the text of a calibration file (see [`Camera::load`]).
     pub fn parse(text: &str) -> Result<Camera, LoadError> {
         parse_calibration(text).map_err(|problem| {
-            LoadError::invalid_text(FileKind::Camera, crate::error::shorten_words(&problem))
+            LoadError::invalid_text(
+                FileKind::Camera,
+                crate::error::shorten_words(&problem.to_string()),
+            )
         })
     }
 
@@ -50,43 +138,41 @@ impl Camera {
     /// outside the image, or distortion that folds the image over, cannot
     /// be inverted, or shrinks or stretches the image's edge by more than
     /// four times.
-    pub fn check_plausible(&self) -> Result<(), String> {
+    pub fn check_plausible(&self) -> Result<(), ImplausibleCamera> {
         let (w, h) = (f64::from(self.width), f64::from(self.height));
-        for (name, f, side) in [("fx", self.fx, w), ("fy", self.fy, h)] {
-            let fov = 2.0 * (0.5 * side / f).atan().to_degrees();
+        for (axis, focal, side) in [("fx", self.fx, w), ("fy", self.fy, h)] {
+            let fov = 2.0 * (0.5 * side / focal).atan().to_degrees();
             if !(fov.is_finite() && (0.1..=175.0).contains(&fov)) {
-                return Err(format!(
-                    "camera_matrix: {name} = {} gives a {fov:.3}° field of view across {side} \
-                     pixels; a real lens gives 0.1-175°",
-                    short_number(f)
-                ));
+                return Err(ImplausibleCamera::FieldOfView {
+                    axis,
+                    focal,
+                    fov,
+                    side,
+                });
             }
         }
         let aspect = self.fx / self.fy;
         if !(0.25..=4.0).contains(&aspect) {
-            return Err(format!(
-                "camera_matrix: fx/fy = {aspect:.3}; real pixels are not that far from square"
-            ));
+            return Err(ImplausibleCamera::NotSquare { aspect });
         }
-        for (name, c, side) in [("cx", self.cx, w), ("cy", self.cy, h)] {
-            if !(-0.5 * side..=1.5 * side).contains(&c) {
-                return Err(format!(
-                    "camera_matrix: principal point {name} = {} lies far outside the {}x{} image",
-                    short_number(c),
-                    self.width,
-                    self.height
-                ));
+        for (axis, value, side) in [("cx", self.cx, w), ("cy", self.cy, h)] {
+            if !(-0.5 * side..=1.5 * side).contains(&value) {
+                return Err(ImplausibleCamera::PrincipalPoint {
+                    axis,
+                    value,
+                    width: self.width,
+                    height: self.height,
+                });
             }
         }
         if !self.has_distortion() {
             return Ok(());
         }
-        let bad = |what: String| {
-            let terms: Vec<String> = self.distortion.iter().map(|&k| short_number(k)).collect();
-            Err(format!(
-                "distortion_coefficients [{}] are not a real lens: {what}",
-                terms.join(", ")
-            ))
+        let bad = |problem: LensProblem| {
+            Err(ImplausibleCamera::Distortion {
+                coefficients: self.distortion,
+                problem,
+            })
         };
         // Walk from the principal point to every corner and edge middle.
         let (x0, x1, y0, y1) = (-0.5, w - 0.5, -0.5, h - 0.5);
@@ -110,26 +196,21 @@ impl Camera {
                 let (bu, bv) = self.distort_normalized(x, y);
                 let miss = (bu - pu).hypot(bv - pv);
                 if miss.is_nan() || miss >= 0.01 {
-                    return bad(format!(
-                        "pixel ({pu:.0}, {pv:.0}) has no undistorted position"
-                    ));
+                    return bad(LensProblem::NoInverse { pixel: [pu, pv] });
                 }
                 let radius = x.hypot(y);
                 if radius <= last {
-                    return bad(format!(
-                        "the image folds over itself towards pixel ({u:.0}, {v:.0})"
-                    ));
+                    return bad(LensProblem::FoldsOver { pixel: [u, v] });
                 }
                 last = radius;
             }
             let distorted = ((u - self.cx) / self.fx).hypot((v - self.cy) / self.fy);
             let ratio = last / distorted;
             if !(0.25..=4.0).contains(&ratio) {
-                return bad(format!(
-                    "pixel ({u:.0}, {v:.0}) would lie at {:.3}% of its distance from the centre \
-                     without distortion (a real lens: 25-400%)",
-                    ratio * 100.0
-                ));
+                return bad(LensProblem::Stretched {
+                    pixel: [u, v],
+                    ratio,
+                });
             }
         }
         Ok(())
@@ -161,7 +242,7 @@ fn nesting(text: &str) -> usize {
     deepest
 }
 
-fn parse_calibration(text: &str) -> Result<Camera, String> {
+fn parse_calibration(text: &str) -> Result<Camera, LoadProblem> {
     if nesting(text) > MAX_NESTING {
         refuse!("nested more than {MAX_NESTING} levels deep: not a camera calibration");
     }
@@ -169,8 +250,9 @@ fn parse_calibration(text: &str) -> Result<Camera, String> {
         opencv_xml_to_value(text)?
     } else {
         let cleaned = strip_opencv_yaml(text);
-        serde_yaml::from_str(&cleaned)
-            .map_err(|e| format!("not a readable calibration YAML: {}", one_line(&e)))?
+        serde_yaml::from_str(&cleaned).map_err(|e| {
+            LoadProblem::Invalid(format!("not a readable calibration YAML: {}", one_line(&e)))
+        })?
     };
     let Value::Mapping(_) = doc else {
         refuse!("not a camera calibration (expected a YAML mapping)");
@@ -182,7 +264,7 @@ fn parse_calibration(text: &str) -> Result<Camera, String> {
     };
 
     let k = matrix_field(&doc, CAMERA_MATRIX_KEYS)?
-        .ok_or_else(|| "missing camera_matrix (or K)".to_string())?;
+        .ok_or_else(|| LoadProblem::Invalid("missing camera_matrix (or K)".into()))?;
     let k = match k.len() {
         9 => k,
         // Kalibr: [fu, fv, pu, pv].
@@ -242,7 +324,7 @@ fn parse_calibration(text: &str) -> Result<Camera, String> {
 
     // Kalibr gives `resolution: [width, height]` instead.
     let resolution = matrix_field(&doc, &["resolution"])?;
-    let from_resolution = |index: usize, name: &str| -> Result<Option<u32>, String> {
+    let from_resolution = |index: usize, name: &str| -> Result<Option<u32>, LoadProblem> {
         match &resolution {
             Some(r) if r.len() == 2 => image_size(r[index], name).map(Some),
             Some(_) => refuse!("resolution must be [width, height]"),
@@ -251,15 +333,13 @@ fn parse_calibration(text: &str) -> Result<Camera, String> {
     };
     let width = match size_field(&doc, &["image_width", "imageWidth", "width"])? {
         Some(w) => w,
-        None => {
-            from_resolution(0, "image_width")?.ok_or_else(|| "missing image_width".to_string())?
-        }
+        None => from_resolution(0, "image_width")?
+            .ok_or_else(|| LoadProblem::Invalid("missing image_width".into()))?,
     };
     let height = match size_field(&doc, &["image_height", "imageHeight", "height"])? {
         Some(h) => h,
-        None => {
-            from_resolution(1, "image_height")?.ok_or_else(|| "missing image_height".to_string())?
-        }
+        None => from_resolution(1, "image_height")?
+            .ok_or_else(|| LoadProblem::Invalid("missing image_height".into()))?,
     };
 
     let camera = Camera {
@@ -271,7 +351,9 @@ fn parse_calibration(text: &str) -> Result<Camera, String> {
         width,
         height,
     };
-    camera.check_plausible()?;
+    camera
+        .check_plausible()
+        .map_err(|e| LoadProblem::Invalid(e.to_string()))?;
     Ok(camera)
 }
 
@@ -290,9 +372,11 @@ const CAMERA_MATRIX_KEYS: &[&str] = &["camera_matrix", "cameraMatrix", "K", "k",
 /// scalars (`<image_width>640</image_width>`) and matrices
 /// (`<camera_matrix type_id="opencv-matrix"><rows>..<data>..</data>`),
 /// turned into the same structure the YAML reader produces.
-fn opencv_xml_to_value(text: &str) -> Result<Value, String> {
+fn opencv_xml_to_value(text: &str) -> Result<Value, LoadProblem> {
     let body = inner_xml(text, "opencv_storage").ok_or_else(|| {
-        "not an OpenCV calibration XML (no complete <opencv_storage> element)".to_string()
+        LoadProblem::Invalid(
+            "not an OpenCV calibration XML (no complete <opencv_storage> element)".into(),
+        )
     })?;
     let mut map = serde_yaml::Mapping::new();
     let mut rest = body;
@@ -304,10 +388,10 @@ fn opencv_xml_to_value(text: &str) -> Result<Value, String> {
         }
         let name_end = after
             .find(|c: char| c.is_whitespace() || c == '>' || c == '/')
-            .ok_or_else(|| "malformed XML element".to_string())?;
+            .ok_or_else(|| LoadProblem::Invalid("malformed XML element".into()))?;
         let name = &after[..name_end];
-        let content = inner_xml(rest, name)
-            .ok_or_else(|| format!("malformed XML: <{name}> is not closed"))?;
+        let not_closed = || LoadProblem::Invalid(format!("malformed XML: <{name}> is not closed"));
+        let content = inner_xml(rest, name).ok_or_else(not_closed)?;
         // A matrix keeps its declared rows and cols, so that the YAML
         // reader's check (rows x cols values) holds XML files to the same.
         let value = match inner_xml(content, "data") {
@@ -326,9 +410,7 @@ fn opencv_xml_to_value(text: &str) -> Result<Value, String> {
         };
         map.insert(name.into(), value);
         let close = format!("</{name}>");
-        let end = rest
-            .find(&close)
-            .ok_or_else(|| format!("malformed XML: <{name}> is not closed"))?;
+        let end = rest.find(&close).ok_or_else(not_closed)?;
         rest = &rest[end + close.len()..];
     }
     Ok(Value::Mapping(map))
@@ -511,7 +593,7 @@ fn field<'a>(doc: &'a Value, names: &[&str]) -> Option<&'a Value> {
 }
 
 /// A matrix either as `{rows, cols, data: [...]}` or as a flat list.
-fn matrix_field(doc: &Value, names: &[&str]) -> Result<Option<Vec<f64>>, String> {
+fn matrix_field(doc: &Value, names: &[&str]) -> Result<Option<Vec<f64>>, LoadProblem> {
     let Some(value) = field(doc, names) else {
         return Ok(None);
     };
@@ -520,7 +602,10 @@ fn matrix_field(doc: &Value, names: &[&str]) -> Result<Option<Vec<f64>>, String>
     let data = match value {
         Value::Sequence(_) => value,
         Value::Mapping(_) => {
-            field(value, &["data"]).ok_or_else(|| format!("{name} has no data list"))?
+            let Some(data) = field(value, &["data"]) else {
+                refuse!("{name} has no data list");
+            };
+            data
         }
         _ => refuse!("{name} is neither a list nor a matrix with data"),
     };
@@ -531,7 +616,7 @@ fn matrix_field(doc: &Value, names: &[&str]) -> Result<Option<Vec<f64>>, String>
         .iter()
         .map(number)
         .collect::<Option<Vec<f64>>>()
-        .ok_or_else(|| format!("{name} contains a non-numeric value"))?;
+        .ok_or_else(|| LoadProblem::Invalid(format!("{name} contains a non-numeric value")))?;
     if let Value::Mapping(_) = value {
         let rows = field(value, &["rows"]).and_then(number);
         let cols = field(value, &["cols"]).and_then(number);
@@ -547,15 +632,17 @@ fn matrix_field(doc: &Value, names: &[&str]) -> Result<Option<Vec<f64>>, String>
     Ok(Some(values))
 }
 
-fn size_field(doc: &Value, names: &[&str]) -> Result<Option<u32>, String> {
+fn size_field(doc: &Value, names: &[&str]) -> Result<Option<u32>, LoadProblem> {
     let Some(value) = field(doc, names) else {
         return Ok(None);
     };
-    let n = number(value).ok_or_else(|| format!("{} is not a number", names[0]))?;
+    let Some(n) = number(value) else {
+        refuse!("{} is not a number", names[0]);
+    };
     image_size(n, names[0]).map(Some)
 }
 
-fn image_size(n: f64, name: &str) -> Result<u32, String> {
+fn image_size(n: f64, name: &str) -> Result<u32, LoadProblem> {
     if !((1.0..=1_000_000.0).contains(&n) && n.fract() == 0.0) {
         refuse!("{name} = {n} is not a valid image size");
     }

@@ -9,7 +9,7 @@
 
 mod calibration;
 
-pub use calibration::{CalibrationFormat, OtherCamera};
+pub use calibration::{CalibrationFormat, ImplausibleCamera, LensProblem, OtherCamera};
 
 use nalgebra::{Matrix2, Vector2, Vector3};
 

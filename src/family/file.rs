@@ -26,7 +26,7 @@
 
 use super::necklace::self_distance;
 use super::Family;
-use crate::error::{refuse, FileKind, LoadError};
+use crate::error::{refuse, FileKind, LoadError, LoadProblem};
 use serde::Deserialize;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -100,14 +100,18 @@ impl Family {
     /// are one line, naming the problem; [`Family::load`] adds the file name.
     pub fn from_json(text: &str) -> Result<Family, LoadError> {
         parse_family(text).map_err(|problem| {
-            LoadError::invalid_text(FileKind::Family, crate::error::shorten_words(&problem))
+            LoadError::invalid_text(
+                FileKind::Family,
+                crate::error::shorten_words(&problem.to_string()),
+            )
         })
     }
 }
 
-/// The checks behind [`Family::from_json`]; the problem in words.
-fn parse_family(text: &str) -> Result<Family, String> {
-    let header: Header = serde_json::from_str(text).map_err(|e| format!("not valid JSON: {e}"))?;
+/// The checks behind [`Family::from_json`].
+fn parse_family(text: &str) -> Result<Family, LoadProblem> {
+    let header: Header = serde_json::from_str(text)
+        .map_err(|e| LoadProblem::Invalid(format!("not valid JSON: {e}")))?;
     match header.format.as_deref() {
         Some(FAMILY_FILE_FORMAT) => {}
         Some(other) => refuse!("format is \"{other}\", expected \"{FAMILY_FILE_FORMAT}\""),
@@ -121,8 +125,8 @@ fn parse_family(text: &str) -> Result<Family, String> {
         ),
         None => refuse!("no \"version\" field"),
     }
-    let doc: Document =
-        serde_json::from_str(text).map_err(|e| format!("malformed family file: {e}"))?;
+    let doc: Document = serde_json::from_str(text)
+        .map_err(|e| LoadProblem::Invalid(format!("malformed family file: {e}")))?;
     let mut codes = Vec::with_capacity(doc.codes.len());
     for (k, entry) in doc.codes.iter().enumerate() {
         let expected_id = k as u32 + 1;
@@ -140,7 +144,8 @@ fn parse_family(text: &str) -> Result<Family, String> {
             refuse!("count is {count} but {} codes are listed", codes.len());
         }
     }
-    let family = Family::from_codes(doc.bits, doc.distance, codes).map_err(|e| e.to_string())?;
+    let family = Family::from_codes(doc.bits, doc.distance, codes)
+        .map_err(|e| LoadProblem::Invalid(e.to_string()))?;
     let bits = doc.bits as usize;
     for entry in &doc.codes {
         if let Some(binary) = &entry.binary {

@@ -237,7 +237,9 @@ impl BagFrames<'_> {
                     Ok(camera) => self.camera = Some(camera),
                     Err(reason) => {
                         self.skipped.refused_calibrations += 1;
-                        self.skipped.first_refused_calibration.get_or_insert(reason);
+                        self.skipped
+                            .first_refused_calibration
+                            .get_or_insert_with(|| reason.to_string());
                     }
                 }
                 continue;

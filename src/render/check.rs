@@ -99,13 +99,28 @@ fn wrap_degrees(rad: f64) -> f64 {
     wrap_signed(rad.to_degrees(), 360.0)
 }
 
+/// How a rendered marker failed to read back as printed.
+#[derive(Debug, thiserror::Error)]
+enum Misreading {
+    #[error("{0} was not found")]
+    NotFound(String),
+    #[error("{0} could not be read")]
+    Unreadable(String),
+    #[error("{marker} reads as ID {id}")]
+    OtherId { marker: String, id: u32 },
+    #[error("{marker} reads with yaw {yaw_deg:.1}°, expected 0°")]
+    Turned { marker: String, yaw_deg: f64 },
+    #[error("{0} gives no yaw")]
+    NoYaw(String),
+}
+
 /// Checks one expected marker against a page's detections.
 fn check_marker(
     m: &PrintedMarker,
     detections: &[Detection],
     dpi: f64,
     design: Design,
-) -> Result<(), String> {
+) -> Result<(), Misreading> {
     let s = raster::px_per_mm(dpi);
     // Detector pixel coordinates have their origin at the top-left pixel's centre.
     let (u, v) = (m.x_mm * s - 0.5, m.y_mm * s - 0.5);
@@ -116,7 +131,7 @@ fn check_marker(
         .map(|d| (d, (d.u - u).hypot(d.v - v)))
         .min_by(|a, b| a.1.total_cmp(&b.1));
     let Some((d, dist)) = nearest.filter(|(_, dist)| *dist <= tolerance) else {
-        return Err(format!("{} was not found", describe(m)));
+        return Err(Misreading::NotFound(describe(m)));
     };
     let _ = dist;
     if design == Design::WhyCon {
@@ -124,19 +139,21 @@ fn check_marker(
     }
     if d.id != m.id {
         return Err(if d.id == 0 {
-            format!("{} could not be read", describe(m))
+            Misreading::Unreadable(describe(m))
         } else {
-            format!("{} reads as ID {}", describe(m), d.id)
+            Misreading::OtherId {
+                marker: describe(m),
+                id: d.id,
+            }
         });
     }
     match d.yaw {
         Some(yaw) if wrap_degrees(yaw).abs() <= MAX_YAW_ERROR_DEG => Ok(()),
-        Some(yaw) => Err(format!(
-            "{} reads with yaw {:.1}°, expected 0°",
-            describe(m),
-            wrap_degrees(yaw)
-        )),
-        None => Err(format!("{} gives no yaw", describe(m))),
+        Some(yaw) => Err(Misreading::Turned {
+            marker: describe(m),
+            yaw_deg: wrap_degrees(yaw),
+        }),
+        None => Err(Misreading::NoYaw(describe(m))),
     }
 }
 
@@ -214,7 +231,8 @@ fn check_pages(
     let jobs: Vec<(usize, f64)> = (0..pages.len())
         .flat_map(|p| resolutions.iter().map(move |&dpi| (p, dpi)))
         .collect();
-    let failures: Vec<Result<usize, String>> = jobs
+    let failed = |problem: String| RenderError::SelfCheck { problem };
+    let outcomes: Vec<Result<usize, RenderError>> = jobs
         .par_iter()
         .map(|&(p, dpi)| {
             let page = &pages[p];
@@ -222,7 +240,7 @@ fn check_pages(
                 .iter()
                 .filter(|m| m.page as usize == p + 1)
                 .collect();
-            let image = raster::render_page(page, dpi).map_err(|e| e.to_string())?;
+            let image = raster::render_page(page, dpi).map_err(|e| failed(e.to_string()))?;
             let mut detector = Detector::new(DetectorConfig {
                 target: target.clone(),
                 max_markers: expected.len() * 2 + 16,
@@ -235,18 +253,17 @@ fn check_pages(
             for m in &expected {
                 check_marker(m, &detections, dpi, target.design()).map_err(|e| {
                     let across = m.diameter_mm * raster::px_per_mm(dpi);
-                    format!("{e} in a {dpi} dpi rendering, where it is {across:.0} px across")
+                    failed(format!(
+                        "{e} in a {dpi} dpi rendering, where it is {across:.0} px across"
+                    ))
                 })?;
             }
             Ok(expected.len())
         })
         .collect();
     let mut readings = 0;
-    for outcome in failures {
-        match outcome {
-            Ok(n) => readings += n,
-            Err(problem) => return Err(RenderError::SelfCheck { problem }),
-        }
+    for outcome in outcomes {
+        readings += outcome?;
     }
     Ok(CheckReport {
         resolutions,

@@ -1,7 +1,7 @@
 //! Page templates for print sheets: small TOML files, the standard ones built
 //! into the binary from `templates/`, a user's own loaded from a path.
 
-use crate::error::{refuse, FileKind, LoadError};
+use crate::error::{refuse, FileKind, LoadError, LoadProblem};
 use crate::units::Length;
 use serde::Deserialize;
 use std::path::Path;
@@ -68,13 +68,13 @@ fn default_scale_bar() -> String {
     "100mm".to_string()
 }
 
-fn length(field: &str, text: &str) -> Result<f64, String> {
+fn length(field: &str, text: &str) -> Result<f64, LoadProblem> {
     text.parse::<Length>()
         .map(Length::mm)
-        .map_err(|e| format!("{field}: {e}"))
+        .map_err(|e| LoadProblem::Invalid(format!("{field}: {e}")))
 }
 
-fn zero_or_length(field: &str, text: &str) -> Result<f64, String> {
+fn zero_or_length(field: &str, text: &str) -> Result<f64, LoadProblem> {
     if text.trim().trim_end_matches(|c: char| c.is_alphabetic()) == "0" {
         return Ok(0.0);
     }
@@ -87,19 +87,20 @@ impl Template {
     /// Parses a template's TOML text; `name` (the file's name) starts every
     /// error message.
     pub fn parse(name: &str, text: &str) -> Result<Template, LoadError> {
-        Template::checked(name, text).map_err(|problem| {
-            LoadError::invalid_text(FileKind::Template, problem).in_file(Path::new(name))
-        })
+        Template::checked(name, text)
+            .map_err(|problem| LoadError::new(Path::new(name), FileKind::Template, problem))
     }
 
-    fn checked(name: &str, text: &str) -> Result<Template, String> {
+    fn checked(name: &str, text: &str) -> Result<Template, LoadProblem> {
         let file: TemplateFile = toml::from_str(text).map_err(|e| {
-            e.to_string()
-                .lines()
-                .collect::<Vec<_>>()
-                .join(" ")
-                .trim()
-                .to_string()
+            LoadProblem::Invalid(
+                e.to_string()
+                    .lines()
+                    .collect::<Vec<_>>()
+                    .join(" ")
+                    .trim()
+                    .to_string(),
+            )
         })?;
         let template = Template {
             name: name.to_string(),

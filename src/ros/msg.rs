@@ -293,17 +293,87 @@ impl Time {
     }
 }
 
+/// Why a camera_info describes no calibrated camera the library can use.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CameraInfoError {
+    /// No image size.
+    #[error("camera_info has no image size ({width}x{height})")]
+    NoImageSize {
+        /// Its width, pixels.
+        width: u32,
+        /// Its height, pixels.
+        height: u32,
+    },
+    /// Focal lengths that are not positive numbers, or a principal point
+    /// that is not a number.
+    #[error(
+        "camera_info is not a calibration ({matrix} gives fx {fx}, fy {fy}, cx {cx}, cy {cy})"
+    )]
+    NotACalibration {
+        /// The matrix they were read from: "K", or "P" for a rectified topic.
+        matrix: &'static str,
+        /// Focal length along x, pixels.
+        fx: f64,
+        /// Focal length along y, pixels.
+        fy: f64,
+        /// Principal point x, pixels.
+        cx: f64,
+        /// Principal point y, pixels.
+        cy: f64,
+    },
+    /// Distortion coefficients that are not numbers.
+    #[error("camera_info's distortion coefficients are not finite")]
+    DistortionNotFinite,
+    /// rational_polynomial with k4..k6 in use.
+    #[error(
+        "camera_info's rational_polynomial model uses k4..k6, which this node does not model \
+         (plumb_bob does: k1, k2, p1, p2, k3)"
+    )]
+    RationalTerms,
+    /// plumb_bob with another number of coefficients than 5.
+    #[error("camera_info's plumb_bob model has {count} coefficients, not 5")]
+    PlumbBobTerms {
+        /// How many it has.
+        count: usize,
+    },
+    /// A distortion model the library does not have.
+    #[error("camera_info's distortion model '{model}' is not modelled (plumb_bob is)")]
+    UnknownModel {
+        /// The model's name.
+        model: String,
+    },
+    /// A calibration no real lens gives.
+    #[error("camera_info is not a real lens: {0}")]
+    NotARealLens(crate::camera::ImplausibleCamera),
+    /// A region of interest outside the image.
+    #[error(
+        "camera_info's region of interest {}x{}+{}+{} lies outside its {width}x{height} image",
+        roi.width,
+        roi.height,
+        roi.x_offset,
+        roi.y_offset
+    )]
+    RoiOutside {
+        /// The region.
+        roi: RegionOfInterest,
+        /// The image's width, pixels.
+        width: u32,
+        /// The image's height, pixels.
+        height: u32,
+    },
+}
+
 impl CameraInfo {
     /// The calibration of the images this camera_info describes: K and D
     /// (or, for a rectified image topic, P without distortion), cropped to
     /// its region of interest and scaled for its binning. A camera_info
     /// that describes no calibrated camera is refused with the reason.
-    pub fn camera(&self, rectified: bool) -> Result<crate::Camera, String> {
+    pub fn camera(&self, rectified: bool) -> Result<crate::Camera, CameraInfoError> {
         if self.width == 0 || self.height == 0 {
-            return Err(format!(
-                "camera_info has no image size ({}x{})",
-                self.width, self.height
-            ));
+            return Err(CameraInfoError::NoImageSize {
+                width: self.width,
+                height: self.height,
+            });
         }
         let [fx, fy, cx, cy] = if rectified {
             [self.p[0], self.p[5], self.p[2], self.p[6]]
@@ -313,9 +383,13 @@ impl CameraInfo {
         let matrix = if rectified { "P" } else { "K" };
         let finite = [fx, fy, cx, cy].iter().all(|v| v.is_finite());
         if !(finite && fx > 0.0 && fy > 0.0) {
-            return Err(format!(
-                "camera_info is not a calibration ({matrix} gives fx {fx}, fy {fy}, cx {cx}, cy {cy})"
-            ));
+            return Err(CameraInfoError::NotACalibration {
+                matrix,
+                fx,
+                fy,
+                cx,
+                cy,
+            });
         }
         let distortion = if rectified {
             [0.0; 5]
@@ -336,17 +410,18 @@ impl CameraInfo {
         // The checks a calibration file gets: a camera_info is used the same way.
         camera
             .check_plausible()
-            .map_err(|e| format!("camera_info is not a real lens: {e}"))?;
+            .map_err(CameraInfoError::NotARealLens)?;
         let roi = self.roi;
         if roi.width != 0 && roi.height != 0 && (roi.width, roi.height) != (self.width, self.height)
         {
             if u64::from(roi.x_offset) + u64::from(roi.width) > u64::from(self.width)
                 || u64::from(roi.y_offset) + u64::from(roi.height) > u64::from(self.height)
             {
-                return Err(format!(
-                    "camera_info's region of interest {}x{}+{}+{} lies outside its {}x{} image",
-                    roi.width, roi.height, roi.x_offset, roi.y_offset, self.width, self.height
-                ));
+                return Err(CameraInfoError::RoiOutside {
+                    roi,
+                    width: self.width,
+                    height: self.height,
+                });
             }
             camera.cx -= f64::from(roi.x_offset);
             camera.cy -= f64::from(roi.y_offset);
@@ -363,9 +438,9 @@ impl CameraInfo {
     /// plumb_bob's k1, k2, p1, p2, k3; the other models only when they
     /// reduce to it (rational_polynomial with k4..k6 zero, or no
     /// distortion at all).
-    fn distortion(&self) -> Result<[f64; 5], String> {
+    fn distortion(&self) -> Result<[f64; 5], CameraInfoError> {
         if self.d.iter().any(|k| !k.is_finite()) {
-            return Err("camera_info's distortion coefficients are not finite".into());
+            return Err(CameraInfoError::DistortionNotFinite);
         }
         let mut k = [0.0; 5];
         for (dst, src) in k.iter_mut().zip(&self.d) {
@@ -376,18 +451,13 @@ impl CameraInfo {
         match self.distortion_model.as_str() {
             _ if none => Ok([0.0; 5]),
             "plumb_bob" | "rational_polynomial" if extra.iter().all(|&c| c == 0.0) => Ok(k),
-            "rational_polynomial" => Err(
-                "camera_info's rational_polynomial model uses k4..k6, which this node does not \
-                 model (plumb_bob does: k1, k2, p1, p2, k3)"
-                    .into(),
-            ),
-            "plumb_bob" => Err(format!(
-                "camera_info's plumb_bob model has {} coefficients, not 5",
-                self.d.len()
-            )),
-            other => Err(format!(
-                "camera_info's distortion model '{other}' is not modelled (plumb_bob is)"
-            )),
+            "rational_polynomial" => Err(CameraInfoError::RationalTerms),
+            "plumb_bob" => Err(CameraInfoError::PlumbBobTerms {
+                count: self.d.len(),
+            }),
+            other => Err(CameraInfoError::UnknownModel {
+                model: other.to_string(),
+            }),
         }
     }
 }
@@ -503,7 +573,11 @@ mod tests {
     #[test]
     fn camera_infos_that_calibrate_nothing_are_refused() {
         let zeros = CameraInfo::default();
-        assert!(zeros.camera(false).unwrap_err().contains("no image size"));
+        assert!(zeros
+            .camera(false)
+            .unwrap_err()
+            .to_string()
+            .contains("no image size"));
         let uncalibrated = CameraInfo {
             width: 640,
             height: 480,
@@ -512,22 +586,35 @@ mod tests {
         assert!(uncalibrated
             .camera(false)
             .unwrap_err()
+            .to_string()
             .contains("not a calibration"));
         let mut fisheye = info();
         fisheye.distortion_model = "equidistant".into();
         fisheye.d = vec![0.1, 0.0, 0.0, 0.0];
-        assert!(fisheye.camera(false).unwrap_err().contains("equidistant"));
+        assert!(fisheye
+            .camera(false)
+            .unwrap_err()
+            .to_string()
+            .contains("equidistant"));
         let mut rational = info();
         rational.distortion_model = "rational_polynomial".into();
         rational.d = vec![-0.1, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
         assert!(rational.camera(false).is_ok());
         rational.d[6] = 0.2;
-        assert!(rational.camera(false).unwrap_err().contains("k4..k6"));
+        assert!(rational
+            .camera(false)
+            .unwrap_err()
+            .to_string()
+            .contains("k4..k6"));
         let mut outside = info();
         outside.roi.width = 600;
         outside.roi.height = 100;
         outside.roi.x_offset = 100;
-        assert!(outside.camera(false).unwrap_err().contains("outside"));
+        assert!(outside
+            .camera(false)
+            .unwrap_err()
+            .to_string()
+            .contains("outside"));
         let mut nan = info();
         nan.k[0] = f64::NAN;
         assert!(nan.camera(false).is_err());

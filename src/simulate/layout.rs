@@ -169,21 +169,36 @@ pub fn marker_scatter_all(
     distance: f64,
     max_tilt: f64,
     seed: u64,
-) -> Result<Vec<LooseMarker>, String> {
+) -> Result<Vec<LooseMarker>, ScatterOverflow> {
     let placed = marker_scatter(camera, markers, distance, max_tilt, seed);
     if placed.len() < markers.len() {
-        return Err(format!(
-            "only {} of {} markers fit into the {}x{} view without overlapping ({} did not); \
-             scatter fewer, make them smaller (--diameter), move them further away (--distance) \
-             or use --layout grid",
-            placed.len(),
-            markers.len(),
-            camera.width,
-            camera.height,
-            markers.len() - placed.len()
-        ));
+        return Err(ScatterOverflow {
+            placed: placed.len(),
+            asked: markers.len(),
+            width: camera.width,
+            height: camera.height,
+        });
     }
     Ok(placed)
+}
+
+/// More markers asked of [`marker_scatter_all`] than fit into the view.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "only {placed} of {asked} markers fit into the {width}x{height} view without overlapping \
+     ({} did not); scatter fewer, make them smaller (--diameter), move them further away \
+     (--distance) or use --layout grid",
+    asked - placed
+)]
+pub struct ScatterOverflow {
+    /// How many markers fit.
+    pub placed: usize,
+    /// How many were asked for.
+    pub asked: usize,
+    /// The view's width, pixels.
+    pub width: u32,
+    /// The view's height, pixels.
+    pub height: u32,
 }
 
 /// An ink smear over a marker's code ring: three overlapping black discs

@@ -29,6 +29,6 @@ pub use arena::ArenaSpec;
 pub use calibrate::CalibrateSpec;
 pub use detect::DetectSpec;
 #[cfg(feature = "recordings")]
-pub use recording::RecordingSpec;
+pub use recording::{NotATime, RecordingSpec};
 pub use scene::{BackgroundKind, Layout, SceneSpec};
 pub use target::{Bits, TargetSpec};

@@ -19,6 +19,14 @@ pub struct RecordingSpec {
     pub end: Option<f64>,
 }
 
+/// Text that [`RecordingSpec::parse_time`] cannot read as a time.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("'{text}' is not a time (seconds like 12.5, or 1:30 for a minute and a half)")]
+pub struct NotATime {
+    /// The text, trimmed.
+    pub text: String,
+}
+
 impl RecordingSpec {
     /// Checks the options and builds the reader's.
     pub fn build(&self) -> Result<ReadOptions, SpecError> {
@@ -70,10 +78,10 @@ impl RecordingSpec {
 
     /// A time as users type it: seconds (`12.5`, `90s`) or a clock
     /// (`1:30`, `0:01:30.5`).
-    pub fn parse_time(text: &str) -> Result<f64, String> {
+    pub fn parse_time(text: &str) -> Result<f64, NotATime> {
         let text = text.trim();
-        let bad = || {
-            format!("'{text}' is not a time (seconds like 12.5, or 1:30 for a minute and a half)")
+        let bad = || NotATime {
+            text: text.to_string(),
         };
         let plain = text.strip_suffix('s').unwrap_or(text);
         let mut seconds = 0.0;

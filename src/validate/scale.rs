@@ -184,9 +184,12 @@ pub(crate) fn measure(
         (Some(x), Some(y)) => Some((x + y) / 2.0),
         (x, y) => x.or(y),
     };
+    let elsewhere = failures
+        .iter()
+        .any(|(_, why)| *why == EdgeMiss::NotWhereExpected);
     let failures = grouped_failures(&failures);
     let Some(s) = scale else {
-        let hint = if failures.contains(NOT_WHERE_EXPECTED) {
+        let hint = if elsewhere {
             "; if the paper's edges are plainly in view, the photo is of another sheet than \
              this manifest's"
         } else {
@@ -375,7 +378,7 @@ fn find_edge(
     [w, h]: [f64; 2],
     markers: &[(f64, f64, f64)],
     side: usize,
-) -> Result<EdgeLine, String> {
+) -> Result<EdgeLine, EdgeMiss> {
     // Base point on the nominal border at along-side coordinate s, and the
     // outward normal.
     let (length, across) = if side.is_multiple_of(2) {
@@ -504,28 +507,43 @@ fn find_edge(
     }
     if points.len() < 6 {
         return Err(if out_of_view >= low_contrast && out_of_view > 0 {
-            "not in the photo".to_string()
+            EdgeMiss::NotInPhoto
         } else if low_contrast > 0 {
-            NOT_WHERE_EXPECTED.to_string()
+            EdgeMiss::NotWhereExpected
         } else {
-            "hidden behind markers".to_string()
+            EdgeMiss::HiddenBehindMarkers
         });
     }
-    fit_edge_line(&points).ok_or_else(|| "not straight (folded or occluded?)".to_string())
+    fit_edge_line(&points).ok_or(EdgeMiss::NotStraight)
 }
 
-/// Why a paper edge was not found where the page's markers put it. Said
-/// with where it was looked for: a paper edge plainly visible elsewhere
-/// means the manifest's page is not the one in the photo.
-const NOT_WHERE_EXPECTED: &str =
-    "no paper edge where the manifest's page puts it (searched from 12 % of the page inside \
-     to 20 % outside)";
+/// Why one paper edge was not found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+enum EdgeMiss {
+    /// The sample lines left the photo before reaching it.
+    #[error("not in the photo")]
+    NotInPhoto,
+    /// No step from paper to background where the page should end. Said
+    /// with where it was looked for: a paper edge plainly visible elsewhere
+    /// means the manifest's page is not the one in the photo.
+    #[error(
+        "no paper edge where the manifest's page puts it (searched from 12 % of the page inside \
+         to 20 % outside)"
+    )]
+    NotWhereExpected,
+    /// Markers near the border left too few places to look.
+    #[error("hidden behind markers")]
+    HiddenBehindMarkers,
+    /// The edge points found lie on no straight line.
+    #[error("not straight (folded or occluded?)")]
+    NotStraight,
+}
 
 /// "top and right edges: not in the photo; bottom edge: ...": the sides
 /// that failed for one reason named together, so that a reason is said once.
-fn grouped_failures(failures: &[(&str, String)]) -> String {
-    let mut reasons: Vec<&String> = Vec::new();
-    for (_, why) in failures {
+fn grouped_failures(failures: &[(&str, EdgeMiss)]) -> String {
+    let mut reasons: Vec<EdgeMiss> = Vec::new();
+    for &(_, why) in failures {
         if !reasons.contains(&why) {
             reasons.push(why);
         }
@@ -535,7 +553,7 @@ fn grouped_failures(failures: &[(&str, String)]) -> String {
         .map(|why| {
             let sides: Vec<&str> = failures
                 .iter()
-                .filter(|(_, w)| w == *why)
+                .filter(|(_, w)| w == why)
                 .map(|(side, _)| *side)
                 .collect();
             let named = match sides.as_slice() {

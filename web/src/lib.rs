@@ -15,8 +15,6 @@ use whycode::board::Board;
 use whycode::calibrate;
 use whycode::camera::Camera;
 use whycode::detect::{Detector, Target};
-#[cfg(feature = "files")]
-use whycode::error::{FileKind, LoadError, LoadProblem};
 use whycode::family::{parse_id_list, CountTable, Family};
 use whycode::image_io;
 use whycode::manifest::Manifest;
@@ -659,15 +657,7 @@ impl LiveOptions {
         let arena = self
             .arena
             .as_ref()
-            .map(|file| {
-                Arena::parse(&file.text).map_err(|problem| {
-                    LoadError::new(
-                        Path::new(&file.name),
-                        FileKind::Arena,
-                        LoadProblem::Invalid(problem),
-                    )
-                })
-            })
+            .map(|file| Arena::parse(&file.text).map_err(|err| err.in_file(Path::new(&file.name))))
             .transpose()?;
         Ok((camera, boards, arena))
     }
