@@ -201,6 +201,10 @@ impl RingReader {
         self.read_light(image, outer, black_level, white_level, true)
     }
 
+    /// The reading's stages: the ring's scale, its profile (rectified under
+    /// perspective, evened under a shadow's edge), the pairing of its
+    /// half-sectors into bits, the bits, their decoding and what the
+    /// decoded member earns.
     fn read_light<C: Deref<Target = [u8]>>(
         &self,
         image: &ImageBuffer<Luma<u8>, C>,
@@ -212,13 +216,69 @@ impl RingReader {
         let Some(decoder) = &self.decoder else {
             return RingReading::unreadable(0.0);
         };
-        let bits = decoder.family().bits();
+        let scale = RingScale::of(outer, decoder.family().bits(), black_level, white_level);
+        if scale.unreadable(self.min_pixels_per_sector) {
+            return RingReading::unreadable(scale.pixels_per_sector.max(0.0));
+        }
+        let Some(mut ring) = RingProfile::sample(image, outer, scale.bits) else {
+            return RingReading::unreadable(scale.pixels_per_sector);
+        };
+        let centre_estimate = ring.rectify(image, outer, 0.5 * (black_level + white_level));
+        if in_shade {
+            ring.even_light(image);
+        }
+        let pairing = Pairing::of(&ring.profile, scale.bits, ring.phase, scale.sector);
+        let mut reading = RingReading {
+            edge_strength: pairing.typical / scale.contrast,
+            pixels_per_sector: scale.pixels_per_sector,
+            projected_centre: Some(ring.frame.projected_centre),
+            centre_estimate,
+            ..RingReading::unreadable(scale.pixels_per_sector)
+        };
+        if reading.edge_strength < MIN_RING_CONTRAST {
+            return reading;
+        }
+        if !pairing.clear() {
+            return all_bits_equal(decoder, &pairing, reading);
+        }
+        let bits = BitsRead::of(&pairing, scale.bits);
+        bits.record(&mut reading);
+        let Some(decoded) = decode(decoder, &bits, &reading) else {
+            return reading;
+        };
+        let Some(rotation) = weigh(&mut reading, decoded, &bits) else {
+            return reading;
+        };
+        let x_axis_t = pairing.start + 2.0 * scale.sector * f64::from(rotation);
+        let (yaw, axis_point) = x_axis(&ring.frame, x_axis_t);
+        RingReading {
+            yaw: Some(yaw),
+            axis_point: Some(axis_point),
+            ..reading
+        }
+    }
+}
+
+/// A ring's size against what the reader can read.
+struct RingScale {
+    bits: u32,
+    /// A sector's span in the ellipse's parameter, radians.
+    sector: f64,
+    /// A sector's width in pixels at the sample radius, narrowest place.
+    pixels_per_sector: f64,
+    /// White level less black level.
+    contrast: f64,
+    /// The outline is a finite ellipse and the levels differ clearly.
+    sound: bool,
+}
+
+impl RingScale {
+    fn of(outer: &Ellipse, bits: u32, black_level: f64, white_level: f64) -> RingScale {
         let sector = PI / f64::from(bits);
-        let radii = sample_radii();
         let mid_ratio = 0.5 * (RING_INNER_RATIO + WHYCODE_WHITE_RATIO);
         let pixels_per_sector = outer.semi_minor * mid_ratio * sector;
         let contrast = white_level - black_level;
-        let valid = [
+        let sound = [
             outer.u,
             outer.v,
             outer.semi_major,
@@ -231,43 +291,96 @@ impl RingReader {
             && outer.semi_major >= outer.semi_minor
             && contrast.is_finite()
             && contrast > 4.0;
-        if !valid || pixels_per_sector < self.min_pixels_per_sector {
-            return RingReading::unreadable(pixels_per_sector.max(0.0));
+        RingScale {
+            bits,
+            sector,
+            pixels_per_sector,
+            contrast,
+            sound,
         }
+    }
 
+    /// Whether the ring is not to be read: unsound, or its sectors narrower
+    /// than `min_pixels_per_sector`.
+    fn unreadable(&self, min_pixels_per_sector: f64) -> bool {
+        !self.sound || self.pixels_per_sector < min_pixels_per_sector
+    }
+}
+
+/// The ring's profile along the ellipse's parameter, with the frame it
+/// was sampled through and the phase of its sector boundaries.
+struct RingProfile {
+    bits: u32,
+    /// Samples a sector.
+    per_sector: usize,
+    /// Samples round the ring.
+    count: usize,
+    /// Radii (of the outer ellipse) each sample averages over.
+    radii: Vec<f64>,
+    frame: EllipseFrame,
+    profile: Vec<f64>,
+    phase: f64,
+}
+
+impl RingProfile {
+    /// Sampled through the outer ellipse's own frame; `None` when the ring
+    /// leaves the image.
+    fn sample<C: Deref<Target = [u8]>>(
+        image: &ImageBuffer<Luma<u8>, C>,
+        outer: &Ellipse,
+        bits: u32,
+    ) -> Option<RingProfile> {
+        let radii = sample_radii();
         // About one sample per pixel along the outermost sample radius
         // (bilinear interpolation keeps the profile smooth between them);
         // small rings average more radii against noise.
         let arc = 2.0 * PI * radii[4] * outer.semi_major;
         let per_sector = ((arc / f64::from(2 * bits)).ceil() as usize).clamp(8, 256);
-        let radii: &[f64] = if outer.semi_minor < 20.0 {
-            &radii
+        let radii = if outer.semi_minor < 20.0 {
+            radii.to_vec()
         } else {
-            &[radii[0], radii[2], radii[4]]
+            vec![radii[0], radii[2], radii[4]]
         };
         let count = per_sector * 2 * bits as usize;
-        let mut frame = EllipseFrame::new(outer);
-        let Some(mut profile) = sample_profile(image, &frame, radii, count) else {
-            return RingReading::unreadable(pixels_per_sector);
-        };
-        let mut phase = boundary_phase(&profile, bits, per_sector);
+        let frame = EllipseFrame::new(outer);
+        let profile = sample_profile(image, &frame, &radii, count)?;
+        let phase = boundary_phase(&profile, bits, per_sector);
+        Some(RingProfile {
+            bits,
+            per_sector,
+            count,
+            radii,
+            frame,
+            profile,
+            phase,
+        })
+    }
 
-        // Under perspective the ring is neither centred on the outer ellipse
-        // nor evenly spaced in its parameter. Locate the projected marker
-        // centre from the ring's own radial edges and read again through the
-        // exact rectification when it moves by more than a tenth of a pixel.
-        let mid_level = 0.5 * (black_level + white_level);
+    /// Under perspective the ring is neither centred on the outer ellipse
+    /// nor evenly spaced in its parameter. Locates the projected marker
+    /// centre from the ring's own radial edges (where the grey crosses
+    /// `mid_level`) and reads again through the exact rectification when it
+    /// moves by more than a tenth of a pixel. Returns where the radial
+    /// edges meet, `None` when they could not be located.
+    fn rectify<C: Deref<Target = [u8]>>(
+        &mut self,
+        image: &ImageBuffer<Luma<u8>, C>,
+        outer: &Ellipse,
+        mid_level: f64,
+    ) -> Option<(f64, f64)> {
         // Starting needs a clear offset (noise and blur move the estimate
         // by a tenth of a pixel on a face-on ring); once rectifying, refine
         // until it settles.
         let mut threshold = 0.25;
         let mut centre_estimate = None;
         for _ in 0..3 {
-            let Some(p) = refined_centre(image, &frame, phase, bits, mid_level) else {
+            let Some(p) = refined_centre(image, &self.frame, self.phase, self.bits, mid_level)
+            else {
                 break;
             };
             centre_estimate = Some(p);
-            let moved = (p.0 - frame.projected_centre.0).hypot(p.1 - frame.projected_centre.1);
+            let projected = self.frame.projected_centre;
+            let moved = (p.0 - projected.0).hypot(p.1 - projected.1);
             let offset = (p.0 - outer.u).hypot(p.1 - outer.v);
             if moved < threshold || offset > 0.3 * outer.semi_minor {
                 break;
@@ -275,66 +388,109 @@ impl RingReader {
             let Some(rectified) = EllipseFrame::with_projected_centre(outer, p) else {
                 break;
             };
-            let Some(resampled) = sample_profile(image, &rectified, radii, count) else {
+            let Some(resampled) = sample_profile(image, &rectified, &self.radii, self.count) else {
                 break;
             };
-            profile = resampled;
-            phase = boundary_phase(&profile, bits, per_sector);
-            frame = rectified;
+            self.profile = resampled;
+            self.phase = boundary_phase(&self.profile, self.bits, self.per_sector);
+            self.frame = rectified;
             threshold = 0.1;
         }
+        centre_estimate
+    }
 
-        let even = in_shade
-            .then(|| paper_profile(image, &frame, count))
-            .flatten()
-            .and_then(|paper| evened_light(&profile, &paper, bits));
+    /// The profile as under even light, judged from the paper round the
+    /// marker (unchanged when that cannot be read).
+    fn even_light<C: Deref<Target = [u8]>>(&mut self, image: &ImageBuffer<Luma<u8>, C>) {
+        let even = paper_profile(image, &self.frame, self.count)
+            .and_then(|paper| evened_light(&self.profile, &paper, self.bits));
         if let Some(even) = even {
-            profile = even;
+            self.profile = even;
         }
-        let halves_a = half_sector_means(&profile, bits, phase);
-        let halves_b = half_sector_means(&profile, bits, phase + sector);
+    }
+}
+
+/// The half-sectors paired into bits: of the two classes of sector
+/// boundary, the one taken for the mandatory mid-bit edge is the pairing
+/// under which the bits are most clearly Manchester.
+struct Pairing {
+    /// Where the first bit starts, in the ellipse's parameter.
+    start: f64,
+    /// Each bit's first half less its second, under this pairing.
+    diffs: Vec<f64>,
+    /// The same under the other pairing.
+    other_diffs: Vec<f64>,
+    /// The median bit's difference, in grey levels.
+    typical: f64,
+}
+
+impl Pairing {
+    fn of(profile: &[f64], bits: u32, phase: f64, sector: f64) -> Pairing {
+        let halves_a = half_sector_means(profile, bits, phase);
+        let halves_b = half_sector_means(profile, bits, phase + sector);
         let diffs_a = bit_differences(&halves_a);
         let diffs_b = bit_differences(&halves_b);
-        let score = |d: &[f64]| d.iter().map(|x| x.abs()).sum::<f64>();
-        let (start, diffs, other_diffs) = if score(&diffs_a) >= score(&diffs_b) {
+        let (start, diffs, other_diffs) = if pairing_score(&diffs_a) >= pairing_score(&diffs_b) {
             (phase, diffs_a, diffs_b)
         } else {
             (phase + sector, diffs_b, diffs_a)
         };
-        let (best_score, other_score) = (score(&diffs), score(&other_diffs));
-
         let typical = median(diffs.iter().map(|d| d.abs()).collect());
-        let edge_strength = typical / contrast;
-        let mut reading = RingReading {
-            edge_strength,
-            pixels_per_sector,
-            projected_centre: Some(frame.projected_centre),
-            centre_estimate,
-            ..RingReading::unreadable(pixels_per_sector)
-        };
-        // Only a word with all bits equal reads alike under both pairings,
-        // and those are periodic; anything close to a tie is noise.
-        let parity_clear = best_score - other_score > 0.5 * typical;
-        if edge_strength < MIN_RING_CONTRAST {
-            return reading;
+        Pairing {
+            start,
+            diffs,
+            other_diffs,
+            typical,
         }
-        if !parity_clear {
-            // Clean Manchester bits under both pairings: a ring alternating
-            // every sector, i.e. all bits equal. Either reading is periodic,
-            // so it is no member whichever way it is paired.
-            let all_clear = diffs
-                .iter()
-                .chain(&other_diffs)
-                .all(|d| d.abs() > (1.0 - ERASURE_RATIO) * typical);
-            if all_clear {
-                let decoded = decoder.decode(0);
-                reading.word = Some(0);
-                reading.decoded = Some(decoded);
-                reading.confidence = logistic((edge_strength - 0.15) / 0.03);
-            }
-            return reading;
-        }
+    }
 
+    /// Only a word with all bits equal reads alike under both pairings,
+    /// and those are periodic; anything close to a tie is noise.
+    fn clear(&self) -> bool {
+        pairing_score(&self.diffs) - pairing_score(&self.other_diffs) > 0.5 * self.typical
+    }
+}
+
+/// How clearly Manchester the bits' differences are.
+fn pairing_score(diffs: &[f64]) -> f64 {
+    diffs.iter().map(|x| x.abs()).sum::<f64>()
+}
+
+/// A ring whose two pairings read about alike. Clean Manchester bits under
+/// both pairings are a ring alternating every sector, i.e. all bits equal.
+/// Either reading is periodic, so it is no member whichever way it is
+/// paired.
+fn all_bits_equal(decoder: &Decoder, pairing: &Pairing, mut reading: RingReading) -> RingReading {
+    let all_clear = pairing
+        .diffs
+        .iter()
+        .chain(&pairing.other_diffs)
+        .all(|d| d.abs() > (1.0 - ERASURE_RATIO) * pairing.typical);
+    if all_clear {
+        let decoded = decoder.decode(0);
+        reading.word = Some(0);
+        reading.decoded = Some(decoded);
+        reading.confidence = logistic((reading.edge_strength - 0.15) / 0.03);
+    }
+    reading
+}
+
+/// The bits a pairing reads, and how clearly.
+struct BitsRead {
+    /// The bits read, the first in the most significant place.
+    word: u32,
+    /// The bits whose halves are not clearly opposite.
+    erasures: Vec<u32>,
+    /// The weakest bit's difference relative to its reference.
+    weakest_bit: f64,
+    /// The same over the bits kept (at most 1): erased bits are paid for
+    /// by the decoded distance instead.
+    weakest_kept: f64,
+}
+
+impl BitsRead {
+    fn of(pairing: &Pairing, bits: u32) -> BitsRead {
+        let diffs = &pairing.diffs;
         let mut word = 0u32;
         for (j, d) in diffs.iter().enumerate() {
             // First half brighter than the second: white then black, a 1.
@@ -342,10 +498,9 @@ impl RingReader {
                 word |= 1 << (bits as usize - 1 - j);
             }
         }
-        let references = bit_references(&diffs, typical);
+        let references = bit_references(diffs, pairing.typical);
         let mut erasures = Vec::new();
         let mut weakest_bit = f64::INFINITY;
-        // Erased bits are paid for by the decoded distance instead.
         let mut weakest_kept = 1.0f64;
         for (j, (d, reference)) in diffs.iter().zip(&references).enumerate() {
             let relative = d.abs() / reference;
@@ -356,65 +511,90 @@ impl RingReader {
                 weakest_kept = weakest_kept.min(relative);
             }
         }
-        reading.weakest_bit = weakest_bit.min(1.0);
-        reading.word = Some(word);
-        reading.erasures = erasures.len() as u32;
-
-        // Filling erasures assumes every other bit is right, which only a
-        // sharp, well-resolved ring (a local smudge or glare) warrants.
-        let fillable = edge_strength >= MIN_FILL_STRENGTH && pixels_per_sector >= MIN_FILL_PIXELS;
-        let decoded = if erasures.is_empty() {
-            decoder.decode(word)
-        } else if !fillable {
-            return reading;
-        } else {
-            match fill_erasures(decoder, word, &erasures) {
-                Some(d) => d,
-                None => return reading,
-            }
-        };
-        reading.decoded = Some(decoded);
-
-        let quality = logistic((edge_strength - 0.15) / 0.03)
-            * logistic((pixels_per_sector - 1.1) / 0.1)
-            * (weakest_kept / 0.7).min(1.0);
-        match decoded.status {
-            MatchStatus::Exact | MatchStatus::Corrected => {
-                if !erasures.is_empty() && decoded.distance > 0 && quality < MIN_FILLED_QUALITY {
-                    // Filling erasures and then correcting bits besides
-                    // trusts a ring with weak bits left (motion blur smears
-                    // sectors into their neighbours), which is as likely
-                    // another member's.
-                    reading.decoded = Some(decoded);
-                    reading.confidence = quality * 0.5f64.powi(decoded.distance as i32);
-                    return reading;
-                }
-                let status_factor = 0.5f64.powi(decoded.distance as i32);
-                reading.confidence = quality * status_factor;
-                if reading.confidence < MIN_ID_CONFIDENCE {
-                    // Kept in `decoded` as (weak) evidence for the ID
-                    // filter, but not named: a guess is not an answer.
-                    return reading;
-                }
-                reading.id = decoded.id;
-                if decoded.rotation_ambiguous {
-                    // The ID is certain, but the error sits between two of
-                    // the code's own rotations: no yaw rather than a guess.
-                    return reading;
-                }
-                let x_axis_t = start + 2.0 * sector * f64::from(decoded.rotation);
-                // The rim point on the outer ellipse, seen from the
-                // estimated projection of the marker centre.
-                let (ax, ay) = frame.point(x_axis_t, 1.0);
-                let (cx, cy) = frame.projected_centre;
-                reading.yaw = Some((ay - cy).atan2(ax - cx));
-                reading.axis_point = Some((ax, ay));
-            }
-            MatchStatus::Rejected => reading.confidence = quality,
-            MatchStatus::Ambiguous => reading.confidence = 0.0,
+        BitsRead {
+            word,
+            erasures,
+            weakest_bit,
+            weakest_kept,
         }
-        reading
     }
+
+    /// What the reading reports of the bits.
+    fn record(&self, reading: &mut RingReading) {
+        reading.weakest_bit = self.weakest_bit.min(1.0);
+        reading.word = Some(self.word);
+        reading.erasures = self.erasures.len() as u32;
+    }
+}
+
+/// The decoder's verdict on the bits read, erasures filled from the
+/// family's distance; `None` when erasures are left that cannot be filled.
+fn decode(decoder: &Decoder, bits: &BitsRead, reading: &RingReading) -> Option<Decoded> {
+    // Filling erasures assumes every other bit is right, which only a
+    // sharp, well-resolved ring (a local smudge or glare) warrants.
+    let fillable =
+        reading.edge_strength >= MIN_FILL_STRENGTH && reading.pixels_per_sector >= MIN_FILL_PIXELS;
+    if bits.erasures.is_empty() {
+        Some(decoder.decode(bits.word))
+    } else if !fillable {
+        None
+    } else {
+        fill_erasures(decoder, bits.word, &bits.erasures)
+    }
+}
+
+/// Records `decoded` in `reading` with the confidence it earns, and the
+/// member's ID when that is enough to name it. Returns the code's rotation
+/// when the yaw follows from it too.
+fn weigh(reading: &mut RingReading, decoded: Decoded, bits: &BitsRead) -> Option<u32> {
+    reading.decoded = Some(decoded);
+    let quality = logistic((reading.edge_strength - 0.15) / 0.03)
+        * logistic((reading.pixels_per_sector - 1.1) / 0.1)
+        * (bits.weakest_kept / 0.7).min(1.0);
+    match decoded.status {
+        MatchStatus::Exact | MatchStatus::Corrected => {
+            if !bits.erasures.is_empty() && decoded.distance > 0 && quality < MIN_FILLED_QUALITY {
+                // Filling erasures and then correcting bits besides
+                // trusts a ring with weak bits left (motion blur smears
+                // sectors into their neighbours), which is as likely
+                // another member's.
+                reading.confidence = quality * 0.5f64.powi(decoded.distance as i32);
+                return None;
+            }
+            let status_factor = 0.5f64.powi(decoded.distance as i32);
+            reading.confidence = quality * status_factor;
+            if reading.confidence < MIN_ID_CONFIDENCE {
+                // Kept in `decoded` as (weak) evidence for the ID
+                // filter, but not named: a guess is not an answer.
+                return None;
+            }
+            reading.id = decoded.id;
+            if decoded.rotation_ambiguous {
+                // The ID is certain, but the error sits between two of
+                // the code's own rotations: no yaw rather than a guess.
+                return None;
+            }
+            Some(decoded.rotation)
+        }
+        MatchStatus::Rejected => {
+            reading.confidence = quality;
+            None
+        }
+        MatchStatus::Ambiguous => {
+            reading.confidence = 0.0;
+            None
+        }
+    }
+}
+
+/// The yaw of the marker's +x axis, at `x_axis_t` in the ellipse's
+/// parameter, and its rim point on the outer ellipse: the yaw is the
+/// direction to the rim point as seen from the estimated projection of
+/// the marker centre.
+fn x_axis(frame: &EllipseFrame, x_axis_t: f64) -> (f64, (f64, f64)) {
+    let (ax, ay) = frame.point(x_axis_t, 1.0);
+    let (cx, cy) = frame.projected_centre;
+    ((ay - cy).atan2(ax - cx), (ax, ay))
 }
 
 /// Tries every filling of the erased bits; accepts the result only when
