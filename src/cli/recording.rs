@@ -184,10 +184,7 @@ impl<'a> Outputs<'a> {
     ) -> Result<()> {
         if let Some(bag) = &mut self.bag {
             let header = Header {
-                stamp: Time {
-                    sec: frame.stamp_ns.div_euclid(1_000_000_000) as i32,
-                    nanosec: frame.stamp_ns.rem_euclid(1_000_000_000) as u32,
-                },
+                stamp: Time::from_nanos(frame.stamp_ns),
                 frame_id: if frame.frame_id.is_empty() {
                     "camera".into()
                 } else {

@@ -1,13 +1,17 @@
 //! What a recorded run writes: the detections as a bag in the ROS 2 node's
 //! layout (`/tf` and `~/markers`, stamped like their images) and the
-//! annotated frames as a video through ffmpeg.
+//! annotated frames as a video through ffmpeg. And the other end of a
+//! run: [`CameraBag`], a bag of a camera's images and camera_info as
+//! `ros2 bag record` stores them (the sample recordings are made with it).
 
 use super::RecordingError;
 use crate::ros::cdr;
 use crate::ros::describe::Described;
-use crate::ros::msg::{MarkerArray, RosType, TfMessage};
+use crate::ros::msg::{CameraInfo, CompressedImage, Image, MarkerArray, RosType, TfMessage, Time};
+use serde::Serialize;
 use std::collections::BTreeMap;
 use std::io::{Cursor, Write};
+use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
@@ -87,55 +91,74 @@ fn markers_definition() -> String {
     )
 }
 
-/// A bag of detections, built in memory (markers are small next to the
-/// images they came from) and written whole by the caller.
-pub struct DetectionsBag {
+fn compressed_image_definition() -> String {
+    definition(
+        "std_msgs/Header header\nstring format\nuint8[] data",
+        &[HEADER, TIME],
+    )
+}
+
+fn image_definition() -> String {
+    definition(
+        "std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\n\
+         uint8 is_bigendian\nuint32 step\nuint8[] data",
+        &[HEADER, TIME],
+    )
+}
+
+fn camera_info_definition() -> String {
+    definition(
+        "std_msgs/Header header\nuint32 height\nuint32 width\nstring distortion_model\n\
+         float64[] d\nfloat64[9] k\nfloat64[9] r\nfloat64[12] p\nuint32 binning_x\n\
+         uint32 binning_y\nsensor_msgs/RegionOfInterest roi",
+        &[
+            HEADER,
+            TIME,
+            (
+                "sensor_msgs/RegionOfInterest",
+                "uint32 x_offset\nuint32 y_offset\nuint32 height\nuint32 width\nbool do_rectify",
+            ),
+        ],
+    )
+}
+
+/// An MCAP file in rosbag2's layout (the `ros2` profile, ros2msg schemas,
+/// CDR messages), built in memory.
+struct Ros2Bag {
     writer: mcap::Writer<Cursor<Vec<u8>>>,
-    tf: u16,
-    markers: u16,
     sequence: u32,
 }
 
-impl DetectionsBag {
-    /// An empty bag with the /tf and marker channels.
-    pub fn new() -> Result<DetectionsBag, mcap::McapError> {
-        let mut writer = mcap::WriteOptions::new()
+impl Ros2Bag {
+    fn new(options: mcap::WriteOptions) -> Result<Ros2Bag, mcap::McapError> {
+        let writer = options
             .profile("ros2")
             .library(concat!("whycode ", env!("CARGO_PKG_VERSION")))
             .create(Cursor::new(Vec::new()))?;
-        let mut channel = |topic: &str, name: String, text: String| {
-            let schema = writer.add_schema(&name, "ros2msg", text.as_bytes())?;
-            writer.add_channel(schema, topic, "cdr", &BTreeMap::new())
-        };
-        let tf = channel(TF_TOPIC, TfMessage::schema_name(), tf_definition())?;
-        let markers = channel(
-            MARKERS_TOPIC,
-            MarkerArray::schema_name(),
-            markers_definition(),
-        )?;
-        Ok(DetectionsBag {
+        Ok(Ros2Bag {
             writer,
-            tf,
-            markers,
             sequence: 0,
         })
     }
 
-    /// Adds one image's messages at its stamp: the marker array always
-    /// (also when empty, as the node publishes it), the transforms when
-    /// there are any.
-    pub fn add(&mut self, stamp_ns: i64, described: &Described) -> Result<(), mcap::McapError> {
-        let time = stamp_ns.max(0) as u64;
-        if !described.transforms.is_empty() {
-            let message = TfMessage {
-                transforms: described.transforms.clone(),
-            };
-            self.write(self.tf, time, &cdr::encode(&message))?;
-        }
-        self.write(self.markers, time, &cdr::encode(&described.markers))
+    /// A channel on `topic` for messages of type `T`, whose ros2msg
+    /// definition is `text`.
+    fn channel<T: RosType>(&mut self, topic: &str, text: &str) -> Result<u16, mcap::McapError> {
+        let schema = self
+            .writer
+            .add_schema(&T::schema_name(), "ros2msg", text.as_bytes())?;
+        self.writer
+            .add_channel(schema, topic, "cdr", &BTreeMap::new())
     }
 
-    fn write(&mut self, channel_id: u16, time: u64, data: &[u8]) -> Result<(), mcap::McapError> {
+    /// Writes `message` on a channel, logged and published at `stamp_ns`.
+    fn write<T: Serialize>(
+        &mut self,
+        channel_id: u16,
+        stamp_ns: i64,
+        message: &T,
+    ) -> Result<(), mcap::McapError> {
+        let time = stamp_ns.max(0) as u64;
         self.sequence += 1;
         self.writer.write_to_known_channel(
             &mcap::records::MessageHeader {
@@ -144,14 +167,124 @@ impl DetectionsBag {
                 log_time: time,
                 publish_time: time,
             },
-            data,
+            &cdr::encode(message),
         )
     }
 
-    /// The bag's bytes.
-    pub fn finish(mut self) -> Result<Vec<u8>, mcap::McapError> {
+    fn finish(mut self) -> Result<Vec<u8>, mcap::McapError> {
         self.writer.finish()?;
         Ok(self.writer.into_inner().into_inner())
+    }
+}
+
+/// A bag of detections, built in memory (markers are small next to the
+/// images they came from) and written whole by the caller.
+pub struct DetectionsBag {
+    bag: Ros2Bag,
+    tf: u16,
+    markers: u16,
+}
+
+impl DetectionsBag {
+    /// An empty bag with the /tf and marker channels.
+    pub fn new() -> Result<DetectionsBag, mcap::McapError> {
+        let mut bag = Ros2Bag::new(mcap::WriteOptions::new())?;
+        let tf = bag.channel::<TfMessage>(TF_TOPIC, &tf_definition())?;
+        let markers = bag.channel::<MarkerArray>(MARKERS_TOPIC, &markers_definition())?;
+        Ok(DetectionsBag { bag, tf, markers })
+    }
+
+    /// Adds one image's messages at its stamp: the marker array always
+    /// (also when empty, as the node publishes it), the transforms when
+    /// there are any.
+    pub fn add(&mut self, stamp_ns: i64, described: &Described) -> Result<(), mcap::McapError> {
+        if !described.transforms.is_empty() {
+            let message = TfMessage {
+                transforms: described.transforms.clone(),
+            };
+            self.bag.write(self.tf, stamp_ns, &message)?;
+        }
+        self.bag.write(self.markers, stamp_ns, &described.markers)
+    }
+
+    /// The bag's bytes.
+    pub fn finish(self) -> Result<Vec<u8>, mcap::McapError> {
+        self.bag.finish()
+    }
+}
+
+/// The image messages a [`CameraBag`] records: sensor_msgs/msg/Image and
+/// sensor_msgs/msg/CompressedImage.
+pub trait ImageMessage: RosType + Serialize {
+    /// The type's ros2msg definition, as a bag's schema carries it.
+    fn definition() -> String;
+    /// The header's stamp, which the message is logged at.
+    fn stamp(&self) -> Time;
+}
+
+impl ImageMessage for Image {
+    fn definition() -> String {
+        image_definition()
+    }
+    fn stamp(&self) -> Time {
+        self.header.stamp
+    }
+}
+
+impl ImageMessage for CompressedImage {
+    fn definition() -> String {
+        compressed_image_definition()
+    }
+    fn stamp(&self) -> Time {
+        self.header.stamp
+    }
+}
+
+/// A bag of what a camera driver publishes, as `ros2 bag record` stores
+/// it: images of type `M` on one topic and sensor_msgs/msg/CameraInfo on
+/// the topic beside it ([`crate::ros::camera_info_beside`]: where `whycode
+/// detect` looks for the calibration), each message logged at its header's
+/// stamp. Built in memory and written whole by the caller. Its chunks are
+/// not compressed, as rosbag2 records by default: JPEG frames and sensor
+/// noise gain nothing from it.
+pub struct CameraBag<M> {
+    bag: Ros2Bag,
+    image: u16,
+    info: u16,
+    images: PhantomData<M>,
+}
+
+impl<M: ImageMessage> CameraBag<M> {
+    /// An empty bag with the image topic `image_topic` and its camera_info.
+    pub fn new(image_topic: &str) -> Result<CameraBag<M>, mcap::McapError> {
+        let mut bag = Ros2Bag::new(mcap::WriteOptions::new().compression(None))?;
+        let image = bag.channel::<M>(image_topic, &M::definition())?;
+        let info = bag.channel::<CameraInfo>(
+            &crate::ros::camera_info_beside(image_topic),
+            &camera_info_definition(),
+        )?;
+        Ok(CameraBag {
+            bag,
+            image,
+            info,
+            images: PhantomData,
+        })
+    }
+
+    /// Adds a camera_info (a driver sends one with every image, just
+    /// before it).
+    pub fn add_camera_info(&mut self, info: &CameraInfo) -> Result<(), mcap::McapError> {
+        self.bag.write(self.info, info.header.stamp.nanos(), info)
+    }
+
+    /// Adds an image.
+    pub fn add_image(&mut self, image: &M) -> Result<(), mcap::McapError> {
+        self.bag.write(self.image, image.stamp().nanos(), image)
+    }
+
+    /// The bag's bytes.
+    pub fn finish(self) -> Result<Vec<u8>, mcap::McapError> {
+        self.bag.finish()
     }
 }
 
@@ -320,6 +453,86 @@ impl Drop for AnnotatedVideo {
         if let Some(mut child) = self.child.take() {
             let _ = child.kill();
             let _ = child.wait();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::recording::{ReadOptions, Recording};
+    use crate::ros::msg::Header;
+
+    fn header(stamp_ns: i64) -> Header {
+        Header {
+            stamp: Time::from_nanos(stamp_ns),
+            frame_id: "cam_optical".into(),
+        }
+    }
+
+    /// A camera bag reads back through the bag reader: every frame with
+    /// its stamp and pixels, the camera from its camera_info.
+    #[test]
+    fn a_camera_bag_reads_back_with_its_calibration() {
+        let camera = crate::Camera {
+            fx: 40.0,
+            fy: 40.0,
+            cx: 7.5,
+            cy: 5.5,
+            distortion: [-0.05, 0.0, 0.0, 0.0, 0.0],
+            width: 16,
+            height: 12,
+        };
+        let frame =
+            |k: u8| image::GrayImage::from_fn(16, 12, |x, y| image::Luma([k + (x * y) as u8]));
+        let stamp = |k: u8| 1_700_000_000_000_000_000 + i64::from(k) * 100_000_000;
+        let dir = tempfile::tempdir().unwrap();
+
+        let mut compressed =
+            CameraBag::<CompressedImage>::new("/cam/image_raw/compressed").unwrap();
+        let mut raw = CameraBag::<Image>::new("/cam/image_raw").unwrap();
+        for k in 0..3 {
+            let info = CameraInfo::from_camera(&camera, header(stamp(k)));
+            compressed.add_camera_info(&info).unwrap();
+            raw.add_camera_info(&info).unwrap();
+            let png = crate::image_io::encode_image(Path::new("f.png"), &frame(k), 90).unwrap();
+            compressed
+                .add_image(&CompressedImage {
+                    header: header(stamp(k)),
+                    format: "png".into(),
+                    data: png,
+                })
+                .unwrap();
+            raw.add_image(&Image {
+                header: header(stamp(k)),
+                height: 12,
+                width: 16,
+                encoding: "mono8".into(),
+                is_bigendian: 0,
+                step: 16,
+                data: frame(k).into_raw(),
+            })
+            .unwrap();
+        }
+        for (name, bytes) in [
+            ("compressed.mcap", compressed.finish().unwrap()),
+            ("raw.mcap", raw.finish().unwrap()),
+        ] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, bytes).unwrap();
+            let recording = Recording::open(&path).unwrap();
+            let frames: Vec<_> = recording
+                .frames(&ReadOptions::default())
+                .unwrap()
+                .map(Result::unwrap)
+                .collect();
+            assert_eq!(frames.len(), 3, "{name}");
+            for (k, got) in (0..3).zip(&frames) {
+                assert_eq!(got.stamp_ns, stamp(k), "{name}");
+                assert_eq!(got.frame_id, "cam_optical");
+                assert_eq!(got.image, frame(k), "{name}");
+                assert_eq!(got.camera, Some(camera), "{name}");
+            }
         }
     }
 }

@@ -291,6 +291,16 @@ impl Time {
     pub fn nanos(self) -> i64 {
         i64::from(self.sec) * 1_000_000_000 + i64::from(self.nanosec)
     }
+
+    /// The time `nanos` nanoseconds since the epoch ([`Time::nanos`] gives
+    /// them back): the seconds rounded down, so `nanosec` stays in
+    /// 0..1e9 before the epoch too, as ROS keeps it.
+    pub fn from_nanos(nanos: i64) -> Time {
+        Time {
+            sec: nanos.div_euclid(1_000_000_000) as i32,
+            nanosec: nanos.rem_euclid(1_000_000_000) as u32,
+        }
+    }
 }
 
 /// Why a camera_info describes no calibrated camera the library can use.
@@ -364,6 +374,28 @@ pub enum CameraInfoError {
 }
 
 impl CameraInfo {
+    /// What a camera driver publishes for `camera` (a calibration file's
+    /// content, as camera_info_manager sends it): K and plumb_bob's D, R
+    /// the identity and P = K, as a calibration file without a rectified
+    /// camera of its own has them. [`CameraInfo::camera`] gives `camera`
+    /// back.
+    pub fn from_camera(camera: &crate::Camera, header: Header) -> CameraInfo {
+        let crate::Camera { fx, fy, cx, cy, .. } = *camera;
+        CameraInfo {
+            header,
+            height: camera.height,
+            width: camera.width,
+            distortion_model: "plumb_bob".into(),
+            d: camera.distortion.to_vec(),
+            k: [fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0],
+            r: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
+            p: [fx, 0.0, cx, 0.0, 0.0, fy, cy, 0.0, 0.0, 0.0, 1.0, 0.0],
+            binning_x: 0,
+            binning_y: 0,
+            roi: RegionOfInterest::default(),
+        }
+    }
+
     /// The calibration of the images this camera_info describes: K and D
     /// (or, for a rectified image topic, P without distortion), cropped to
     /// its region of interest and scaled for its binning. A camera_info
@@ -548,6 +580,30 @@ mod tests {
         let rectified = info().camera(true).unwrap();
         assert_eq!((rectified.fx, rectified.cx), (480.0, 320.0));
         assert!(!rectified.has_distortion());
+    }
+
+    #[test]
+    fn a_camera_sent_as_camera_info_comes_back() {
+        let camera = crate::Camera {
+            fx: 520.0,
+            fy: 521.5,
+            cx: 319.2,
+            cy: 241.7,
+            distortion: [-0.1, 0.02, 0.001, -0.0005, 0.0],
+            width: 640,
+            height: 480,
+        };
+        let info = CameraInfo::from_camera(&camera, Header::default());
+        assert_eq!(info.camera(false).unwrap(), camera);
+        let stamp = Time::from_nanos(-1_500_000_000);
+        assert_eq!(
+            stamp,
+            Time {
+                sec: -2,
+                nanosec: 500_000_000
+            }
+        );
+        assert_eq!(stamp.nanos(), -1_500_000_000);
     }
 
     #[test]

@@ -15,6 +15,8 @@
 //! - [`tag36h11`], [`aruco4x4`]: AprilTags and ArUco tags printed in the
 //!   markers' places;
 //! - [`desk`]: desk clutter without markers, for the phantom rules;
+//! - [`swarm`]: the robots on a floor of the sample recordings
+//!   (`samples/`, `examples/make_samples`);
 //! - [`fuzz`]: the fuzz harness (the test suite's bounded run and
 //!   `examples/fuzz`'s long one).
 
@@ -25,5 +27,6 @@ pub mod desk;
 pub mod fuzz;
 pub mod scenario;
 pub mod scenes;
+pub mod swarm;
 pub mod tag36h11;
 pub mod tally;

@@ -30,6 +30,7 @@ mod output_streams;
 mod pose_properties;
 mod pose_roundtrip;
 mod pose_synthetic;
+mod readme_recordings;
 mod recordings;
 mod reference;
 mod render_cli_errors;
