@@ -659,8 +659,7 @@ enum Grey<'a> {
 impl Grey<'_> {
     fn as_view(&self) -> GrayView<'_> {
         match self {
-            Grey::Borrowed(view) => GrayView::from_raw(view.width(), view.height(), view.as_raw())
-                .expect("a whole image"),
+            Grey::Borrowed(view) => view.clone(),
             Grey::Owned(image) => {
                 GrayView::from_raw(image.width(), image.height(), image.as_raw().as_slice())
                     .expect("a whole image")

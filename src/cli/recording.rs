@@ -98,7 +98,7 @@ pub fn run(path: &Path, run: &Run, out: &mut output::Stdout) -> Result<()> {
     }
     drop(frames);
     result?;
-    outputs.finish(run)?;
+    outputs.finish()?;
     for line in summary.lines(&skipped) {
         output::say(format_args!("{shown}: {line}"));
     }
@@ -147,31 +147,45 @@ fn process(session: &mut Session, frame: &RecordedFrame, shown: &str) -> Result<
 /// The files a recording's run writes besides stdout: the detections bag
 /// and the annotated frames (a video, or images in a folder).
 struct Outputs<'a> {
-    bag: Option<DetectionsBag>,
-    annotate: &'a Annotate,
-    video: Option<(AnnotatedVideo, whycode::io::StagedFile)>,
+    /// The detections bag and where it goes.
+    bag: Option<(DetectionsBag, &'a Path)>,
+    pictures: Pictures<'a>,
+}
+
+/// Where the annotated frames go, opened.
+enum Pictures<'a> {
+    None,
+    Folder(&'a Path),
+    Video {
+        writer: Box<AnnotatedVideo>,
+        staged: whycode::io::StagedFile,
+        target: &'a Path,
+    },
 }
 
 impl<'a> Outputs<'a> {
     fn new(run: &Run<'a>) -> Result<Outputs<'a>> {
-        let bag = run
-            .output
-            .map(|_| DetectionsBag::new())
-            .transpose()
-            .context("cannot start the detections bag")?;
-        let video = match run.annotate {
+        let bag = match run.output {
+            Some(target) => Some((
+                DetectionsBag::new().context("cannot start the detections bag")?,
+                target,
+            )),
+            None => None,
+        };
+        let pictures = match run.annotate {
+            Annotate::None => Pictures::None,
+            Annotate::Folder(dir) => Pictures::Folder(dir),
             Annotate::Video(target) => {
                 let staged = whycode::io::StagedFile::new(target)?;
-                let writer = AnnotatedVideo::new(target, staged.path());
-                Some((writer, staged))
+                let writer = Box::new(AnnotatedVideo::new(target, staged.path()));
+                Pictures::Video {
+                    writer,
+                    staged,
+                    target,
+                }
             }
-            _ => None,
         };
-        Ok(Outputs {
-            bag,
-            annotate: run.annotate,
-            video,
-        })
+        Ok(Outputs { bag, pictures })
     }
 
     /// Adds one frame's messages to the bag and its picture to the video
@@ -182,7 +196,7 @@ impl<'a> Outputs<'a> {
         report: &FrameReport,
         session: &Session,
     ) -> Result<()> {
-        if let Some(bag) = &mut self.bag {
+        if let Some((bag, _)) = &mut self.bag {
             let header = Header {
                 stamp: Time::from_nanos(frame.stamp_ns),
                 frame_id: if frame.frame_id.is_empty() {
@@ -205,40 +219,40 @@ impl<'a> Outputs<'a> {
             bag.add(frame.stamp_ns, &described)
                 .context("cannot write the detections bag")?;
         }
-        match self.annotate {
-            Annotate::None => {}
-            Annotate::Folder(dir) => {
+        match &mut self.pictures {
+            Pictures::None => {}
+            Pictures::Folder(dir) => {
                 let png = whycode::session::annotate::annotated_png(&frame.image, &report.markers)?;
                 let name = format!("frame_{:06}.png", frame.index);
                 whycode::io::write_atomic(&dir.join(name), &png)?;
             }
-            Annotate::Video(_) => {
+            Pictures::Video { writer, .. } => {
                 let rgb = whycode::session::annotate::annotated_rgb(&frame.image, &report.markers)?;
-                if let Some((writer, _)) = &mut self.video {
-                    writer.push(rgb, frame.stamp_ns)?;
-                }
+                writer.push(rgb, frame.stamp_ns)?;
             }
         }
         Ok(())
     }
 
     /// Writes the bag and the video, each whole or not at all.
-    fn finish(self, run: &Run) -> Result<()> {
-        if let Some(bag) = self.bag {
+    fn finish(self) -> Result<()> {
+        if let Some((bag, target)) = self.bag {
             let bytes = bag.finish().context("cannot finish the detections bag")?;
-            let target = run.output.expect("a bag only with an output");
             whycode::io::write_atomic(target, &bytes)?;
             output::say(format_args!("wrote the detections to {}", target.display()));
         }
-        if let Some((writer, staged)) = self.video {
+        if let Pictures::Video {
+            writer,
+            staged,
+            target,
+        } = self.pictures
+        {
             writer.finish()?;
             staged.commit()?;
-            if let Annotate::Video(target) = self.annotate {
-                output::say(format_args!(
-                    "wrote the annotated video {}",
-                    target.display()
-                ));
-            }
+            output::say(format_args!(
+                "wrote the annotated video {}",
+                target.display()
+            ));
         }
         Ok(())
     }

@@ -605,7 +605,7 @@ struct LiveOptions {
 /// as there); empty means not given.
 fn diameter(text: Option<&str>) -> Result<Option<Length>> {
     match text.map(str::trim) {
-        Some(text) if !text.is_empty() => Length::parse_with_default_unit(text, "m")
+        Some(text) if !text.is_empty() => Length::parse_metres(text)
             .map(Some)
             .map_err(|e| anyhow::anyhow!("--diameter: {e}")),
         _ => Ok(None),
