@@ -17,6 +17,7 @@
 //! until the camera stops moving.
 
 mod fit;
+mod photos;
 
 use nalgebra::Vector3;
 
@@ -28,6 +29,7 @@ use crate::parallel::prelude::*;
 use crate::pose::{self, Pose};
 
 pub use fit::NAMES as PARAMETER_NAMES;
+pub use photos::{Preview, SheetPhotos};
 
 /// Which of the lens's parameters the fit may move.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

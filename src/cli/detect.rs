@@ -2,19 +2,19 @@
 
 use super::args::{spec_error, Format, FormatArg, MarkerKindArgs};
 use super::output;
-use super::recording::{self, Annotate};
-use anyhow::{bail, Context, Result};
+use super::outputs::{Annotate, Outputs, Plan};
+use super::stream::{Input, Stream};
+use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use whycode::camera::Camera;
 use whycode::detect::family_check::FamilyCheck;
 use whycode::detect::{StageTimings, Target};
-use whycode::image_io::load_gray;
-use whycode::recording::Kind;
+use whycode::recording::{Kind, ReadOptions, Summary};
 use whycode::session::report::{CsvColumns, FrameReport};
-use whycode::session::{Frame, Session, SessionConfig};
+use whycode::session::{Frame, FrameError, Session, SessionConfig};
 use whycode::spec::{DetectSpec, RecordingSpec};
 use whycode::units::Length;
 
@@ -40,11 +40,6 @@ images, read in parallel. ROS 2 bags (.mcap: sensor_msgs Image and
 CompressedImage, the camera from camera_info) and videos (.mp4, .mkv, .avi,
 .mov, .webm, through ffmpeg) are tracked streams: each JSON line gains frame,
 stamp_ns (and topic); a summary ends on stderr.";
-
-/// Image file extensions read from folders.
-const IMAGE_EXTENSIONS: [&str; 9] = [
-    "png", "jpg", "jpeg", "pgm", "ppm", "pnm", "pbm", "bmp", "pam",
-];
 
 /// A progress bar appears from this many images on (and only on a terminal).
 const PROGRESS_MIN_IMAGES: usize = 20;
@@ -162,220 +157,307 @@ pub struct DetectArgs {
     timings: bool,
 }
 
-/// One unit of work: an independent image, or a folder's frames in order.
-enum Job {
-    Image(PathBuf),
-    Sequence(Vec<PathBuf>),
+pub fn run(args: DetectArgs) -> Result<ExitCode> {
+    let inputs = check_options(&args)?;
+    let settings = Settings::new(&args, inputs)?;
+    let streams = Stream::list(&args.inputs, args.no_tracking)?;
+    let plan = Plan::new(
+        Annotate::of(args.annotate.as_deref()),
+        args.output.clone(),
+        &streams,
+    )?;
+    let files: usize = streams.iter().map(|s| s.files().len()).sum();
+    let several = files > 1 || inputs.recordings;
+    let mut printer = Printer::new(&args, &settings, &plan, several)?;
+    let progress = progress_bar(files, inputs.recordings);
+
+    // Independent images and folders run in parallel, one session per
+    // worker thread, restarted for each stream (so results never depend on
+    // which thread ran what), and are printed in input order; a recording
+    // runs alone and is printed as it is read.
+    for group in streams.chunk_by(|a, b| !a.is_recording() && !b.is_recording()) {
+        if let [recording] = group {
+            if recording.is_recording() {
+                let mut session = Session::new(settings.config(recording));
+                let ended = run_stream(
+                    recording,
+                    &settings,
+                    &plan,
+                    &mut session,
+                    &progress,
+                    &mut |r| progress.suspend(|| printer.take(r)),
+                )?;
+                printer.ended(ended);
+                continue;
+            }
+        }
+        let done: Vec<(Vec<Result<FrameReport>>, Ended)> = group
+            .par_iter()
+            .map_init(
+                || Session::new(settings.any().clone()),
+                |session, stream| {
+                    let mut reports = Vec::new();
+                    let ended =
+                        run_stream(stream, &settings, &plan, session, &progress, &mut |r| {
+                            reports.push(r);
+                            Ok(())
+                        })
+                        .unwrap_or_else(|err| {
+                            reports.push(Err(err));
+                            Ended::default()
+                        });
+                    (reports, ended)
+                },
+            )
+            .collect();
+        for (reports, ended) in done {
+            for report in reports {
+                progress.suspend(|| printer.take(report))?;
+            }
+            printer.ended(ended);
+        }
+    }
+    progress.finish_and_clear();
+    printer.finish(&plan)
 }
 
-pub fn run(args: DetectArgs) -> Result<ExitCode> {
-    if recording::check_inputs(&args.inputs)? {
-        return run_recordings(args);
-    }
-    for (given, option) in [
-        (args.output.is_some(), "--output"),
-        (args.topic.is_some(), "--topic"),
-        (args.every.is_some(), "--every"),
-        (args.start.is_some(), "--start"),
-        (args.end.is_some(), "--end"),
-    ] {
-        if given {
-            bail!("{option}: applies to bags and videos (.mcap, .mp4, .mkv, .avi, .mov, .webm)");
-        }
-    }
-    if let Some(path) = &args.annotate {
-        if Kind::of(path) == Some(Kind::Video) {
-            bail!(
-                "--annotate {}: an annotated video is made from a bag or video; for images give a folder",
-                path.display()
+/// What ends a stream besides its frames.
+#[derive(Default)]
+struct Ended {
+    /// A recording's summary, for standard error.
+    summary: Vec<String>,
+    /// Pictures written.
+    drawn: usize,
+}
+
+/// One stream through the session, the frame loop of every input: each
+/// frame read, measured, drawn and written to the outputs, and its report
+/// (or why it failed) handed to `each`. A failed frame ends a recording
+/// (its outputs unwritten), not a folder. Only an error of `each` itself
+/// (standard output gone) ends the run.
+fn run_stream(
+    stream: &Stream,
+    settings: &Settings,
+    plan: &Plan,
+    session: &mut Session,
+    progress: &indicatif::ProgressBar,
+    each: &mut dyn FnMut(Result<FrameReport>) -> Result<()>,
+) -> Result<Ended> {
+    let config = settings.config(stream);
+    let stream_cameras = config.stream_cameras;
+    session.restart(config);
+    let opened = match stream.open() {
+        Ok(opened) => opened,
+        Err(err) => return each(Err(err)).map(|()| Ended::default()),
+    };
+    let (mut frames, mut outputs) = match opened
+        .frames(&settings.read)
+        .and_then(|f| Ok((f, Outputs::new(plan, stream)?)))
+    {
+        Ok(open) => open,
+        Err(err) => return each(Err(err)).map(|()| Ended::default()),
+    };
+    let mut summary = Summary::default();
+    let mut unmeasured = stream.is_recording();
+    while let Some(input) = frames.next() {
+        let measured = input.and_then(|input| {
+            let report = measure(session, &input)?;
+            outputs.frame(&input, &report, session)?;
+            summary.observe(
+                input.recorded.as_ref().map_or(0, |r| r.index),
+                &report.markers,
             );
-        }
-    }
-    let config = detector_config(&args, false)?;
-    let family_bits = config.detector.target.family().map(|f| f.bits());
-    // In auto mode with a distance the IDs are there already; legacy
-    // circles carry no ring.
-    let wants_note = matches!(
-        config.detector.target,
-        Target::WhyCode(_) | Target::AnyBits { distance: None }
-    );
-    let jobs = collect_jobs(&args.inputs, args.no_tracking)?;
-    if let Some(dir) = &args.annotate {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create folder", dir.display()))?;
-    }
-    let annotate_names = annotation_names(&jobs, args.annotate.as_deref());
-    let total: usize = jobs
-        .iter()
-        .map(|j| match j {
-            Job::Image(_) => 1,
-            Job::Sequence(frames) => frames.len(),
-        })
-        .sum();
-    let progress = if total >= PROGRESS_MIN_IMAGES && std::io::stderr().is_terminal() {
-        indicatif::ProgressBar::new(total as u64)
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
-
-    let process = |session: &mut Session, path: &Path| -> Result<FrameReport> {
-        let result = detect_one(
-            session,
-            path,
-            annotate_names.get(path).map(PathBuf::as_path),
-        );
+            Ok(report)
+        });
+        let failed = measured.is_err();
+        each(measured)?;
         progress.inc(1);
-        result
-    };
-    // Jobs run in parallel, one session per worker thread, restarted for
-    // each job (so results never depend on which thread ran what); a
-    // sequence's frames run in order, tracked, in one session.
-    let results: Vec<Vec<Result<FrameReport>>> = jobs
-        .par_iter()
-        .map_init(
-            || Session::new(config.clone()),
-            |session, job| match job {
-                Job::Image(path) => {
-                    session.restart(config.clone());
-                    vec![process(session, path)]
-                }
-                Job::Sequence(frames) => {
-                    let mut tracked = config.clone();
-                    tracked.detector.tracking = true;
-                    session.restart(tracked);
-                    frames.iter().map(|f| process(session, f)).collect()
-                }
-            },
-        )
-        .collect();
-    progress.finish_and_clear();
-
-    let mut out = output::Stdout::new();
-    let mut failures = 0;
-    let columns = CsvColumns::of(&config);
-    let rows = Rows::new(args.format.format, columns, total > 1);
-    if args.format.format == Format::Csv {
-        out.line(columns.header())?;
-    }
-    let mut check = FamilyCheck::new(family_bits);
-    let mut timings = StageTimings::default();
-    for result in results.into_iter().flatten() {
-        match result {
-            Ok(frame) => {
-                check.observe(&frame.markers);
-                check.legacy_looking += frame.legacy_looking;
-                if let Some(frame_timings) = &frame.timings {
-                    timings += frame_timings;
-                }
-                rows.print(&mut out, &frame)?;
-            }
-            Err(err) => {
-                out.flush()?;
-                output::error(super::one_line(&err));
-                failures += 1;
-            }
+        if let (true, Some(n)) = (unmeasured, frames.expected()) {
+            progress.inc_length(n);
+            unmeasured = false;
+        }
+        if failed && !stream.goes_on_after_a_failed_frame() {
+            return Ok(Ended::default());
         }
     }
-    out.flush()?;
-    if args.timings && timings.frames() > 0 {
-        output::say(format_args!("time per stage:\n{timings}"));
-    }
-    if let Some(dir) = &args.annotate {
-        let written = total - failures;
-        output::say(format_args!(
-            "wrote {written} annotated image{} to {}",
-            if written == 1 { "" } else { "s" },
-            dir.display()
-        ));
-    }
-    if wants_note {
-        if let Some(note) = check.note() {
-            output::note(note);
+    let mut lines = Vec::new();
+    if let Some(skipped) = frames.skipped() {
+        let mut skipped = skipped.clone();
+        if !stream_cameras {
+            // The bag's camera_info was not what the poses used.
+            skipped.refused_calibrations = 0;
+            skipped.first_refused_calibration = None;
         }
+        let shown = match stream {
+            Stream::Recording(path) => path.display().to_string(),
+            _ => String::new(),
+        };
+        lines = summary
+            .lines(&skipped)
+            .into_iter()
+            .map(|line| format!("{shown}: {line}"))
+            .collect();
     }
-    Ok(if failures > 0 {
-        ExitCode::FAILURE
-    } else {
-        ExitCode::SUCCESS
+    drop(frames);
+    let drawn = outputs.drawn;
+    if let Err(err) = outputs.finish() {
+        each(Err(err))?;
+        return Ok(Ended::default());
+    }
+    Ok(Ended {
+        summary: lines,
+        drawn,
     })
 }
 
-/// How each frame's report is printed, images and recordings alike.
-pub(super) struct Rows {
-    format: Format,
-    columns: CsvColumns,
-    /// Whether the table names each frame (more than one is printed).
-    several: bool,
+/// One frame through the session; the error names the frame.
+fn measure(session: &mut Session, input: &Input) -> Result<FrameReport> {
+    session
+        .process(Frame {
+            image: &input.image,
+            name: input.name.clone(),
+            stream: input.position(),
+            camera: input.recorded.as_ref().and_then(|r| r.camera),
+        })
+        .map_err(|problem| match problem {
+            camera @ FrameError::Camera { .. } if input.recorded.is_some() => {
+                anyhow!("{}: the camera does not fit: {camera}", input.shown())
+            }
+            problem => anyhow!("{}: {problem}", input.shown()),
+        })
 }
 
-impl Rows {
-    pub(super) fn new(format: Format, columns: CsvColumns, several: bool) -> Rows {
-        Rows {
-            format,
-            columns,
-            several,
+/// The session configurations and the reading options of a run.
+struct Settings {
+    /// For images and folders (a folder's frames are tracked), when there
+    /// are some.
+    files: Option<SessionConfig>,
+    /// For bags and videos, when there are some: tracked, scanned each
+    /// frame, their own camera from camera_info unless one was given.
+    recordings: Option<SessionConfig>,
+    read: ReadOptions,
+}
+
+impl Settings {
+    fn new(args: &DetectArgs, inputs: Inputs) -> Result<Settings> {
+        let spec = DetectSpec {
+            target: args.kind.spec()?,
+            diameter: args.diameter,
+            camera: args.camera.as_deref().map(Camera::load).transpose()?,
+            max_markers: args.max_markers,
+            tracking: false,
+            unreadable: args.unreadable,
+            min_ink: args.min_ink,
+            boards: args
+                .board
+                .iter()
+                .map(|path| whycode::board::Board::load(path))
+                .collect::<Result<Vec<_>, _>>()?
+                .into_iter()
+                .flatten()
+                .collect(),
+            timings: args.timings,
+            scan_every_frame: false,
+            camera_later: false,
+            arena: args
+                .arena
+                .as_deref()
+                .map(whycode::arena::Arena::load)
+                .transpose()?,
+            marker_height: args.marker_height,
+        };
+        let recordings = inputs
+            .recordings
+            .then(|| {
+                DetectSpec {
+                    tracking: true,
+                    scan_every_frame: true,
+                    camera_later: args.camera.is_none(),
+                    ..spec.clone()
+                }
+                .build()
+                .map_err(spec_error)
+            })
+            .transpose()?;
+        let files = inputs
+            .files
+            .then(|| spec.build().map_err(spec_error))
+            .transpose()?;
+        let read = RecordingSpec {
+            topic: args.topic.clone(),
+            every: args.every,
+            start: args.start,
+            end: args.end,
+        }
+        .build()
+        .map_err(spec_error)?;
+        Ok(Settings {
+            files,
+            recordings,
+            read,
+        })
+    }
+
+    /// The session `stream` is read with.
+    fn config(&self, stream: &Stream) -> SessionConfig {
+        let (files, recordings) = (self.files.as_ref(), self.recordings.as_ref());
+        let config = match stream {
+            Stream::Recording(_) => recordings.or(files),
+            _ => files.or(recordings),
+        };
+        let mut config = config
+            .expect("a configuration for every kind of input")
+            .clone();
+        if let Stream::Folder(_) = stream {
+            config.detector.tracking = true;
+        }
+        config
+    }
+
+    /// Either configuration: what the two share (the target, the arena).
+    fn any(&self) -> &SessionConfig {
+        self.files
+            .as_ref()
+            .or(self.recordings.as_ref())
+            .expect("a configuration for every kind of input")
+    }
+}
+
+/// Which kinds of input a run has.
+#[derive(Clone, Copy)]
+struct Inputs {
+    /// Images or folders.
+    files: bool,
+    /// Bags or videos.
+    recordings: bool,
+}
+
+/// Checks the options fit the inputs, and says which kinds there are.
+fn check_options(args: &DetectArgs) -> Result<Inputs> {
+    let is_recording = |p: &PathBuf| Kind::of(p).is_some() && !p.is_dir();
+    let recordings = args.inputs.iter().filter(|p| is_recording(p)).count();
+    if recordings == 0 {
+        for (given, option) in [
+            (args.output.is_some(), "--output"),
+            (args.topic.is_some(), "--topic"),
+            (args.every.is_some(), "--every"),
+            (args.start.is_some(), "--start"),
+            (args.end.is_some(), "--end"),
+        ] {
+            if given {
+                bail!(
+                    "{option}: applies to bags and videos (.mcap, .mp4, .mkv, .avi, .mov, .webm)"
+                );
+            }
         }
     }
-
-    /// One frame's JSON line, CSV rows or table.
-    pub(super) fn print(&self, out: &mut output::Stdout, report: &FrameReport) -> Result<()> {
-        match self.format {
-            Format::Json => out.line(report.to_json()),
-            Format::Csv => out.write(&report.to_csv_rows(self.columns)),
-            Format::Table => out.write(&report.to_table(self.several)),
-        }
-    }
-}
-
-/// The session the options ask for; a recording's camera may come later
-/// (a bag's camera_info), and its frames are tracked.
-fn detector_config(args: &DetectArgs, recording: bool) -> Result<SessionConfig> {
-    DetectSpec {
-        target: args.kind.spec()?,
-        diameter: args.diameter,
-        camera: args.camera.as_deref().map(Camera::load).transpose()?,
-        max_markers: args.max_markers,
-        tracking: recording,
-        unreadable: args.unreadable,
-        min_ink: args.min_ink,
-        boards: args
-            .board
-            .iter()
-            .map(|path| whycode::board::Board::load(path))
-            .collect::<Result<Vec<_>, _>>()?
-            .into_iter()
-            .flatten()
-            .collect(),
-        timings: args.timings,
-        scan_every_frame: recording,
-        camera_later: recording && args.camera.is_none(),
-        arena: args
-            .arena
-            .as_deref()
-            .map(whycode::arena::Arena::load)
-            .transpose()?,
-        marker_height: args.marker_height,
-    }
-    .build()
-    .map_err(spec_error)
-}
-
-/// Bags and videos, each one tracked stream, one after the other.
-fn run_recordings(args: DetectArgs) -> Result<ExitCode> {
-    if args.no_tracking {
-        bail!("--no-tracking: a bag or video is read as one tracked stream");
-    }
-    // A bag's camera_info brings the camera.
-    let config = detector_config(&args, true)?;
-    let read = RecordingSpec {
-        topic: args.topic.clone(),
-        every: args.every,
-        start: args.start,
-        end: args.end,
-    }
-    .build()
-    .map_err(spec_error)?;
     let annotate = Annotate::of(args.annotate.as_deref());
+    if let (Annotate::Video(path), 0) = (&annotate, recordings) {
+        bail!(
+            "--annotate {}: an annotated video is made from a bag or video; for images give a folder",
+            path.display()
+        );
+    }
     let single_output = matches!(annotate, Annotate::Video(_)) || args.output.is_some();
     if single_output && args.inputs.len() > 1 {
         bail!("--output and --annotate VIDEO take one recording at a time");
@@ -388,171 +470,152 @@ fn run_recordings(args: DetectArgs) -> Result<ExitCode> {
             );
         }
     }
-    let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
-    let mut outputs: Vec<&Path> = args.output.iter().map(PathBuf::as_path).collect();
-    match &annotate {
-        Annotate::Video(path) => outputs.push(path),
-        Annotate::Folder(dir) => std::fs::create_dir_all(dir)
-            .with_context(|| format!("{}: cannot create folder", dir.display()))?,
-        Annotate::None => {}
+    if recordings > 0 && args.no_tracking {
+        bail!("--no-tracking: a bag or video is read as one tracked stream");
     }
-    whycode::io::check_outputs(&inputs, &outputs)?;
-    for out in &outputs {
-        whycode::io::check_output_dir(out)?;
-    }
-    let run = recording::Run {
-        config,
-        read,
-        format: args.format.format,
-        annotate: &annotate,
-        output: args.output.as_deref(),
-    };
-    let mut out = if run.output.is_some() || !matches!(annotate, Annotate::None) {
-        output::Stdout::outliving_its_reader()
-    } else {
-        output::Stdout::new()
-    };
-    recording::header(&run, &mut out)?;
-    for input in &args.inputs {
-        if let Err(err) = recording::run(input, &run, &mut out) {
-            out.flush()?;
-            return Err(err);
-        }
-    }
-    Ok(ExitCode::SUCCESS)
+    Ok(Inputs {
+        files: recordings < args.inputs.len(),
+        recordings: recordings > 0,
+    })
 }
 
-/// Checks every input exists before any work starts, and lists folders.
-fn collect_jobs(inputs: &[PathBuf], no_tracking: bool) -> Result<Vec<Job>> {
-    let mut jobs = Vec::new();
-    for input in inputs {
-        let meta = std::fs::metadata(input)
-            .with_context(|| format!("{}: cannot read", input.display()))?;
-        if !meta.is_dir() {
-            jobs.push(Job::Image(input.clone()));
-            continue;
-        }
-        let mut frames: Vec<PathBuf> = std::fs::read_dir(input)
-            .with_context(|| format!("{}: cannot list folder", input.display()))?
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            // Everything named like a frame is a frame: one that is a folder
-            // or a broken link is reported as a failed frame, not skipped
-            // without a word.
-            .filter(|p| {
-                p.extension()
-                    .and_then(|e| e.to_str())
-                    .is_some_and(|e| IMAGE_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
-            })
-            .collect();
-        if frames.is_empty() {
-            bail!("{}: folder holds no images", input.display());
-        }
-        // Cameras and scripts number frames without zero padding as often
-        // as with it: frame2 comes before frame10.
-        frames.sort_by(|a, b| natural_order(a, b));
-        if no_tracking {
-            jobs.extend(frames.into_iter().map(Job::Image));
+/// A bar of frames read when stderr is a terminal and the run is long:
+/// many images, or a recording (whose length comes once it says how many
+/// frames it holds).
+fn progress_bar(files: usize, recordings: bool) -> indicatif::ProgressBar {
+    if !(files >= PROGRESS_MIN_IMAGES || recordings) || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(files as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{pos}/{len} frames, {per_sec}, {eta} left {wide_bar}",
+        )
+        .expect("a valid template"),
+    );
+    bar
+}
+
+/// Where every frame's report goes: its rows on stdout, the run's tallies
+/// (failures, the family check, the stage timings, pictures written) and
+/// the closing lines on stderr.
+struct Printer {
+    out: output::Stdout,
+    rows: Rows,
+    check: FamilyCheck,
+    /// In auto mode with a distance the IDs are there already; legacy
+    /// circles carry no ring.
+    wants_note: bool,
+    timings: Option<StageTimings>,
+    failures: usize,
+    drawn: usize,
+}
+
+impl Printer {
+    fn new(args: &DetectArgs, settings: &Settings, plan: &Plan, several: bool) -> Result<Printer> {
+        let target = &settings.any().detector.target;
+        let columns = CsvColumns::of(settings.any());
+        let mut out = if plan.writes_files() {
+            output::Stdout::outliving_its_reader()
         } else {
-            jobs.push(Job::Sequence(frames));
+            output::Stdout::new()
+        };
+        if args.format.format == Format::Csv {
+            out.line(columns.header())?;
         }
+        Ok(Printer {
+            out,
+            rows: Rows::new(args.format.format, columns, several),
+            check: FamilyCheck::new(target.family().map(|f| f.bits())),
+            wants_note: matches!(
+                target,
+                Target::WhyCode(_) | Target::AnyBits { distance: None }
+            ),
+            timings: args.timings.then(StageTimings::default),
+            failures: 0,
+            drawn: 0,
+        })
     }
-    Ok(jobs)
-}
 
-/// Compares paths with runs of digits taken as numbers ("f2" < "f10");
-/// equal numbers with different padding fall back to the plain order.
-fn natural_order(a: &Path, b: &Path) -> std::cmp::Ordering {
-    fn chunks(text: &str) -> Vec<(bool, &str)> {
-        let mut out = Vec::new();
-        let mut start = 0;
-        let bytes = text.as_bytes();
-        for i in 1..=bytes.len() {
-            if i == bytes.len() || bytes[i].is_ascii_digit() != bytes[start].is_ascii_digit() {
-                out.push((bytes[start].is_ascii_digit(), &text[start..i]));
-                start = i;
+    /// One frame's report, or why it failed.
+    fn take(&mut self, result: Result<FrameReport>) -> Result<()> {
+        match result {
+            Ok(frame) => {
+                self.check.observe(&frame.markers);
+                self.check.legacy_looking += frame.legacy_looking;
+                if let (Some(all), Some(frame_timings)) = (&mut self.timings, &frame.timings) {
+                    *all += frame_timings;
+                }
+                self.rows.print(&mut self.out, &frame)
+            }
+            Err(err) if err.is::<output::ReaderGone>() => Err(err),
+            Err(err) => {
+                self.out.flush()?;
+                output::error(super::one_line(&err));
+                self.failures += 1;
+                Ok(())
             }
         }
-        out
     }
-    let (ta, tb) = (a.to_string_lossy(), b.to_string_lossy());
-    let (ca, cb) = (chunks(&ta), chunks(&tb));
-    for ((da, xa), (db, xb)) in ca.iter().zip(&cb) {
-        let order = if *da && *db {
-            let (na, nb) = (xa.trim_start_matches('0'), xb.trim_start_matches('0'));
-            na.len().cmp(&nb.len()).then_with(|| na.cmp(nb))
-        } else {
-            xa.cmp(xb)
-        };
-        if order.is_ne() {
-            return order;
+
+    /// The end of one stream.
+    fn ended(&mut self, ended: Ended) {
+        self.drawn += ended.drawn;
+        for line in ended.summary {
+            output::say(line);
         }
     }
-    ca.len().cmp(&cb.len()).then_with(|| ta.cmp(&tb))
-}
 
-/// Output file for every image (see [`whycode::io::annotation_paths`]).
-fn annotation_names(
-    jobs: &[Job],
-    dir: Option<&Path>,
-) -> std::collections::HashMap<PathBuf, PathBuf> {
-    let Some(dir) = dir else {
-        return std::collections::HashMap::new();
-    };
-    let all: Vec<PathBuf> = jobs
-        .iter()
-        .flat_map(|j| match j {
-            Job::Image(p) => std::slice::from_ref(p).iter(),
-            Job::Sequence(frames) => frames.iter(),
+    /// The closing lines; failure when any frame or stream failed.
+    fn finish(mut self, plan: &Plan) -> Result<ExitCode> {
+        self.out.flush()?;
+        if let Some(timings) = self.timings.filter(|t| t.frames() > 0) {
+            output::say(format_args!("time per stage:\n{timings}"));
+        }
+        if let Annotate::Folder(dir) = &plan.annotate {
+            let drawn = self.drawn;
+            output::say(format_args!(
+                "wrote {drawn} annotated image{} to {}",
+                if drawn == 1 { "" } else { "s" },
+                dir.display()
+            ));
+        }
+        if self.wants_note {
+            if let Some(note) = self.check.note() {
+                output::note(note);
+            }
+        }
+        Ok(if self.failures > 0 {
+            ExitCode::FAILURE
+        } else {
+            ExitCode::SUCCESS
         })
-        .cloned()
-        .collect();
-    whycode::io::annotation_paths(dir, &all)
-        .into_iter()
-        .collect()
-}
-
-fn detect_one(session: &mut Session, path: &Path, annotate: Option<&Path>) -> Result<FrameReport> {
-    let image = load_gray(path)?;
-    let report = session
-        .process(Frame::new(&image, path.display().to_string()))
-        .map_err(|problem| anyhow::anyhow!("{}: {problem}", path.display()))?;
-    if let Some(out) = annotate {
-        let png = whycode::session::annotate::annotated_png(&image, &report.markers)?;
-        whycode::io::write_atomic(out, &png)?;
     }
-    Ok(report)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::natural_order;
-    use std::path::PathBuf;
+/// How each frame's report is printed.
+struct Rows {
+    format: Format,
+    columns: CsvColumns,
+    /// Whether the table names each frame (more than one is printed).
+    several: bool,
+}
 
-    #[test]
-    fn frames_sort_by_their_numbers() {
-        let mut frames: Vec<PathBuf> = [
-            "f10.png",
-            "f2.png",
-            "f1.png",
-            "f02b.png",
-            "g.png",
-            "f0010.png",
-        ]
-        .iter()
-        .map(PathBuf::from)
-        .collect();
-        frames.sort_by(|a, b| natural_order(a, b));
-        let names: Vec<_> = frames.iter().map(|p| p.to_str().unwrap()).collect();
-        assert_eq!(
-            names,
-            [
-                "f1.png",
-                "f2.png",
-                "f02b.png",
-                "f0010.png",
-                "f10.png",
-                "g.png"
-            ]
-        );
+impl Rows {
+    fn new(format: Format, columns: CsvColumns, several: bool) -> Rows {
+        Rows {
+            format,
+            columns,
+            several,
+        }
+    }
+
+    /// One frame's JSON line, CSV rows or table.
+    fn print(&self, out: &mut output::Stdout, report: &FrameReport) -> Result<()> {
+        match self.format {
+            Format::Json => out.line(report.to_json()),
+            Format::Csv => out.write(&report.to_csv_rows(self.columns)),
+            Format::Table => out.write(&report.to_table(self.several)),
+        }
     }
 }

@@ -11,9 +11,10 @@ mod detect;
 mod ids;
 mod marker;
 mod output;
-mod recording;
+mod outputs;
 mod sheet;
 mod simulate;
+mod stream;
 mod validate;
 
 #[derive(Debug, Parser)]

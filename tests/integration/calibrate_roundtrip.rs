@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::support::{run_err, run_ok};
-use whycode::calibrate::disagreement;
+use whycode::calibrate::{disagreement, SheetPhotos};
 use whycode::camera::Camera;
 use whycode::simulate::layout;
 use whycode_testkit::calibration;
@@ -242,4 +242,40 @@ fn calibration_reads_centres_nearer_the_truth_than_live_detection() {
         fine < 0.85 * live && fine < 0.0075,
         "centres {fine:.4} px rms with fine edges, {live:.4} px without"
     );
+}
+
+/// Photos added one at a time (the page's Calibrate panel) show their
+/// markers, the coverage and a first fit as they come, refuse a photo of
+/// another size, and calibrate to the very camera `whycode calibrate`
+/// writes from the same photos.
+#[test]
+fn photos_added_one_at_a_time_calibrate_as_the_command_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let truth = calibration::lens();
+    let (manifest_path, paths) = photos(dir.path(), &calibration::views(&truth, 8, 5));
+    let manifest = calibration::a4_sheet();
+    let mut sheet = SheetPhotos::new(manifest.clone()).unwrap();
+    let empty = sheet.preview(&Default::default());
+    assert!(empty.size.is_none() && empty.views.is_empty() && empty.fit.is_err());
+    for path in &paths {
+        let image = image::open(path).unwrap().to_luma8();
+        let markers = sheet.add(&path.display().to_string(), image).unwrap();
+        assert!(markers >= 8, "{}: {markers} markers", path.display());
+    }
+    let small = image::GrayImage::new(64, 48);
+    let refused = sheet.add("small.png", small).unwrap_err();
+    assert!(refused.to_string().contains("small.png"), "{refused}");
+    let preview = sheet.preview(&Default::default());
+    assert_eq!(preview.views.len(), paths.len());
+    assert!(preview.fit.is_ok(), "{:?}", preview.fit.err());
+    let coverage = preview.coverage.unwrap();
+    assert!(
+        coverage.counts.iter().flatten().all(|&n| n > 0),
+        "{coverage:?}"
+    );
+
+    let out = dir.path().join("camera.yaml");
+    run_ok(&args(&manifest_path, &paths, &out));
+    let calibrated = sheet.calibrate(&Default::default()).unwrap();
+    assert_eq!(calibrated.camera, Camera::load(&out).unwrap());
 }

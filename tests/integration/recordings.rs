@@ -529,3 +529,68 @@ fn a_start_past_the_end_is_an_error_that_writes_nothing() {
     );
     assert!(out.status.success(), "{}", stderr(&out));
 }
+
+/// Every input is a stream to `detect`: images, a folder and bags go in
+/// one run, each printed in input order, and every picture lands under a
+/// name of its own (two recordings called `run.mcap` do not overwrite each
+/// other's frames).
+#[test]
+fn images_folders_and_bags_are_read_in_one_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let bag = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/swarm.mcap");
+    for sub in ["a", "b", "frames"] {
+        std::fs::create_dir(d.join(sub)).unwrap();
+    }
+    std::fs::copy(&bag, d.join("a/run.mcap")).unwrap();
+    std::fs::copy(&bag, d.join("b/run.mcap")).unwrap();
+    for k in 0..3 {
+        sequence()[k]
+            .0
+            .save(d.join(format!("frames/f{k}.png")))
+            .unwrap();
+    }
+    sequence()[5].0.save(d.join("run.png")).unwrap();
+    let out = whycode_in(
+        d,
+        &[
+            "detect",
+            "--format",
+            "json",
+            "--annotate",
+            "seen",
+            "run.png",
+            "a/run.mcap",
+            "frames",
+            "b/run.mcap",
+        ],
+    );
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    let images: Vec<String> = lines(&stdout(&out))
+        .iter()
+        .map(|l| l["image"].as_str().unwrap().to_string())
+        .collect();
+    let mut expected = vec!["run.png".to_string()];
+    expected.extend(std::iter::repeat_n("a/run.mcap".to_string(), 15));
+    expected.extend((0..3).map(|k| format!("frames/f{k}.png")));
+    expected.extend(std::iter::repeat_n("b/run.mcap".to_string(), 15));
+    assert_eq!(images, expected);
+    assert_eq!(sequence()[5].1, ids(&lines(&stdout(&out))[0]));
+    let mut pictures: Vec<String> = std::fs::read_dir(d.join("seen"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    pictures.sort();
+    assert_eq!(pictures.len(), 1 + 15 + 3 + 15, "{pictures:?}");
+    for name in [
+        "run.annotated.png",
+        "run-2.frame_000000.png",
+        "run-3.frame_000014.png",
+        "f2.annotated.png",
+    ] {
+        assert!(pictures.contains(&name.to_string()), "{name}: {pictures:?}");
+    }
+    assert!(err.contains("a/run.mcap: read 15 frames"), "{err}");
+    assert!(err.contains("wrote 34 annotated images to seen"), "{err}");
+}

@@ -430,10 +430,7 @@ impl CalibrateOptions {
 /// the calibration over all of them and its camera file.
 #[wasm_bindgen]
 pub struct Calibration {
-    manifest: Manifest,
-    detector: Detector,
-    /// Each photo's name, grey image and first-round detections.
-    photos: Vec<(String, GrayImage, Vec<whycode::Detection>)>,
+    photos: calibrate::SheetPhotos,
     result: Option<calibrate::Calibration>,
 }
 
@@ -443,13 +440,11 @@ impl Calibration {
     #[wasm_bindgen(constructor)]
     pub fn new(name: &str, text: &str) -> Result<Calibration, JsError> {
         let manifest = Manifest::from_json(name, text).map_err(|e| js_error(e.into()))?;
-        let config = calibrate::sheet_detector(&manifest, None)
+        let photos = calibrate::SheetPhotos::new(manifest)
             .with_context(|| name.to_string())
             .map_err(js_error)?;
         Ok(Calibration {
-            manifest,
-            detector: Detector::new(config),
-            photos: Vec::new(),
+            photos,
             result: None,
         })
     }
@@ -460,59 +455,34 @@ impl Calibration {
     #[wasm_bindgen(js_name = addPhoto)]
     pub fn add_photo(&mut self, name: &str, bytes: &[u8]) -> Result<usize, JsError> {
         let image = decode_gray(name, bytes).map_err(js_error)?;
-        if let Some((first, first_image, _)) = self.photos.first() {
-            if first_image.dimensions() != image.dimensions() {
-                let err = calibrate::CalibrationError::ImageSizes {
-                    first: first.clone(),
-                    first_size: [first_image.width(), first_image.height()],
-                    name: name.to_string(),
-                    size: [image.width(), image.height()],
-                };
-                return Err(js_error(err.into()));
-            }
-        }
-        self.detector.reset();
-        let detections = self.detector.detect(&image);
-        let views = calibrate::observe(&self.manifest, name, &detections, 1.0, None);
-        self.photos.push((name.to_string(), image, detections));
         self.result = None;
-        Ok(views.iter().map(|v| v.ids.len()).max().unwrap_or(0))
+        self.photos.add(name, image).map_err(|e| js_error(e.into()))
     }
 
     /// Forgets the photo added `index`-th (from 0).
     #[wasm_bindgen(js_name = removePhoto)]
     pub fn remove_photo(&mut self, index: usize) {
-        if index < self.photos.len() {
-            self.photos.remove(index);
-            self.result = None;
-        }
+        self.photos.remove(index);
+        self.result = None;
     }
 
     /// What the photos so far show, as JSON: `coverage` (markers per ninth
     /// of the image, rows from the top), `views` ({label, markers}) and a
     /// first fit on the markers' ellipse centres (`rms_px`, `fx`, `fy`,
     /// `advice`) or the reason there is none yet (`refusal`, the command
-    /// line's line). The calibration itself re-reads the centres through
-    /// the camera found, so its RMS comes out lower.
+    /// line's line).
     pub fn preview(&self, options: &str) -> Result<String, JsError> {
         let options = CalibrateOptions::parse(options).map_err(js_error)?;
-        let views: Vec<calibrate::ViewPoints> = self
-            .photos
-            .iter()
-            .flat_map(|(name, _, detections)| {
-                calibrate::observe(&self.manifest, name, detections, options.print_scale, None)
-            })
-            .collect();
-        let Some((_, first, _)) = self.photos.first() else {
+        let preview = self.photos.preview(&options);
+        let (Some((width, height)), Some(coverage)) = (preview.size, preview.coverage) else {
             return Ok(serde_json::json!({ "views": [], "coverage": null }).to_string());
         };
-        let (width, height) = first.dimensions();
-        let coverage = calibrate::Coverage::of(&views, width, height);
-        let listed: Vec<serde_json::Value> = views
+        let listed: Vec<serde_json::Value> = preview
+            .views
             .iter()
             .map(|v| serde_json::json!({ "label": v.label, "markers": v.ids.len() }))
             .collect();
-        let fit = match calibrate::calibrate_views(views, width, height, &options) {
+        let fit = match preview.fit {
             Ok(c) => serde_json::json!({
                 "rms_px": c.rms,
                 "fx": c.camera.fx,
@@ -538,12 +508,9 @@ impl Calibration {
     pub fn calibrate(&mut self, options: &str) -> Result<String, JsError> {
         let options = CalibrateOptions::parse(options).map_err(js_error)?;
         self.result = None;
-        let photos: Vec<(String, GrayImage)> = self
+        let result = self
             .photos
-            .iter()
-            .map(|(name, image, _)| (name.clone(), image.clone()))
-            .collect();
-        let result = calibrate::calibrate(&self.manifest, &photos, &options)
+            .calibrate(&options)
             .map_err(|e| js_error(e.into()))?;
         let json = result.to_json();
         self.result = Some(result);
