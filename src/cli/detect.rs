@@ -12,7 +12,7 @@ use std::process::ExitCode;
 use whycode::camera::Camera;
 use whycode::detect::family_check::FamilyCheck;
 use whycode::detect::{StageTimings, Target};
-use whycode::recording::{Kind, ReadOptions, Summary};
+use whycode::recording::{Kind, ReadOptions, Skipped, Summary};
 use whycode::session::report::{CsvColumns, FrameReport};
 use whycode::session::{Frame, FrameError, Session, SessionConfig};
 use whycode::spec::{DetectSpec, RecordingSpec};
@@ -230,6 +230,16 @@ struct Ended {
     drawn: usize,
 }
 
+impl Ended {
+    /// A stream cut short after `drawn` pictures.
+    fn drawn(drawn: usize) -> Ended {
+        Ended {
+            summary: Vec::new(),
+            drawn,
+        }
+    }
+}
+
 /// One stream through the session, the frame loop of every input: each
 /// frame read, measured, drawn and written to the outputs, and its report
 /// (or why it failed) handed to `each`. A failed frame ends a recording
@@ -263,10 +273,8 @@ fn run_stream(
         let measured = input.and_then(|input| {
             let report = measure(session, &input)?;
             outputs.frame(&input, &report, session)?;
-            summary.observe(
-                input.recorded.as_ref().map_or(0, |r| r.index),
-                &report.markers,
-            );
+            let index = input.recorded.as_ref().map_or(0, |r| r.index);
+            summary.observe(index, &report.markers);
             Ok(report)
         });
         let failed = measured.is_err();
@@ -277,37 +285,43 @@ fn run_stream(
             unmeasured = false;
         }
         if failed && !stream.goes_on_after_a_failed_frame() {
-            return Ok(Ended::default());
+            return Ok(Ended::drawn(outputs.drawn));
         }
     }
-    let mut lines = Vec::new();
-    if let Some(skipped) = frames.skipped() {
-        let mut skipped = skipped.clone();
-        if !stream_cameras {
-            // The bag's camera_info was not what the poses used.
-            skipped.refused_calibrations = 0;
-            skipped.first_refused_calibration = None;
-        }
-        let shown = match stream {
-            Stream::Recording(path) => path.display().to_string(),
-            _ => String::new(),
-        };
-        lines = summary
-            .lines(&skipped)
-            .into_iter()
-            .map(|line| format!("{shown}: {line}"))
-            .collect();
-    }
+    let lines = summary_lines(stream, frames.skipped(), &summary, stream_cameras);
     drop(frames);
     let drawn = outputs.drawn;
     if let Err(err) = outputs.finish() {
         each(Err(err))?;
-        return Ok(Ended::default());
+        return Ok(Ended::drawn(drawn));
     }
     Ok(Ended {
         summary: lines,
         drawn,
     })
+}
+
+/// A recording's summary lines, each after its name (none for files).
+fn summary_lines(
+    stream: &Stream,
+    skipped: Option<&Skipped>,
+    summary: &Summary,
+    stream_cameras: bool,
+) -> Vec<String> {
+    let (Stream::Recording(path), Some(skipped)) = (stream, skipped) else {
+        return Vec::new();
+    };
+    let mut skipped = skipped.clone();
+    if !stream_cameras {
+        // The bag's camera_info was not what the poses used.
+        skipped.refused_calibrations = 0;
+        skipped.first_refused_calibration = None;
+    }
+    summary
+        .lines(&skipped)
+        .into_iter()
+        .map(|line| format!("{}: {line}", path.display()))
+        .collect()
 }
 
 /// One frame through the session; the error names the frame.
