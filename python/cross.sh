@@ -22,7 +22,7 @@ trap 'rm -rf "$WORK"' EXIT
 # Debian's arm64 packages of Python 3.11 and the C library it needs, never
 # installed on this machine: only downloaded and unpacked under $ROOT.
 ARM_PACKAGES=(libc6 libgcc-s1 libstdc++6 zlib1g libexpat1 libffi8 libbz2-1.0 liblzma5
-    libssl3 libcrypt1 libsqlite3-0 libuuid1 libncursesw6 libtinfo6 libreadline8 libmpdec3
+    libssl3 libcrypt1 libsqlite3-0 libuuid1 libncursesw6 libtinfo6 libreadline8 libdb5.3
     libpython3.11-minimal libpython3.11-stdlib python3.11-minimal)
 if ! command -v qemu-aarch64-static >/dev/null 2>&1 \
     || ! dpkg --print-foreign-architectures | grep -qx arm64; then
