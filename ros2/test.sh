@@ -28,7 +28,12 @@ if [ ! -x "$VENV/bin/pytest" ] || ! "$VENV/bin/python" -c "import cyclonedds, nu
 fi
 
 cargo build --release --quiet -p whycode-ros2 --bin whycode_node --example latency
-cargo build --release --quiet --bin whycode
+# The CLI the node is compared with: this checkout's (or the one WHYCODE_BIN
+# names: .ci/run hands on the Rust suite's).
+if [ -z "${WHYCODE_BIN:-}" ]; then
+    cargo build --release --quiet --bin whycode
+    export WHYCODE_BIN="$TARGET/release/whycode"
+fi
 # .ci/run lints the whole workspace first and says so.
 if [ -z "${WHYCODE_LINTED:-}" ]; then
     cargo clippy --quiet -p whycode-ros2 --all-targets -- -D warnings
@@ -36,7 +41,6 @@ fi
 cargo test --release --quiet -p whycode-ros2
 
 export WHYCODE_NODE="$TARGET/release/whycode_node"
-export WHYCODE_BIN="$TARGET/release/whycode"
 export PYTEST="$VENV/bin/pytest"
 export LATENCY="$TARGET/release/examples/latency"
 # CycloneDDS (the peer) on loopback only; the node is started with

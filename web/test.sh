@@ -33,6 +33,11 @@ if [ -z "${WHYCODE_LINTED:-}" ]; then
     cargo clippy -p whycode-web --all-targets -- -D warnings
 fi
 "$here/build.sh"
-cargo build --release --bin whycode
-"$venv/bin/python" "$here/test_web.py" --dist "$here/dist" --whycode "$target_dir/release/whycode" \
+# The CLI the page is compared with: this checkout's (or the one WHYCODE_BIN
+# names: .ci/run hands on the Rust suite's).
+if [ -z "${WHYCODE_BIN:-}" ]; then
+    cargo build --release --bin whycode
+    WHYCODE_BIN="$target_dir/release/whycode"
+fi
+"$venv/bin/python" "$here/test_web.py" --dist "$here/dist" --whycode "$WHYCODE_BIN" \
     --out "${WEB_TEST_OUT:-$target_dir/web-test}" "$@"
