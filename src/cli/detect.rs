@@ -171,25 +171,24 @@ pub fn run(args: DetectArgs) -> Result<ExitCode> {
     let mut printer = Printer::new(&args, &settings, &plan, several)?;
     let progress = progress_bar(files, inputs.recordings);
 
-    // Independent images and folders run in parallel, one session per
+    // Neighbouring images and folders run in parallel, one session per
     // worker thread, restarted for each stream (so results never depend on
-    // which thread ran what), and are printed in input order; a recording
-    // runs alone and is printed as it is read.
+    // which thread ran what), and are printed in input order; a stream on
+    // its own (a recording, one image, one folder) runs on this thread and
+    // is printed as it is read, with no thread pool to start.
     for group in streams.chunk_by(|a, b| !a.is_recording() && !b.is_recording()) {
-        if let [recording] = group {
-            if recording.is_recording() {
-                let mut session = Session::new(settings.config(recording));
-                let ended = run_stream(
-                    recording,
-                    &settings,
-                    &plan,
-                    &mut session,
-                    &progress,
-                    &mut |r| progress.suspend(|| printer.take(r)),
-                )?;
-                printer.ended(ended);
-                continue;
-            }
+        if let [stream] = group {
+            let mut session = Session::new(settings.config(stream));
+            let ended = run_stream(
+                stream,
+                &settings,
+                &plan,
+                &mut session,
+                &progress,
+                &mut |r| progress.suspend(|| printer.take(r)),
+            )?;
+            printer.ended(ended);
+            continue;
         }
         let done: Vec<(Vec<Result<FrameReport>>, Ended)> = group
             .par_iter()
