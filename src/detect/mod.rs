@@ -214,11 +214,15 @@ pub struct Detector {
     labels: Labels,
     filler: Filler,
     edge_scratch: Vec<(f64, f64)>,
-    inner_scratch: Vec<(f64, f64)>,
-    spokes: ellipse::Spokes,
-    pose_points: Vec<crate::pose::RadialPoint>,
+    /// What describing a candidate works in, on this thread.
+    workspace: Workspace,
+    /// One more per thread, for a frame's new candidates described in
+    /// parallel.
+    workspaces: Vec<Workspace>,
     /// Scan tiles covered by markers followed this frame.
     occupied: Vec<bool>,
+    /// A large frame's seed pixels, found before the scan walks them.
+    seed_words: Vec<u64>,
     /// A follow of this frame fell back to the flood fill.
     follow_filled: bool,
     tracks: Vec<Track>,
@@ -244,6 +248,18 @@ pub struct Detector {
     /// Where the scan lost each segment (feature `trace` only).
     #[cfg(feature = "trace")]
     trace: Vec<trace::Loss>,
+}
+
+/// The buffers describing a candidate works in, apart from the detector's
+/// state: describing reads that state only, so the candidates a scan found
+/// can be described on several threads at once, one workspace each.
+#[derive(Debug, Clone, Default)]
+struct Workspace {
+    spokes: ellipse::Spokes,
+    inner_scratch: Vec<(f64, f64)>,
+    pose_points: Vec<crate::pose::RadialPoint>,
+    /// Discs described that only a legacy WhyCon marker would explain.
+    legacy_looking: usize,
 }
 
 /// A disc that passed every test.
@@ -290,10 +306,10 @@ impl Detector {
             labels: Labels::default(),
             filler: Filler::default(),
             edge_scratch: Vec::new(),
-            inner_scratch: Vec::new(),
-            spokes: ellipse::Spokes::default(),
-            pose_points: Vec::new(),
+            workspace: Workspace::default(),
+            workspaces: Vec::new(),
             occupied: Vec::new(),
+            seed_words: Vec::new(),
             follow_filled: false,
             tracks: Vec::new(),
             next_track: 1,
@@ -453,21 +469,67 @@ impl Detector {
     }
 
     /// Describes the candidates the scans found (followed markers were
-    /// described as they were found).
+    /// described as they were found): on a large frame in runs of
+    /// consecutive candidates on the pool's threads, each run in a
+    /// workspace of its own, the detections collected in the candidates'
+    /// order.
     fn describe_new<C: std::ops::Deref<Target = [u8]>>(
         &mut self,
         image: &image::ImageBuffer<image::Luma<u8>, C>,
         gray: Gray<'_>,
         finds: &mut Finds,
     ) {
-        for k in finds.detections.len()..finds.candidates.len() {
-            if let Some(next) = finds.candidates.get(k + 1) {
-                preload_disc(gray, next.outer.u, next.outer.v, next.reach());
-            }
-            let (d, memory) = self.describe(image, gray, &finds.candidates[k]);
-            finds.detections.push(d);
-            finds.memories.push(memory);
+        use crate::parallel::prelude::*;
+        let new = &finds.candidates[finds.detections.len()..];
+        // A borrowed view of the pixels, which threads can share whatever
+        // holds them.
+        let view = image::ImageBuffer::<image::Luma<u8>, &[u8]>::from_raw(
+            image.width(),
+            image.height(),
+            &**image.as_raw(),
+        )
+        .expect("an image's buffer holds its pixels");
+        let threads = crate::parallel::frame_threads(gray.width * gray.height).min(new.len());
+        if threads <= 1 {
+            let mut ws = std::mem::take(&mut self.workspace);
+            let mut stopwatch = std::mem::take(&mut self.stopwatch);
+            let described = describe_run(self, &mut ws, &mut stopwatch, &view, gray, new);
+            self.stopwatch = stopwatch;
+            self.legacy_looking += std::mem::take(&mut ws.legacy_looking);
+            self.workspace = ws;
+            finds.extend_described(described);
+            return;
         }
+        // A few runs a thread, so that one whose markers take longer
+        // leaves the others' to the rest.
+        let run = new.len().div_ceil(4 * threads);
+        self.workspaces
+            .resize_with(new.len().div_ceil(run), Workspace::default);
+        let mut workspaces = std::mem::take(&mut self.workspaces);
+        let timings = self.config.timings;
+        let this = &*self;
+        let runs: Vec<_> = workspaces
+            .par_iter_mut()
+            .zip(new.par_chunks(run))
+            .map(|(ws, run)| {
+                let mut stopwatch = Stopwatch::default();
+                stopwatch.start(timings);
+                let described = describe_run(this, ws, &mut stopwatch, &view, gray, run);
+                (described, stopwatch.stop())
+            })
+            .collect();
+        let mut spent = StageTimings::default();
+        for (described, laps) in runs {
+            finds.extend_described(described);
+            if let Some(laps) = laps {
+                spent += &laps;
+            }
+        }
+        self.stopwatch.lap_shared(&spent);
+        for ws in &mut workspaces {
+            self.legacy_looking += std::mem::take(&mut ws.legacy_looking);
+        }
+        self.workspaces = workspaces;
     }
 
     /// The frame's detections in reading order, the tracks and tolerances
@@ -499,6 +561,15 @@ struct Finds {
 }
 
 impl Finds {
+    /// Adds the detections of the candidates after those already
+    /// described, in their order.
+    fn extend_described(&mut self, described: Vec<(Detection, PoseMemory)>) {
+        for (d, memory) in described {
+            self.detections.push(d);
+            self.memories.push(memory);
+        }
+    }
+
     /// Drops the described candidates that are not markers.
     fn drop_unreadable(&mut self) {
         let keep: Vec<bool> = self.detections.iter().map(|d| !d.unreadable).collect();
@@ -508,6 +579,26 @@ impl Finds {
         self.memories.retain(|_| (keep[k], k += 1).0);
         self.detections.retain(|d| !d.unreadable);
     }
+}
+
+/// Describes the candidates of `run` one after another, each one's pixels
+/// brought towards the cache while the one before is worked on.
+fn describe_run(
+    detector: &Detector,
+    ws: &mut Workspace,
+    stopwatch: &mut Stopwatch,
+    image: &image::ImageBuffer<image::Luma<u8>, &[u8]>,
+    gray: Gray<'_>,
+    run: &[Candidate],
+) -> Vec<(Detection, PoseMemory)> {
+    let mut described = Vec::with_capacity(run.len());
+    for (k, c) in run.iter().enumerate() {
+        if let Some(next) = run.get(k + 1) {
+            preload_disc(gray, next.outer.u, next.outer.v, next.reach());
+        }
+        described.push(detector.describe_found(ws, stopwatch, image, gray, c));
+    }
+    described
 }
 
 /// Drops the candidates after the first `followed` that one of those

@@ -41,7 +41,8 @@ impl Detector {
         }
         let map = ThresholdMap::constant(track.threshold);
         self.follow_filled = true;
-        let c = self.evaluate(gray, &map, (seed as u32, y as u32), &[])?;
+        let passed = self.evaluate(gray, &map, (seed as u32, y as u32), &[])?;
+        let c = self.fit_outline(gray, &passed)?;
         let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
         let same_size = (c.outer.semi_major / track.a - 1.0).abs() < 0.3;
         (moved < track.a.max(4.0) && same_size).then_some(c)

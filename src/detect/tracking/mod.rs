@@ -21,7 +21,9 @@ use super::pose::Posed;
 use super::ring::RingRead;
 use super::segment::Gray;
 use super::threshold::ThresholdMap;
-use super::{preload_disc, rectify, Candidate, Detection, Detector, Finds, Stage, SCAN_CHUNK};
+use super::{
+    preload_disc, rectify, Candidate, Detection, Detector, Finds, Stage, Workspace, SCAN_CHUNK,
+};
 use crate::family::Family;
 use track::{PoseMemory, Track};
 
@@ -113,7 +115,8 @@ impl Detector {
     /// has not settled, or the code's edges do not show (then the ring is
     /// read).
     pub(super) fn follow_code(
-        &mut self,
+        &self,
+        ws: &mut Workspace,
         gray: Gray<'_>,
         c: &Candidate,
         index: usize,
@@ -124,7 +127,7 @@ impl Detector {
         }
         let bits = self.config.target.family().map(Family::bits)?;
         let (code, previous_yaw) = (track.code?, track.yaw?);
-        let followed = self.follow_pose(gray, c, index, bits, code, previous_yaw);
+        let followed = self.follow_pose(ws, gray, c, index, bits, code, previous_yaw);
         let yaw = match &followed {
             Some(followed) => followed.yaw,
             None => rectify::follow_ring(gray, &c.outer, bits, code, previous_yaw)?,
