@@ -10,7 +10,9 @@
 //! of 2 threads (a large frame is split between the pool's threads; the
 //! results are the same for any number). `moving_swarm_...` is a tracked
 //! stream whose markers move 1-20 px a frame, some turning, some entering
-//! and leaving the view, every marker's pose computed each frame.
+//! and leaving the view, every marker's pose computed each frame. The
+//! small frames (a cluttered 1280x720 desk without a marker, one marker in
+//! 640x480) stay on one thread.
 //! Run with `cargo bench --bench detect`.
 
 use std::sync::OnceLock;
@@ -138,7 +140,7 @@ fn swarm_frames() -> &'static [GrayImage] {
                     .iter()
                     .map(|(id, (u, v), d, roll, (du, dv), turn)| {
                         let centre = (u + t * du, v + t * dv);
-                        marker_at(&camera, id.clone(), centre, *d, roll + t * turn, (0.0, 0.0))
+                        marker_at(&camera, *id, centre, *d, roll + t * turn, (0.0, 0.0))
                     })
                     .collect();
                 render(&camera, &markers, big_look()).0
@@ -278,7 +280,7 @@ fn moving_swarm_5000x5000_tracked_with_pose_threads(bencher: Bencher, threads: u
     let period = 2 * (SWARM_FRAMES - 1);
     for k in 0..period {
         let found = pool.install(|| detector.detect(swarm_frame(k)));
-        assert!(found.len() >= 540, "frame {k}: {} markers", found.len());
+        assert!(found.len() >= 500, "frame {k}: {} markers", found.len());
     }
     let mut k = period;
     bencher.bench_local(|| {
@@ -294,4 +296,38 @@ fn frame_640x480_4_markers(bencher: Bencher) {
     let mut detector = Detector::new(config(false, 1024));
     assert_eq!(detector.detect(image).len(), 4);
     bencher.bench_local(|| detector.detect(black_box(image)).len());
+}
+
+/// A cluttered 1280x720 desk without a marker (testkit's `desk_clutter`):
+/// everything the scan fills is turned down.
+#[divan::bench(sample_count = 100)]
+fn frame_1280x720_desk_clutter_no_marker(bencher: Bencher) {
+    let image = whycode_testkit::desk::desk_clutter(1);
+    let mut detector = Detector::new(config(false, 1024));
+    assert_eq!(detector.detect(&image).len(), 0);
+    bencher.bench_local(|| detector.detect(black_box(&image)).len());
+}
+
+/// One marker of 40-90 px in a 640x480 frame, with its pose.
+#[divan::bench(sample_count = 100)]
+fn frame_640x480_1_marker_with_pose(bencher: Bencher) {
+    let codes = family().codes().to_vec();
+    let camera = camera(640, 480, 600.0);
+    let mut rng = Pcg32::new(641, 0);
+    let markers = scatter(&mut rng, &camera, 1, (40.0, 90.0), &mut |k| {
+        member(&codes, k)
+    });
+    let look = Look {
+        blur: 1,
+        noise: 2.0,
+        ..Look::default()
+    };
+    let image = render(&camera, &markers, look).0;
+    let mut detector = Detector::new(DetectorConfig {
+        camera: Some(camera),
+        diameter_m: Some(0.1),
+        ..config(false, 1024)
+    });
+    assert_eq!(detector.detect(&image).len(), 1);
+    bencher.bench_local(|| detector.detect(black_box(&image)).len());
 }

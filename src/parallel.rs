@@ -14,11 +14,12 @@ pub(crate) const MIN_PARALLEL_PIXELS: usize = 2_000_000;
 /// thread keeps everything on it) for a large frame, else one. Results
 /// never depend on it.
 pub(crate) fn frame_threads(pixels: usize) -> usize {
-    #[cfg(feature = "parallel")]
-    if pixels >= MIN_PARALLEL_PIXELS {
-        return rayon::current_num_threads();
+    if pixels < MIN_PARALLEL_PIXELS {
+        return 1;
     }
-    let _ = pixels;
+    #[cfg(feature = "parallel")]
+    return rayon::current_num_threads();
+    #[cfg(not(feature = "parallel"))]
     1
 }
 

@@ -34,6 +34,7 @@ use super::pose::Posed;
 use super::ring::{RingRead, RingVerdict};
 use super::segment::Gray;
 use super::tracking::idfilter::IdFilter;
+use super::tracking::FollowedCode;
 use super::{legacy, rectify, Candidate, Detection, Detector, Workspace};
 use crate::family::MatchStatus;
 use crate::geometry::Design;
@@ -48,11 +49,46 @@ impl Detector {
         gray: Gray<'_>,
         c: &Candidate,
     ) -> (Detection, RingRead, Option<Posed>) {
+        let reading = self.read_tracked(ws, image, gray, c);
+        self.settle_identity(gray, c, reading)
+    }
+
+    /// What [`Detector::identity`] reads of a candidate before its track's
+    /// ID filter: it changes nothing, so the tracked markers of a frame
+    /// can be read on several threads.
+    pub(super) fn read_tracked<C: Deref<Target = [u8]>>(
+        &self,
+        ws: &mut Workspace,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        c: &Candidate,
+    ) -> Reading {
         let followed = c.track.and_then(|i| self.follow_code(ws, gray, c, i));
-        let (mut d, read) = match &followed {
+        let (d, read) = match &followed {
             Some(followed) => (detection(c, &followed.read, false), followed.read),
             None => self.read_identity(ws, image, gray, c),
         };
+        Reading {
+            detection: d,
+            read,
+            followed,
+        }
+    }
+
+    /// The rest of [`Detector::identity`] after [`Detector::read_tracked`]:
+    /// the reading through the candidate's track's ID filter (which it
+    /// updates).
+    pub(super) fn settle_identity(
+        &mut self,
+        gray: Gray<'_>,
+        c: &Candidate,
+        reading: Reading,
+    ) -> (Detection, RingRead, Option<Posed>) {
+        let Reading {
+            detection: mut d,
+            read,
+            followed,
+        } = reading;
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed.is_some());
         }
@@ -200,6 +236,15 @@ impl Detector {
             _ => None,
         };
     }
+}
+
+/// What a candidate's pixels (and its track, read only) say of it before
+/// the ID filter: see [`Detector::read_tracked`].
+#[derive(Debug, Clone)]
+pub(super) struct Reading {
+    detection: Detection,
+    read: RingRead,
+    followed: Option<FollowedCode>,
 }
 
 /// Why a WhyCode marker was reported with ID 0 ("unknown").

@@ -479,7 +479,6 @@ impl Detector {
         gray: Gray<'_>,
         finds: &mut Finds,
     ) {
-        use crate::parallel::prelude::*;
         let new = &finds.candidates[finds.detections.len()..];
         // A borrowed view of the pixels, which threads can share whatever
         // holds them.
@@ -489,42 +488,39 @@ impl Detector {
             &**image.as_raw(),
         )
         .expect("an image's buffer holds its pixels");
+        // Each marker's pixels are brought towards the cache while the
+        // one before it is worked on: on a large frame they have left it
+        // since the scan.
+        let describe =
+            |this: &Detector, ws: &mut Workspace, stopwatch: &mut Stopwatch, k: usize| {
+                if let Some(next) = new.get(k + 1) {
+                    preload_disc(gray, next.outer.u, next.outer.v, next.reach());
+                }
+                this.describe_found(ws, stopwatch, &view, gray, &new[k])
+            };
         let threads = crate::parallel::frame_threads(gray.width * gray.height).min(new.len());
         if threads <= 1 {
             let mut ws = std::mem::take(&mut self.workspace);
             let mut stopwatch = std::mem::take(&mut self.stopwatch);
-            let described = describe_run(self, &mut ws, &mut stopwatch, &view, gray, new);
+            let described = (0..new.len())
+                .map(|k| describe(self, &mut ws, &mut stopwatch, k))
+                .collect();
             self.stopwatch = stopwatch;
             self.legacy_looking += std::mem::take(&mut ws.legacy_looking);
             self.workspace = ws;
             finds.extend_described(described);
             return;
         }
-        // A few runs a thread, so that one whose markers take longer
-        // leaves the others' to the rest.
-        let run = new.len().div_ceil(4 * threads);
-        self.workspaces
-            .resize_with(new.len().div_ceil(run), Workspace::default);
         let mut workspaces = std::mem::take(&mut self.workspaces);
-        let timings = self.config.timings;
         let this = &*self;
-        let runs: Vec<_> = workspaces
-            .par_iter_mut()
-            .zip(new.par_chunks(run))
-            .map(|(ws, run)| {
-                let mut stopwatch = Stopwatch::default();
-                stopwatch.start(timings);
-                let described = describe_run(this, ws, &mut stopwatch, &view, gray, run);
-                (described, stopwatch.stop())
-            })
-            .collect();
-        let mut spent = StageTimings::default();
-        for (described, laps) in runs {
-            finds.extend_described(described);
-            if let Some(laps) = laps {
-                spent += &laps;
-            }
-        }
+        let (described, spent) = in_runs(
+            threads,
+            &mut workspaces,
+            self.config.timings,
+            new,
+            |ws, stopwatch, k, _| describe(this, ws, stopwatch, k),
+        );
+        finds.extend_described(described);
         self.stopwatch.lap_shared(&spent);
         for ws in &mut workspaces {
             self.legacy_looking += std::mem::take(&mut ws.legacy_looking);
@@ -581,24 +577,49 @@ impl Finds {
     }
 }
 
-/// Describes the candidates of `run` one after another, each one's pixels
-/// brought towards the cache while the one before is worked on.
-fn describe_run(
-    detector: &Detector,
-    ws: &mut Workspace,
-    stopwatch: &mut Stopwatch,
-    image: &image::ImageBuffer<image::Luma<u8>, &[u8]>,
-    gray: Gray<'_>,
-    run: &[Candidate],
-) -> Vec<(Detection, PoseMemory)> {
-    let mut described = Vec::with_capacity(run.len());
-    for (k, c) in run.iter().enumerate() {
-        if let Some(next) = run.get(k + 1) {
-            preload_disc(gray, next.outer.u, next.outer.v, next.reach());
-        }
-        described.push(detector.describe_found(ws, stopwatch, image, gray, c));
+/// `work(workspace, stopwatch, index, item)` of every item, in runs of
+/// consecutive items on the pool's `threads` (a few runs a thread, so
+/// that a run whose items take longer leaves the others' to the rest),
+/// each run with a workspace of `workspaces` and a stopwatch of its own
+/// (on with `timings`). Gives the results in the items' order and the
+/// stopwatches' laps added up.
+fn in_runs<T: Sync, R: Send>(
+    threads: usize,
+    workspaces: &mut Vec<Workspace>,
+    timings: bool,
+    items: &[T],
+    work: impl Fn(&mut Workspace, &mut Stopwatch, usize, &T) -> R + Sync,
+) -> (Vec<R>, StageTimings) {
+    use crate::parallel::prelude::*;
+    let run = items.len().div_ceil(4 * threads).max(1);
+    let runs = items.len().div_ceil(run);
+    if workspaces.len() < runs {
+        workspaces.resize_with(runs, Workspace::default);
     }
-    described
+    let results: Vec<(Vec<R>, Option<StageTimings>)> = workspaces[..runs]
+        .par_iter_mut()
+        .zip(items.par_chunks(run))
+        .enumerate()
+        .map(|(k, (ws, items))| {
+            let mut stopwatch = Stopwatch::default();
+            stopwatch.start(timings);
+            let done = items
+                .iter()
+                .enumerate()
+                .map(|(j, item)| work(ws, &mut stopwatch, k * run + j, item))
+                .collect();
+            (done, stopwatch.stop())
+        })
+        .collect();
+    let mut spent = StageTimings::default();
+    let mut all = Vec::with_capacity(items.len());
+    for (done, laps) in results {
+        all.extend(done);
+        if let Some(laps) = laps {
+            spent += &laps;
+        }
+    }
+    (all, spent)
 }
 
 /// Drops the candidates after the first `followed` that one of those

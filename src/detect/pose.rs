@@ -140,13 +140,12 @@ impl Detector {
         gray: Gray<'_>,
         c: &Candidate,
         index: usize,
-        bits: u32,
-        code: u32,
-        previous_yaw: f64,
     ) -> Option<FollowedPose> {
         let (camera, diameter) = (self.frame_camera?, self.config.diameter_m?);
         let radius_m = diameter / 2.0;
         let track = &self.tracks[index];
+        let bits = self.config.target.family().map(Family::bits)?;
+        let (code, previous_yaw) = (track.code?, track.yaw?);
         let hints = PoseHints {
             yaw: Some(previous_yaw),
             axis_point: None,

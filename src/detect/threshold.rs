@@ -558,15 +558,7 @@ fn tile_levels(
     let mut lo = vec![255u8; cols * rows];
     let mut hi = vec![0u8; cols * rows];
     let mut sums = vec![0u32; cols * rows];
-    // A tile row at a time, each tile's column of chunks folded row by
-    // row and reduced once: the reduction across a chunk's bytes costs
-    // more than the folds, and was paid per row.
-    let tile_row = |((band, lo), (hi, sums)): ((&[u8], &mut [u8]), (&mut [u8], &mut [u32]))| {
-        for (c, x0) in (0..width).step_by(tile).enumerate() {
-            let x1 = (x0 + tile).min(width);
-            (lo[c], hi[c], sums[c]) = tile_min_max_sum(band, width, x0..x1);
-        }
-    };
+    // A tile row at a time, on the pool's threads for a large frame.
     let threads = crate::parallel::frame_threads(band_pixels.len());
     let noise_floor = if threads > 1 {
         use crate::parallel::prelude::*;
@@ -574,14 +566,14 @@ fn tile_levels(
             .par_chunks(width.max(1) * tile)
             .zip(lo.par_chunks_mut(cols))
             .zip(hi.par_chunks_mut(cols).zip(sums.par_chunks_mut(cols)))
-            .for_each(tile_row);
+            .for_each(|((band, lo), (hi, sums))| tile_row_levels(band, width, lo, hi, sums));
         noise_contrast_parallel(band_pixels, width, y.end - y.start)
     } else {
         band_pixels
             .chunks(width.max(1) * tile)
             .zip(lo.chunks_mut(cols))
             .zip(hi.chunks_mut(cols).zip(sums.chunks_mut(cols)))
-            .for_each(tile_row);
+            .for_each(|((band, lo), (hi, sums))| tile_row_levels(band, width, lo, hi, sums));
         noise_contrast(band_pixels, width, y.end - y.start)
     };
     let noise_floor = MIN_CONTRAST.max(noise_floor);
@@ -593,6 +585,18 @@ fn tile_levels(
         near_hi,
         noise_floor,
         sums,
+    }
+}
+
+/// The darkest and brightest pixel and the sum of the pixels of each tile
+/// of one row of tiles (`band`, rows of `width` pixels), a tile's column
+/// of chunks folded row by row and reduced once: the reduction across a
+/// chunk's bytes costs more than the folds, and was paid per row.
+fn tile_row_levels(band: &[u8], width: usize, lo: &mut [u8], hi: &mut [u8], sums: &mut [u32]) {
+    let tile = 1usize << TILE_SHIFT;
+    for (c, x0) in (0..width).step_by(tile).enumerate() {
+        let x1 = (x0 + tile).min(width);
+        (lo[c], hi[c], sums[c]) = tile_min_max_sum(band, width, x0..x1);
     }
 }
 
