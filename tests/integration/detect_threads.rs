@@ -24,7 +24,7 @@ fn frame_camera() -> Camera {
     camera(WIDTH, HEIGHT, 1500.0)
 }
 
-/// Seeded markers of 14-90 px on a grid with jitter, moved by `t` frames
+/// Seeded markers of 20-90 px on a grid with jitter, moved by `t` frames
 /// of their own motion, under a light gradient and a cast shadow (the
 /// shaded second look), some tilted.
 fn frame(t: f64) -> image::GrayImage {
@@ -35,7 +35,7 @@ fn frame(t: f64) -> image::GrayImage {
     for row in 0..6 {
         for col in 0..10 {
             let k = row * 10 + col;
-            let d = rng.range(14.0, 90.0);
+            let d = rng.range(20.0, 90.0);
             let u =
                 90.0 + 180.0 * f64::from(col) + rng.range(-20.0, 20.0) + t * rng.range(-8.0, 8.0);
             let v =
@@ -61,7 +61,7 @@ fn frame(t: f64) -> image::GrayImage {
         ..Look::default()
     };
     let mut image = render(&camera, &markers, look).0;
-    cast_shadow(&mut image, (900.0, 0.0), 1.2, 0.35, 6.0);
+    cast_shadow(&mut image, (1300.0, 0.0), 1.3, 0.5, 6.0);
     image
 }
 
@@ -94,9 +94,14 @@ fn detect_in_pool(
 #[test]
 fn two_threads_report_what_one_does() {
     let frames: Vec<_> = (0..3).map(|t| frame(f64::from(t))).collect();
-    for config in [config(false, 1024), config(true, 1024), config(false, 17)] {
+    // The last stops at 9 candidates, fewer than the frame holds.
+    for (config, least) in [
+        (config(false, 1024), 50),
+        (config(true, 1024), 50),
+        (config(false, 9), 5),
+    ] {
         let one = detect_in_pool(1, &config, &frames);
-        assert!(one[0].len() >= 17, "{} found", one[0].len());
+        assert!(one[0].len() >= least, "{} found", one[0].len());
         assert!(one[0].iter().all(|d| d.pose.is_some()));
         let two = detect_in_pool(2, &config, &frames);
         // Compared as printed, so that two NaNs in the same place agree.
