@@ -88,72 +88,82 @@ const SWARM_FRAMES: usize = 8;
 /// played forwards then backwards make a stream without jumps.
 fn swarm_frames() -> &'static [GrayImage] {
     static FRAMES: OnceLock<Vec<GrayImage>> = OnceLock::new();
-    FRAMES.get_or_init(|| {
-        let codes = family().codes().to_vec();
-        let camera = big_camera();
-        let centre = 2500.0;
-        let corner = centre * std::f64::consts::SQRT_2;
-        // The swarm's turn a frame: 20 px at the corners.
-        let turn = 20.0 / corner;
-        let mut rng = Pcg32::new(5001, 0);
-        // Per marker: centre, diameter, roll, and its own turn a frame;
-        // placed as `scatter` places them, over the disc the corners turn
-        // through.
-        let mut placed: Vec<(f64, f64, f64)> = Vec::new();
-        let mut swarm = Vec::new();
-        let in_view = |x: f64| (0.0..5000.0).contains(&x);
-        let (mut seen, mut attempts) = (0, 0);
-        while seen < 550 && attempts < 100_000 {
-            attempts += 1;
-            let d = rng.range(60.0, 120.0);
-            let reach = d * 0.5 * 1.35 + 2.0;
-            let (u, v) = (
-                rng.range(centre - corner, centre + corner),
-                rng.range(centre - corner, centre + corner),
-            );
-            if (u - centre).hypot(v - centre) > corner
-                || placed
-                    .iter()
-                    .any(|&(pu, pv, pr)| (pu - u).hypot(pv - v) < pr + reach)
-            {
-                continue;
-            }
-            placed.push((u, v, reach));
-            seen += usize::from(in_view(u) && in_view(v));
-            let roll = rng.range(0.0, std::f64::consts::TAU);
-            let own_turn = if swarm.len() % 3 == 0 {
-                rng.range(-3.0, 3.0).to_radians()
-            } else {
-                0.0
-            };
-            swarm.push(((u, v), d, roll, own_turn));
-        }
-        (0..SWARM_FRAMES)
-            .map(|t| {
-                let angle = turn * t as f64;
-                let (sin, cos) = angle.sin_cos();
-                let markers: Vec<LooseMarker> = swarm
-                    .iter()
-                    .enumerate()
-                    .filter_map(|(k, &((u, v), d, roll, own_turn))| {
-                        let (du, dv) = (u - centre, v - centre);
-                        let at = (centre + du * cos - dv * sin, centre + du * sin + dv * cos);
-                        // Only those whose card reaches into the view.
-                        let near = |x: f64| (-d..5000.0 + d).contains(&x);
-                        let roll = roll + angle + own_turn * t as f64;
-                        (near(at.0) && near(at.1))
-                            .then(|| marker_at(&camera, member(&codes, k), at, d, roll, (0.0, 0.0)))
-                    })
-                    .collect();
-                render(&camera, &markers, big_look()).0
-            })
-            .collect()
-    })
+    FRAMES.get_or_init(|| render_swarm(true))
 }
 
-/// The k-th frame of the swarm's stream: its frames forwards, then back.
-fn swarm_frame(k: usize) -> &'static GrayImage {
-    let frames = swarm_frames();
+/// As [`swarm_frames`], the 550 markers all within the circle the frame's
+/// sides touch, which none leaves: every track is followed every frame.
+fn swarm_in_view_frames() -> &'static [GrayImage] {
+    static FRAMES: OnceLock<Vec<GrayImage>> = OnceLock::new();
+    FRAMES.get_or_init(|| render_swarm(false))
+}
+
+/// The frames of [`swarm_frames`] (`leaving`) or [`swarm_in_view_frames`].
+fn render_swarm(leaving: bool) -> Vec<GrayImage> {
+    let codes = family().codes().to_vec();
+    let camera = big_camera();
+    let centre = 2500.0;
+    let corner = centre * std::f64::consts::SQRT_2;
+    let reach_out = if leaving { corner } else { centre - 90.0 };
+    // The swarm's turn a frame: 20 px at the corners.
+    let turn = 20.0 / corner;
+    let mut rng = Pcg32::new(5001, 0);
+    // Per marker: centre, diameter, roll, and its own turn a frame;
+    // placed as `scatter` places them, over the disc the corners turn
+    // through (or the one the sides touch).
+    let mut placed: Vec<(f64, f64, f64)> = Vec::new();
+    let mut swarm = Vec::new();
+    let in_view = |x: f64| (0.0..5000.0).contains(&x);
+    let (mut seen, mut attempts) = (0, 0);
+    while seen < 550 && attempts < 100_000 {
+        attempts += 1;
+        let d = rng.range(60.0, 120.0);
+        let reach = d * 0.5 * 1.35 + 2.0;
+        let (u, v) = (
+            rng.range(centre - reach_out, centre + reach_out),
+            rng.range(centre - reach_out, centre + reach_out),
+        );
+        if (u - centre).hypot(v - centre) > reach_out
+            || placed
+                .iter()
+                .any(|&(pu, pv, pr)| (pu - u).hypot(pv - v) < pr + reach)
+        {
+            continue;
+        }
+        placed.push((u, v, reach));
+        seen += usize::from(in_view(u) && in_view(v));
+        let roll = rng.range(0.0, std::f64::consts::TAU);
+        let own_turn = if swarm.len() % 3 == 0 {
+            rng.range(-3.0, 3.0).to_radians()
+        } else {
+            0.0
+        };
+        swarm.push(((u, v), d, roll, own_turn));
+    }
+    (0..SWARM_FRAMES)
+        .map(|t| {
+            let angle = turn * t as f64;
+            let (sin, cos) = angle.sin_cos();
+            let markers: Vec<LooseMarker> = swarm
+                .iter()
+                .enumerate()
+                .filter_map(|(k, &((u, v), d, roll, own_turn))| {
+                    let (du, dv) = (u - centre, v - centre);
+                    let at = (centre + du * cos - dv * sin, centre + du * sin + dv * cos);
+                    // Only those whose card reaches into the view.
+                    let near = |x: f64| (-d..5000.0 + d).contains(&x);
+                    let roll = roll + angle + own_turn * t as f64;
+                    (near(at.0) && near(at.1))
+                        .then(|| marker_at(&camera, member(&codes, k), at, d, roll, (0.0, 0.0)))
+                })
+                .collect();
+            render(&camera, &markers, big_look()).0
+        })
+        .collect()
+}
+
+/// The k-th frame of a swarm's stream: its frames forwards, then back.
+fn swarm_frame(frames: &[GrayImage], k: usize) -> &GrayImage {
     let period = 2 * (frames.len() - 1);
     let t = k % period;
     &frames[if t < frames.len() { t } else { period - t }]
@@ -274,19 +284,30 @@ fn first_frame_5000x5000_550_markers_with_pose_threads(bencher: Bencher, threads
 
 /// A tracked stream of the moving swarm with every marker's pose, in a
 /// pool of 1 and of 2 threads: each sample is the stream's next frame,
-/// after a pass over the whole stream for the IDs to settle.
+/// after a pass over the whole stream for the IDs to settle. A frame
+/// after a marker left the view scans the whole frame for it.
 #[divan::bench(sample_count = 28, sample_size = 1, args = [1, 2])]
 fn moving_swarm_5000x5000_tracked_with_pose_threads(bencher: Bencher, threads: usize) {
+    bench_swarm(bencher, threads, swarm_frames());
+}
+
+/// As `moving_swarm_...`, every marker in view in every frame.
+#[divan::bench(sample_count = 28, sample_size = 1, args = [1, 2])]
+fn moving_swarm_in_view_5000x5000_tracked_with_pose_threads(bencher: Bencher, threads: usize) {
+    bench_swarm(bencher, threads, swarm_in_view_frames());
+}
+
+fn bench_swarm(bencher: Bencher, threads: usize, frames: &[GrayImage]) {
     let pool = pool(threads);
     let mut detector = Detector::new(with_pose(config(true, 1024)));
     let period = 2 * (SWARM_FRAMES - 1);
     for k in 0..period {
-        let found = pool.install(|| detector.detect(swarm_frame(k)));
+        let found = pool.install(|| detector.detect(swarm_frame(frames, k)));
         assert!(found.len() >= 520, "frame {k}: {} markers", found.len());
     }
     let mut k = period;
     bencher.bench_local(|| {
-        let image = swarm_frame(k);
+        let image = swarm_frame(frames, k);
         k += 1;
         pool.install(|| detector.detect(black_box(image)).len())
     });
