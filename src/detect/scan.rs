@@ -581,7 +581,7 @@ impl Detector {
 /// The seed pixels of word `w` of a row (`block` its pixels, `thresholds`
 /// the row's): those darker than their tile's threshold by the map's seed
 /// margin.
-#[inline]
+#[inline(always)]
 fn seed_word(block: &[u8], thresholds: &[u8], shift: u32, margin: u8, w: usize) -> u64 {
     const WORD: usize = 64;
     if block.len() == WORD {
