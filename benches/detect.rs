@@ -1,4 +1,6 @@
-//! Detector speed, single thread (paper Table 5 setting).
+//! Detector speed (paper Table 5 setting). The benches without `_threads`
+//! run in rayon's global pool (a thread a core, `RAYON_NUM_THREADS=1` for
+//! one), which a 5000x5000 frame is split between.
 //!
 //! Targets: a 5000x5000 grey image with 550 markers of 60-120 px, first
 //! frame (no tracking) under 150 ms and a tracked frame under 15 ms, also
