@@ -10,7 +10,10 @@
 //! moving, leaving and coming back, pose with and without lens distortion,
 //! motion blur, a cast shadow's edge (the shaded second look), low
 //! contrast under noise (the global threshold walk), clutter, rings too
-//! small to sample, steep views and families of the wrong bit count.
+//! small to sample, steep views and families of the wrong bit count; and
+//! the detection bench's 5000x5000 swarm, which the detector splits
+//! between the threads of the pool it runs in (`RAYON_NUM_THREADS=1` and
+//! `2` must print the same).
 //!
 //! `detections_dump [group ...]` prints only the named groups (see
 //! `GROUPS`), e.g. a short run under callgrind; with `--timings`, each
@@ -31,9 +34,9 @@ use whycode::simulate::{self, Background, LooseMarker, MotionBlur, Placement, Sc
 const DEG: f64 = PI / 180.0;
 const DIAMETER_M: f64 = 0.05;
 
-const GROUPS: [&str; 12] = [
+const GROUPS: [&str; 13] = [
     "photos", "families", "auto", "legacy", "tracking", "blur", "shade", "dim", "clutter", "small",
-    "steep", "wrong",
+    "steep", "wrong", "large",
 ];
 
 thread_local! {
@@ -65,6 +68,7 @@ fn main() {
                 "small" => small(),
                 "steep" => steep(),
                 "wrong" => wrong(),
+                "large" => large(),
                 _ => unreachable!(),
             }
             if let Some(sum) = TIMINGS.with(|t| t.borrow_mut().take()) {
@@ -872,5 +876,41 @@ fn wrong() {
         "wrong 16b as 16b",
         config(Target::WhyCode(sixteen)),
         &frames,
+    );
+}
+
+/// The detection bench's frame (`benches/detect.rs`): 5000x5000, 550
+/// markers of 60-120 px, light falling 2:1, mild blur and noise; seen
+/// once with pose, and twice tracked.
+fn large() {
+    use whycode_testkit::scenes::{self, Look};
+    let family = family(8, 2);
+    let codes = family.codes().to_vec();
+    let camera = scenes::camera(5000, 5000, 5000.0);
+    let mut rng = Pcg32::new(5000, 0);
+    let markers = scenes::scatter(&mut rng, &camera, 550, (60.0, 120.0), &mut |k| {
+        let id = k % codes.len();
+        (Marker::whycode(8, codes[id], 100.0), id as u32 + 1)
+    });
+    let look = Look {
+        gradient_right: 0.5,
+        blur: 1,
+        noise: 2.0,
+        ..Look::default()
+    };
+    let frame = scenes::render(&camera, &markers, look).0;
+    let config = DetectorConfig {
+        camera: Some(camera),
+        diameter_m: Some(0.1),
+        ..config(Target::WhyCode(family))
+    };
+    dump("large", config.clone(), std::slice::from_ref(&frame));
+    dump(
+        "large tracked",
+        DetectorConfig {
+            tracking: true,
+            ..config
+        },
+        &[frame.clone(), frame],
     );
 }

@@ -7,22 +7,46 @@ use image::{ImageBuffer, Luma};
 
 use super::ring::RingRead;
 use super::segment::Gray;
+use super::timings::Stopwatch;
 use super::tracking::track::PoseMemory;
-use super::{Candidate, Detection, Detector, Stage};
+use super::{Candidate, Detection, Detector, Stage, Workspace};
 
 impl Detector {
-    /// The detection of a candidate, and what its pose tells the track: who
-    /// it is ([`Detector::identity`]), then where it is.
+    /// The detection of a followed candidate, and what its pose tells the
+    /// track: who it is ([`Detector::identity`]), then where it is.
     pub(super) fn describe<C: Deref<Target = [u8]>>(
         &mut self,
         image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,
     ) -> (Detection, PoseMemory) {
-        let (mut d, read, posed) = self.identity(image, gray, c);
+        let mut ws = std::mem::take(&mut self.workspace);
+        let (mut d, read, posed) = self.identity(&mut ws, image, gray, c);
         self.stopwatch.lap(Stage::Describe);
-        let memory = self.measure_pose(gray, c, &mut d, &read, posed);
+        let memory = self.measure_pose(&mut ws, gray, c, &mut d, &read, posed);
         self.stopwatch.lap(Stage::Pose);
+        self.legacy_looking += std::mem::take(&mut ws.legacy_looking);
+        self.workspace = ws;
+        (d, memory)
+    }
+
+    /// [`Detector::describe`] for a candidate a scan found (it has no track
+    /// yet): reads the detector's state only, so that the frame's new
+    /// candidates can be described on several threads, each in its own
+    /// workspace and stopwatch.
+    pub(super) fn describe_found<C: Deref<Target = [u8]>>(
+        &self,
+        ws: &mut Workspace,
+        stopwatch: &mut Stopwatch,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        c: &Candidate,
+    ) -> (Detection, PoseMemory) {
+        debug_assert!(c.track.is_none());
+        let (mut d, read) = self.found_identity(ws, image, gray, c);
+        stopwatch.lap(Stage::Describe);
+        let memory = self.measure_pose(ws, gray, c, &mut d, &read, None);
+        stopwatch.lap(Stage::Pose);
         (d, memory)
     }
 }

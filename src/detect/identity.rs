@@ -34,7 +34,8 @@ use super::pose::Posed;
 use super::ring::{RingRead, RingVerdict};
 use super::segment::Gray;
 use super::tracking::idfilter::IdFilter;
-use super::{legacy, rectify, Candidate, Detection, Detector};
+use super::tracking::FollowedCode;
+use super::{legacy, rectify, Candidate, Detection, Detector, Workspace};
 use crate::family::MatchStatus;
 use crate::geometry::Design;
 
@@ -43,36 +44,106 @@ impl Detector {
     /// ring reading its pose starts from, and a followed marker's pose.
     pub(super) fn identity<C: Deref<Target = [u8]>>(
         &mut self,
+        ws: &mut Workspace,
         image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,
     ) -> (Detection, RingRead, Option<Posed>) {
-        let quality = 1.0 - (c.area_error / self.area.tolerance()).min(1.0);
-        let outline = (0.5 + 0.5 * quality).clamp(0.0, 1.0);
-        let followed = c.track.and_then(|i| self.follow_code(gray, c, i));
-        let (mut d, read) = match &followed {
+        let reading = self.read_tracked(ws, image, gray, c);
+        self.settle_identity(gray, c, reading)
+    }
+
+    /// What [`Detector::identity`] reads of a candidate before its track's
+    /// ID filter: it changes nothing, so the tracked markers of a frame
+    /// can be read on several threads.
+    pub(super) fn read_tracked<C: Deref<Target = [u8]>>(
+        &self,
+        ws: &mut Workspace,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        c: &Candidate,
+    ) -> Reading {
+        let followed = c.track.and_then(|i| self.follow_code(ws, gray, c, i));
+        let (d, read) = match &followed {
             Some(followed) => (detection(c, &followed.read, false), followed.read),
-            None if self.config.target.design() == Design::WhyCode => {
-                self.by_ring(image, gray, c, outline)
-            }
-            None => self.by_legacy_rule(image, gray, c, outline),
+            None => self.read_identity(ws, image, gray, c),
         };
+        Reading {
+            detection: d,
+            read,
+            followed,
+        }
+    }
+
+    /// The rest of [`Detector::identity`] after [`Detector::read_tracked`]:
+    /// the reading through the candidate's track's ID filter (which it
+    /// updates).
+    pub(super) fn settle_identity(
+        &mut self,
+        gray: Gray<'_>,
+        c: &Candidate,
+        reading: Reading,
+    ) -> (Detection, RingRead, Option<Posed>) {
+        let Reading {
+            detection: mut d,
+            read,
+            followed,
+        } = reading;
         if let Some(i) = c.track {
             self.filter_identity(gray, c, i, &mut d, followed.is_some());
         }
+        self.say_why_unnamed(&mut d);
+        (d, read, followed.and_then(|f| f.posed))
+    }
+
+    /// [`Detector::identity`] of a candidate with no track (a scan's find):
+    /// what its pixels say alone.
+    pub(super) fn found_identity<C: Deref<Target = [u8]>>(
+        &self,
+        ws: &mut Workspace,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        c: &Candidate,
+    ) -> (Detection, RingRead) {
+        let (mut d, read) = self.read_identity(ws, image, gray, c);
+        self.say_why_unnamed(&mut d);
+        (d, read)
+    }
+
+    /// Candidate `c` by its ring, or by the legacy rules, before any ID
+    /// filter.
+    fn read_identity<C: Deref<Target = [u8]>>(
+        &self,
+        ws: &mut Workspace,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        c: &Candidate,
+    ) -> (Detection, RingRead) {
+        let quality = 1.0 - (c.area_error / self.area.tolerance()).min(1.0);
+        let outline = (0.5 + 0.5 * quality).clamp(0.0, 1.0);
+        if self.config.target.design() == Design::WhyCode {
+            self.by_ring(ws, image, gray, c, outline)
+        } else {
+            self.by_legacy_rule(image, gray, c, outline)
+        }
+    }
+
+    /// A named detection says nothing of why it would be unnamed; a
+    /// WhyCode marker left unnamed always says why.
+    fn say_why_unnamed(&self, d: &mut Detection) {
         if d.id != 0 {
             d.unnamed = None;
         } else if d.unnamed.is_none() && self.config.target.design() == Design::WhyCode {
             // A followed marker whose ring this frame did not name.
             d.unnamed = Some(Unnamed::Unread);
         }
-        (d, read, followed.and_then(|f| f.posed))
     }
 
     /// A WhyCode candidate by what its ring says, and without a code ring
     /// by its track and the legacy rules.
     fn by_ring<C: Deref<Target = [u8]>>(
-        &mut self,
+        &self,
+        ws: &mut Workspace,
         image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,
@@ -93,7 +164,7 @@ impl Detector {
             let large = 2.0 * c.outer.semi_minor >= MIN_NO_RING_DIAMETER_PX;
             let sharp = legacy::is_marker(image, gray, c, self.config.legacy_min_ink_px);
             if sharp && c.track.is_none() {
-                self.legacy_looking += 1;
+                ws.legacy_looking += 1;
             }
             marker = (sharp && large) || legacy::is_blurred_marker(gray, c);
         }
@@ -105,7 +176,7 @@ impl Detector {
 
     /// A legacy WhyCon candidate: a marker by its inside, or by its track.
     fn by_legacy_rule<C: Deref<Target = [u8]>>(
-        &mut self,
+        &self,
         image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,
@@ -165,6 +236,15 @@ impl Detector {
             _ => None,
         };
     }
+}
+
+/// What a candidate's pixels (and its track, read only) say of it before
+/// the ID filter: see [`Detector::read_tracked`].
+#[derive(Debug, Clone)]
+pub(super) struct Reading {
+    detection: Detection,
+    read: RingRead,
+    followed: Option<FollowedCode>,
 }
 
 /// Why a WhyCode marker was reported with ID 0 ("unknown").

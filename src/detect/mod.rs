@@ -214,11 +214,15 @@ pub struct Detector {
     labels: Labels,
     filler: Filler,
     edge_scratch: Vec<(f64, f64)>,
-    inner_scratch: Vec<(f64, f64)>,
-    spokes: ellipse::Spokes,
-    pose_points: Vec<crate::pose::RadialPoint>,
+    /// What describing a candidate works in, on this thread.
+    workspace: Workspace,
+    /// One more per thread, for a frame's new candidates described in
+    /// parallel.
+    workspaces: Vec<Workspace>,
     /// Scan tiles covered by markers followed this frame.
     occupied: Vec<bool>,
+    /// A large frame's seed pixels, found before the scan walks them.
+    seed_words: Vec<u64>,
     /// A follow of this frame fell back to the flood fill.
     follow_filled: bool,
     tracks: Vec<Track>,
@@ -244,6 +248,18 @@ pub struct Detector {
     /// Where the scan lost each segment (feature `trace` only).
     #[cfg(feature = "trace")]
     trace: Vec<trace::Loss>,
+}
+
+/// The buffers describing a candidate works in, apart from the detector's
+/// state: describing reads that state only, so the candidates a scan found
+/// can be described on several threads at once, one workspace each.
+#[derive(Debug, Clone, Default)]
+struct Workspace {
+    spokes: ellipse::Spokes,
+    inner_scratch: Vec<(f64, f64)>,
+    pose_points: Vec<crate::pose::RadialPoint>,
+    /// Discs described that only a legacy WhyCon marker would explain.
+    legacy_looking: usize,
 }
 
 /// A disc that passed every test.
@@ -290,10 +306,10 @@ impl Detector {
             labels: Labels::default(),
             filler: Filler::default(),
             edge_scratch: Vec::new(),
-            inner_scratch: Vec::new(),
-            spokes: ellipse::Spokes::default(),
-            pose_points: Vec::new(),
+            workspace: Workspace::default(),
+            workspaces: Vec::new(),
             occupied: Vec::new(),
+            seed_words: Vec::new(),
             follow_filled: false,
             tracks: Vec::new(),
             next_track: 1,
@@ -453,21 +469,63 @@ impl Detector {
     }
 
     /// Describes the candidates the scans found (followed markers were
-    /// described as they were found).
+    /// described as they were found): on a large frame in runs of
+    /// consecutive candidates on the pool's threads, each run in a
+    /// workspace of its own, the detections collected in the candidates'
+    /// order.
     fn describe_new<C: std::ops::Deref<Target = [u8]>>(
         &mut self,
         image: &image::ImageBuffer<image::Luma<u8>, C>,
         gray: Gray<'_>,
         finds: &mut Finds,
     ) {
-        for k in finds.detections.len()..finds.candidates.len() {
-            if let Some(next) = finds.candidates.get(k + 1) {
-                preload_disc(gray, next.outer.u, next.outer.v, next.reach());
-            }
-            let (d, memory) = self.describe(image, gray, &finds.candidates[k]);
-            finds.detections.push(d);
-            finds.memories.push(memory);
+        let new = &finds.candidates[finds.detections.len()..];
+        // A borrowed view of the pixels, which threads can share whatever
+        // holds them.
+        let view = image::ImageBuffer::<image::Luma<u8>, &[u8]>::from_raw(
+            image.width(),
+            image.height(),
+            &**image.as_raw(),
+        )
+        .expect("an image's buffer holds its pixels");
+        // Each marker's pixels are brought towards the cache while the
+        // one before it is worked on: on a large frame they have left it
+        // since the scan.
+        let describe =
+            |this: &Detector, ws: &mut Workspace, stopwatch: &mut Stopwatch, k: usize| {
+                if let Some(next) = new.get(k + 1) {
+                    preload_disc(gray, next.outer.u, next.outer.v, next.reach());
+                }
+                this.describe_found(ws, stopwatch, &view, gray, &new[k])
+            };
+        let threads = crate::parallel::frame_threads(gray.width * gray.height).min(new.len());
+        if threads <= 1 {
+            let mut ws = std::mem::take(&mut self.workspace);
+            let mut stopwatch = std::mem::take(&mut self.stopwatch);
+            let described = (0..new.len())
+                .map(|k| describe(self, &mut ws, &mut stopwatch, k))
+                .collect();
+            self.stopwatch = stopwatch;
+            self.legacy_looking += std::mem::take(&mut ws.legacy_looking);
+            self.workspace = ws;
+            finds.extend_described(described);
+            return;
         }
+        let mut workspaces = std::mem::take(&mut self.workspaces);
+        let this = &*self;
+        let (described, spent) = in_runs(
+            threads,
+            &mut workspaces,
+            self.config.timings,
+            new,
+            |ws, stopwatch, k, _| describe(this, ws, stopwatch, k),
+        );
+        finds.extend_described(described);
+        self.stopwatch.lap_shared(&spent);
+        for ws in &mut workspaces {
+            self.legacy_looking += std::mem::take(&mut ws.legacy_looking);
+        }
+        self.workspaces = workspaces;
     }
 
     /// The frame's detections in reading order, the tracks and tolerances
@@ -499,6 +557,15 @@ struct Finds {
 }
 
 impl Finds {
+    /// Adds the detections of the candidates after those already
+    /// described, in their order.
+    fn extend_described(&mut self, described: Vec<(Detection, PoseMemory)>) {
+        for (d, memory) in described {
+            self.detections.push(d);
+            self.memories.push(memory);
+        }
+    }
+
     /// Drops the described candidates that are not markers.
     fn drop_unreadable(&mut self) {
         let keep: Vec<bool> = self.detections.iter().map(|d| !d.unreadable).collect();
@@ -508,6 +575,51 @@ impl Finds {
         self.memories.retain(|_| (keep[k], k += 1).0);
         self.detections.retain(|d| !d.unreadable);
     }
+}
+
+/// `work(workspace, stopwatch, index, item)` of every item, in runs of
+/// consecutive items on the pool's `threads` (a few runs a thread, so
+/// that a run whose items take longer leaves the others' to the rest),
+/// each run with a workspace of `workspaces` and a stopwatch of its own
+/// (on with `timings`). Gives the results in the items' order and the
+/// stopwatches' laps added up.
+fn in_runs<T: Sync, R: Send>(
+    threads: usize,
+    workspaces: &mut Vec<Workspace>,
+    timings: bool,
+    items: &[T],
+    work: impl Fn(&mut Workspace, &mut Stopwatch, usize, &T) -> R + Sync,
+) -> (Vec<R>, StageTimings) {
+    use crate::parallel::prelude::*;
+    let run = items.len().div_ceil(4 * threads).max(1);
+    let runs = items.len().div_ceil(run);
+    if workspaces.len() < runs {
+        workspaces.resize_with(runs, Workspace::default);
+    }
+    let results: Vec<(Vec<R>, Option<StageTimings>)> = workspaces[..runs]
+        .par_iter_mut()
+        .zip(items.par_chunks(run))
+        .enumerate()
+        .map(|(k, (ws, items))| {
+            let mut stopwatch = Stopwatch::default();
+            stopwatch.start(timings);
+            let done = items
+                .iter()
+                .enumerate()
+                .map(|(j, item)| work(ws, &mut stopwatch, k * run + j, item))
+                .collect();
+            (done, stopwatch.stop())
+        })
+        .collect();
+    let mut spent = StageTimings::default();
+    let mut all = Vec::with_capacity(items.len());
+    for (done, laps) in results {
+        all.extend(done);
+        if let Some(laps) = laps {
+            spent += &laps;
+        }
+    }
+    (all, spent)
 }
 
 /// Drops the candidates after the first `followed` that one of those

@@ -15,7 +15,7 @@ use nalgebra::Vector3;
 use super::ring::RingRead;
 use super::segment::Gray;
 use super::tracking::track::{Fitted, PoseMemory};
-use super::{ellipse, rectify, Candidate, Detection, Detector};
+use super::{ellipse, rectify, Candidate, Detection, Detector, Workspace};
 use crate::camera::Camera;
 use crate::family::Family;
 use crate::geometry::{sector_is_black, sector_width, Design, WHYCODE_WHITE_RATIO};
@@ -68,7 +68,8 @@ impl Detector {
     /// `d`, with the centre and yaw it tells; returns what the track keeps
     /// for the next frame.
     pub(super) fn measure_pose(
-        &mut self,
+        &self,
+        ws: &mut Workspace,
         gray: Gray<'_>,
         c: &Candidate,
         d: &mut Detection,
@@ -91,7 +92,7 @@ impl Detector {
         };
         let posed = match followed {
             Some(posed) => Some(posed),
-            None => self.pose(&camera, diameter / 2.0, gray, c, hints),
+            None => self.pose(ws, &camera, diameter / 2.0, gray, c, hints),
         };
         d.pose = posed.map(|p| p.pose);
         let memory = posed.map_or_else(PoseMemory::default, |posed| PoseMemory {
@@ -134,17 +135,17 @@ impl Detector {
     /// camera and a diameter, or when the edges do not show (then the ring
     /// is followed or read as for a marker without a pose).
     pub(super) fn follow_pose(
-        &mut self,
+        &self,
+        ws: &mut Workspace,
         gray: Gray<'_>,
         c: &Candidate,
         index: usize,
-        bits: u32,
-        code: u32,
-        previous_yaw: f64,
     ) -> Option<FollowedPose> {
         let (camera, diameter) = (self.frame_camera?, self.config.diameter_m?);
         let radius_m = diameter / 2.0;
         let track = &self.tracks[index];
+        let bits = self.config.target.family().map(Family::bits)?;
+        let (code, previous_yaw) = (track.code?, track.yaw?);
         let hints = PoseHints {
             yaw: Some(previous_yaw),
             axis_point: None,
@@ -155,7 +156,7 @@ impl Detector {
             bits: Some(bits),
             code: Some(code),
         };
-        let mut posed = self.pose(&camera, radius_m, gray, c, hints)?;
+        let mut posed = self.pose(ws, &camera, radius_m, gray, c, hints)?;
         posed.pose = rectify::refine_rotation(gray, &camera, &posed.pose, radius_m, bits, code)?;
         let yaw = posed.pose.image_yaw(&camera)?;
         Some(FollowedPose { posed, yaw })
@@ -174,7 +175,8 @@ impl Detector {
     /// on the outer and inner edges together (from last frame's fit when
     /// that still fits); the rotation from the yaw.
     fn pose(
-        &mut self,
+        &self,
+        ws: &mut Workspace,
         camera: &Camera,
         radius_m: f64,
         gray: Gray<'_>,
@@ -230,13 +232,13 @@ impl Detector {
                     &c.outer,
                     ratio,
                     mid,
-                    &mut self.spokes,
-                    &mut self.inner_scratch,
+                    &mut ws.spokes,
+                    &mut ws.inner_scratch,
                 );
                 let found = pose::inner_edge_errors(
                     camera,
                     &candidates,
-                    &self.inner_scratch,
+                    &ws.inner_scratch,
                     ratio * radius_m,
                 );
                 for (error, e) in errors.iter_mut().zip(found) {
@@ -259,7 +261,7 @@ impl Detector {
                 .filter(|_| yaw.is_some())
                 .map(|bits| Some(RingSides::new(camera, &rough, bits, code))),
         };
-        let mut points = std::mem::take(&mut self.pose_points);
+        let mut points = std::mem::take(&mut ws.pose_points);
         points.clear();
         let min_rise = 0.5 * (c.white - c.black);
         let rays = if self.config.fine_edges {
@@ -275,10 +277,10 @@ impl Detector {
             min_rise,
             rays,
             everywhere,
-            &mut self.spokes,
-            &mut self.inner_scratch,
+            &mut ws.spokes,
+            &mut ws.inner_scratch,
         );
-        points.extend(self.inner_scratch.iter().map(|&p| (p, radius_m)));
+        points.extend(ws.inner_scratch.iter().map(|&p| (p, radius_m)));
         if let Some(sides) = sector_sides {
             for &ratio in design.inner_edge_ratios() {
                 let radius = ratio * radius_m;
@@ -297,10 +299,10 @@ impl Detector {
                     min_rise,
                     rays,
                     wanted,
-                    &mut self.spokes,
-                    &mut self.inner_scratch,
+                    &mut ws.spokes,
+                    &mut ws.inner_scratch,
                 );
-                points.extend(self.inner_scratch.iter().map(|&p| (p, radius)));
+                points.extend(ws.inner_scratch.iter().map(|&p| (p, radius)));
             }
         }
         // Last frame's fit, moved as far as the closed-form centre moved,
@@ -318,7 +320,7 @@ impl Detector {
         let circle = refit
             .or_else(|| pose::refine_circle_pose(camera, &chosen, &points))
             .unwrap_or(chosen);
-        self.pose_points = points;
+        ws.pose_points = points;
         Some(Posed {
             pose: pose::full_pose_from_ring(camera, &circle, yaw, axis_point),
             settled: settled.is_some(),

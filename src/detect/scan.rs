@@ -191,6 +191,22 @@ impl Detector {
         let shift = map.shift();
         let margin = map.seed_margin();
         let cols = gray.width.div_ceil(CHUNK);
+        let stride = gray.width.div_ceil(WORD);
+        // On a large frame what reads the pixels only is done on the pool's
+        // threads: the rows classified and the seed pixels found before the
+        // walk, the outlines fitted after it. The walk, whose fills depend
+        // on the fills before them, stays on one thread, so the segments
+        // and their order are the same for any number of threads.
+        let parallel =
+            !cfg!(feature = "trace") && crate::parallel::frame_threads(gray.width * rows.len()) > 1;
+        let mut seed_words = std::mem::take(&mut self.seed_words);
+        seed_words.clear();
+        if parallel {
+            if self.occupied.is_empty() {
+                self.filler.classify_rows(gray, map, rows.clone());
+            }
+            seed_rows(gray, map, rows.clone(), &mut seed_words);
+        }
         // Tile rows with a tile left to scan: a look at a few tiles (the
         // global walk's blind ones) passes over the others' rows at once.
         let open_rows: Vec<bool> = if self.occupied.is_empty() {
@@ -203,9 +219,10 @@ impl Detector {
         };
         let rows_start = rows.start;
         let mut open_words: Vec<u64> = Vec::new();
-        for y in rows {
+        let mut pending = Vec::new();
+        'rows: for y in rows {
             if found.len() >= limit {
-                return;
+                break;
             }
             if open_rows.get(y / CHUNK) == Some(&false) {
                 continue;
@@ -219,7 +236,7 @@ impl Detector {
                 let floor = map.floor_row(y);
                 let tile_row = (y / CHUNK) * cols;
                 open_words.clear();
-                open_words.extend((0..gray.width.div_ceil(WORD)).map(|w| {
+                open_words.extend((0..stride).map(|w| {
                     let mut open = !0u64;
                     if !self.occupied.is_empty() || floor.is_some() {
                         for q in 0..(gray.width - w * WORD).div_ceil(CHUNK).min(WORD / CHUNK) {
@@ -239,24 +256,25 @@ impl Detector {
                 if open == 0 {
                     continue;
                 }
-                let t = |x0: usize| thresholds[x0 >> shift].saturating_sub(margin);
-                let mut seeds = if block.len() == WORD {
-                    below_word(
-                        block,
-                        word_thresholds(thresholds, shift, w).map(|t| t.saturating_sub(margin)),
-                    )
+                let mut seeds = if parallel {
+                    seed_words[(y - rows_start) * stride + w]
                 } else {
-                    block.chunks(CHUNK).enumerate().fold(0u64, |m, (q, chunk)| {
-                        m | u64::from(below_mask(chunk, t(w * WORD + q * CHUNK))) << (q * CHUNK)
-                    })
+                    seed_word(block, thresholds, shift, margin, w)
                 };
                 seeds &= open & !self.labels.dark_word(y, w);
                 while seeds != 0 {
                     let x = w * WORD + seeds.trailing_zeros() as usize;
-                    if let Some(c) = self.evaluate(gray, map, (x as u32, y as u32), known) {
-                        found.push(c);
+                    if let Some(passed) = self.evaluate(gray, map, (x as u32, y as u32), known) {
+                        if parallel {
+                            pending.push(passed);
+                            if found.len() + pending.len() >= limit {
+                                self.fit_outlines(gray, &mut pending, found);
+                            }
+                        } else if let Some(c) = self.fit_outline(gray, &passed) {
+                            found.push(c);
+                        }
                         if found.len() >= limit {
-                            return;
+                            break 'rows;
                         }
                     }
                     // The fill took this seed and perhaps others of the word.
@@ -265,6 +283,36 @@ impl Detector {
                 }
             }
         }
+        self.fit_outlines(gray, &mut pending, found);
+        self.seed_words = seed_words;
+    }
+
+    /// Fits the outlines of the segments `pending` on the pool's threads
+    /// and adds the candidates they make to `found`, in their order, up to
+    /// the most markers the configuration allows.
+    fn fit_outlines(
+        &mut self,
+        gray: Gray<'_>,
+        pending: &mut Vec<Passed>,
+        found: &mut Vec<Candidate>,
+    ) {
+        use crate::parallel::prelude::*;
+        if pending.is_empty() {
+            return;
+        }
+        let this = &*self;
+        let fitted: Vec<Option<Candidate>> = pending
+            .par_iter()
+            .map(|passed| this.outline(gray, passed, &mut Vec::new()))
+            .collect();
+        for (passed, candidate) in pending.iter().zip(fitted) {
+            if found.len() >= self.config.max_markers {
+                break;
+            }
+            self.note_outline(passed, candidate.is_some());
+            found.extend(candidate);
+        }
+        pending.clear();
     }
 
     /// Runs the tests on the dark segment that contains `seed`. A segment
@@ -277,7 +325,7 @@ impl Detector {
         map: &ThresholdMap,
         seed: (u32, u32),
         known: &[Candidate],
-    ) -> Option<Candidate> {
+    ) -> Option<Passed> {
         let design = self.config.target.design();
         let dark = self
             .filler
@@ -395,32 +443,72 @@ impl Detector {
         if white_level - black < map.min_contrast() {
             lost!(self, Contrast, dark);
         }
-        // The outline must be an ellipse along the whole edge: squares and
-        // blobs pass the moment tests (a square's area is within 5 % of its
-        // moment ellipse's) but not this.
-        let Some(refined) = ellipse::refine(gray, &coarse, &mut self.edge_scratch) else {
-            lost!(self, EllipseFit, dark);
-        };
-        // A motion-blurred outline is fitted on the stretches across the
-        // blur only (at least 45 % of the rays).
-        let min_support = if refined.blur.is_some() { 0.45 } else { 0.75 };
-        if refined.support < min_support || refined.rms > 0.35 + 0.015 * coarse.semi_major {
-            lost!(self, EllipseFit, dark);
-        }
-        #[cfg(feature = "trace")]
-        self.note_loss(super::trace::Reached::Candidate, &dark);
-        let outer = refined.ellipse;
-        Some(Candidate {
-            outer,
-            edge: self.edge_scratch.clone(),
+        Some(Passed {
+            coarse,
             black,
             white: white_level,
             ratio,
             roundness,
             area_error: area_error.abs(),
+            dark,
+        })
+    }
+
+    /// The candidate a segment that passed the tests makes when its
+    /// outline is an ellipse along the whole edge: squares and blobs pass
+    /// the moment tests (a square's area is within 5 % of its moment
+    /// ellipse's) but not this. Reads only the pixels, so a frame's
+    /// segments can be fitted on several threads. `edge` is scratch.
+    pub(super) fn outline(
+        &self,
+        gray: Gray<'_>,
+        passed: &Passed,
+        edge: &mut Vec<(f64, f64)>,
+    ) -> Option<Candidate> {
+        let coarse = &passed.coarse;
+        let refined = ellipse::refine(gray, coarse, edge)?;
+        // A motion-blurred outline is fitted on the stretches across the
+        // blur only (at least 45 % of the rays).
+        let min_support = if refined.blur.is_some() { 0.45 } else { 0.75 };
+        if refined.support < min_support || refined.rms > 0.35 + 0.015 * coarse.semi_major {
+            return None;
+        }
+        Some(Candidate {
+            outer: refined.ellipse,
+            edge: edge.clone(),
+            black: passed.black,
+            white: passed.white,
+            ratio: passed.ratio,
+            roundness: passed.roundness,
+            area_error: passed.area_error,
             tested: true,
             track: None,
         })
+    }
+
+    /// [`Detector::outline`] of `passed`, noting (feature `trace`) whether
+    /// it made a candidate.
+    pub(super) fn fit_outline(&mut self, gray: Gray<'_>, passed: &Passed) -> Option<Candidate> {
+        let mut edge = std::mem::take(&mut self.edge_scratch);
+        let candidate = self.outline(gray, passed, &mut edge);
+        self.edge_scratch = edge;
+        self.note_outline(passed, candidate.is_some());
+        candidate
+    }
+
+    /// Notes (feature `trace`) whether a segment's outline made it a
+    /// candidate.
+    #[allow(unused_variables)]
+    fn note_outline(&mut self, passed: &Passed, fitted: bool) {
+        #[cfg(feature = "trace")]
+        self.note_loss(
+            if fitted {
+                super::trace::Reached::Candidate
+            } else {
+                super::trace::Reached::EllipseFit
+            },
+            &passed.dark,
+        );
     }
 
     /// Fills the white region around the dark segment's centroid; None when
@@ -488,6 +576,68 @@ impl Detector {
         }
         None
     }
+}
+
+/// The seed pixels of word `w` of a row (`block` its pixels, `thresholds`
+/// the row's): those darker than their tile's threshold by the map's seed
+/// margin.
+#[inline(always)]
+fn seed_word(block: &[u8], thresholds: &[u8], shift: u32, margin: u8, w: usize) -> u64 {
+    const WORD: usize = 64;
+    if block.len() == WORD {
+        below_word(
+            block,
+            word_thresholds(thresholds, shift, w).map(|t| t.saturating_sub(margin)),
+        )
+    } else {
+        block
+            .chunks(SCAN_CHUNK)
+            .enumerate()
+            .fold(0u64, |m, (q, chunk)| {
+                let t = thresholds[(w * WORD + q * SCAN_CHUNK) >> shift].saturating_sub(margin);
+                m | u64::from(below_mask(chunk, t)) << (q * SCAN_CHUNK)
+            })
+    }
+}
+
+/// [`seed_word`] of every word of `rows`, row after row, worked out on
+/// the pool's threads into `words`.
+fn seed_rows(
+    gray: Gray<'_>,
+    map: &ThresholdMap,
+    rows: std::ops::Range<usize>,
+    words: &mut Vec<u64>,
+) {
+    use crate::parallel::prelude::*;
+    let stride = gray.width.div_ceil(64);
+    let (shift, margin) = (map.shift(), map.seed_margin());
+    words.resize(rows.len() * stride, 0);
+    words
+        .par_chunks_mut(stride)
+        .enumerate()
+        .for_each(|(k, out)| {
+            let y = rows.start + k;
+            let row = &gray.pixels[y * gray.width..(y + 1) * gray.width];
+            let thresholds = map.row(y);
+            for (w, (block, out)) in row.chunks(64).zip(out).enumerate() {
+                *out = seed_word(block, thresholds, shift, margin, w);
+            }
+        });
+}
+
+/// A segment that passed every test that reads the labels, with what its
+/// candidate keeps: its outline's fit is left (see [`Detector::outline`]).
+#[derive(Debug, Clone)]
+pub(super) struct Passed {
+    coarse: crate::math::Ellipse,
+    black: f64,
+    white: f64,
+    ratio: f64,
+    roundness: f64,
+    area_error: f64,
+    /// The dark segment, for the trace of losses.
+    #[cfg_attr(not(feature = "trace"), allow(dead_code))]
+    dark: Stats,
 }
 
 /// Adds the candidates of another look that are not already found (no

@@ -301,52 +301,88 @@ impl Classes {
 
     fn classify(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
         self.stamps[y] = self.generation;
-        let thresholds = map.row(y);
-        let floor = map.floor_row(y);
-        let shift = map.shift();
-        let pixels = &image.pixels[y * image.width..(y + 1) * image.width];
         let range = y * self.stride..(y + 1) * self.stride;
-        let (dark, light) = (&mut self.dark[range.clone()], &mut self.light[range]);
-        // Whole words first: four chunks, no partial chunk to mask.
-        let full = pixels.len() / WORD;
-        let (dark_full, light_full) = (&mut dark[..full], &mut light[..full]);
-        for w in 0..full {
-            let x0 = w * WORD;
-            let below = below_word(
-                &pixels[x0..x0 + WORD],
-                word_thresholds(thresholds, shift, w),
-            );
-            dark_full[w] = below;
-            light_full[w] = !below;
-        }
-        if let Some(f) = floor {
-            for (w, d) in dark_full.iter_mut().enumerate() {
-                let tiles = word_floor(f, shift, w);
-                if tiles != [false; 4] {
-                    for (q, _) in tiles.iter().enumerate().filter(|(_, &t)| t) {
-                        *d &= !(0xffff << (q * CHUNK));
-                    }
+        classify_row(
+            image,
+            map,
+            y,
+            &mut self.dark[range.clone()],
+            &mut self.light[range],
+        );
+    }
+
+    /// Classifies `rows` on the pool's threads, for a scan of a large
+    /// frame whose fills will reach most of them.
+    fn classify_rows(&mut self, image: Gray<'_>, map: &ThresholdMap, rows: std::ops::Range<usize>) {
+        use crate::parallel::prelude::*;
+        let range = rows.start * self.stride..rows.end * self.stride;
+        let generation = self.generation;
+        self.dark[range.clone()]
+            .par_chunks_mut(self.stride)
+            .zip(self.light[range].par_chunks_mut(self.stride))
+            .zip(self.stamps[rows.clone()].par_iter_mut())
+            .enumerate()
+            .for_each(|(k, ((dark, light), stamp))| {
+                if *stamp != generation {
+                    classify_row(image, map, rows.start + k, dark, light);
+                    *stamp = generation;
+                }
+            });
+    }
+}
+
+/// Row `y` of `image` classified under `map` into `dark` and `light`, a
+/// bit per pixel (see [`Classes`]).
+fn classify_row(
+    image: Gray<'_>,
+    map: &ThresholdMap,
+    y: usize,
+    dark: &mut [u64],
+    light: &mut [u64],
+) {
+    let thresholds = map.row(y);
+    let floor = map.floor_row(y);
+    let shift = map.shift();
+    let pixels = &image.pixels[y * image.width..(y + 1) * image.width];
+    // Whole words first: four chunks, no partial chunk to mask.
+    let full = pixels.len() / WORD;
+    let (dark_full, light_full) = (&mut dark[..full], &mut light[..full]);
+    for w in 0..full {
+        let x0 = w * WORD;
+        let below = below_word(
+            &pixels[x0..x0 + WORD],
+            word_thresholds(thresholds, shift, w),
+        );
+        dark_full[w] = below;
+        light_full[w] = !below;
+    }
+    if let Some(f) = floor {
+        for (w, d) in dark_full.iter_mut().enumerate() {
+            let tiles = word_floor(f, shift, w);
+            if tiles != [false; 4] {
+                for (q, _) in tiles.iter().enumerate().filter(|(_, &t)| t) {
+                    *d &= !(0xffff << (q * CHUNK));
                 }
             }
         }
-        let blocks = pixels.chunks_exact(WORD);
-        let tail = blocks.remainder();
-        if !tail.is_empty() {
-            let w = pixels.len() / WORD;
-            let (mut dw, mut lw) = (0u64, 0u64);
-            for (q, chunk) in tail.chunks(CHUNK).enumerate() {
-                let x0 = w * WORD + q * CHUNK;
-                let below = below_mask(chunk, thresholds[x0 >> shift]);
-                let valid = (1u32 << chunk.len()) - 1;
-                let on_floor = floor.is_some_and(|f| f[x0 >> shift]);
-                if !on_floor {
-                    dw |= u64::from(below) << (q * CHUNK);
-                }
-                lw |= u64::from(!below & valid as u16) << (q * CHUNK);
+    }
+    let blocks = pixels.chunks_exact(WORD);
+    let tail = blocks.remainder();
+    if !tail.is_empty() {
+        let w = pixels.len() / WORD;
+        let (mut dw, mut lw) = (0u64, 0u64);
+        for (q, chunk) in tail.chunks(CHUNK).enumerate() {
+            let x0 = w * WORD + q * CHUNK;
+            let below = below_mask(chunk, thresholds[x0 >> shift]);
+            let valid = (1u32 << chunk.len()) - 1;
+            let on_floor = floor.is_some_and(|f| f[x0 >> shift]);
+            if !on_floor {
+                dw |= u64::from(below) << (q * CHUNK);
             }
-            dark[w] = dw;
-            light[w] = lw;
+            lw |= u64::from(!below & valid as u16) << (q * CHUNK);
         }
+        dark[w] = dw;
+        light[w] = lw;
     }
 }
 
@@ -757,6 +793,18 @@ impl Filler {
             Fillable::<false>::new(&self.classes, labels, y).word(x / WORD)
         };
         word >> (x % WORD) & 1 == 1
+    }
+
+    /// Classifies `rows` of `image` under `map` at once, on the pool's
+    /// threads, rather than as fills reach them: the same classes, sooner.
+    pub fn classify_rows(
+        &mut self,
+        image: Gray<'_>,
+        map: &ThresholdMap,
+        rows: std::ops::Range<usize>,
+    ) {
+        self.classes.select(image, map);
+        self.classes.classify_rows(image, map, rows);
     }
 
     /// Sets the last fill's runs aside for [`Filler::kept_grey_sum`].

@@ -558,20 +558,25 @@ fn tile_levels(
     let mut lo = vec![255u8; cols * rows];
     let mut hi = vec![0u8; cols * rows];
     let mut sums = vec![0u32; cols * rows];
-    // A tile row at a time, each tile's column of chunks folded row by
-    // row and reduced once: the reduction across a chunk's bytes costs
-    // more than the folds, and was paid per row.
-    for (r, band) in band_pixels.chunks(width.max(1) * tile).enumerate() {
-        let t = r * cols;
-        for (c, x0) in (0..width).step_by(tile).enumerate() {
-            let x1 = (x0 + tile).min(width);
-            let (l, h, s) = tile_min_max_sum(band, width, x0..x1);
-            lo[t + c] = l;
-            hi[t + c] = h;
-            sums[t + c] = s;
-        }
-    }
-    let noise_floor = MIN_CONTRAST.max(noise_contrast(band_pixels, width, y.end - y.start));
+    // A tile row at a time, on the pool's threads for a large frame.
+    let threads = crate::parallel::frame_threads(band_pixels.len());
+    let noise_floor = if threads > 1 {
+        use crate::parallel::prelude::*;
+        band_pixels
+            .par_chunks(width.max(1) * tile)
+            .zip(lo.par_chunks_mut(cols))
+            .zip(hi.par_chunks_mut(cols).zip(sums.par_chunks_mut(cols)))
+            .for_each(|((band, lo), (hi, sums))| tile_row_levels(band, width, lo, hi, sums));
+        noise_contrast_parallel(band_pixels, width, y.end - y.start)
+    } else {
+        band_pixels
+            .chunks(width.max(1) * tile)
+            .zip(lo.chunks_mut(cols))
+            .zip(hi.chunks_mut(cols).zip(sums.chunks_mut(cols)))
+            .for_each(|((band, lo), (hi, sums))| tile_row_levels(band, width, lo, hi, sums));
+        noise_contrast(band_pixels, width, y.end - y.start)
+    };
+    let noise_floor = MIN_CONTRAST.max(noise_floor);
     let near_lo = box_filter(&lo, cols, rows, NEIGHBOURHOOD_TILES, u8::min);
     let near_hi = box_filter(&hi, cols, rows, NEIGHBOURHOOD_TILES, u8::max);
     TileLevels {
@@ -580,6 +585,18 @@ fn tile_levels(
         near_hi,
         noise_floor,
         sums,
+    }
+}
+
+/// The darkest and brightest pixel and the sum of the pixels of each tile
+/// of one row of tiles (`band`, rows of `width` pixels), a tile's column
+/// of chunks folded row by row and reduced once: the reduction across a
+/// chunk's bytes costs more than the folds, and was paid per row.
+fn tile_row_levels(band: &[u8], width: usize, lo: &mut [u8], hi: &mut [u8], sums: &mut [u32]) {
+    let tile = 1usize << TILE_SHIFT;
+    for (c, x0) in (0..width).step_by(tile).enumerate() {
+        let x1 = (x0 + tile).min(width);
+        (lo[c], hi[c], sums[c]) = tile_min_max_sum(band, width, x0..x1);
     }
 }
 
@@ -673,6 +690,44 @@ fn noise_contrast(pixels: &[u8], width: usize, height: usize) -> u8 {
     for &d in &diffs {
         histogram[usize::from(d)] += 1;
     }
+    let mut seen = 0;
+    for (diff, &count) in histogram.iter().enumerate() {
+        seen += count;
+        if 2 * seen >= total {
+            return (diff * 8).min(255) as u8;
+        }
+    }
+    0
+}
+
+/// [`noise_contrast`] from the counts of each difference, rows counted on
+/// the pool's threads: the same median, so the same contrast.
+fn noise_contrast_parallel(pixels: &[u8], width: usize, height: usize) -> u8 {
+    use crate::parallel::prelude::*;
+    let rows: Vec<&[u8]> = pixels
+        .chunks_exact(width.max(1))
+        .take(height)
+        .step_by(8)
+        .collect();
+    let parts: Vec<[u64; 256]> = rows
+        .par_chunks(64)
+        .map(|rows| {
+            let mut histogram = [0u64; 256];
+            for row in rows {
+                for (&a, &b) in row.iter().zip(&row[1..]) {
+                    histogram[usize::from(a.abs_diff(b))] += 1;
+                }
+            }
+            histogram
+        })
+        .collect();
+    let mut histogram = [0u64; 256];
+    for part in parts {
+        for (sum, count) in histogram.iter_mut().zip(part) {
+            *sum += count;
+        }
+    }
+    let total: u64 = histogram.iter().sum();
     let mut seen = 0;
     for (diff, &count) in histogram.iter().enumerate() {
         seen += count;

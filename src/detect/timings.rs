@@ -204,6 +204,23 @@ impl Stopwatch {
         }
     }
 
+    /// Charges the time since the last lap to the stages of `parts`, the
+    /// laps of work done on several threads at once, in proportion to each
+    /// stage's share of the threads' time: the stages still add up to the
+    /// frame.
+    pub(super) fn lap_shared(&mut self, parts: &StageTimings) {
+        if let Some(last) = self.last {
+            let now = Instant::now();
+            let (wall, spent) = (now - last, parts.total().as_secs_f64());
+            if spent > 0.0 {
+                for (stage, time) in parts.iter() {
+                    self.laps.stages[stage as usize] += wall.mul_f64(time.as_secs_f64() / spent);
+                }
+            }
+            self.last = Some(now);
+        }
+    }
+
     /// The frame's laps; None when off.
     pub(super) fn stop(&mut self) -> Option<StageTimings> {
         self.last.take()?;

@@ -19,6 +19,7 @@ mod detect_robustness;
 mod detect_roundtrip;
 mod detect_rules;
 mod detect_simulated;
+mod detect_threads;
 mod family_props;
 mod frame_folders;
 mod fuzz_bounded;

@@ -22,8 +22,8 @@ mod reader;
 
 pub use reader::{RingReader, RingReading, MIN_ID_CONFIDENCE, MIN_PIXELS_PER_SECTOR};
 
-use std::collections::BTreeMap;
 use std::ops::Deref;
+use std::sync::OnceLock;
 
 use image::{ImageBuffer, Luma};
 
@@ -139,14 +139,16 @@ pub(super) struct Rings {
 #[derive(Debug, Clone)]
 struct AutoReaders {
     distance: Option<u32>,
-    readers: BTreeMap<u32, Option<RingReader>>,
+    /// Indexed by bit count; each made once, by whichever thread describing
+    /// a candidate first needs it.
+    readers: Vec<OnceLock<Option<RingReader>>>,
 }
 
 impl AutoReaders {
     /// The reader for rings of `bits` bits; None without a distance.
-    fn reader(&mut self, bits: u32) -> Option<&RingReader> {
+    fn reader(&self, bits: u32) -> Option<&RingReader> {
         let distance = self.distance?;
-        let reader = self.readers.entry(bits).or_insert_with(|| {
+        let reader = self.readers.get(bits as usize)?.get_or_init(|| {
             Family::generate(bits, distance)
                 .ok()
                 .map(|family| RingReader::new(Some(Decoder::new(&family))))
@@ -168,7 +170,9 @@ impl Rings {
                 .map(|family| RingReader::new(Some(Decoder::new(family)))),
             auto: AutoReaders {
                 distance,
-                readers: BTreeMap::new(),
+                readers: (0..=*manchester::BITS.end())
+                    .map(|_| OnceLock::new())
+                    .collect(),
             },
         }
     }
@@ -188,7 +192,7 @@ impl Rings {
     /// a ring the outline shows smeared by motion, the members rendered
     /// through that smear.
     pub(super) fn identify<C: Deref<Target = [u8]>>(
-        &mut self,
+        &self,
         image: &ImageBuffer<Luma<u8>, C>,
         gray: Gray<'_>,
         c: &Candidate,

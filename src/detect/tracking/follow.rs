@@ -22,11 +22,18 @@ impl Detector {
     /// (inside the white centre) along the row to the first dark pixel,
     /// which starts the marker's dark segment and the full tests.
     pub(super) fn follow(&mut self, gray: Gray<'_>, index: usize) -> Option<Candidate> {
+        let mut edge = std::mem::take(&mut self.edge_scratch);
+        let by_edges = self.follow_edges(gray, &self.tracks[index], &mut edge);
+        self.edge_scratch = edge;
+        by_edges.or_else(|| self.follow_by_fill(gray, index))
+    }
+
+    /// The paper's way to follow a marker, when its edges were not found
+    /// where its track predicted them (see [`Detector::follow`]); the fill
+    /// labels what it reaches.
+    pub(super) fn follow_by_fill(&mut self, gray: Gray<'_>, index: usize) -> Option<Candidate> {
         let track = self.tracks[index].clone();
         let (pu, pv) = track.predicted();
-        if let Some(c) = self.follow_edges(gray, &track) {
-            return Some(c);
-        }
         let (x, y) = (pu.round(), pv.round());
         if !(x >= 0.0 && y >= 0.0 && (x as usize) < gray.width && (y as usize) < gray.height) {
             return None;
@@ -41,13 +48,22 @@ impl Detector {
         }
         let map = ThresholdMap::constant(track.threshold);
         self.follow_filled = true;
-        let c = self.evaluate(gray, &map, (seed as u32, y as u32), &[])?;
+        let passed = self.evaluate(gray, &map, (seed as u32, y as u32), &[])?;
+        let c = self.fit_outline(gray, &passed)?;
         let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
         let same_size = (c.outer.semi_major / track.a - 1.0).abs() < 0.3;
         (moved < track.a.max(4.0) && same_size).then_some(c)
     }
 
-    fn follow_edges(&mut self, gray: Gray<'_>, track: &Track) -> Option<Candidate> {
+    /// The cheap way of [`Detector::follow`]; reads the pixels only (`edge`
+    /// is scratch), so the tracks of a frame can be followed on several
+    /// threads.
+    pub(super) fn follow_edges(
+        &self,
+        gray: Gray<'_>,
+        track: &Track,
+        edge: &mut Vec<(f64, f64)>,
+    ) -> Option<Candidate> {
         let (pu, pv) = track.predicted();
         let guess = Ellipse {
             u: pu,
@@ -64,17 +80,17 @@ impl Detector {
             mid,
             track.white - track.black,
             window,
-            &mut self.edge_scratch,
+            edge,
         );
-        if self.edge_scratch.len() * 5 < rays * 4 {
+        if edge.len() * 5 < rays * 4 {
             return None;
         }
-        let fitted = Ellipse::fit_near(&self.edge_scratch, (pu, pv), track.a)?;
+        let fitted = Ellipse::fit_near(edge, (pu, pv), track.a)?;
         let rms = (fitted
-            .radial_distances(&self.edge_scratch)
+            .radial_distances(edge)
             .map(|d| d.powi(2))
             .sum::<f64>()
-            / self.edge_scratch.len() as f64)
+            / edge.len() as f64)
             .sqrt();
         let consistent = rms < 0.3 + 0.01 * track.a
             && (fitted.semi_major / track.a - 1.0).abs() < 0.1
@@ -102,7 +118,7 @@ impl Detector {
         let (white, black) = (white_sum / PROBES as f64, black_sum / PROBES as f64);
         Some(Candidate {
             outer: fitted,
-            edge: self.edge_scratch.clone(),
+            edge: edge.clone(),
             black,
             white,
             ratio: self.ratio.expected,

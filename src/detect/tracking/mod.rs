@@ -21,7 +21,10 @@ use super::pose::Posed;
 use super::ring::RingRead;
 use super::segment::Gray;
 use super::threshold::ThresholdMap;
-use super::{preload_disc, rectify, Candidate, Detection, Detector, Finds, Stage, SCAN_CHUNK};
+use super::{
+    in_runs, preload_disc, rectify, Candidate, Detection, Detector, Finds, Stage, Workspace,
+    SCAN_CHUNK,
+};
 use crate::family::Family;
 use track::{PoseMemory, Track};
 
@@ -54,6 +57,33 @@ impl Detector {
         gray: Gray<'_>,
         finds: &mut Finds,
     ) {
+        let threads = crate::parallel::frame_threads(gray.width * gray.height);
+        // Past the most markers allowed, which tracks are followed depends
+        // on how many were found before them: those frames stay on one
+        // thread.
+        if threads > 1 && self.tracks.len() > 1 && self.tracks.len() <= self.config.max_markers {
+            self.follow_tracks_in_parallel(threads, image, gray, finds);
+        } else {
+            self.follow_tracks_in_turn(image, gray, finds);
+        }
+        if self.follow_filled {
+            // A follow that fell back to the flood fill labelled the
+            // pixels it reached with its own threshold, whether or not it
+            // found its marker; the scan would skip a marker it missed as
+            // already visited. Markers that were followed are kept out of
+            // the scan by the occupied tiles (`Detector::mark_followed`)
+            // and the duplicate test after it.
+            self.labels.begin(gray.width, gray.height);
+        }
+    }
+
+    /// [`Detector::follow_tracks`] one track after another.
+    fn follow_tracks_in_turn<C: Deref<Target = [u8]>>(
+        &mut self,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        finds: &mut Finds,
+    ) {
         for index in 0..self.tracks.len() {
             if finds.candidates.len() >= self.config.max_markers {
                 break;
@@ -73,14 +103,91 @@ impl Detector {
                 finds.candidates.push(c);
             }
         }
-        if self.follow_filled {
-            // A follow that fell back to the flood fill labelled the
-            // pixels it reached with its own threshold, whether or not it
-            // found its marker; the scan would skip a marker it missed as
-            // already visited. Markers that were followed are kept out of
-            // the scan by the occupied tiles (`Detector::mark_followed`)
-            // and the duplicate test after it.
-            self.labels.begin(gray.width, gray.height);
+    }
+
+    /// [`Detector::follow_tracks`] on the pool's threads, with the same
+    /// results: each track is followed by its edges and its marker read
+    /// on some thread; then, in the tracks' order on this one, the tracks
+    /// whose edges were missed are followed by the flood fill (each fill
+    /// labels what the next may not take) and every reading goes through
+    /// its track's ID filter (which changes that track only, and nothing
+    /// the other steps read); then the poses are fitted on the threads.
+    fn follow_tracks_in_parallel<C: Deref<Target = [u8]>>(
+        &mut self,
+        threads: usize,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        finds: &mut Finds,
+    ) {
+        let view = ImageBuffer::<Luma<u8>, &[u8]>::from_raw(
+            image.width(),
+            image.height(),
+            &**image.as_raw(),
+        )
+        .expect("an image's buffer holds its pixels");
+        let mut workspaces = std::mem::take(&mut self.workspaces);
+        let timings = self.config.timings;
+        let this = &*self;
+        let tracks = &this.tracks;
+        let (by_edges, spent) = in_runs(
+            threads,
+            &mut workspaces,
+            timings,
+            tracks,
+            |ws, stopwatch, index, track| {
+                if let Some(next) = tracks.get(index + 1) {
+                    // The edge search reaches a window past the outline.
+                    let (u, v) = next.predicted();
+                    preload_disc(gray, u, v, next.a + follow::edge_window(next.a) + 1.0);
+                }
+                let followed = this.follow_edges(gray, track, &mut Vec::new());
+                stopwatch.lap(Stage::Follow);
+                let read = followed.map(|mut c| {
+                    c.track = Some(index);
+                    let reading = this.read_tracked(ws, &view, gray, &c);
+                    (c, reading)
+                });
+                stopwatch.lap(Stage::Describe);
+                read
+            },
+        );
+        self.stopwatch.lap_shared(&spent);
+        let mut found = Vec::new();
+        for (index, read) in by_edges.into_iter().enumerate() {
+            let read = read.or_else(|| {
+                let mut c = self.follow_by_fill(gray, index)?;
+                c.track = Some(index);
+                let mut ws = std::mem::take(&mut self.workspace);
+                let reading = self.read_tracked(&mut ws, &view, gray, &c);
+                self.workspace = ws;
+                Some((c, reading))
+            });
+            self.stopwatch.lap(Stage::Follow);
+            if let Some((c, reading)) = read {
+                let (d, read, posed) = self.settle_identity(gray, &c, reading);
+                found.push((c, d, read, posed));
+            }
+            self.stopwatch.lap(Stage::Describe);
+        }
+        let this = &*self;
+        let (posed, spent) = in_runs(
+            threads,
+            &mut workspaces,
+            timings,
+            &found,
+            |ws, stopwatch, _, (c, d, read, posed)| {
+                let mut d = d.clone();
+                let memory = this.measure_pose(ws, gray, c, &mut d, read, *posed);
+                stopwatch.lap(Stage::Pose);
+                (d, memory)
+            },
+        );
+        self.stopwatch.lap_shared(&spent);
+        self.workspaces = workspaces;
+        for ((c, ..), (d, memory)) in found.into_iter().zip(posed) {
+            finds.detections.push(d);
+            finds.memories.push(memory);
+            finds.candidates.push(c);
         }
     }
 
@@ -113,7 +220,8 @@ impl Detector {
     /// has not settled, or the code's edges do not show (then the ring is
     /// read).
     pub(super) fn follow_code(
-        &mut self,
+        &self,
+        ws: &mut Workspace,
         gray: Gray<'_>,
         c: &Candidate,
         index: usize,
@@ -124,7 +232,7 @@ impl Detector {
         }
         let bits = self.config.target.family().map(Family::bits)?;
         let (code, previous_yaw) = (track.code?, track.yaw?);
-        let followed = self.follow_pose(gray, c, index, bits, code, previous_yaw);
+        let followed = self.follow_pose(ws, gray, c, index);
         let yaw = match &followed {
             Some(followed) => followed.yaw,
             None => rectify::follow_ring(gray, &c.outer, bits, code, previous_yaw)?,
