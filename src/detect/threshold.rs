@@ -690,6 +690,13 @@ fn noise_contrast(pixels: &[u8], width: usize, height: usize) -> u8 {
     for &d in &diffs {
         histogram[usize::from(d)] += 1;
     }
+    contrast_at_median(&histogram)
+}
+
+/// Eight times the median difference a histogram of differences counts:
+/// the contrast below which the frame's noise alone reaches.
+fn contrast_at_median(histogram: &[u64; 256]) -> u8 {
+    let total: u64 = histogram.iter().sum();
     let mut seen = 0;
     for (diff, &count) in histogram.iter().enumerate() {
         seen += count;
@@ -727,15 +734,7 @@ fn noise_contrast_parallel(pixels: &[u8], width: usize, height: usize) -> u8 {
             *sum += count;
         }
     }
-    let total: u64 = histogram.iter().sum();
-    let mut seen = 0;
-    for (diff, &count) in histogram.iter().enumerate() {
-        seen += count;
-        if 2 * seen >= total {
-            return (diff * 8).min(255) as u8;
-        }
-    }
-    0
+    contrast_at_median(&histogram)
 }
 
 /// Min or max over a (2r+1)² window of a grid, clipped at the borders.
