@@ -327,20 +327,9 @@ fn frame_640x480_4_markers(bencher: Bencher) {
 /// marker (the simulator's clutter, noise σ 2), the 8-bit family.
 #[divan::bench(sample_count = 100)]
 fn frame_1280x720_clutter_no_marker(bencher: Bencher) {
-    use whycode::simulate::Background;
-    use whycode_testkit::scenario::{self, Print, Scenario, Spread};
+    use whycode_testkit::scenario::{self, Print};
     let family = family();
-    let clutter = Scenario::new(
-        Some(&family),
-        Spread::tilted(0, (40.0, 90.0), 0.0),
-        1,
-        920_000,
-    )
-    .size(1280, 720)
-    .look(|s, _, _| {
-        s.background = Background::Clutter { density: 3.0 };
-        s.noise = 2.0;
-    });
+    let clutter = scenario::cluttered_desk(&family, 1);
     let image = clutter.frame(0, Print::WhyCode).image;
     let mut detector = scenario::detector(Some(&family), &clutter.camera(), false);
     assert_eq!(detector.detect(&image).len(), 0);

@@ -11,7 +11,8 @@ use whycode::family::Family;
 use whycode::math::Pcg32;
 use whycode::simulate::{self, Background, Sighting};
 use whycode_testkit::scenario::{
-    camera, detector, scene, spread_markers, Families, Print, Scenario, Spread, DEG, DIAMETER_M,
+    camera, cluttered_desk, detector, scene, spread_markers, Families, Print, Scenario, Spread,
+    DEG, DIAMETER_M,
 };
 use whycode_testkit::tally::Counts;
 
@@ -99,17 +100,7 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Ri
 
     // Cluttered 1280x720 frames without a marker: what costs time when
     // there is nothing to find.
-    let clutter = Scenario::new(
-        Some(&fam8),
-        Spread::tilted(0, (40.0, 90.0), 0.0),
-        runs,
-        920_000,
-    )
-    .size(1280, 720)
-    .look(|s, _, _| {
-        s.background = Background::Clutter { density: 3.0 };
-        s.noise = 2.0;
-    });
+    let clutter = cluttered_desk(&fam8, runs);
     let mut det = detector(Some(&fam8), &clutter.camera(), false);
     let mut times = Vec::new();
     for f in 0..clutter.frames {
