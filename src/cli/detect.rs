@@ -3,7 +3,7 @@
 use super::args::{spec_error, Format, FormatArg, MarkerKindArgs};
 use super::output;
 use super::outputs::{Annotate, Outputs, Plan};
-use super::stream::{Input, Stream};
+use super::stream::{self, Input, Stream};
 use anyhow::{anyhow, bail, Result};
 use rayon::prelude::*;
 use std::io::IsTerminal;
@@ -12,7 +12,7 @@ use std::process::ExitCode;
 use whycode::camera::Camera;
 use whycode::detect::family_check::FamilyCheck;
 use whycode::detect::{StageTimings, Target};
-use whycode::recording::{Kind, ReadOptions, Skipped, Summary};
+use whycode::recording::{ReadOptions, Skipped, Summary};
 use whycode::session::report::{CsvColumns, FrameReport};
 use whycode::session::{Frame, FrameError, Session, SessionConfig};
 use whycode::spec::{DetectSpec, RecordingSpec};
@@ -267,7 +267,7 @@ fn run_stream(
         Err(err) => return each(Err(err)).map(|()| Ended::default()),
     };
     let mut summary = Summary::default();
-    let mut unmeasured = stream.is_recording();
+    let mut uncounted = true;
     while let Some(input) = frames.next() {
         let measured = input.and_then(|input| {
             let report = measure(session, &input)?;
@@ -279,9 +279,9 @@ fn run_stream(
         let failed = measured.is_err();
         each(measured)?;
         progress.inc(1);
-        if let (true, Some(n)) = (unmeasured, frames.expected()) {
+        if let (true, Some(n)) = (uncounted, frames.expected()) {
             progress.inc_length(n);
-            unmeasured = false;
+            uncounted = false;
         }
         if failed && !stream.goes_on_after_a_failed_frame() {
             return Ok(Ended::drawn(outputs.drawn));
@@ -447,8 +447,11 @@ struct Inputs {
 
 /// Checks the options fit the inputs, and says which kinds there are.
 fn check_options(args: &DetectArgs) -> Result<Inputs> {
-    let is_recording = |p: &PathBuf| Kind::of(p).is_some() && !p.is_dir();
-    let recordings = args.inputs.iter().filter(|p| is_recording(p)).count();
+    let recordings = args
+        .inputs
+        .iter()
+        .filter(|p| stream::names_a_recording(p))
+        .count();
     if recordings == 0 {
         for (given, option) in [
             (args.output.is_some(), "--output"),

@@ -36,9 +36,10 @@ impl Stream {
             let meta = std::fs::metadata(input)
                 .with_context(|| format!("{}: cannot read", input.display()))?;
             if !meta.is_dir() {
-                streams.push(match Kind::of(input) {
-                    Some(_) => Stream::Recording(input.clone()),
-                    None => Stream::Image(input.clone()),
+                streams.push(if names_a_recording(input) {
+                    Stream::Recording(input.clone())
+                } else {
+                    Stream::Image(input.clone())
                 });
                 continue;
             }
@@ -156,10 +157,11 @@ impl Input {
 }
 
 impl Frames<'_> {
-    /// How many frames the stream will give, when known.
+    /// How many frames a recording will give, once it says (image files
+    /// are counted before any is read: none here).
     pub fn expected(&self) -> Option<u64> {
         match self {
-            Frames::Files(paths) => Some(paths.len() as u64),
+            Frames::Files(_) => None,
             Frames::Recording { frames, .. } => frames.expected(),
         }
     }
@@ -204,6 +206,12 @@ impl Iterator for Frames<'_> {
             }
         }
     }
+}
+
+/// Whether `path` is read as a bag or a video (by its extension; a folder
+/// never is).
+pub fn names_a_recording(path: &Path) -> bool {
+    Kind::of(path).is_some() && !path.is_dir()
 }
 
 /// A folder's images in name order.
