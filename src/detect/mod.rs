@@ -91,10 +91,11 @@ pub struct DetectorConfig {
     /// does it on wasm32-unknown-unknown, which has none).
     pub timings: bool,
     /// With tracking, look for new markers over the whole frame every
-    /// frame. Off (live use), a frame whose every track was followed looks
-    /// in one band of rows only, so a marker that comes into view is found
-    /// within 8 frames; on (a recording read offline, where nothing waits
-    /// for the frame), in the frame it comes.
+    /// frame. Off (live use), a frame that lost no marker inside the frame
+    /// (those lost at its edge left the view) looks in one band of rows
+    /// only, so a marker that comes into view is found within 8 frames; on
+    /// (a recording read offline, where nothing waits for the frame), in
+    /// the frame it comes.
     pub scan_every_frame: bool,
     /// Read each posed marker's circles along a ray every pixel of their
     /// outline instead of every two (at most 48): projected centres about
@@ -404,15 +405,18 @@ impl Detector {
             self.follow_tracks(image, gray, &mut finds);
         }
         let followed = finds.candidates.len();
-        let every_track_followed = self.config.tracking
+        // A marker lost inside the frame is looked for in the whole frame;
+        // one lost at its edge left the view (or is leaving it): if it
+        // comes back, the band finds it as it finds any newcomer.
+        let band_only = self.config.tracking
             && !self.config.scan_every_frame
             && followed > 0
-            && followed == self.tracks.len();
+            && self.lost_inside(&finds.candidates, gray.width, gray.height) == 0;
         self.timed(Stage::Follow, |d| {
             d.mark_followed(&finds.candidates, gray.width, gray.height)
         });
         let found = &mut finds.candidates;
-        if every_track_followed {
+        if band_only {
             self.timed(Stage::Scan, |d| d.scan_band(gray, found));
         } else {
             let map = self.timed(Stage::Scan, |d| d.scan_frame(gray, found));

@@ -72,7 +72,11 @@ impl Detector {
             return;
         };
         let (width, height) = (gray.width, gray.height);
-        let ratio_map = ThresholdMap::adaptive_ratio(gray.pixels, width, height, rows.clone(), map);
+        // The ratio map over the mid map's rows takes that map's tile
+        // levels as they are; over the shaded rows only, it would read
+        // every pixel of them again. Seeds are still taken in the shaded
+        // rows only.
+        let ratio_map = ThresholdMap::adaptive_ratio(gray.pixels, width, height, 0..height, map);
         self.labels.begin(width, height);
         let mut again = Vec::new();
         self.scan_tiles(gray, &ratio_map, rows, map.near_shaded(), found, &mut again);

@@ -92,9 +92,9 @@ impl ThresholdMap {
         }
     }
 
-    /// Image rows holding shaded tiles: tiles dark in every pixel by the
-    /// mid-level threshold although their brightest pixel stands far above
-    /// the darkest of the neighbourhood. That is white paper in a cast
+    /// Image rows holding shaded tiles: flat tiles dark (but for their
+    /// noise) by the mid-level threshold although their brightest pixel
+    /// stands far above the darkest of the neighbourhood. That is white paper in a cast
     /// shadow next to lit paper (the mid-level of lit white and black lies
     /// above shaded white), and a marker crossed by the shadow's edge loses
     /// the shaded part of its white disc to the black. Such rows are worth
@@ -430,17 +430,25 @@ impl ThresholdMap {
             width - ((cols - 1) << TILE_SHIFT),
             y_end - y_start - ((rows - 1) << TILE_SHIFT),
         );
+        // Shade is looked for on the mid-level map only: the ratio map is
+        // the second look at what this one flags.
+        let look_for_shade = matches!(level, Level::Mid);
         let shaded_flags: Vec<u8> = (0..values.len())
             .map(|i| {
-                // Dark, or flat paper dark but for the noise's brightest
-                // pixels: on shaded paper the noise alone lifts a few of a
-                // tile's 256 pixels over a threshold just above the paper's
-                // grey. (A tile across an edge's ramp is not flat: its
-                // brightest pixel stands far above its mean.)
+                // Flat paper, dark but for the noise's brightest pixels: on
+                // shaded paper the noise alone lifts a few of a tile's 256
+                // pixels over a threshold just above the paper's grey. A
+                // tile of a marker's ink beside its blurred edge is dark
+                // too, and stands as far above the darkest ink, but is not
+                // flat: its brightest pixel stands far above its mean (as
+                // on an edge's ramp).
+                if !look_for_shade {
+                    return 0;
+                }
                 let (hi_own, nf) = (u16::from(own_hi[i]), u16::from(noise_floor));
                 let flat_paper = hi_own < u16::from(values[i]) + nf
                     && hi_own <= tile_mean(&sums, i, cols, rows, tile_size) + 2 * nf;
-                u8::from((solid[i] || flat_paper) && hi_own >= 2 * u16::from(lo[i]) + 2 * nf)
+                u8::from(flat_paper && hi_own >= 2 * u16::from(lo[i]) + 2 * nf)
             })
             .collect();
         let shaded_tiles = (0..values.len()).filter(|&i| shaded_flags[i] != 0);

@@ -15,6 +15,7 @@
 //! - [`tag36h11`], [`aruco4x4`]: AprilTags and ArUco tags printed in the
 //!   markers' places;
 //! - [`desk`]: desk clutter without markers, for the phantom rules;
+//! - [`speed`]: the frames the detector's speed is measured on;
 //! - [`swarm`]: the robots on a floor of the sample recordings
 //!   (`samples/`, `examples/make_samples`);
 //! - [`fuzz`]: the fuzz harness (the test suite's bounded run and
@@ -27,6 +28,7 @@ pub mod desk;
 pub mod fuzz;
 pub mod scenario;
 pub mod scenes;
+pub mod speed;
 pub mod swarm;
 pub mod tag36h11;
 pub mod tally;

@@ -710,3 +710,95 @@ fn defocused_steep_markers_are_named_through_the_blur_and_never_misread() {
         2_500_000,
     );
 }
+
+/// A tracked stream whose markers leave the view through its edges while
+/// others stay, and one moves too fast to be followed: live (a marker
+/// lost at the edge left the view; one lost inside has the whole frame
+/// scanned for it), every frame must give what a tracker that scans the
+/// whole frame every frame gives, markers cut by the edge included.
+#[test]
+fn markers_leaving_through_the_edges_are_found_as_a_whole_frame_scan_finds_them() {
+    use whycode_testkit::scenes::{camera, marker_at, render, Look};
+    let camera = camera(800, 600, 800.0);
+    let family = Family::generate(8, 2).unwrap();
+    let member = |id: u32| (Marker::whycode(8, family.code(id).unwrap(), 100.0), id);
+    let config = DetectorConfig {
+        target: Target::WhyCode(family.clone()),
+        tracking: true,
+        ..DetectorConfig::default()
+    };
+    let mut live = Detector::new(config.clone());
+    let mut offline = Detector::new(DetectorConfig {
+        scan_every_frame: true,
+        ..config
+    });
+    let look = Look {
+        blur: 1,
+        noise: 2.0,
+        ..Look::default()
+    };
+    let mut cut_by_edge_found = 0;
+    for t in 0..16 {
+        let step = f64::from(t) * 9.0;
+        let markers = [
+            marker_at(&camera, member(1), (300.0, 300.0), 70.0, 0.3, (0.0, 0.0)),
+            marker_at(&camera, member(2), (480.0, 380.0), 70.0, 1.1, (0.0, 0.0)),
+            // Out through the right edge, and through the top; and one
+            // that runs down too fast to be followed, then stops short of
+            // the bottom edge.
+            marker_at(
+                &camera,
+                member(3),
+                (690.0 + step, 200.0),
+                70.0,
+                0.7,
+                (0.0, 0.0),
+            ),
+            marker_at(
+                &camera,
+                member(4),
+                (200.0, 110.0 - step),
+                70.0,
+                2.0,
+                (0.0, 0.0),
+            ),
+            marker_at(
+                &camera,
+                member(5),
+                (650.0, (300.0 + 5.0 * step).min(550.0)),
+                70.0,
+                2.5,
+                (0.0, 0.0),
+            ),
+        ];
+        let (image, _) = render(&camera, &markers, look);
+        let key = |found: Vec<Detection>| -> Vec<(u32, i64, i64)> {
+            let mut key: Vec<_> = found
+                .iter()
+                .map(|d| {
+                    (
+                        d.id,
+                        (d.u * 100.0).round() as i64,
+                        (d.v * 100.0).round() as i64,
+                    )
+                })
+                .collect();
+            key.sort();
+            key
+        };
+        let (a, b) = (key(live.detect(&image)), key(offline.detect(&image)));
+        assert_eq!(a, b, "frame {t}: live against whole-frame scans");
+        assert!(
+            [1, 2, 5].iter().all(|&id| a.iter().any(|k| k.0 == id)),
+            "frame {t}: the markers that stay in view: {a:?}"
+        );
+        cut_by_edge_found += a
+            .iter()
+            .filter(|&&(id, u, v)| (id == 3 && u > 76_500) || (id == 4 && v < 3_500))
+            .count();
+    }
+    assert!(
+        cut_by_edge_found > 0,
+        "no marker was seen while the edge cut it"
+    );
+}

@@ -4,8 +4,9 @@
 //! while its pixels are in the cache; once its ID is settled, its yaw comes
 //! from the known code's edges (on the rectified ring, once, when a pose is
 //! wanted). Only if following fails does the flood fill run, and only if a
-//! marker is lost is the whole frame scanned (else one band of rows per
-//! frame looks for newcomers). IDs of tracked markers go through a
+//! marker is lost inside the frame is the whole frame scanned (else one
+//! band of rows per frame looks for newcomers, and for markers that left
+//! through the edge and come back). IDs of tracked markers go through a
 //! Bayesian filter ([`idfilter`], paper 5.1); the test tolerances adapt
 //! slowly to what is measured (paper 4.2, `track.rs`).
 
@@ -189,6 +190,30 @@ impl Detector {
             finds.memories.push(memory);
             finds.candidates.push(c);
         }
+    }
+
+    /// How many tracks were lost inside the frame: not followed this
+    /// frame (`followed` holds no candidate of theirs), their outline as
+    /// predicted wholly within the frame. A track lost where that outline
+    /// reaches past the frame's edge left the view, or is leaving it.
+    pub(super) fn lost_inside(&self, followed: &[Candidate], width: usize, height: usize) -> usize {
+        let mut seen = vec![false; self.tracks.len()];
+        for c in followed {
+            if let Some(i) = c.track {
+                seen[i] = true;
+            }
+        }
+        let inside = |track: &Track| {
+            let (u, v) = track.predicted();
+            let reach = track.a + follow::edge_window(track.a);
+            let within = |x: f64, size: usize| x - reach >= 0.0 && x + reach < size as f64;
+            within(u, width) && within(v, height)
+        };
+        self.tracks
+            .iter()
+            .zip(seen)
+            .filter(|&(track, seen)| !seen && inside(track))
+            .count()
     }
 
     /// Looks for markers new to a frame whose every known marker is back:
