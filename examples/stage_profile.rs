@@ -1,8 +1,8 @@
 //! Where the detector's time goes on the detection bench's frames, stage
 //! by stage (`DetectorConfig::timings`): the median milliseconds of each
 //! stage over many runs of each frame set, in a rayon pool of one thread
-//! (or `--threads N`). The medians of the stages need not add up to the
-//! median total.
+//! (or `--threads N`), and the median, mean and longest frame. The
+//! medians of the stages need not add up to the median frame.
 //!
 //!     cargo run --release --example stage_profile [-- --threads 2] [--runs N] [set ...]
 //!
@@ -57,8 +57,8 @@ fn main() {
     for stage in Stage::ALL {
         print!(" {} |", stage.name());
     }
-    println!(" total |");
-    println!("|---|---|{}---|", "---|".repeat(Stage::ALL.len()));
+    println!(" total | mean | max |");
+    println!("|---|---|{}---|---|---|", "---|".repeat(Stage::ALL.len()));
     for set in &wanted {
         let (detector, frames, default_runs) = frame_set(set);
         let row = pool.install(|| profile(detector, &frames, runs.unwrap_or(default_runs)));
@@ -124,7 +124,7 @@ fn frame_set(set: &str) -> (Detector, Vec<&'static GrayImage>, usize) {
 
 /// The table row of `runs` frames of `frames` (in turn, after one pass
 /// for the detector's state to settle): the markers of the last frame,
-/// each stage's median and the total's.
+/// each stage's median, and the whole frame's median, mean and maximum.
 fn profile(mut detector: Detector, frames: &[&GrayImage], runs: usize) -> String {
     for frame in frames {
         detector.detect(*frame);
@@ -146,7 +146,14 @@ fn profile(mut detector: Detector, frames: &[&GrayImage], runs: usize) -> String
     for mut times in stages {
         row += &format!(" {} |", ms(median(&mut times)));
     }
-    row + &format!(" {} |", ms(median(&mut totals)))
+    let mean = totals.iter().sum::<Duration>() / totals.len() as u32;
+    let max = totals.iter().copied().max().unwrap_or_default();
+    row + &format!(
+        " {} | {} | {} |",
+        ms(median(&mut totals)),
+        ms(mean),
+        ms(max)
+    )
 }
 
 fn median(times: &mut [Duration]) -> Duration {
