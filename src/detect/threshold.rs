@@ -94,11 +94,12 @@ impl ThresholdMap {
 
     /// Image rows holding shaded tiles: flat tiles dark (but for their
     /// noise) by the mid-level threshold although their brightest pixel
-    /// stands far above the darkest of the neighbourhood. That is white paper in a cast
-    /// shadow next to lit paper (the mid-level of lit white and black lies
-    /// above shaded white), and a marker crossed by the shadow's edge loses
-    /// the shaded part of its white disc to the black. Such rows are worth
-    /// a second look with [`ThresholdMap::adaptive_ratio`].
+    /// stands far above the darkest of the neighbourhood. That is white
+    /// paper in a cast shadow next to lit paper (the mid-level of lit white
+    /// and black lies above shaded white), and a marker crossed by the
+    /// shadow's edge loses the shaded part of its white disc to the black.
+    /// Such rows are worth a second look with
+    /// [`ThresholdMap::adaptive_ratio`].
     pub fn shaded_rows(&self) -> Option<std::ops::Range<usize>> {
         self.shaded.clone()
     }

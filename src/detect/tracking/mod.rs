@@ -216,7 +216,8 @@ impl Detector {
             .count()
     }
 
-    /// Looks for markers new to a frame whose every known marker is back:
+    /// Looks for markers new to a frame that lost no marker inside it
+    /// (every known marker is back, or left through the frame's edge):
     /// in one band of rows per frame, so a tracked frame stays cheap and a
     /// newcomer is found within [`DISCOVERY_BANDS`] frames.
     pub(super) fn scan_band(&mut self, gray: Gray<'_>, found: &mut Vec<Candidate>) {
