@@ -238,7 +238,7 @@ pub fn one_line(err: &(dyn std::error::Error + 'static)) -> String {
 /// in a family file is shown by its ends, not echoed to the terminal.
 const MAX_QUOTED: usize = 100;
 
-/// `text` with every run of more than [`MAX_QUOTED`] characters between
+/// `text` with every run of more than `MAX_QUOTED` characters between
 /// spaces cut to its first and last few, and how long it was.
 pub fn shorten_words(text: &str) -> String {
     text.split(' ')

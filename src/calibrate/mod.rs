@@ -6,7 +6,7 @@
 //! Each page seen in a photo is one view of a plane. The first camera comes
 //! from the views' homographies (Zhang's method, principal point at the
 //! image centre), then Levenberg–Marquardt moves the intrinsics, the
-//! distortion and every view's pose together ([`fit`]).
+//! distortion and every view's pose together (`fit`).
 //!
 //! A circle's image is not an ellipse centred on the image of the circle's
 //! centre: perspective moves the ellipse's centre, and a distorting lens

@@ -769,7 +769,7 @@ const SAMPLED_EDGE_VARIANCE: f64 = 0.25;
 /// A Gaussian of sigma s spreads an edge of contrast C so that its slope
 /// over two pixels peaks at C·erf(1/(s√2))/2; the median over the rays of
 /// the contrast over that slope gives s. `None` when the edge cannot be
-/// read (see [`edge_spread`]).
+/// read (see `edge_spread`).
 pub fn defocus(image: Gray<'_>, outer: &Ellipse) -> Option<f64> {
     let rays = edge_spread(image, outer)?;
     let mut widths: Vec<f64> = rays

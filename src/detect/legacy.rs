@@ -140,7 +140,7 @@ pub fn white_margin(gray: Gray<'_>, outer: &Ellipse, black: f64, white: f64) -> 
 /// What a candidate's inside was taken for by [`concentric_white_disc`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Inside {
-    /// WhyCon's white disc: to be weighed with [`white_disc_mass`].
+    /// WhyCon's white disc: to be weighed with `white_disc_mass`.
     WhyConDisc,
     /// The edges of a WhyCode ring's parts: only its Manchester structure
     /// tells it from a glyph whose hole is an oval (a '0' shows edges at

@@ -19,7 +19,7 @@
 //! Each pixel's model value is linear in the 2n half-sector colours, so the
 //! pixel sums that the least-squares comparison needs are formed once per
 //! blur and phase; each member rotation then costs a table lookup per bit
-//! ([`solver::PatternTables`]).
+//! (`solver::PatternTables`).
 //!
 //! This file holds the readers and the thresholds they name a ring by; the
 //! parts they share are a file each: `footprint.rs` renders the marker at
@@ -131,7 +131,7 @@ fn small_footprints() -> Vec<Footprint> {
 
 /// [`read_small_ring`], with the member withdrawn (ID 0, no yaw) when a
 /// ring of a neighbouring bit count explains the pixels better
-/// ([`RingPixels::neighbour_count_fits_better`]).
+/// (`RingPixels::neighbour_count_fits_better`).
 pub fn read_small_ring_of_its_count<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
     outer: &ImageEllipse,
@@ -192,7 +192,7 @@ const DEFOCUS_SCALES: [f64; 3] = [0.8, 1.0, 1.25];
 /// Reads a ring out of focus by the Gaussian blur of `sigma` pixels the
 /// outline's edge spread shows ([`crate::detect::ellipse::defocus`]): the
 /// same comparison with every member rendered through Gaussians about
-/// that wide, on about [`COMPARED_PIXELS`] pixels whatever the ring's size.
+/// that wide, on about `COMPARED_PIXELS` pixels whatever the ring's size.
 pub fn read_defocused_ring<C: Deref<Target = [u8]>>(
     image: &ImageBuffer<Luma<u8>, C>,
     outer: &ImageEllipse,
