@@ -16,7 +16,7 @@ use whycode::detect::trace::Reached;
 use whycode::detect::{Detector, DetectorConfig};
 use whycode::simulate::{match_reports, Reach, Sighting};
 use whycode_testkit::scenario::{
-    defocused, detector, Families, Print, DEFOCUS_SIGMAS, DEFOCUS_SIZES, DEFOCUS_VIEWS,
+    defocused, detector_config, Families, Print, DEFOCUS_SIGMAS, DEFOCUS_SIZES, DEFOCUS_VIEWS,
 };
 
 /// The stage that lost a marker, in pipeline order.
@@ -70,9 +70,7 @@ fn main() {
                 let scenario = defocused(&fam8, size, view, sigma, frames, seed);
                 let mut det = Detector::new(DetectorConfig {
                     report_unreadable: true,
-                    ..detector(Some(&fam8), &scenario.camera(), false)
-                        .config()
-                        .clone()
+                    ..detector_config(Some(&fam8), &scenario.camera(), false)
                 });
                 let mut cell: Vec<Lost> = Vec::new();
                 for f in 0..scenario.frames {

@@ -82,9 +82,7 @@ fn frame_set(set: &str) -> (Detector, Vec<&'static GrayImage>, usize) {
             let desk = scenario::cluttered_desk(&family, 1);
             let image: &'static GrayImage =
                 Box::leak(Box::new(desk.frame(0, Print::WhyCode).image));
-            let config = scenario::detector(Some(&family), &desk.camera(), false)
-                .config()
-                .clone();
+            let config = scenario::detector_config(Some(&family), &desk.camera(), false);
             (timed(config), vec![image], 400)
         }
         "one" => (

@@ -39,7 +39,7 @@ use table::{beats, beats_ids, cells, pct, Table};
 use whycode::detect::{Detector, DetectorConfig, Target};
 use whycode::family::Family;
 use whycode::simulate::{Background, MotionBlur};
-use whycode_testkit::scenario::{detector, Families, Scenario, Spread};
+use whycode_testkit::scenario::{detector_config, Families, Scenario, Spread};
 use whycode_testkit::scenes::cast_shadow;
 use whycode_testkit::tally::Counts;
 
@@ -326,7 +326,7 @@ fn clutter_rows(table: &mut Table, fam8: &Family, scale: usize, rivals: &Rivals)
             });
         let mut det = Detector::new(DetectorConfig {
             target,
-            ..detector(None, &scenario.camera(), false).config().clone()
+            ..detector_config(None, &scenario.camera(), false)
         });
         let mut c = Counts::default();
         scenario.run(&mut det, &mut c, |_, _| {});

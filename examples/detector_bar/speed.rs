@@ -11,8 +11,8 @@ use whycode::family::Family;
 use whycode::math::Pcg32;
 use whycode::simulate::{self, Background, Sighting};
 use whycode_testkit::scenario::{
-    camera, cluttered_desk, detector, scene, spread_markers, Families, Print, Scenario, Spread,
-    DEG, DIAMETER_M,
+    camera, cluttered_desk, detector, detector_config, scene, spread_markers, Families, Print,
+    Scenario, Spread, DEG, DIAMETER_M,
 };
 use whycode_testkit::tally::Counts;
 
@@ -82,7 +82,7 @@ fn tracked(
 ) -> (f64, usize) {
     let mut tracker = Detector::new(DetectorConfig {
         max_markers,
-        ..detector(family, cam, true).config().clone()
+        ..detector_config(family, cam, true)
     });
     for _ in 0..SETTLE_FRAMES {
         tracker.detect(image);

@@ -200,13 +200,19 @@ pub fn cluttered_desk(family: &Family, frames: usize) -> Scenario<'_> {
 /// A detector for `family` (legacy without) of [`DIAMETER_M`] markers,
 /// with pose.
 pub fn detector(family: Option<&Family>, camera: &Camera, tracking: bool) -> Detector {
-    Detector::new(DetectorConfig {
+    Detector::new(detector_config(family, camera, tracking))
+}
+
+/// The configuration of [`detector`], for callers that change a field of
+/// it first.
+pub fn detector_config(family: Option<&Family>, camera: &Camera, tracking: bool) -> DetectorConfig {
+    DetectorConfig {
         target: family.map_or(Target::WhyCon, |f| Target::WhyCode(f.clone())),
         camera: Some(*camera),
         diameter_m: Some(DIAMETER_M),
         tracking,
         ..DetectorConfig::default()
-    })
+    }
 }
 
 /// One frame of a scenario: its seed, the image and the true targets.

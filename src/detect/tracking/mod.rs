@@ -192,17 +192,21 @@ impl Detector {
         }
     }
 
+    /// Per track, whether a candidate of `found` was followed as it.
+    fn tracks_of(&self, found: &[Candidate]) -> Vec<bool> {
+        let mut taken = vec![false; self.tracks.len()];
+        for i in found.iter().filter_map(|c| c.track) {
+            taken[i] = true;
+        }
+        taken
+    }
+
     /// How many tracks were lost inside the frame: not followed this
     /// frame (`followed` holds no candidate of theirs), their outline as
     /// predicted wholly within the frame. A track lost where that outline
     /// reaches past the frame's edge left the view, or is leaving it.
     pub(super) fn lost_inside(&self, followed: &[Candidate], width: usize, height: usize) -> usize {
-        let mut seen = vec![false; self.tracks.len()];
-        for c in followed {
-            if let Some(i) = c.track {
-                seen[i] = true;
-            }
-        }
+        let seen = self.tracks_of(followed);
         let inside = |track: &Track| {
             let (u, v) = track.predicted();
             let reach = track.a + follow::edge_window(track.a);
@@ -294,12 +298,7 @@ impl Detector {
         poses: &[PoseMemory],
     ) {
         let mut next: Vec<Track> = Vec::with_capacity(found.len());
-        let mut taken = vec![false; self.tracks.len()];
-        for c in found {
-            if let Some(i) = c.track {
-                taken[i] = true;
-            }
-        }
+        let mut taken = self.tracks_of(found);
         for ((c, d), pose) in found.iter().zip(detections.iter_mut()).zip(poses) {
             let threshold = ((c.black + c.white) / 2.0).round().clamp(1.0, 255.0) as u8;
             let (u, v, a, b) = (c.outer.u, c.outer.v, c.outer.semi_major, c.outer.semi_minor);
