@@ -1,6 +1,6 @@
-//! Row 8: speed where users run it, ours and AprilTag's on the same
-//! frames in the same run (medians, ms per frame, one thread each), and
-//! the ratio.
+//! Row 8: speed where users run it, ours and each rival's (AprilTag, the
+//! original, ArUco) on the same frames in the same run (medians, ms per
+//! frame, one thread each), and the ratio.
 
 use std::time::Instant;
 
@@ -215,8 +215,9 @@ pub fn rows(table: &mut Table, families: &mut Families, quick: bool, rivals: &Ri
         let (tracked_ms, tracked_n) = track(DetectorConfig::default().max_markers);
         let (known_ms, known_n) = track(550);
         let first_ms = median(first);
-        // Each rival once, on the first scene (with tags in our markers'
-        // places for AprilTag: 25 megapixels take it seconds).
+        // Each rival once, on the first scene, with its own tags in our
+        // markers' places where it has them: 25 megapixels take AprilTag
+        // seconds.
         let theirs: Cells = rivals.map(|rival| {
             let rival = rival.filter(|_| k == 0)?;
             let mut printed = s.clone();

@@ -253,20 +253,38 @@ fn set_bits(row: &mut [u64], x0: usize, x1: usize, on: bool) {
     }
 }
 
-/// The pixels of an image classified under one threshold map, rows
-/// computed when a fill first reaches them: `dark` below the threshold
-/// and outside floor tiles (what a dark fill may take), `light` at or
-/// above it (what a white fill may take).
+/// The pixels of an image classified under one threshold map as fills
+/// first reach them: `dark` below the threshold and outside floor tiles
+/// (what a dark fill may take), `light` at or above it (what a white fill
+/// may take). Under a frame's adaptive map a row is classified whole, as
+/// its fills reach most rows; under one threshold (a tracked marker's, a
+/// level of the global walk) on a wide frame a few words at a time, since
+/// a fill of one marker there needs a few hundred pixels of each row it
+/// crosses, not the row.
 #[derive(Debug, Clone, Default)]
 struct Classes {
     /// The map and image the rows were classified for.
     key: Option<(u64, usize, usize)>,
     dark: Vec<u64>,
     light: Vec<u64>,
+    /// Rows classified whole.
     stamps: Vec<u32>,
+    /// Runs of [`CLASS_RUN`] words classified, `runs_per_row` a row.
+    run_stamps: Vec<u32>,
+    runs_per_row: usize,
+    /// Whether rows are classified a run of words at a time.
+    by_runs: bool,
     generation: u32,
     stride: usize,
 }
+
+/// Words of a row classified together when a fill reaches one of them.
+const CLASS_RUN: usize = 4;
+
+/// Rows of more words than this are classified a run of words at a time
+/// under one threshold; narrower ones whole, which costs a fill less than
+/// keeping track of the runs.
+const BY_RUNS_FROM_WORDS: usize = 32;
 
 impl Classes {
     /// Forgets the rows unless they were classified for this map and image.
@@ -275,39 +293,87 @@ impl Classes {
         let stride = words_per_row(image.width);
         if self.stride != stride || self.stamps.len() != image.height {
             self.stride = stride;
+            self.runs_per_row = stride.div_ceil(CLASS_RUN);
             self.dark = vec![0; stride * image.height];
             self.light = vec![0; stride * image.height];
             self.stamps = vec![0; image.height];
+            self.run_stamps = vec![0; self.runs_per_row * image.height];
             self.generation = 0;
             self.key = None;
         }
         if self.key != Some(key) {
             self.key = Some(key);
+            self.by_runs = map.is_constant() && stride > BY_RUNS_FROM_WORDS;
             if self.generation == u32::MAX {
                 self.stamps.fill(0);
+                self.run_stamps.fill(0);
                 self.generation = 0;
             }
             self.generation += 1;
         }
     }
 
-    /// Classifies row `y` unless it already is.
-    #[inline]
-    fn ensure(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
-        if self.stamps[y] != self.generation {
-            self.classify(image, map, y);
+    /// Whether row `y` is classified whole.
+    #[inline(always)]
+    fn row_ready(&self, y: usize) -> bool {
+        self.stamps[y] == self.generation
+    }
+
+    /// Classifies row `y` whole unless it already is.
+    #[inline(always)]
+    fn ensure_row(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
+        if !self.row_ready(y) {
+            self.classify_row(image, map, y);
         }
     }
 
-    fn classify(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
+    /// Classifies words `w0..=w1` of row `y` unless they already are (or
+    /// the row is, when rows are classified whole).
+    #[inline(always)]
+    fn ensure(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize, w0: usize, w1: usize) {
+        if self.row_ready(y) {
+            return;
+        }
+        if !self.by_runs {
+            self.classify_row(image, map, y);
+            return;
+        }
+        let stamps = y * self.runs_per_row;
+        for run in w0 / CLASS_RUN..=w1 / CLASS_RUN {
+            if self.run_stamps[stamps + run] != self.generation {
+                self.classify_run(image, map, y, run);
+            }
+        }
+    }
+
+    /// Classifies row `y` whole.
+    #[inline(never)]
+    fn classify_row(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize) {
         self.stamps[y] = self.generation;
-        let range = y * self.stride..(y + 1) * self.stride;
-        classify_row(
+        let row = y * self.stride..(y + 1) * self.stride;
+        classify_words(
             image,
             map,
             y,
-            &mut self.dark[range.clone()],
-            &mut self.light[range],
+            0..self.stride,
+            &mut self.dark[row.clone()],
+            &mut self.light[row],
+        );
+    }
+
+    /// Classifies the words of run `run` of row `y`.
+    #[inline(never)]
+    fn classify_run(&mut self, image: Gray<'_>, map: &ThresholdMap, y: usize, run: usize) {
+        self.run_stamps[y * self.runs_per_row + run] = self.generation;
+        let words = run * CLASS_RUN..((run + 1) * CLASS_RUN).min(self.stride);
+        let row = y * self.stride..(y + 1) * self.stride;
+        classify_words(
+            image,
+            map,
+            y,
+            words,
+            &mut self.dark[row.clone()],
+            &mut self.light[row],
         );
     }
 
@@ -324,19 +390,20 @@ impl Classes {
             .enumerate()
             .for_each(|(k, ((dark, light), stamp))| {
                 if *stamp != generation {
-                    classify_row(image, map, rows.start + k, dark, light);
+                    classify_words(image, map, rows.start + k, 0..dark.len(), dark, light);
                     *stamp = generation;
                 }
             });
     }
 }
 
-/// Row `y` of `image` classified under `map` into `dark` and `light`, a
-/// bit per pixel (see [`Classes`]).
-fn classify_row(
+/// Words `words` of row `y` of `image` classified under `map` into `dark`
+/// and `light` (the row's words), a bit per pixel (see [`Classes`]).
+fn classify_words(
     image: Gray<'_>,
     map: &ThresholdMap,
     y: usize,
+    words: std::ops::Range<usize>,
     dark: &mut [u64],
     light: &mut [u64],
 ) {
@@ -346,18 +413,19 @@ fn classify_row(
     let pixels = &image.pixels[y * image.width..(y + 1) * image.width];
     // Whole words first: four chunks, no partial chunk to mask.
     let full = pixels.len() / WORD;
-    let (dark_full, light_full) = (&mut dark[..full], &mut light[..full]);
-    for w in 0..full {
+    let whole = words.start.min(full)..words.end.min(full);
+    let (dark_whole, light_whole) = (&mut dark[whole.clone()], &mut light[whole.clone()]);
+    for (k, w) in whole.clone().enumerate() {
         let x0 = w * WORD;
         let below = below_word(
             &pixels[x0..x0 + WORD],
             word_thresholds(thresholds, shift, w),
         );
-        dark_full[w] = below;
-        light_full[w] = !below;
+        dark_whole[k] = below;
+        light_whole[k] = !below;
     }
     if let Some(f) = floor {
-        for (w, d) in dark_full.iter_mut().enumerate() {
+        for (d, w) in dark_whole.iter_mut().zip(whole) {
             let tiles = word_floor(f, shift, w);
             if tiles != [false; 4] {
                 for (q, _) in tiles.iter().enumerate().filter(|(_, &t)| t) {
@@ -366,10 +434,9 @@ fn classify_row(
             }
         }
     }
-    let blocks = pixels.chunks_exact(WORD);
-    let tail = blocks.remainder();
-    if !tail.is_empty() {
-        let w = pixels.len() / WORD;
+    let tail = &pixels[full * WORD..];
+    if !tail.is_empty() && words.contains(&full) {
+        let w = full;
         let (mut dw, mut lw) = (0u64, 0u64);
         for (q, chunk) in tail.chunks(CHUNK).enumerate() {
             let x0 = w * WORD + q * CHUNK;
@@ -444,13 +511,19 @@ impl<F: Fn(usize) -> u64> Row for F {
 /// a row of `stride` words.
 #[inline]
 fn run_through(row: &impl Row, stride: usize, x: usize) -> (usize, usize) {
+    run_within(row, 0, stride, x)
+}
+
+/// [`run_through`] within words `first..end` of the row.
+#[inline(always)]
+fn run_within(row: &impl Row, first: usize, end: usize, x: usize) -> (usize, usize) {
     let (w, b) = (x / WORD, x % WORD);
     let word = row.word(w);
     // Right: the set bits from x up.
     let ones = (!(word >> b)).trailing_zeros() as usize;
     let mut right = x + ones - 1;
     if ones == WORD - b {
-        for next in w + 1..stride {
+        for next in w + 1..end {
             let t = row.word(next).trailing_ones() as usize;
             right += t;
             if t < WORD {
@@ -462,7 +535,7 @@ fn run_through(row: &impl Row, stride: usize, x: usize) -> (usize, usize) {
     let ones = (!(word << (WORD - 1 - b))).leading_zeros() as usize;
     let mut left = x + 1 - ones;
     if ones == b + 1 {
-        for prev in (0..w).rev() {
+        for prev in (first..w).rev() {
             let t = row.word(prev).leading_ones() as usize;
             left -= t;
             if t < WORD {
@@ -471,6 +544,41 @@ fn run_through(row: &impl Row, stride: usize, x: usize) -> (usize, usize) {
         }
     }
     (left, right)
+}
+
+/// [`run_through`] the fillable pixel (`x`, `y`) of a row classified a
+/// run of words at a time: read within the words classified round `x`,
+/// widened while the run reaches their ends. None when the pixel is not
+/// fillable.
+#[inline(never)]
+fn run_in_runs<const DARK: bool>(
+    classes: &mut Classes,
+    image: Gray<'_>,
+    map: &ThresholdMap,
+    labels: &Labels,
+    y: usize,
+    x: usize,
+) -> Option<(usize, usize)> {
+    let (stride, run) = (classes.stride, x / WORD / CLASS_RUN);
+    let mut reach = 0;
+    loop {
+        let (w0, w1) = (
+            run.saturating_sub(reach) * CLASS_RUN,
+            ((run + reach + 1) * CLASS_RUN).min(stride) - 1,
+        );
+        classes.ensure(image, map, y, w0, w1);
+        let row = Fillable::<DARK>::new(classes, labels, y);
+        if row.word(x / WORD) >> (x % WORD) & 1 == 0 {
+            return None;
+        }
+        let (left, right) = run_within(&row, w0, w1 + 1, x);
+        let left_closed = left > w0 * WORD || w0 == 0;
+        let right_closed = right + 1 < (w1 + 1) * WORD || w1 + 1 == stride;
+        if left_closed && right_closed {
+            return Some((left, right));
+        }
+        reach = 4 * reach + 1;
+    }
 }
 
 /// Statistics of a segment, summed over its pixels (u = column, v = row).
@@ -637,15 +745,24 @@ impl Filler {
         seed: (u32, u32),
         mode: Fill,
     ) -> FillResult {
-        match mode {
-            Fill::Dark => self.fill_as::<true>(image, map, labels, seed, mode),
-            Fill::White { .. } => self.fill_as::<false>(image, map, labels, seed, mode),
+        self.classes.select(image, map);
+        // A fill that classifies a few words at a time is its own copy, so
+        // that the fills of a frame's scan keep their tighter loop.
+        match (mode, self.classes.by_runs) {
+            (Fill::Dark, false) => self.fill_as::<true, false>(image, map, labels, seed, mode),
+            (Fill::Dark, true) => self.fill_as::<true, true>(image, map, labels, seed, mode),
+            (Fill::White { .. }, false) => {
+                self.fill_as::<false, false>(image, map, labels, seed, mode)
+            }
+            (Fill::White { .. }, true) => {
+                self.fill_as::<false, true>(image, map, labels, seed, mode)
+            }
         }
     }
 
     /// [`Filler::fill`] for one kind of fill, `DARK` when `mode` is
     /// [`Fill::Dark`].
-    fn fill_as<const DARK: bool>(
+    fn fill_as<const DARK: bool, const BY_RUNS: bool>(
         &mut self,
         image: Gray<'_>,
         map: &ThresholdMap,
@@ -660,7 +777,6 @@ impl Filler {
         let mut count = 0u64;
         self.stack.clear();
         self.runs.clear();
-        self.classes.select(image, map);
         let (bounds, max_count) = match mode {
             Fill::Dark => ([0, 0, u32::MAX, u32::MAX], u64::MAX),
             Fill::White { bounds, max_count } => (bounds, max_count),
@@ -707,13 +823,18 @@ impl Filler {
                 escaped = true;
                 break;
             }
-            classes.ensure(image, map, y);
-            let (left, right) = {
+            let (left, right) = if !BY_RUNS {
+                classes.ensure_row(image, map, y);
                 let row = Fillable::<DARK>::new(classes, labels, y);
                 if row.word(x / WORD) >> (x % WORD) & 1 == 0 {
                     continue;
                 }
                 run_through(&row, stride, x)
+            } else {
+                match run_in_runs::<DARK>(classes, image, map, labels, y, x) {
+                    Some(run) => run,
+                    None => continue,
+                }
             };
             let (left, right) = (left.max(x_lo), right.min(x_hi));
             set_bits(labels.row_mut(y, dark), left, right, true);
@@ -745,9 +866,13 @@ impl Filler {
                 if ny < y_lo || ny > y_hi {
                     continue;
                 }
-                classes.ensure(image, map, ny);
-                let row = Fillable::<DARK>::new(classes, labels, ny);
                 let (w0, w1) = (left / WORD, right / WORD);
+                if BY_RUNS {
+                    classes.ensure(image, map, ny, w0, w1);
+                } else {
+                    classes.ensure_row(image, map, ny);
+                }
+                let row = Fillable::<DARK>::new(classes, labels, ny);
                 let mut carry = 0u64;
                 for w in w0..=w1 {
                     let mut m = row.word(w);
@@ -786,7 +911,7 @@ impl Filler {
     ) -> bool {
         let (x, y) = (at.0 as usize, at.1 as usize);
         self.classes.select(image, map);
-        self.classes.ensure(image, map, y);
+        self.classes.ensure(image, map, y, x / WORD, x / WORD);
         let word = if dark {
             Fillable::<true>::new(&self.classes, labels, y).word(x / WORD)
         } else {
@@ -859,6 +984,104 @@ mod tests {
             s.add_run(y, x, x, 0);
         }
         s
+    }
+
+    /// The 4-connected pixels below `t` from `seed`, found one by one.
+    fn brute_component(px: &[u8], w: usize, h: usize, t: u8, seed: (usize, usize)) -> Stats {
+        assert!(px[seed.1 * w + seed.0] < t, "{seed:?} is not dark");
+        let mut seen = vec![false; w * h];
+        let mut stack = vec![seed];
+        let mut pixels = Vec::new();
+        seen[seed.1 * w + seed.0] = true;
+        while let Some((x, y)) = stack.pop() {
+            pixels.push((x as u32, y as u32));
+            let next = [
+                (x.wrapping_sub(1), y),
+                (x + 1, y),
+                (x, y.wrapping_sub(1)),
+                (x, y + 1),
+            ];
+            for (nx, ny) in next {
+                if nx < w && ny < h && !seen[ny * w + nx] && px[ny * w + nx] < t {
+                    seen[ny * w + nx] = true;
+                    stack.push((nx, ny));
+                }
+            }
+        }
+        brute_stats(&pixels)
+    }
+
+    /// Under one threshold on a frame wider than [`BY_RUNS_FROM_WORDS`]
+    /// words, rows are classified a few words at a time as the fill
+    /// reaches them: a bar across most of the width, a ring over the
+    /// boundaries of those words and a snake through them fill as the
+    /// pixels connect, and so does a second fill of the same image.
+    #[test]
+    fn a_fill_on_a_wide_frame_classifies_rows_in_runs_and_fills_whole() {
+        let (w, h) = (64 * (BY_RUNS_FROM_WORDS + 9) + 13, 60usize);
+        let mut px = vec![200u8; w * h];
+        // A bar from near the left edge to near the right, two rows high,
+        // with a stub down at the run boundary of 256 px.
+        for y in 10..12 {
+            px[y * w + 3..y * w + w - 5].fill(30);
+        }
+        for y in 12..20 {
+            px[y * w + 255] = 30;
+        }
+        // A ring centred on a run boundary (512 px).
+        for y in 25..55 {
+            for x in 480..545 {
+                let d2 = (x as i64 - 512).pow(2) + (y as i64 - 40).pow(2);
+                if (100..=196).contains(&d2) {
+                    px[y * w + x] = 30;
+                }
+            }
+        }
+        // A snake across four runs' boundaries, one pixel wide.
+        for x in 700..1800 {
+            let y = 30 + ((x / 97) % 2) * 20;
+            px[y * w + x] = 30;
+        }
+        for x in (776..1800).step_by(97) {
+            for y in 30..=50 {
+                px[y * w + x] = 30;
+            }
+        }
+        let image = Gray {
+            pixels: &px,
+            width: w,
+            height: h,
+        };
+        let map = ThresholdMap::constant(100);
+        let mut labels = Labels::default();
+        let mut filler = Filler::default();
+        for seed in [(2000, 11), (512, 27), (1700, 50), (3, 10)] {
+            labels.begin(w, h);
+            let filled = filler.fill(image, &map, &mut labels, seed, Fill::Dark);
+            assert!(filler.classes.by_runs);
+            let expected = brute_component(&px, w, h, 100, (seed.0 as usize, seed.1 as usize));
+            assert_eq!(filled.stats, expected, "from {seed:?}");
+        }
+        // The white inside the ring, bounded by it.
+        labels.begin(w, h);
+        let ring = filler
+            .fill(image, &map, &mut labels, (512, 27), Fill::Dark)
+            .stats;
+        let hole = filler.fill(
+            image,
+            &map,
+            &mut labels,
+            (512, 40),
+            Fill::White {
+                bounds: [ring.min_u, ring.min_v, ring.max_u, ring.max_v],
+                max_count: 10_000,
+            },
+        );
+        assert!(!hole.escaped);
+        let inside = (0..w * h)
+            .filter(|&i| ((i % w) as i64 - 512).pow(2) + ((i / w) as i64 - 40).pow(2) < 100)
+            .count() as u64;
+        assert_eq!(hole.stats.count, inside);
     }
 
     #[test]

@@ -71,12 +71,15 @@ pub const MIN_CONTRAST: u8 = 8;
 /// marker cut by the image edge is told from floor by its ink.
 pub const MIN_FLOOR_TILES: usize = 48;
 
+/// The tile shift of a map of one threshold: one tile wider than any image.
+const CONSTANT_SHIFT: u32 = 31;
+
 impl ThresholdMap {
     /// The same threshold everywhere.
     pub fn constant(threshold: u8) -> ThresholdMap {
         ThresholdMap {
             id: next_map_id(),
-            shift: 31,
+            shift: CONSTANT_SHIFT,
             cols: 1,
             row0: 0,
             rows: 1,
@@ -184,6 +187,12 @@ impl ThresholdMap {
     #[inline]
     pub fn held_rows(&self) -> std::ops::Range<usize> {
         (self.row0 << self.shift)..((self.row0 + self.rows) << self.shift)
+    }
+
+    /// Whether the map is one threshold everywhere ([`ThresholdMap::constant`]).
+    #[inline]
+    pub fn is_constant(&self) -> bool {
+        self.shift == CONSTANT_SHIFT
     }
 
     /// Whether any tile is floor.
