@@ -286,6 +286,12 @@ const CLASS_RUN: usize = 4;
 /// keeping track of the runs.
 const BY_RUNS_FROM_WORDS: usize = 32;
 
+/// Whether rows may be classified in runs at all. Not in the browser: its
+/// frames are a camera's, narrower than [`BY_RUNS_FROM_WORDS`] words, and
+/// the page's first load has a size budget that the run-by-run copy of the
+/// fill would spend for nothing. The fills' results are the same either way.
+const BY_RUNS_BUILT: bool = !cfg!(target_arch = "wasm32");
+
 impl Classes {
     /// Forgets the rows unless they were classified for this map and image.
     fn select(&mut self, image: Gray<'_>, map: &ThresholdMap) {
@@ -303,7 +309,7 @@ impl Classes {
         }
         if self.key != Some(key) {
             self.key = Some(key);
-            self.by_runs = map.is_constant() && stride > BY_RUNS_FROM_WORDS;
+            self.by_runs = BY_RUNS_BUILT && map.is_constant() && stride > BY_RUNS_FROM_WORDS;
             if self.generation == u32::MAX {
                 self.stamps.fill(0);
                 self.run_stamps.fill(0);
@@ -334,7 +340,7 @@ impl Classes {
         if self.row_ready(y) {
             return;
         }
-        if !self.by_runs {
+        if !(BY_RUNS_BUILT && self.by_runs) {
             self.classify_row(image, map, y);
             return;
         }
@@ -748,7 +754,7 @@ impl Filler {
         self.classes.select(image, map);
         // A fill that classifies a few words at a time is its own copy, so
         // that the fills of a frame's scan keep their tighter loop.
-        match (mode, self.classes.by_runs) {
+        match (mode, BY_RUNS_BUILT && self.classes.by_runs) {
             (Fill::Dark, false) => self.fill_as::<true, false>(image, map, labels, seed, mode),
             (Fill::Dark, true) => self.fill_as::<true, true>(image, map, labels, seed, mode),
             (Fill::White { .. }, false) => {
