@@ -290,6 +290,8 @@ const BY_RUNS_FROM_WORDS: usize = 32;
 /// frames are a camera's, narrower than [`BY_RUNS_FROM_WORDS`] words, and
 /// the page's first load has a size budget that the run-by-run copy of the
 /// fill would spend for nothing. The fills' results are the same either way.
+/// Tested again where the fill picks its copy and in [`Classes::ensure`],
+/// beside `by_runs`, so that the compiler leaves the copy's code out.
 const BY_RUNS_BUILT: bool = !cfg!(target_arch = "wasm32");
 
 impl Classes {
@@ -1017,6 +1019,31 @@ mod tests {
         brute_stats(&pixels)
     }
 
+    /// The white fill from `seed` within the bounding box of `ring`, a dark
+    /// segment's statistics (as the scan fills a marker's inside).
+    fn fill_within(
+        filler: &mut Filler,
+        image: Gray<'_>,
+        map: &ThresholdMap,
+        labels: &mut Labels,
+        seed: (u32, u32),
+        ring: &Stats,
+        max_count: u64,
+    ) -> FillResult {
+        let bounds = [ring.min_u, ring.min_v, ring.max_u, ring.max_v];
+        filler.fill(image, map, labels, seed, Fill::White { bounds, max_count })
+    }
+
+    /// How many pixels of a `w` x `h` image lie closer than the square
+    /// root of `r2` to `centre`.
+    fn pixels_within(w: usize, h: usize, centre: (i64, i64), r2: i64) -> u64 {
+        (0..w * h)
+            .filter(|&i| {
+                ((i % w) as i64 - centre.0).pow(2) + ((i / w) as i64 - centre.1).pow(2) < r2
+            })
+            .count() as u64
+    }
+
     /// Under one threshold on a frame wider than [`BY_RUNS_FROM_WORDS`]
     /// words, rows are classified a few words at a time as the fill
     /// reaches them: a bar across most of the width, a ring over the
@@ -1073,21 +1100,17 @@ mod tests {
         let ring = filler
             .fill(image, &map, &mut labels, (512, 27), Fill::Dark)
             .stats;
-        let hole = filler.fill(
+        let hole = fill_within(
+            &mut filler,
             image,
             &map,
             &mut labels,
             (512, 40),
-            Fill::White {
-                bounds: [ring.min_u, ring.min_v, ring.max_u, ring.max_v],
-                max_count: 10_000,
-            },
+            &ring,
+            10_000,
         );
         assert!(!hole.escaped);
-        let inside = (0..w * h)
-            .filter(|&i| ((i % w) as i64 - 512).pow(2) + ((i / w) as i64 - 40).pow(2) < 100)
-            .count() as u64;
-        assert_eq!(hole.stats.count, inside);
+        assert_eq!(hole.stats.count, pixels_within(w, h, (512, 40), 100));
     }
 
     #[test]
@@ -1252,32 +1275,11 @@ mod tests {
         assert_eq!(ring.stats.count, expected);
         assert_eq!(ring.stats.centroid(), (20.0, 15.0));
         let s = ring.stats;
-        let hole = filler.fill(
-            image,
-            &map,
-            &mut labels,
-            (20, 15),
-            Fill::White {
-                bounds: [s.min_u, s.min_v, s.max_u, s.max_v],
-                max_count: 1000,
-            },
-        );
+        let hole = fill_within(&mut filler, image, &map, &mut labels, (20, 15), &s, 1000);
         assert!(!hole.escaped);
-        let inside = (0..w * h)
-            .filter(|&i| ((i % w) as i32 - 20).pow(2) + ((i / w) as i32 - 15).pow(2) < 25)
-            .count() as u64;
-        assert_eq!(hole.stats.count, inside);
+        assert_eq!(hole.stats.count, pixels_within(w, h, (20, 15), 25));
         // Outside the ring the white region reaches the bounds.
-        let outside = filler.fill(
-            image,
-            &map,
-            &mut labels,
-            (11, 6),
-            Fill::White {
-                bounds: [s.min_u, s.min_v, s.max_u, s.max_v],
-                max_count: 1000,
-            },
-        );
+        let outside = fill_within(&mut filler, image, &map, &mut labels, (11, 6), &s, 1000);
         assert!(outside.escaped);
     }
 }
