@@ -51,6 +51,39 @@ impl Detector {
     }
 }
 
+impl Detector {
+    /// Describes candidate `c`, found by a scan on several threads, as
+    /// [`Detector::describe_found`] will, and keeps what that gives on it.
+    #[cfg(feature = "parallel")]
+    pub(super) fn describe_early<C: Deref<Target = [u8]>>(
+        &self,
+        stopwatch: &mut Stopwatch,
+        image: &ImageBuffer<Luma<u8>, C>,
+        gray: Gray<'_>,
+        c: &mut Candidate,
+    ) {
+        let mut ws = Workspace::default();
+        let (detection, memory) = self.describe_found(&mut ws, stopwatch, image, gray, c);
+        c.described = Some(Box::new(super::Described {
+            detection,
+            memory,
+            legacy_looking: ws.legacy_looking,
+        }));
+    }
+
+    /// Without threads nothing is done beside the scan (and the page's
+    /// build stays as small as it was).
+    #[cfg(not(feature = "parallel"))]
+    pub(super) fn describe_early<C: Deref<Target = [u8]>>(
+        &self,
+        _: &mut Stopwatch,
+        _: &ImageBuffer<Luma<u8>, C>,
+        _: Gray<'_>,
+        _: &mut Candidate,
+    ) {
+    }
+}
+
 /// A candidate's detection as its outline and `read` describe it, before
 /// the ID filter and the pose.
 pub(super) fn detection(c: &Candidate, read: &RingRead, unreadable: bool) -> Detection {

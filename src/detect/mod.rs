@@ -50,7 +50,7 @@ use crate::family::{Family, MatchStatus};
 use crate::geometry::Design;
 use crate::math::Ellipse;
 use crate::pose::Pose;
-use segment::{Filler, Gray, Labels};
+use segment::Gray;
 use threshold::ThresholdSearch;
 use timings::Stopwatch;
 use tracking::track::{Adaptive, PoseMemory, Track};
@@ -212,9 +212,8 @@ pub struct Detection {
 pub struct Detector {
     config: DetectorConfig,
     rings: ring::Rings,
-    labels: Labels,
-    filler: Filler,
-    edge_scratch: Vec<(f64, f64)>,
+    /// What the scan's walk writes.
+    walker: scan::Walker,
     /// What describing a candidate works in, on this thread.
     workspace: Workspace,
     /// One more per thread, for a frame's new candidates described in
@@ -246,9 +245,6 @@ pub struct Detector {
     stopwatch: Stopwatch,
     /// The last frame's stage timings, with `config.timings`.
     timings: Option<StageTimings>,
-    /// Where the scan lost each segment (feature `trace` only).
-    #[cfg(feature = "trace")]
-    trace: Vec<trace::Loss>,
 }
 
 /// The buffers describing a candidate works in, apart from the detector's
@@ -278,6 +274,21 @@ struct Candidate {
     /// The values above were measured (not a marker followed by its edge).
     tested: bool,
     track: Option<usize>,
+    /// What describing it gave, when a scan on several threads had that
+    /// done while it went on (never in a build without threads, whose
+    /// page this would only make larger).
+    #[cfg(feature = "parallel")]
+    described: Option<Box<Described>>,
+}
+
+/// A new candidate described (see [`Detector::describe_found`]).
+#[cfg(feature = "parallel")]
+#[derive(Debug, Clone)]
+struct Described {
+    detection: Detection,
+    memory: PoseMemory,
+    /// Whether only a legacy WhyCon marker would explain it (0 or 1).
+    legacy_looking: usize,
 }
 
 impl Candidate {
@@ -304,9 +315,7 @@ impl Detector {
             area: Adaptive::new(0.0, config.area_tolerance),
             rings: ring::Rings::new(&config.target),
             config,
-            labels: Labels::default(),
-            filler: Filler::default(),
-            edge_scratch: Vec::new(),
+            walker: scan::Walker::default(),
             workspace: Workspace::default(),
             workspaces: Vec::new(),
             occupied: Vec::new(),
@@ -321,8 +330,6 @@ impl Detector {
             frame: 0,
             stopwatch: Stopwatch::default(),
             timings: None,
-            #[cfg(feature = "trace")]
-            trace: Vec::new(),
         }
     }
 
@@ -380,7 +387,7 @@ impl Detector {
     /// allocating and clearing a frame-sized buffer each time.
     pub fn restart(&mut self, config: DetectorConfig) {
         *self = Detector {
-            labels: std::mem::take(&mut self.labels),
+            walker: std::mem::take(&mut self.walker),
             ..Detector::new(config)
         };
     }
@@ -462,7 +469,7 @@ impl Detector {
             .config
             .camera
             .and_then(|camera| camera.for_image(image.width(), image.height()).ok());
-        self.labels.begin(width, height);
+        self.walker.labels.begin(width, height);
         self.follow_filled = false;
         self.legacy_looking = 0;
         Some(Gray {
@@ -497,6 +504,11 @@ impl Detector {
         // since the scan.
         let describe =
             |this: &Detector, ws: &mut Workspace, stopwatch: &mut Stopwatch, k: usize| {
+                #[cfg(feature = "parallel")]
+                if let Some(early) = &new[k].described {
+                    ws.legacy_looking += early.legacy_looking;
+                    return (early.detection.clone(), early.memory);
+                }
                 if let Some(next) = new.get(k + 1) {
                     preload_disc(gray, next.outer.u, next.outer.v, next.reach());
                 }

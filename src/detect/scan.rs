@@ -5,17 +5,19 @@
 
 use std::f64::consts::PI;
 
-use super::segment::{below_mask, below_word, word_thresholds, Fill, Gray, Stats};
+use super::segment::{below_mask, below_word, word_thresholds, Fill, Filler, Gray, Labels, Stats};
 use super::threshold::{self, ThresholdMap};
-use super::{ellipse, Candidate, Detector, Stage, SCAN_CHUNK};
+use super::timings::Stopwatch;
+use super::tracking::track::Adaptive;
+use super::{ellipse, Candidate, Detector, DetectorConfig, Stage, StageTimings, SCAN_CHUNK};
 use crate::geometry::Design;
 
 /// Returns None from a candidate test, recording (feature `trace`) which
 /// test lost the segment of these statistics.
 macro_rules! lost {
-    ($detector:ident, $reached:ident, $stats:expr) => {{
+    ($walker:ident, $reached:ident, $stats:expr) => {{
         #[cfg(feature = "trace")]
-        $detector.note_loss(super::trace::Reached::$reached, &$stats);
+        $walker.note_loss(super::trace::Reached::$reached, &$stats);
         return None;
     }};
 }
@@ -26,6 +28,11 @@ macro_rules! lost {
 /// the adaptive window around the printed 0.41, and the tests after this
 /// one (the centre's light, the white margin) judge it more closely.
 const ORIGINAL_WHITE_SHARE: std::ops::RangeInclusive<f64> = 0.34 * 0.34..=0.55 * 0.55;
+
+/// Segments whose outlines a job of the pool fits (and whose candidates it
+/// describes) together while the scan walks on: each takes about a tenth
+/// of a millisecond.
+const OUTLINE_BATCH: usize = 8;
 
 /// Slack of the concentricity test, in outer radii: WhyCode's white region
 /// has its ring sectors on one side or the other, so its centroid wanders.
@@ -46,7 +53,7 @@ impl Detector {
     ) -> ThresholdMap {
         let map = ThresholdMap::adaptive(gray.pixels, gray.width, gray.height);
         self.stopwatch.lap(Stage::Threshold);
-        self.scan(gray, &map, 0..gray.height, &[], found);
+        self.scan(Stage::Scan, gray, &map, 0..gray.height, &[], found);
         map
     }
 
@@ -77,9 +84,18 @@ impl Detector {
         // every pixel of them again. Seeds are still taken in the shaded
         // rows only.
         let ratio_map = ThresholdMap::adaptive_ratio(gray.pixels, width, height, 0..height, map);
-        self.labels.begin(width, height);
+        self.walker.labels.begin(width, height);
         let mut again = Vec::new();
-        self.scan_tiles(gray, &ratio_map, rows, map.near_shaded(), found, &mut again);
+        let near = map.near_shaded();
+        self.scan_tiles(
+            Stage::Shade,
+            gray,
+            &ratio_map,
+            rows,
+            near,
+            found,
+            &mut again,
+        );
         merge_new(found, again, self.config.max_markers);
     }
 
@@ -111,9 +127,10 @@ impl Detector {
             if !seeds.contains(&true) {
                 continue;
             }
-            self.labels.begin(width, height);
+            self.walker.labels.begin(width, height);
             let mut level = Vec::new();
             self.scan_tiles(
+                Stage::Fallback,
                 gray,
                 &ThresholdMap::constant(t),
                 0..height,
@@ -154,8 +171,10 @@ impl Detector {
     /// [`Detector::scan`] with segments started only in the tiles flagged
     /// in `seed_tiles` (laid out as the scan's tiles); the segments so
     /// started are filled and tested whole, wherever they reach.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn scan_tiles(
         &mut self,
+        stage: Stage,
         gray: Gray<'_>,
         map: &ThresholdMap,
         rows: std::ops::Range<usize>,
@@ -170,7 +189,7 @@ impl Detector {
         self.occupied.extend(
             (0..seed_tiles.len()).map(|i| !seed_tiles[i] || followed.get(i) == Some(&true)),
         );
-        self.scan(gray, map, rows, known, found);
+        self.scan(stage, gray, map, rows, known, found);
         self.occupied = followed;
     }
 
@@ -178,14 +197,185 @@ impl Detector {
     /// segment each one starts, until `found` holds the most markers the
     /// configuration allows. Segments of the markers in `known` (found by
     /// an earlier look at the frame) are passed over, see
-    /// [`Detector::evaluate`].
+    /// [`Detector::evaluate`]. With the timings on, the scan's time is
+    /// charged to `stage` (the look it serves), and that of describing
+    /// its candidates on the way to the describe and pose stages.
     pub(super) fn scan(
         &mut self,
+        stage: Stage,
         gray: Gray<'_>,
         map: &ThresholdMap,
         rows: std::ops::Range<usize>,
         known: &[Candidate],
         found: &mut Vec<Candidate>,
+    ) {
+        // On a large frame what reads the pixels only is done on the pool's
+        // threads: the rows classified and the seed pixels found before the
+        // walk, the outlines fitted while it goes on. The walk, whose fills
+        // depend on the fills before them, stays on one thread, so the
+        // segments and their order are the same for any number of threads.
+        let parallel =
+            !cfg!(feature = "trace") && crate::parallel::frame_threads(gray.width * rows.len()) > 1;
+        if !parallel {
+            let adaptive = (&self.ratio, &self.roundness, &self.area);
+            Rules::new(&self.config, adaptive, &self.occupied).walk(
+                &mut self.walker,
+                gray,
+                map,
+                rows,
+                known,
+                None,
+                found,
+                |walker, passed, found| {
+                    found.extend(walker.fit_outline(gray, &passed));
+                },
+            );
+            return;
+        }
+        let mut walker = std::mem::take(&mut self.walker);
+        let mut seed_words = std::mem::take(&mut self.seed_words);
+        seed_words.clear();
+        if self.occupied.is_empty() {
+            walker.filler.classify_rows(gray, map, rows.clone());
+        }
+        seed_rows(gray, map, rows.clone(), &mut seed_words);
+        self.stopwatch.lap(stage);
+        let this = &*self;
+        let rules = Rules::new(
+            &this.config,
+            (&this.ratio, &this.roundness, &this.area),
+            &this.occupied,
+        );
+        let limit = this.config.max_markers;
+        let timings = this.config.timings;
+        let view = image::ImageBuffer::<image::Luma<u8>, &[u8]>::from_raw(
+            gray.width as u32,
+            gray.height as u32,
+            gray.pixels,
+        )
+        .expect("a frame's pixels fill it");
+        // Each segment's outline, and the candidate it makes described as
+        // the describe stage would (reading the detector only), while the
+        // walk goes on: its pixels are in that thread's cache then.
+        let fit_and_describe = |passed: &Passed| {
+            let mut stopwatch = Stopwatch::default();
+            stopwatch.start(timings);
+            let mut candidate = Detector::outline(gray, passed, &mut Vec::new());
+            stopwatch.lap(stage);
+            if let Some(c) = &mut candidate {
+                this.describe_early(&mut stopwatch, &view, gray, c);
+            }
+            (candidate, stopwatch.stop())
+        };
+        let mut own = Stopwatch::default();
+        own.start(timings);
+        let spent = crate::parallel::map_alongside(OUTLINE_BATCH, &fit_and_describe, |fits| {
+            let mut spent = StageTimings::default();
+            let seeds = Some(seed_words.as_slice());
+            rules.walk(
+                &mut walker,
+                gray,
+                map,
+                rows,
+                known,
+                seeds,
+                found,
+                |walker, passed, found| {
+                    fits.push(passed);
+                    // Which segments the walk tests next depends on how many
+                    // made candidates.
+                    if found.len() + fits.unsettled() >= limit {
+                        spent += &walker.take_outlines(fits.settle(), found, limit);
+                    }
+                },
+            );
+            spent += &walker.take_outlines(fits.settle(), found, limit);
+            spent
+        });
+        own.lap(stage);
+        if let Some(mut laps) = own.stop() {
+            laps += &spent;
+            self.stopwatch.lap_shared(&laps);
+        }
+        self.walker = walker;
+        self.seed_words = seed_words;
+    }
+
+    /// The candidate a segment that passed the tests makes when its
+    /// outline is an ellipse along the whole edge: squares and blobs pass
+    /// the moment tests (a square's area is within 5 % of its moment
+    /// ellipse's) but not this. Reads only the pixels, so a frame's
+    /// segments can be fitted on several threads. `edge` is scratch.
+    pub(super) fn outline(
+        gray: Gray<'_>,
+        passed: &Passed,
+        edge: &mut Vec<(f64, f64)>,
+    ) -> Option<Candidate> {
+        let coarse = &passed.coarse;
+        let refined = ellipse::refine(gray, coarse, edge)?;
+        // A motion-blurred outline is fitted on the stretches across the
+        // blur only (at least 45 % of the rays).
+        let min_support = if refined.blur.is_some() { 0.45 } else { 0.75 };
+        if refined.support < min_support || refined.rms > 0.35 + 0.015 * coarse.semi_major {
+            return None;
+        }
+        Some(Candidate {
+            outer: refined.ellipse,
+            edge: edge.clone(),
+            black: passed.black,
+            white: passed.white,
+            ratio: passed.ratio,
+            roundness: passed.roundness,
+            area_error: passed.area_error,
+            tested: true,
+            track: None,
+            #[cfg(feature = "parallel")]
+            described: None,
+        })
+    }
+}
+
+/// What the scan's walk reads of the detector: the configuration, the
+/// tests' tolerances and the tiles followed markers cover. Borrowed beside
+/// the detector's [`Walker`], which the walk writes.
+pub(super) struct Rules<'a> {
+    config: &'a DetectorConfig,
+    ratio: &'a Adaptive,
+    roundness: &'a Adaptive,
+    area: &'a Adaptive,
+    occupied: &'a [bool],
+}
+
+impl<'a> Rules<'a> {
+    pub(super) fn new(
+        config: &'a DetectorConfig,
+        (ratio, roundness, area): (&'a Adaptive, &'a Adaptive, &'a Adaptive),
+        occupied: &'a [bool],
+    ) -> Rules<'a> {
+        Rules {
+            config,
+            ratio,
+            roundness,
+            area,
+            occupied,
+        }
+    }
+
+    /// The walk of [`Detector::scan`] over `rows`: each segment that passes
+    /// the tests goes to `passed`, which makes it a candidate in `found`
+    /// or leaves it for later. The seed pixels are `seeds` (words of
+    /// [`seed_rows`]) when they were found before, else found on the way.
+    #[allow(clippy::too_many_arguments)]
+    fn walk(
+        &self,
+        walker: &mut Walker,
+        gray: Gray<'_>,
+        map: &ThresholdMap,
+        rows: std::ops::Range<usize>,
+        known: &[Candidate],
+        seeds: Option<&[u64]>,
+        found: &mut Vec<Candidate>,
+        mut passed: impl FnMut(&mut Walker, Passed, &mut Vec<Candidate>),
     ) {
         let limit = self.config.max_markers;
         const CHUNK: usize = SCAN_CHUNK;
@@ -196,21 +386,6 @@ impl Detector {
         let margin = map.seed_margin();
         let cols = gray.width.div_ceil(CHUNK);
         let stride = gray.width.div_ceil(WORD);
-        // On a large frame what reads the pixels only is done on the pool's
-        // threads: the rows classified and the seed pixels found before the
-        // walk, the outlines fitted after it. The walk, whose fills depend
-        // on the fills before them, stays on one thread, so the segments
-        // and their order are the same for any number of threads.
-        let parallel =
-            !cfg!(feature = "trace") && crate::parallel::frame_threads(gray.width * rows.len()) > 1;
-        let mut seed_words = std::mem::take(&mut self.seed_words);
-        seed_words.clear();
-        if parallel {
-            if self.occupied.is_empty() {
-                self.filler.classify_rows(gray, map, rows.clone());
-            }
-            seed_rows(gray, map, rows.clone(), &mut seed_words);
-        }
         // Tile rows with a tile left to scan: a look at a few tiles (the
         // global walk's blind ones) passes over the others' rows at once.
         let open_rows: Vec<bool> = if self.occupied.is_empty() {
@@ -223,7 +398,6 @@ impl Detector {
         };
         let rows_start = rows.start;
         let mut open_words: Vec<u64> = Vec::new();
-        let mut pending = Vec::new();
         'rows: for y in rows {
             if found.len() >= limit {
                 break;
@@ -260,63 +434,26 @@ impl Detector {
                 if open == 0 {
                     continue;
                 }
-                let mut seeds = if parallel {
-                    seed_words[(y - rows_start) * stride + w]
-                } else {
-                    seed_word(block, thresholds, shift, margin, w)
+                let mut word = match seeds {
+                    Some(words) => words[(y - rows_start) * stride + w],
+                    None => seed_word(block, thresholds, shift, margin, w),
                 };
-                seeds &= open & !self.labels.dark_word(y, w);
-                while seeds != 0 {
-                    let x = w * WORD + seeds.trailing_zeros() as usize;
-                    if let Some(passed) = self.evaluate(gray, map, (x as u32, y as u32), known) {
-                        if parallel {
-                            pending.push(passed);
-                            if found.len() + pending.len() >= limit {
-                                self.fit_outlines(gray, &mut pending, found);
-                            }
-                        } else if let Some(c) = self.fit_outline(gray, &passed) {
-                            found.push(c);
-                        }
+                word &= open & !walker.labels.dark_word(y, w);
+                while word != 0 {
+                    let x = w * WORD + word.trailing_zeros() as usize;
+                    let seed = (x as u32, y as u32);
+                    if let Some(segment) = self.evaluate(walker, gray, map, seed, known) {
+                        passed(walker, segment, found);
                         if found.len() >= limit {
                             break 'rows;
                         }
                     }
                     // The fill took this seed and perhaps others of the word.
-                    seeds &= seeds - 1;
-                    seeds &= !self.labels.dark_word(y, w);
+                    word &= word - 1;
+                    word &= !walker.labels.dark_word(y, w);
                 }
             }
         }
-        self.fit_outlines(gray, &mut pending, found);
-        self.seed_words = seed_words;
-    }
-
-    /// Fits the outlines of the segments `pending` on the pool's threads
-    /// and adds the candidates they make to `found`, in their order, up to
-    /// the most markers the configuration allows.
-    fn fit_outlines(
-        &mut self,
-        gray: Gray<'_>,
-        pending: &mut Vec<Passed>,
-        found: &mut Vec<Candidate>,
-    ) {
-        use crate::parallel::prelude::*;
-        if pending.is_empty() {
-            return;
-        }
-        let this = &*self;
-        let fitted: Vec<Option<Candidate>> = pending
-            .par_iter()
-            .map(|passed| this.outline(gray, passed, &mut Vec::new()))
-            .collect();
-        for (passed, candidate) in pending.iter().zip(fitted) {
-            if found.len() >= self.config.max_markers {
-                break;
-            }
-            self.note_outline(passed, candidate.is_some());
-            found.extend(candidate);
-        }
-        pending.clear();
     }
 
     /// Runs the tests on the dark segment that contains `seed`. A segment
@@ -324,18 +461,19 @@ impl Detector {
     /// is that marker seen again (under another threshold map): it is not
     /// tested a second time.
     pub(super) fn evaluate(
-        &mut self,
+        &self,
+        walker: &mut Walker,
         gray: Gray<'_>,
         map: &ThresholdMap,
         seed: (u32, u32),
         known: &[Candidate],
     ) -> Option<Passed> {
         let design = self.config.target.design();
-        let dark = self
+        let dark = walker
             .filler
-            .fill(gray, map, &mut self.labels, seed, Fill::Dark);
+            .fill(gray, map, &mut walker.labels, seed, Fill::Dark);
         if dark.escaped {
-            lost!(self, Escaped, dark.stats);
+            lost!(walker, Escaped, dark.stats);
         }
         let dark = dark.stats;
         let white_fraction = self.ratio.expected;
@@ -343,11 +481,11 @@ impl Detector {
         let min_d = self.config.min_diameter_px;
         let n = dark.count as f64;
         if n < 0.5 * dark_fraction * PI / 4.0 * min_d * min_d {
-            lost!(self, Size, dark);
+            lost!(walker, Size, dark);
         }
         let (bw, bh) = (f64::from(dark.width()), f64::from(dark.height()));
         if bw < 4.0 || bh < 4.0 {
-            lost!(self, Size, dark);
+            lost!(walker, Size, dark);
         }
         let (cu, cv) = dark.centroid();
         if !known.is_empty() {
@@ -377,13 +515,13 @@ impl Detector {
         };
         let roundness = n / (PI / 4.0 * bw * bh * dark_fraction * slant) - 1.0;
         if roundness.abs() >= self.roundness.tolerance() {
-            lost!(self, Roundness, dark);
+            lost!(walker, Roundness, dark);
         }
         // The grey values are read only for segments that pass every test
         // up to the contrast test, which is most of all a round blob of
         // clutter with no white inside is not: the dark fill's runs are
         // kept aside for it while the white fill runs.
-        self.filler.keep_runs();
+        walker.filler.keep_runs();
         // The white inside may come next to the segment's bounding box only
         // when the annulus is one pixel wide, on markers of a few pixels:
         // those need a family's ring model to be told from blobs.
@@ -396,8 +534,9 @@ impl Detector {
         ];
         let max_count = (n * white_fraction / dark_fraction * 2.5) as u64 + 16;
         let reach = concentricity_tolerance(design) * 0.25 * (bw + bh);
-        let Some(white) = self.fill_inside(gray, map, (cu, cv), reach, bounds, max_count) else {
-            lost!(self, WhiteInside, dark);
+        let Some(white) = self.fill_inside(walker, gray, map, (cu, cv), reach, bounds, max_count)
+        else {
+            lost!(walker, WhiteInside, dark);
         };
         let total = dark.merged(&white);
         let ratio = white.count as f64 / total.count as f64;
@@ -424,28 +563,28 @@ impl Detector {
         let coarse = match coarse {
             Some(e) if accepted => e,
             _ => {
-                self.filler.undo_last(&mut self.labels);
-                lost!(self, RatioOrConcentricity, dark);
+                walker.filler.undo_last(&mut walker.labels);
+                lost!(walker, RatioOrConcentricity, dark);
             }
         };
         // Eq. 4 on the whole disc. Pixel counts of small discs carry a
         // boundary quantisation error of about 1/(2b) of the area.
         let area_error = coarse.area() / total.count as f64 - 1.0;
         if area_error.abs() >= self.area.tolerance() + 0.5 / coarse.semi_minor {
-            lost!(self, Area, dark);
+            lost!(walker, Area, dark);
         }
         let black = Stats {
-            sum_i: self.filler.kept_grey_sum(gray),
+            sum_i: walker.filler.kept_grey_sum(gray),
             ..dark
         }
         .mean_intensity();
         let white_level = Stats {
-            sum_i: self.filler.grey_sum(gray),
+            sum_i: walker.filler.grey_sum(gray),
             ..white
         }
         .mean_intensity();
         if white_level - black < map.min_contrast() {
-            lost!(self, Contrast, dark);
+            lost!(walker, Contrast, dark);
         }
         Some(Passed {
             coarse,
@@ -458,63 +597,6 @@ impl Detector {
         })
     }
 
-    /// The candidate a segment that passed the tests makes when its
-    /// outline is an ellipse along the whole edge: squares and blobs pass
-    /// the moment tests (a square's area is within 5 % of its moment
-    /// ellipse's) but not this. Reads only the pixels, so a frame's
-    /// segments can be fitted on several threads. `edge` is scratch.
-    pub(super) fn outline(
-        &self,
-        gray: Gray<'_>,
-        passed: &Passed,
-        edge: &mut Vec<(f64, f64)>,
-    ) -> Option<Candidate> {
-        let coarse = &passed.coarse;
-        let refined = ellipse::refine(gray, coarse, edge)?;
-        // A motion-blurred outline is fitted on the stretches across the
-        // blur only (at least 45 % of the rays).
-        let min_support = if refined.blur.is_some() { 0.45 } else { 0.75 };
-        if refined.support < min_support || refined.rms > 0.35 + 0.015 * coarse.semi_major {
-            return None;
-        }
-        Some(Candidate {
-            outer: refined.ellipse,
-            edge: edge.clone(),
-            black: passed.black,
-            white: passed.white,
-            ratio: passed.ratio,
-            roundness: passed.roundness,
-            area_error: passed.area_error,
-            tested: true,
-            track: None,
-        })
-    }
-
-    /// [`Detector::outline`] of `passed`, noting (feature `trace`) whether
-    /// it made a candidate.
-    pub(super) fn fit_outline(&mut self, gray: Gray<'_>, passed: &Passed) -> Option<Candidate> {
-        let mut edge = std::mem::take(&mut self.edge_scratch);
-        let candidate = self.outline(gray, passed, &mut edge);
-        self.edge_scratch = edge;
-        self.note_outline(passed, candidate.is_some());
-        candidate
-    }
-
-    /// Notes (feature `trace`) whether a segment's outline made it a
-    /// candidate.
-    #[allow(unused_variables)]
-    fn note_outline(&mut self, passed: &Passed, fitted: bool) {
-        #[cfg(feature = "trace")]
-        self.note_loss(
-            if fitted {
-                super::trace::Reached::Candidate
-            } else {
-                super::trace::Reached::EllipseFit
-            },
-            &passed.dark,
-        );
-    }
-
     /// Fills the white region around the dark segment's centroid; None when
     /// it is not enclosed by the segment. When the centroid lands on ink
     /// (the ring, or a printed centring cross, whose lines a local
@@ -523,8 +605,10 @@ impl Detector {
     /// rays: further off, the white's centroid would fail concentricity
     /// anyway. The region's grey values are left for later (its runs are
     /// the filler's last, see `Filler::grey_sum`).
+    #[allow(clippy::too_many_arguments)]
     fn fill_inside(
-        &mut self,
+        &self,
+        walker: &mut Walker,
         gray: Gray<'_>,
         map: &ThresholdMap,
         centre: (f64, f64),
@@ -557,21 +641,21 @@ impl Detector {
                 continue;
             }
             // A probe on ink would fill nothing.
-            if !self
+            if !walker
                 .filler
-                .takes(gray, map, &self.labels, (x as u32, y as u32), false)
+                .takes(gray, map, &walker.labels, (x as u32, y as u32), false)
             {
                 continue;
             }
-            let result = self.filler.fill(
+            let result = walker.filler.fill(
                 gray,
                 map,
-                &mut self.labels,
+                &mut walker.labels,
                 (x as u32, y as u32),
                 Fill::White { bounds, max_count },
             );
             if result.escaped {
-                self.filler.undo_last(&mut self.labels);
+                walker.filler.undo_last(&mut walker.labels);
                 return None;
             }
             if result.stats.count > 0 {
@@ -579,6 +663,71 @@ impl Detector {
             }
         }
         None
+    }
+}
+
+/// A passed segment's candidate, if its outline makes one, with the time
+/// fitting and describing it took (with the timings on).
+type Fitted = (Option<Candidate>, Option<StageTimings>);
+
+/// What the scan's walk writes as it goes: the labels of the frame's
+/// segments, the flood fill's buffers, the outline's edge points and
+/// (feature `trace`) where each segment was lost. The walk only reads the
+/// detector, so that the pool's other threads can read it meanwhile.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Walker {
+    pub(super) labels: Labels,
+    filler: Filler,
+    pub(super) edge: Vec<(f64, f64)>,
+    #[cfg(feature = "trace")]
+    pub(super) trace: Vec<super::trace::Loss>,
+}
+
+impl Walker {
+    /// [`Detector::outline`] of `passed`, noting (feature `trace`) whether
+    /// it made a candidate.
+    pub(super) fn fit_outline(&mut self, gray: Gray<'_>, passed: &Passed) -> Option<Candidate> {
+        let candidate = Detector::outline(gray, passed, &mut self.edge);
+        self.note_outline(passed, candidate.is_some());
+        candidate
+    }
+
+    /// Adds the candidates of segments whose outlines were fitted
+    /// (`fitted`, in the walk's order) to `found`, up to `limit`.
+    /// Gives the time the outlines and descriptions took.
+    fn take_outlines(
+        &mut self,
+        fitted: Vec<(Passed, Fitted)>,
+        found: &mut Vec<Candidate>,
+        limit: usize,
+    ) -> StageTimings {
+        let mut spent = StageTimings::default();
+        for (passed, (candidate, laps)) in fitted {
+            if let Some(laps) = laps {
+                spent += &laps;
+            }
+            if found.len() >= limit {
+                continue;
+            }
+            self.note_outline(&passed, candidate.is_some());
+            found.extend(candidate);
+        }
+        spent
+    }
+
+    /// Notes (feature `trace`) whether a segment's outline made it a
+    /// candidate.
+    #[allow(unused_variables)]
+    pub(super) fn note_outline(&mut self, passed: &Passed, fitted: bool) {
+        #[cfg(feature = "trace")]
+        self.note_loss(
+            if fitted {
+                super::trace::Reached::Candidate
+            } else {
+                super::trace::Reached::EllipseFit
+            },
+            &passed.dark,
+        );
     }
 }
 

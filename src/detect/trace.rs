@@ -45,9 +45,11 @@ pub struct Loss {
 impl super::Detector {
     /// What the scans of the frames so far recorded, emptied.
     pub fn take_trace(&mut self) -> Vec<Loss> {
-        std::mem::take(&mut self.trace)
+        std::mem::take(&mut self.walker.trace)
     }
+}
 
+impl super::scan::Walker {
     /// Records that the segment of `stats` reached `reached` and no further.
     pub(super) fn note_loss(&mut self, reached: Reached, stats: &super::segment::Stats) {
         if stats.count == 0 {

@@ -3,6 +3,7 @@
 //! predicted centre).
 
 use super::track::Track;
+use crate::detect::scan::{Passed, Rules};
 use crate::detect::segment::Gray;
 use crate::detect::threshold::ThresholdMap;
 use crate::detect::{ellipse, Candidate, Detector};
@@ -22,9 +23,9 @@ impl Detector {
     /// (inside the white centre) along the row to the first dark pixel,
     /// which starts the marker's dark segment and the full tests.
     pub(super) fn follow(&mut self, gray: Gray<'_>, index: usize) -> Option<Candidate> {
-        let mut edge = std::mem::take(&mut self.edge_scratch);
+        let mut edge = std::mem::take(&mut self.walker.edge);
         let by_edges = self.follow_edges(gray, &self.tracks[index], &mut edge);
-        self.edge_scratch = edge;
+        self.walker.edge = edge;
         by_edges.or_else(|| self.follow_by_fill(gray, index))
     }
 
@@ -32,7 +33,18 @@ impl Detector {
     /// where its track predicted them (see [`Detector::follow`]); the fill
     /// labels what it reaches.
     pub(super) fn follow_by_fill(&mut self, gray: Gray<'_>, index: usize) -> Option<Candidate> {
-        let track = self.tracks[index].clone();
+        let passed = self.fill_tracked(gray, index)?;
+        let c = self.walker.fit_outline(gray, &passed)?;
+        self.where_expected(index, c)
+    }
+
+    /// The flood fill of [`Detector::follow_by_fill`]: from the track's
+    /// predicted centre along the row to the first pixel darker than its
+    /// threshold, the segment there and its tests. The only part of the
+    /// fill's way that writes (the labels), so the rest may be done on
+    /// other threads.
+    pub(super) fn fill_tracked(&mut self, gray: Gray<'_>, index: usize) -> Option<Passed> {
+        let track = &self.tracks[index];
         let (pu, pv) = track.predicted();
         let (x, y) = (pu.round(), pv.round());
         if !(x >= 0.0 && y >= 0.0 && (x as usize) < gray.width && (y as usize) < gray.height) {
@@ -43,13 +55,26 @@ impl Detector {
         let row = y * gray.width;
         let end = (x + reach).min(gray.width - 1);
         let seed = (x..=end).find(|&xx| gray.pixels[row + xx] < track.threshold)?;
-        if self.labels.is_dark_visited(row + seed) {
+        if self.walker.labels.is_dark_visited(row + seed) {
             return None;
         }
         let map = ThresholdMap::constant(track.threshold);
         self.follow_filled = true;
-        let passed = self.evaluate(gray, &map, (seed as u32, y as u32), &[])?;
-        let c = self.fit_outline(gray, &passed)?;
+        let adaptive = (&self.ratio, &self.roundness, &self.area);
+        Rules::new(&self.config, adaptive, &self.occupied).evaluate(
+            &mut self.walker,
+            gray,
+            &map,
+            (seed as u32, y as u32),
+            &[],
+        )
+    }
+
+    /// Candidate `c`, filled and fitted for track `index`, if it lies where
+    /// the track expects its marker and is of its size.
+    pub(super) fn where_expected(&self, index: usize, c: Candidate) -> Option<Candidate> {
+        let track = &self.tracks[index];
+        let (pu, pv) = track.predicted();
         let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
         let same_size = (c.outer.semi_major / track.a - 1.0).abs() < 0.3;
         (moved < track.a.max(4.0) && same_size).then_some(c)
@@ -126,6 +151,8 @@ impl Detector {
             area_error: 0.0,
             tested: false,
             track: None,
+            #[cfg(feature = "parallel")]
+            described: None,
         })
     }
 }

@@ -20,6 +20,7 @@ use image::{ImageBuffer, Luma};
 
 use super::pose::Posed;
 use super::ring::RingRead;
+use super::scan::Passed;
 use super::segment::Gray;
 use super::threshold::ThresholdMap;
 use super::{
@@ -74,7 +75,7 @@ impl Detector {
             // already visited. Markers that were followed are kept out of
             // the scan by the occupied tiles (`Detector::mark_followed`)
             // and the duplicate test after it.
-            self.labels.begin(gray.width, gray.height);
+            self.walker.labels.begin(gray.width, gray.height);
         }
     }
 
@@ -130,6 +131,7 @@ impl Detector {
         let timings = self.config.timings;
         let this = &*self;
         let tracks = &this.tracks;
+        let tracks_len = tracks.len();
         let (by_edges, spent) = in_runs(
             threads,
             &mut workspaces,
@@ -153,23 +155,49 @@ impl Detector {
             },
         );
         self.stopwatch.lap_shared(&spent);
+        // The markers whose edges were missed: their flood fills on this
+        // thread in the tracks' order (the labels), then their outlines
+        // and readings on the threads, as for those followed by their edges.
+        let filled: Vec<(usize, Passed)> = (0..tracks_len)
+            .filter(|&index| by_edges[index].is_none())
+            .filter_map(|index| Some((index, self.fill_tracked(gray, index)?)))
+            .collect();
+        self.stopwatch.lap(Stage::Follow);
+        let this = &*self;
+        let (by_fill, spent) = in_runs(
+            threads,
+            &mut workspaces,
+            timings,
+            &filled,
+            |ws, stopwatch, _, (index, passed)| {
+                let outline = Detector::outline(gray, passed, &mut Vec::new());
+                let fitted = outline.is_some();
+                let followed = outline.and_then(|c| this.where_expected(*index, c));
+                stopwatch.lap(Stage::Follow);
+                let read = followed.map(|mut c| {
+                    c.track = Some(*index);
+                    let reading = this.read_tracked(ws, &view, gray, &c);
+                    (c, reading)
+                });
+                stopwatch.lap(Stage::Describe);
+                (fitted, read)
+            },
+        );
+        self.stopwatch.lap_shared(&spent);
+        let mut by_fill = filled.iter().zip(by_fill).peekable();
         let mut found = Vec::new();
         for (index, read) in by_edges.into_iter().enumerate() {
             let read = read.or_else(|| {
-                let mut c = self.follow_by_fill(gray, index)?;
-                c.track = Some(index);
-                let mut ws = std::mem::take(&mut self.workspace);
-                let reading = self.read_tracked(&mut ws, &view, gray, &c);
-                self.workspace = ws;
-                Some((c, reading))
+                let ((_, passed), (fitted, read)) = by_fill.next_if(|((i, _), _)| *i == index)?;
+                self.walker.note_outline(passed, fitted);
+                read
             });
-            self.stopwatch.lap(Stage::Follow);
             if let Some((c, reading)) = read {
                 let (d, read, posed) = self.settle_identity(gray, &c, reading);
                 found.push((c, d, read, posed));
             }
-            self.stopwatch.lap(Stage::Describe);
         }
+        self.stopwatch.lap(Stage::Describe);
         let this = &*self;
         let (posed, spent) = in_runs(
             threads,
@@ -239,7 +267,7 @@ impl Detector {
         let map_rows = rows.start.saturating_sub(reach)..(rows.end + reach).min(height);
         let map = ThresholdMap::adaptive_rows(gray.pixels, width, height, map_rows);
         self.stopwatch.lap(Stage::Threshold);
-        self.scan(gray, &map, rows, &[], found);
+        self.scan(Stage::Scan, gray, &map, rows, &[], found);
     }
 
     /// A followed marker whose ID its track has read the same several
