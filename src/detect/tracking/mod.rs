@@ -18,6 +18,7 @@ use std::ops::Deref;
 
 use image::{ImageBuffer, Luma};
 
+use super::identity::Reading;
 use super::pose::Posed;
 use super::ring::RingRead;
 use super::scan::Passed;
@@ -110,9 +111,10 @@ impl Detector {
     /// [`Detector::follow_tracks`] on the pool's threads, with the same
     /// results: each track is followed by its edges and its marker read
     /// on some thread; then, in the tracks' order on this one, the tracks
-    /// whose edges were missed are followed by the flood fill (each fill
-    /// labels what the next may not take) and every reading goes through
-    /// its track's ID filter (which changes that track only, and nothing
+    /// whose edges were missed are flood-filled (each fill labels what the
+    /// next may not take), and what the fills found is fitted and read on
+    /// the threads; then every reading goes through its track's ID filter
+    /// in the tracks' order (which changes that track only, and nothing
     /// the other steps read); then the poses are fitted on the threads.
     fn follow_tracks_in_parallel<C: Deref<Target = [u8]>>(
         &mut self,
@@ -145,11 +147,7 @@ impl Detector {
                 }
                 let followed = this.follow_edges(gray, track, &mut Vec::new());
                 stopwatch.lap(Stage::Follow);
-                let read = followed.map(|mut c| {
-                    c.track = Some(index);
-                    let reading = this.read_tracked(ws, &view, gray, &c);
-                    (c, reading)
-                });
+                let read = this.read_followed(ws, &view, gray, followed, index);
                 stopwatch.lap(Stage::Describe);
                 read
             },
@@ -174,11 +172,7 @@ impl Detector {
                 let fitted = outline.is_some();
                 let followed = outline.and_then(|c| this.where_expected(*index, c));
                 stopwatch.lap(Stage::Follow);
-                let read = followed.map(|mut c| {
-                    c.track = Some(*index);
-                    let reading = this.read_tracked(ws, &view, gray, &c);
-                    (c, reading)
-                });
+                let read = this.read_followed(ws, &view, gray, followed, *index);
                 stopwatch.lap(Stage::Describe);
                 (fitted, read)
             },
@@ -218,6 +212,22 @@ impl Detector {
             finds.memories.push(memory);
             finds.candidates.push(c);
         }
+    }
+
+    /// Candidate `followed`, found where track `index` expected its marker,
+    /// as that track's, with what its pixels say of it.
+    fn read_followed(
+        &self,
+        ws: &mut Workspace,
+        image: &ImageBuffer<Luma<u8>, &[u8]>,
+        gray: Gray<'_>,
+        followed: Option<Candidate>,
+        index: usize,
+    ) -> Option<(Candidate, Reading)> {
+        let mut c = followed?;
+        c.track = Some(index);
+        let reading = self.read_tracked(ws, image, gray, &c);
+        Some((c, reading))
     }
 
     /// Per track, whether a candidate of `found` was followed as it.
