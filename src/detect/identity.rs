@@ -119,7 +119,7 @@ impl Detector {
         gray: Gray<'_>,
         c: &Candidate,
     ) -> (Detection, RingRead) {
-        let quality = 1.0 - (c.area_error / self.area.tolerance()).min(1.0);
+        let quality = 1.0 - (c.area_error / self.tolerances.area.tolerance()).min(1.0);
         let outline = (0.5 + 0.5 * quality).clamp(0.0, 1.0);
         if self.config.target.design() == Design::WhyCode {
             self.by_ring(ws, image, gray, c, outline)

@@ -53,7 +53,7 @@ use crate::pose::Pose;
 use segment::Gray;
 use threshold::ThresholdSearch;
 use timings::Stopwatch;
-use tracking::track::{Adaptive, PoseMemory, Track};
+use tracking::track::{Adaptive, PoseMemory, Tolerances, Track};
 
 /// What to look for and how strictly.
 #[derive(Debug, Clone)]
@@ -238,9 +238,7 @@ pub struct Detector {
     /// Discs of this frame that only a legacy WhyCon marker would explain.
     legacy_looking: usize,
     search: ThresholdSearch,
-    ratio: Adaptive,
-    roundness: Adaptive,
-    area: Adaptive,
+    tolerances: Tolerances,
     frame: u64,
     stopwatch: Stopwatch,
     /// The last frame's stage timings, with `config.timings`.
@@ -310,9 +308,11 @@ impl Detector {
         let white = config.target.design().white_fraction();
         let check = family_check::FamilyCheck::new(config.target.family().map(Family::bits));
         Detector {
-            ratio: Adaptive::new(white, config.ratio_tolerance),
-            roundness: Adaptive::new(0.0, config.roundness_tolerance),
-            area: Adaptive::new(0.0, config.area_tolerance),
+            tolerances: Tolerances {
+                ratio: Adaptive::new(white, config.ratio_tolerance),
+                roundness: Adaptive::new(0.0, config.roundness_tolerance),
+                area: Adaptive::new(0.0, config.area_tolerance),
+            },
             rings: ring::Rings::new(&config.target),
             config,
             walker: scan::Walker::default(),

@@ -8,7 +8,7 @@ use std::f64::consts::PI;
 use super::segment::{below_mask, below_word, word_thresholds, Fill, Filler, Gray, Labels, Stats};
 use super::threshold::{self, ThresholdMap};
 use super::timings::Stopwatch;
-use super::tracking::track::Adaptive;
+use super::tracking::track::Tolerances;
 use super::{ellipse, Candidate, Detector, DetectorConfig, Stage, StageTimings, SCAN_CHUNK};
 use crate::geometry::Design;
 
@@ -217,8 +217,7 @@ impl Detector {
         let parallel =
             !cfg!(feature = "trace") && crate::parallel::frame_threads(gray.width * rows.len()) > 1;
         if !parallel {
-            let adaptive = (&self.ratio, &self.roundness, &self.area);
-            Rules::new(&self.config, adaptive, &self.occupied).walk(
+            Rules::new(&self.config, &self.tolerances, &self.occupied).walk(
                 &mut self.walker,
                 gray,
                 map,
@@ -241,11 +240,7 @@ impl Detector {
         seed_rows(gray, map, rows.clone(), &mut seed_words);
         self.stopwatch.lap(stage);
         let this = &*self;
-        let rules = Rules::new(
-            &this.config,
-            (&this.ratio, &this.roundness, &this.area),
-            &this.occupied,
-        );
+        let rules = Rules::new(&this.config, &this.tolerances, &this.occupied);
         let limit = this.config.max_markers;
         let timings = this.config.timings;
         let view = image::ImageBuffer::<image::Luma<u8>, &[u8]>::from_raw(
@@ -340,23 +335,19 @@ impl Detector {
 /// the detector's [`Walker`], which the walk writes.
 pub(super) struct Rules<'a> {
     config: &'a DetectorConfig,
-    ratio: &'a Adaptive,
-    roundness: &'a Adaptive,
-    area: &'a Adaptive,
+    tolerances: &'a Tolerances,
     occupied: &'a [bool],
 }
 
 impl<'a> Rules<'a> {
     pub(super) fn new(
         config: &'a DetectorConfig,
-        (ratio, roundness, area): (&'a Adaptive, &'a Adaptive, &'a Adaptive),
+        tolerances: &'a Tolerances,
         occupied: &'a [bool],
     ) -> Rules<'a> {
         Rules {
             config,
-            ratio,
-            roundness,
-            area,
+            tolerances,
             occupied,
         }
     }
@@ -476,7 +467,7 @@ impl<'a> Rules<'a> {
             lost!(walker, Escaped, dark.stats);
         }
         let dark = dark.stats;
-        let white_fraction = self.ratio.expected;
+        let white_fraction = self.tolerances.ratio.expected;
         let dark_fraction = 1.0 - white_fraction;
         let min_d = self.config.min_diameter_px;
         let n = dark.count as f64;
@@ -514,7 +505,7 @@ impl<'a> Rules<'a> {
             1.0
         };
         let roundness = n / (PI / 4.0 * bw * bh * dark_fraction * slant) - 1.0;
-        if roundness.abs() >= self.roundness.tolerance() {
+        if roundness.abs() >= self.tolerances.roundness.tolerance() {
             lost!(walker, Roundness, dark);
         }
         // The grey values are read only for segments that pass every test
@@ -553,7 +544,8 @@ impl<'a> Rules<'a> {
                 e.semi_minor
             }
         };
-        let accepted = (self.ratio.accepts(ratio) || ORIGINAL_WHITE_SHARE.contains(&ratio))
+        let accepted = (self.tolerances.ratio.accepts(ratio)
+            || ORIGINAL_WHITE_SHARE.contains(&ratio))
             && coarse.is_some_and(|e| {
                 let (wu, wv) = white.centroid();
                 let radius = (e.semi_major * e.semi_minor).sqrt();
@@ -570,7 +562,7 @@ impl<'a> Rules<'a> {
         // Eq. 4 on the whole disc. Pixel counts of small discs carry a
         // boundary quantisation error of about 1/(2b) of the area.
         let area_error = coarse.area() / total.count as f64 - 1.0;
-        if area_error.abs() >= self.area.tolerance() + 0.5 / coarse.semi_minor {
+        if area_error.abs() >= self.tolerances.area.tolerance() + 0.5 / coarse.semi_minor {
             lost!(walker, Area, dark);
         }
         let black = Stats {

@@ -60,8 +60,7 @@ impl Detector {
         }
         let map = ThresholdMap::constant(track.threshold);
         self.follow_filled = true;
-        let adaptive = (&self.ratio, &self.roundness, &self.area);
-        Rules::new(&self.config, adaptive, &self.occupied).evaluate(
+        Rules::new(&self.config, &self.tolerances, &self.occupied).evaluate(
             &mut self.walker,
             gray,
             &map,
@@ -146,7 +145,7 @@ impl Detector {
             edge: edge.clone(),
             black,
             white,
-            ratio: self.ratio.expected,
+            ratio: self.tolerances.ratio.expected,
             roundness: 0.0,
             area_error: 0.0,
             tested: false,

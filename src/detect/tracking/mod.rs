@@ -133,7 +133,6 @@ impl Detector {
         let timings = self.config.timings;
         let this = &*self;
         let tracks = &this.tracks;
-        let tracks_len = tracks.len();
         let (by_edges, spent) = in_runs(
             threads,
             &mut workspaces,
@@ -156,7 +155,7 @@ impl Detector {
         // The markers whose edges were missed: their flood fills on this
         // thread in the tracks' order (the labels), then their outlines
         // and readings on the threads, as for those followed by their edges.
-        let filled: Vec<(usize, Passed)> = (0..tracks_len)
+        let filled: Vec<(usize, Passed)> = (0..by_edges.len())
             .filter(|&index| by_edges[index].is_none())
             .filter_map(|index| Some((index, self.fill_tracked(gray, index)?)))
             .collect();
@@ -387,9 +386,9 @@ impl Detector {
     /// tests measured (not those followed by their edges).
     pub(super) fn learn_tolerances(&mut self, found: &[Candidate]) {
         for c in found.iter().filter(|c| c.tested) {
-            self.ratio.learn(c.ratio);
-            self.roundness.learn(c.roundness);
-            self.area.learn(c.area_error);
+            self.tolerances.ratio.learn(c.ratio);
+            self.tolerances.roundness.learn(c.roundness);
+            self.tolerances.area.learn(c.area_error);
         }
     }
 }

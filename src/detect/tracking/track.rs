@@ -163,6 +163,16 @@ impl Track {
     }
 }
 
+/// The candidate tests' tolerances, each following what the candidates
+/// that passed the tests measured (paper 4.2): the white share, the
+/// roundness (eq. 1) and the area (eq. 4).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tolerances {
+    pub ratio: Adaptive,
+    pub roundness: Adaptive,
+    pub area: Adaptive,
+}
+
 /// A test value that follows what is measured: `expected` is the mean the
 /// test is centred on (or the typical error, for error-only tests) and the
 /// tolerance shrinks towards a multiple of the typical error but never
