@@ -66,6 +66,23 @@ pub(crate) mod prelude {
     impl<I: IntoIterator> SequentialIntoIter for I {}
 }
 
+/// Runs `work` on this thread and `aside` beside it, as a job another of
+/// the pool's threads takes if one is free (else this thread runs it
+/// after `work`); returns both results. Without threads, one after the
+/// other.
+pub(crate) fn beside<W, A, RW, RA>(work: W, aside: A) -> (RW, RA)
+where
+    W: FnOnce() -> RW + Send,
+    A: FnOnce() -> RA + Send,
+    RW: Send,
+    RA: Send,
+{
+    #[cfg(feature = "parallel")]
+    return rayon::join(work, aside);
+    #[cfg(not(feature = "parallel"))]
+    (work(), aside())
+}
+
 /// Items mapped on the pool's other threads while this thread goes on
 /// producing them (see [`map_alongside`]).
 #[cfg(feature = "parallel")]

@@ -426,8 +426,10 @@ impl Detector {
         if band_only {
             self.timed(Stage::Scan, |d| d.scan_band(gray, found));
         } else {
-            let map = self.timed(Stage::Scan, |d| d.scan_frame(gray, found));
-            self.timed(Stage::Shade, |d| d.look_in_shade(gray, &map, found));
+            let (map, ratio_map) = self.timed(Stage::Scan, |d| d.scan_frame(gray, found));
+            self.timed(Stage::Shade, |d| {
+                d.look_in_shade(gray, &map, ratio_map, found)
+            });
             self.timed(Stage::Fallback, |d| d.global_fallback(gray, &map, found));
         }
         drop_seen_again(found, followed, self.config.max_markers);

@@ -43,28 +43,56 @@ fn concentricity_tolerance(design: Design) -> f64 {
     }
 }
 
+/// The shade look's map over the rows of the scan's `map`: its tile
+/// levels taken as they are (over the shaded rows only, it would read
+/// every pixel of them again). Seeds are still taken in the shaded rows
+/// only.
+fn ratio_map(gray: Gray<'_>, map: &ThresholdMap) -> ThresholdMap {
+    ThresholdMap::adaptive_ratio(gray.pixels, gray.width, gray.height, 0..gray.height, map)
+}
+
 impl Detector {
     /// Scans the whole frame with thresholds from the local map, which it
-    /// returns for the looks after it.
+    /// returns for the looks after it, with the shade look's map when it
+    /// was made beside the scan.
     pub(super) fn scan_frame(
         &mut self,
         gray: Gray<'_>,
         found: &mut Vec<Candidate>,
-    ) -> ThresholdMap {
+    ) -> (ThresholdMap, Option<ThresholdMap>) {
         let map = ThresholdMap::adaptive(gray.pixels, gray.width, gray.height);
         self.stopwatch.lap(Stage::Threshold);
-        self.scan(Stage::Scan, gray, &map, 0..gray.height, &[], found);
-        map
+        // With a family, the shade look follows wherever the map saw a
+        // shadow's edge (see `look_in_shade`), whatever the scan finds. Its
+        // map depends on the first map alone: on a frame the pool splits,
+        // another thread makes it while this one walks, rather than both
+        // waiting for it after the scan.
+        let shade_ahead = self.config.target.family().is_some()
+            && map.shaded_rows().is_some()
+            && crate::parallel::frame_threads(gray.width * gray.height) > 1;
+        if !shade_ahead {
+            self.scan(Stage::Scan, gray, &map, 0..gray.height, &[], found);
+            return (map, None);
+        }
+        let ((), ratio_map) = crate::parallel::beside(
+            || self.scan(Stage::Scan, gray, &map, 0..gray.height, &[], found),
+            || ratio_map(gray, &map),
+        );
+        // Whatever the scan waited for the shade look's map is its time.
+        self.stopwatch.lap(Stage::Shade);
+        (map, Some(ratio_map))
     }
 
     /// A second look at the rows where the scan's `map` saw a cast
     /// shadow's edge: shaded paper fell below the mid-level threshold.
     /// There thresholds that keep the paper's ratio to the ink find what
     /// the first look missed.
+    /// `ratio_map` is that look's map if it was made beside the scan.
     pub(super) fn look_in_shade(
         &mut self,
         gray: Gray<'_>,
         map: &ThresholdMap,
+        ratio_map: Option<ThresholdMap>,
         found: &mut Vec<Candidate>,
     ) {
         // A family's ring test stands between grey clutter (which looks
@@ -79,11 +107,7 @@ impl Detector {
             return;
         };
         let (width, height) = (gray.width, gray.height);
-        // The ratio map over the mid map's rows takes that map's tile
-        // levels as they are; over the shaded rows only, it would read
-        // every pixel of them again. Seeds are still taken in the shaded
-        // rows only.
-        let ratio_map = ThresholdMap::adaptive_ratio(gray.pixels, width, height, 0..height, map);
+        let ratio_map = ratio_map.unwrap_or_else(|| self::ratio_map(gray, map));
         self.walker.labels.begin(width, height);
         let mut again = Vec::new();
         let near = map.near_shaded();
@@ -233,11 +257,22 @@ impl Detector {
         }
         let mut walker = std::mem::take(&mut self.walker);
         let mut seed_words = std::mem::take(&mut self.seed_words);
+        let stride = gray.width.div_ceil(64);
         seed_words.clear();
+        seed_words.resize(rows.len() * stride, 0);
+        let seeds = |y: usize, words: &mut [u64]| seed_row(gray, map, y, words);
         if self.occupied.is_empty() {
-            walker.filler.classify_rows(gray, map, rows.clone());
+            let extra = (seed_words.as_mut_slice(), stride);
+            walker
+                .filler
+                .classify_rows(gray, map, rows.clone(), extra, seeds);
+        } else {
+            use crate::parallel::prelude::*;
+            seed_words
+                .par_chunks_mut(stride)
+                .enumerate()
+                .for_each(|(k, words)| seeds(rows.start + k, words));
         }
-        seed_rows(gray, map, rows.clone(), &mut seed_words);
         self.stopwatch.lap(stage);
         let this = &*self;
         let rules = Rules::new(&this.config, &this.tolerances, &this.occupied);
@@ -355,7 +390,7 @@ impl<'a> Rules<'a> {
     /// The walk of [`Detector::scan`] over `rows`: each segment that passes
     /// the tests goes to `passed`, which makes it a candidate in `found`
     /// or leaves it for later. The seed pixels are `seeds` (words of
-    /// [`seed_rows`]) when they were found before, else found on the way.
+    /// [`seed_row`]) when they were found before, else found on the way.
     #[allow(clippy::too_many_arguments)]
     fn walk(
         &self,
@@ -745,29 +780,14 @@ fn seed_word(block: &[u8], thresholds: &[u8], shift: u32, margin: u8, w: usize) 
     }
 }
 
-/// [`seed_word`] of every word of `rows`, row after row, worked out on
-/// the pool's threads into `words`.
-fn seed_rows(
-    gray: Gray<'_>,
-    map: &ThresholdMap,
-    rows: std::ops::Range<usize>,
-    words: &mut Vec<u64>,
-) {
-    use crate::parallel::prelude::*;
-    let stride = gray.width.div_ceil(64);
+/// [`seed_word`] of every word of row `y`, into `words`.
+fn seed_row(gray: Gray<'_>, map: &ThresholdMap, y: usize, words: &mut [u64]) {
     let (shift, margin) = (map.shift(), map.seed_margin());
-    words.resize(rows.len() * stride, 0);
-    words
-        .par_chunks_mut(stride)
-        .enumerate()
-        .for_each(|(k, out)| {
-            let y = rows.start + k;
-            let row = &gray.pixels[y * gray.width..(y + 1) * gray.width];
-            let thresholds = map.row(y);
-            for (w, (block, out)) in row.chunks(64).zip(out).enumerate() {
-                *out = seed_word(block, thresholds, shift, margin, w);
-            }
-        });
+    let row = &gray.pixels[y * gray.width..(y + 1) * gray.width];
+    let thresholds = map.row(y);
+    for (w, (block, out)) in row.chunks(64).zip(words).enumerate() {
+        *out = seed_word(block, thresholds, shift, margin, w);
+    }
 }
 
 /// A segment that passed every test that reads the labels, with what its

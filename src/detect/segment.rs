@@ -386,21 +386,38 @@ impl Classes {
     }
 
     /// Classifies `rows` on the pool's threads, for a scan of a large
-    /// frame whose fills will reach most of them.
-    fn classify_rows(&mut self, image: Gray<'_>, map: &ThresholdMap, rows: std::ops::Range<usize>) {
+    /// frame whose fills will reach most of them, and runs `also` on each
+    /// row (its number and its `per_row` items of `extra`) while its
+    /// pixels are in the cache.
+    fn classify_rows<T: Send>(
+        &mut self,
+        image: Gray<'_>,
+        map: &ThresholdMap,
+        rows: std::ops::Range<usize>,
+        (extra, per_row): (&mut [T], usize),
+        also: impl Fn(usize, &mut [T]) + Sync,
+    ) {
         use crate::parallel::prelude::*;
+        assert_eq!(
+            extra.len(),
+            rows.len() * per_row,
+            "a row of `extra` per row"
+        );
         let range = rows.start * self.stride..rows.end * self.stride;
         let generation = self.generation;
         self.dark[range.clone()]
             .par_chunks_mut(self.stride)
             .zip(self.light[range].par_chunks_mut(self.stride))
             .zip(self.stamps[rows.clone()].par_iter_mut())
+            .zip(extra.par_chunks_mut(per_row.max(1)))
             .enumerate()
-            .for_each(|(k, ((dark, light), stamp))| {
+            .for_each(|(k, (((dark, light), stamp), extra))| {
+                let y = rows.start + k;
                 if *stamp != generation {
-                    classify_words(image, map, rows.start + k, 0..dark.len(), dark, light);
+                    classify_words(image, map, y, 0..dark.len(), dark, light);
                     *stamp = generation;
                 }
+                also(y, extra);
             });
     }
 }
@@ -909,6 +926,7 @@ impl Filler {
 
     /// Whether a fill (dark or white) from `at` would take that pixel at
     /// all: most of the white fill's probes of a blob land on ink.
+    #[inline]
     pub fn takes(
         &mut self,
         image: Gray<'_>,
@@ -930,14 +948,19 @@ impl Filler {
 
     /// Classifies `rows` of `image` under `map` at once, on the pool's
     /// threads, rather than as fills reach them: the same classes, sooner.
-    pub fn classify_rows(
+    /// `also` runs on each row as it is classified, with its number and
+    /// its `per_row` items of `extra` (the scan finds its seeds there,
+    /// reading the row's pixels while they are in the cache).
+    pub fn classify_rows<T: Send>(
         &mut self,
         image: Gray<'_>,
         map: &ThresholdMap,
         rows: std::ops::Range<usize>,
+        extra: (&mut [T], usize),
+        also: impl Fn(usize, &mut [T]) + Sync,
     ) {
         self.classes.select(image, map);
-        self.classes.classify_rows(image, map, rows);
+        self.classes.classify_rows(image, map, rows, extra, also);
     }
 
     /// Sets the last fill's runs aside for [`Filler::kept_grey_sum`].

@@ -147,18 +147,27 @@ fn solve(observations: &Observations, initial: &CirclePose, steps: usize) -> Opt
     let mut circle = *initial;
     for _ in 0..steps {
         let basis = plane_basis(&circle.normal);
-        let mut normal = SMatrix::<f64, 5, 5>::zeros();
-        let mut gradient = Params::zeros();
+        // JᵀJ is symmetric: the sums of its upper triangle, in plain
+        // arrays, are mirrored below once (a product j[a]·j[b] is the same
+        // number either way round, so the matrix is the one the full
+        // outer products would sum, bit for bit).
+        let mut upper = [[0.0f64; 5]; 5];
+        let mut gradient = [0.0f64; 5];
         let mut current = 0.0;
-        let linearised = observations.linearise(&circle, &basis, |r, row| {
-            let j = Params::from_column_slice(row);
-            normal += j * j.transpose();
-            gradient += j * r;
+        let linearised = observations.linearise(&circle, &basis, |r, j| {
+            for a in 0..5 {
+                for b in a..5 {
+                    upper[a][b] += j[a] * j[b];
+                }
+                gradient[a] += j[a] * r;
+            }
             current += r * r;
         });
         if !linearised {
             return None;
         }
+        let normal = SMatrix::<f64, 5, 5>::from_fn(|a, b| upper[a.min(b)][a.max(b)]);
+        let gradient = Params::from(gradient);
         let Some(mut step) = normal.cholesky().map(|c| c.solve(&-gradient)) else {
             break;
         };
