@@ -8,13 +8,15 @@
 //! to disk before the rename; a new file gets the permissions the umask
 //! allows and a replaced one keeps its own; and the temporary files of a
 //! run that was interrupted are removed (on SIGINT, SIGTERM and SIGHUP by
-//! the command line's handler, after `kill -9` by the next write into the
-//! same folder).
+//! the command line's handler, which it installs through
+//! [`before_first_staging`] as the first one is staged, after stopping the
+//! programs that fill them, [`StagedWriter`]; after `kill -9` by the next
+//! write into the same folder).
 
 use crate::error::WriteError;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
+use std::sync::{Mutex, Once, OnceLock};
 
 /// Prefix of every temporary file this crate stages an output in.
 const TEMP_PREFIX: &str = ".whycode-";
@@ -27,10 +29,81 @@ const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(600);
 /// handler to clean up ([`remove_staged`]).
 static STAGED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
-/// Removes every temporary file staged and not yet committed: what a
-/// signal handler calls before the process ends, since a signal does not
-/// unwind and run the temporary files' own clean-up.
+/// What runs once, just before the first temporary file is staged.
+static BEFORE_FIRST_STAGING: OnceLock<fn()> = OnceLock::new();
+static STAGING_BEGUN: Once = Once::new();
+
+/// Sets what runs once, just before this process stages its first
+/// temporary file: the command line installs its signal handler there
+/// (see [`remove_staged`]), so that a run which writes no file, a photo
+/// detected to the terminal, starts no thread to wait for signals. Set
+/// once; later calls change nothing.
+pub fn before_first_staging(hook: fn()) {
+    let _ = BEFORE_FIRST_STAGING.set(hook);
+}
+
+/// Programs filling staged files by their paths, by [`StagedWriter`]
+/// number.
+static WRITERS: Mutex<Vec<(u64, std::process::Child)>> = Mutex::new(Vec::new());
+static NEXT_WRITER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+
+/// A program that fills a staged file by its path (ffmpeg writing a
+/// video), held here so that [`remove_staged`] stops it before it removes
+/// the file: left running after this process ends, it would create the
+/// file again under its temporary name. Killed when dropped unwaited.
+pub struct StagedWriter {
+    id: u64,
+}
+
+impl StagedWriter {
+    /// Takes over `child`, whose pipes the caller has taken out of it
+    /// first (it writes to the program and reads its messages itself).
+    pub fn new(child: std::process::Child) -> StagedWriter {
+        let id = NEXT_WRITER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        lock(&WRITERS).push((id, child));
+        StagedWriter { id }
+    }
+
+    /// Waits for the program to end by itself (its input closed) and
+    /// returns how it ended. A signal's clean-up waits meanwhile: the
+    /// program may not have opened its file yet.
+    pub fn wait(self) -> std::io::Result<std::process::ExitStatus> {
+        let mut writers = lock(&WRITERS);
+        let at = writers.iter().position(|(id, _)| *id == self.id);
+        let Some(at) = at else {
+            return Err(std::io::Error::other("the program was stopped"));
+        };
+        let status = writers[at].1.wait();
+        writers.remove(at);
+        status
+    }
+}
+
+impl Drop for StagedWriter {
+    fn drop(&mut self) {
+        let mut writers = lock(&WRITERS);
+        if let Some(at) = writers.iter().position(|(id, _)| *id == self.id) {
+            let (_, mut child) = writers.remove(at);
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+/// A lock that a panic elsewhere does not poison for the clean-up.
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    mutex.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Stops the programs filling staged files, then removes every temporary
+/// file staged and not yet committed: what a signal handler calls before
+/// the process ends, since a signal does not unwind and run the temporary
+/// files' own clean-up.
 pub fn remove_staged() {
+    for (_, child) in lock(&WRITERS).iter_mut() {
+        let _ = child.kill();
+        let _ = child.wait();
+    }
     let staged = STAGED.lock().unwrap_or_else(|p| p.into_inner());
     for path in staged.iter() {
         let _ = std::fs::remove_file(path);
@@ -418,6 +491,9 @@ fn stage_beside(path: &Path, target: &Path) -> Result<Staged, WriteError> {
         return Err(err);
     }
     sweep_stale(dir);
+    if let Some(hook) = BEFORE_FIRST_STAGING.get() {
+        STAGING_BEGUN.call_once(hook);
+    }
     let mut builder = tempfile::Builder::new();
     builder.prefix(TEMP_PREFIX).rand_bytes(6);
     // Created as an ordinary file would be, so the umask decides who may
@@ -483,6 +559,23 @@ fn without_temp_path(err: std::io::Error) -> std::io::Error {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_hook_runs_once_as_the_first_file_is_staged() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static RUNS: AtomicUsize = AtomicUsize::new(0);
+        fn count() {
+            RUNS.fetch_add(1, Ordering::SeqCst);
+        }
+        before_first_staging(count);
+        let dir = tempfile::tempdir().unwrap();
+        write_atomic(&dir.path().join("a.txt"), b"a").unwrap();
+        assert_eq!(RUNS.load(Ordering::SeqCst), 1);
+        let staged = StagedFile::new(&dir.path().join("b.txt")).unwrap();
+        write_atomic(&dir.path().join("c.txt"), b"c").unwrap();
+        drop(staged);
+        assert_eq!(RUNS.load(Ordering::SeqCst), 1);
+    }
 
     #[test]
     fn concurrent_writers_of_one_set_leave_one_writers_files() {

@@ -50,7 +50,10 @@ enum Command {
 
 /// An interrupted run (Ctrl-C, `kill`, a closed terminal) removes the
 /// temporary files its writes had staged before it ends: a signal does not
-/// unwind, so their own clean-up would never run.
+/// unwind, so their own clean-up would never run. Installed as the first
+/// file is staged ([`whycode::io::before_first_staging`]): a command that
+/// writes no file (a photo detected to the terminal) starts no thread for
+/// it.
 fn clean_up_on_signals() {
     use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
     let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
@@ -66,7 +69,7 @@ fn clean_up_on_signals() {
 
 /// Parses the command line and runs the subcommand.
 pub fn main() -> ExitCode {
-    clean_up_on_signals();
+    whycode::io::before_first_staging(clean_up_on_signals);
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(err) => return usage_error(err),

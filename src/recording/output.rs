@@ -10,10 +10,10 @@ use crate::ros::describe::Described;
 use crate::ros::msg::{CameraInfo, CompressedImage, Image, MarkerArray, RosType, TfMessage, Time};
 use serde::Serialize;
 use std::collections::BTreeMap;
-use std::io::{Cursor, Write};
+use std::io::{Cursor, Read, Write};
 use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::process::{ChildStderr, ChildStdin, Command, Stdio};
 
 /// The topic the node publishes its marker arrays on (`~/markers` of a
 /// node named `whycode`).
@@ -293,9 +293,18 @@ impl<M: ImageMessage> CameraBag<M> {
 pub struct AnnotatedVideo {
     target: PathBuf,
     staged: PathBuf,
-    child: Option<Child>,
+    ffmpeg: Option<Encoder>,
     first: Option<(image::RgbImage, i64)>,
     size: (u32, u32),
+}
+
+/// The ffmpeg filling the staged file: the program (held by
+/// [`crate::io::StagedWriter`], which stops it if a signal ends the run),
+/// its input and its messages.
+struct Encoder {
+    writer: crate::io::StagedWriter,
+    input: ChildStdin,
+    messages: ChildStderr,
 }
 
 impl AnnotatedVideo {
@@ -305,7 +314,7 @@ impl AnnotatedVideo {
         AnnotatedVideo {
             target: target.to_path_buf(),
             staged: staged.to_path_buf(),
-            child: None,
+            ffmpeg: None,
             first: None,
             size: (0, 0),
         }
@@ -320,7 +329,7 @@ impl AnnotatedVideo {
 
     /// Adds a frame shown at `stamp_ns`.
     pub fn push(&mut self, frame: image::RgbImage, stamp_ns: i64) -> Result<(), RecordingError> {
-        if self.child.is_none() {
+        if self.ffmpeg.is_none() {
             match self.first.take() {
                 None => {
                     self.first = Some((frame, stamp_ns));
@@ -374,7 +383,7 @@ impl AnnotatedVideo {
         };
         // 4:2:0 needs even sizes: the last odd row or column is dropped.
         let even = "crop=trunc(iw/2)*2:trunc(ih/2)*2";
-        let child = Command::new(super::video::ffmpeg_program())
+        let mut child = Command::new(super::video::ffmpeg_program())
             .args([
                 "-hide_banner",
                 "-nostdin",
@@ -399,7 +408,14 @@ impl AnnotatedVideo {
                 },
                 _ => self.fail(e),
             })?;
-        self.child = Some(child);
+        let (Some(input), Some(messages)) = (child.stdin.take(), child.stderr.take()) else {
+            unreachable!("ffmpeg's input and messages are piped");
+        };
+        self.ffmpeg = Some(Encoder {
+            writer: crate::io::StagedWriter::new(child),
+            input,
+            messages,
+        });
         self.size = (width, height);
         Ok(())
     }
@@ -414,8 +430,8 @@ impl AnnotatedVideo {
                 self.size.1
             )));
         }
-        let stdin = self.child.as_mut().and_then(|c| c.stdin.as_mut());
-        match stdin.map(|s| s.write_all(frame.as_raw())) {
+        let input = self.ffmpeg.as_mut().map(|f| &mut f.input);
+        match input.map(|s| s.write_all(frame.as_raw())) {
             Some(Ok(())) => Ok(()),
             _ => Err(self
                 .finish_child()
@@ -425,15 +441,23 @@ impl AnnotatedVideo {
     }
 
     fn finish_child(&mut self) -> Result<(), RecordingError> {
-        let Some(mut child) = self.child.take() else {
+        let Some(Encoder {
+            writer,
+            input,
+            mut messages,
+        }) = self.ffmpeg.take()
+        else {
             return Ok(());
         };
-        drop(child.stdin.take());
-        let output = child.wait_with_output().map_err(|e| self.fail(e))?;
-        if output.status.success() {
+        drop(input);
+        // ffmpeg closes its messages as it ends.
+        let mut said = Vec::new();
+        messages.read_to_end(&mut said).map_err(|e| self.fail(e))?;
+        let status = writer.wait().map_err(|e| self.fail(e))?;
+        if status.success() {
             Ok(())
         } else {
-            let said = String::from_utf8_lossy(&output.stderr);
+            let said = String::from_utf8_lossy(&said);
             Err(self.fail(said.lines().last().unwrap_or("ffmpeg failed")))
         }
     }
@@ -445,15 +469,6 @@ impl AnnotatedVideo {
             self.write(&first)?;
         }
         self.finish_child()
-    }
-}
-
-impl Drop for AnnotatedVideo {
-    fn drop(&mut self) {
-        if let Some(mut child) = self.child.take() {
-            let _ = child.kill();
-            let _ = child.wait();
-        }
     }
 }
 

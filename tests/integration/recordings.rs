@@ -594,3 +594,65 @@ fn images_folders_and_bags_are_read_in_one_run() {
     assert!(err.contains("a/run.mcap: read 15 frames"), "{err}");
     assert!(err.contains("wrote 34 annotated images to seen"), "{err}");
 }
+
+/// The temporary files of this crate's writes in `dir`.
+fn temporary_files(dir: &Path) -> Vec<String> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|name| name.starts_with(".whycode-"))
+        .collect()
+}
+
+/// A run stopped by a signal (as `kill` or a closed terminal sends) while
+/// ffmpeg writes its annotated video under a temporary name removes that
+/// file, and stops ffmpeg first: ffmpeg opens its output only once its
+/// encoder has packets, a few dozen frames in, so left running after the
+/// run ended it would create the file again. Stopped from at once to
+/// about a second in.
+#[test]
+fn a_run_stopped_while_writing_its_video_leaves_no_file_behind() {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    sequence()[0].0.save(d.join("still.png")).unwrap();
+    let out = Command::new("ffmpeg")
+        .current_dir(d)
+        .args(["-hide_banner", "-loglevel", "error", "-loop", "1"])
+        .args(["-i", "still.png", "-vf", "pad=1280:720:480:240:white"])
+        .args(["-frames:v", "1000", "-c:v", "mjpeg", "long.avi"])
+        .output()
+        .expect("ffmpeg runs (apt-get install ffmpeg)");
+    assert!(out.status.success(), "{}", stderr(&out));
+    for round in 0..8u64 {
+        let mut run = Command::new(env!("CARGO_BIN_EXE_whycode"))
+            .current_dir(d)
+            .args(["detect", "--annotate", "seen.mp4", "long.avi"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        while temporary_files(d).is_empty() {
+            assert!(
+                run.try_wait().unwrap().is_none(),
+                "round {round}: the run ended before it staged its video"
+            );
+            assert!(start.elapsed() < Duration::from_secs(60), "round {round}");
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        std::thread::sleep(Duration::from_millis(120 * round));
+        let kill = Command::new("sh")
+            .args(["-c", &format!("kill -TERM {}", run.id())])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        let status = run.wait().unwrap();
+        assert!(!status.success(), "round {round}: the run was not stopped");
+        // An ffmpeg left running would write its file in this time.
+        std::thread::sleep(Duration::from_millis(300));
+        assert_eq!(temporary_files(d), Vec::<String>::new(), "round {round}");
+        assert!(!d.join("seen.mp4").exists(), "round {round}");
+    }
+}
