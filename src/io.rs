@@ -104,7 +104,7 @@ pub fn remove_staged() {
         let _ = child.kill();
         let _ = child.wait();
     }
-    let staged = STAGED.lock().unwrap_or_else(|p| p.into_inner());
+    let staged = lock(&STAGED);
     for path in staged.iter() {
         let _ = std::fs::remove_file(path);
     }
@@ -119,10 +119,7 @@ struct Staged {
 impl Staged {
     fn new(tmp: tempfile::NamedTempFile) -> Staged {
         let path = tmp.path().to_path_buf();
-        STAGED
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .push(path.clone());
+        lock(&STAGED).push(path.clone());
         Staged {
             tmp: Some(tmp),
             path,
@@ -139,10 +136,7 @@ impl Staged {
 
 impl Drop for Staged {
     fn drop(&mut self) {
-        STAGED
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .retain(|p| *p != self.path);
+        lock(&STAGED).retain(|p| *p != self.path);
     }
 }
 
