@@ -56,12 +56,25 @@ pub struct StagedWriter {
 }
 
 impl StagedWriter {
-    /// Takes over `child`, whose pipes the caller has taken out of it
-    /// first (it writes to the program and reads its messages itself).
-    pub fn new(child: std::process::Child) -> StagedWriter {
+    /// Starts `command` and holds the program here at once, handing
+    /// `take` the child to take its pipes out of (the caller writes to the
+    /// program and reads its messages itself). A signal's clean-up waits
+    /// meanwhile: one that came between the start and the holding would
+    /// miss the program, which would then create its file after this
+    /// process ended. Starts nothing once that clean-up has begun.
+    pub fn spawn<T>(
+        command: &mut std::process::Command,
+        take: impl FnOnce(&mut std::process::Child) -> T,
+    ) -> std::io::Result<(StagedWriter, T)> {
+        let mut writers = lock(&WRITERS);
+        if stopping() {
+            return Err(std::io::Error::other("the run is being stopped"));
+        }
+        let mut child = command.spawn()?;
+        let taken = take(&mut child);
         let id = NEXT_WRITER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        lock(&WRITERS).push((id, child));
-        StagedWriter { id }
+        writers.push((id, child));
+        Ok((StagedWriter { id }, taken))
     }
 
     /// Waits for the program to end by itself (its input closed) and
@@ -95,11 +108,23 @@ fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     mutex.lock().unwrap_or_else(|p| p.into_inner())
 }
 
+/// Set once [`remove_staged`] has begun: the process is being stopped.
+static STOPPING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Whether a signal's clean-up ([`remove_staged`]) has begun. What fails
+/// meanwhile (a write to the ffmpeg it stopped, an ffmpeg that got the
+/// terminal's Ctrl-C too) is that stop, not a fault to report: the command
+/// line leaves the process's end and exit status to the signal handler.
+pub fn stopping() -> bool {
+    STOPPING.load(std::sync::atomic::Ordering::SeqCst)
+}
+
 /// Stops the programs filling staged files, then removes every temporary
 /// file staged and not yet committed: what a signal handler calls before
 /// the process ends, since a signal does not unwind and run the temporary
 /// files' own clean-up.
 pub fn remove_staged() {
+    STOPPING.store(true, std::sync::atomic::Ordering::SeqCst);
     for (_, child) in lock(&WRITERS).iter_mut() {
         let _ = child.kill();
         let _ = child.wait();
@@ -117,13 +142,22 @@ struct Staged {
 }
 
 impl Staged {
-    fn new(tmp: tempfile::NamedTempFile) -> Staged {
+    /// Creates the temporary file `builder` makes in `dir` and lists it,
+    /// as one step for a signal's clean-up, which waits meanwhile (a file
+    /// created before it and listed after it would be left behind); none
+    /// once that clean-up has begun.
+    fn create(builder: &tempfile::Builder, dir: &Path) -> std::io::Result<Staged> {
+        let mut staged = lock(&STAGED);
+        if stopping() {
+            return Err(std::io::Error::other("the run is being stopped"));
+        }
+        let tmp = builder.tempfile_in(dir)?;
         let path = tmp.path().to_path_buf();
-        lock(&STAGED).push(path.clone());
-        Staged {
+        staged.push(path.clone());
+        Ok(Staged {
             tmp: Some(tmp),
             path,
-        }
+        })
     }
 
     fn file(&mut self) -> &mut std::fs::File {
@@ -497,10 +531,7 @@ fn stage_beside(path: &Path, target: &Path) -> Result<Staged, WriteError> {
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
-    let tmp = builder
-        .tempfile_in(dir)
-        .map_err(|e| WriteError::io(path, without_temp_path(e)))?;
-    Ok(Staged::new(tmp))
+    Staged::create(&builder, dir).map_err(|e| WriteError::io(path, without_temp_path(e)))
 }
 
 fn commit(path: &Path, target: &Path, mut staged: Staged) -> Result<(), WriteError> {

@@ -87,6 +87,14 @@ pub fn main() -> ExitCode {
         Command::Calibrate(args) => calibrate::run(args),
         Command::Arena(args) => arena::run(args),
     };
+    if whycode::io::stopping() {
+        // A signal is ending the run: its handler removes the staged files
+        // and exits with the signal's status; an error its clean-up caused
+        // would only mislead.
+        loop {
+            std::thread::park();
+        }
+    }
     match result {
         Ok(code) => code,
         // The reader had what it wanted (`| head`): not a failure.

@@ -111,7 +111,13 @@ pub fn note(text: impl Display) {
     say(format_args!("note: {text}"));
 }
 
-/// `whycode: error: {text}` on standard error.
+/// `whycode: error: {text}` on standard error; nothing once a signal's
+/// clean-up has begun ([`whycode::io::stopping`]): what fails then (a
+/// write to the ffmpeg it stopped) is the stop, which the exit status
+/// tells.
 pub fn error(text: impl Display) {
+    if whycode::io::stopping() {
+        return;
+    }
     say(format_args!("error: {text}"));
 }

@@ -383,7 +383,8 @@ impl AnnotatedVideo {
         };
         // 4:2:0 needs even sizes: the last odd row or column is dropped.
         let even = "crop=trunc(iw/2)*2:trunc(ih/2)*2";
-        let mut child = Command::new(super::video::ffmpeg_program())
+        let mut command = Command::new(super::video::ffmpeg_program());
+        command
             .args([
                 "-hide_banner",
                 "-nostdin",
@@ -400,19 +401,21 @@ impl AnnotatedVideo {
             .arg(&self.staged)
             .stdin(Stdio::piped())
             .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .map_err(|e| match e.kind() {
-                std::io::ErrorKind::NotFound => RecordingError::FfmpegMissing {
-                    path: self.target.clone(),
-                },
-                _ => self.fail(e),
-            })?;
-        let (Some(input), Some(messages)) = (child.stdin.take(), child.stderr.take()) else {
+            .stderr(Stdio::piped());
+        let (writer, pipes) = crate::io::StagedWriter::spawn(&mut command, |child| {
+            (child.stdin.take(), child.stderr.take())
+        })
+        .map_err(|e| match e.kind() {
+            std::io::ErrorKind::NotFound => RecordingError::FfmpegMissing {
+                path: self.target.clone(),
+            },
+            _ => self.fail(e),
+        })?;
+        let (Some(input), Some(messages)) = pipes else {
             unreachable!("ffmpeg's input and messages are piped");
         };
         self.ffmpeg = Some(Encoder {
-            writer: crate::io::StagedWriter::new(child),
+            writer,
             input,
             messages,
         });
