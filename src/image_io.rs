@@ -40,9 +40,31 @@ fn image_error(path: &Path, problem: LoadProblem) -> LoadError {
 /// colour) as 8-bit grey. Refuses sizes beyond [`SizeLimit::FILES`] before
 /// decoding.
 pub fn load_gray(path: &Path) -> Result<GrayImage, LoadError> {
+    load_gray_reading_whole(path, READ_WHOLE_BYTES)
+}
+
+/// Image files up to this size are read into memory whole before decoding
+/// (a 25-megapixel JPEG is about 10 MB).
+const READ_WHOLE_BYTES: u64 = 64 << 20;
+
+/// [`load_gray`], reading a file of up to `whole` bytes into memory once
+/// and decoding it from there: the decoder looks at the header, then at the
+/// pixels, which from disk is a second and third opening of the file. A
+/// larger file is opened again for each look, so that a huge file whose
+/// header is refused is never read whole.
+fn load_gray_reading_whole(path: &Path, whole: u64) -> Result<GrayImage, LoadError> {
     // Refuses a FIFO or device before the decoder waits on it or reads
     // without end.
-    crate::input::open(path, FileKind::Image)?;
+    {
+        let (mut file, length) = crate::input::open(path, FileKind::Image)?;
+        if length <= whole {
+            let mut bytes = Vec::with_capacity(length as usize);
+            std::io::Read::read_to_end(&mut file, &mut bytes)
+                .map_err(|e| image_error(path, LoadProblem::Read(e)))?;
+            let open = || Ok(std::io::Cursor::new(&bytes[..]));
+            return Ok(decode(path, open, SizeLimit::FILES)?.0);
+        }
+    }
     let open = || std::fs::File::open(path).map(std::io::BufReader::new);
     Ok(decode(path, open, SizeLimit::FILES)?.0)
 }
@@ -597,8 +619,10 @@ mod tests {
         let path = dir.path().join("ramp.png");
         std::fs::write(&path, &bytes).unwrap();
         let from_file = load_gray(&path).unwrap();
+        let reopened = load_gray_reading_whole(&path, 0).unwrap();
         let from_bytes = decode_gray(Path::new("ramp.png"), &bytes, SizeLimit::FILES).unwrap();
         assert_eq!(from_file, image);
+        assert_eq!(reopened, image);
         assert_eq!(from_bytes, image);
     }
 
