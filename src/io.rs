@@ -67,9 +67,7 @@ impl StagedWriter {
         take: impl FnOnce(&mut std::process::Child) -> T,
     ) -> std::io::Result<(StagedWriter, T)> {
         let mut writers = lock(&WRITERS);
-        if stopping() {
-            return Err(std::io::Error::other("the run is being stopped"));
-        }
+        refuse_once_stopping()?;
         let mut child = command.spawn()?;
         let taken = take(&mut child);
         let id = NEXT_WRITER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
@@ -119,10 +117,21 @@ pub fn stopping() -> bool {
     STOPPING.load(std::sync::atomic::Ordering::SeqCst)
 }
 
+/// The error of a file staged or a program started once a signal's
+/// clean-up has begun: the process is about to end, and what was started
+/// now would outlive it.
+fn refuse_once_stopping() -> std::io::Result<()> {
+    if stopping() {
+        return Err(std::io::Error::other("the run is being stopped"));
+    }
+    Ok(())
+}
+
 /// Stops the programs filling staged files, then removes every temporary
 /// file staged and not yet committed: what a signal handler calls before
 /// the process ends, since a signal does not unwind and run the temporary
-/// files' own clean-up.
+/// files' own clean-up. For the rest of the process nothing is staged and
+/// no such program started ([`stopping`]).
 pub fn remove_staged() {
     STOPPING.store(true, std::sync::atomic::Ordering::SeqCst);
     for (_, child) in lock(&WRITERS).iter_mut() {
@@ -148,9 +157,7 @@ impl Staged {
     /// once that clean-up has begun.
     fn create(builder: &tempfile::Builder, dir: &Path) -> std::io::Result<Staged> {
         let mut staged = lock(&STAGED);
-        if stopping() {
-            return Err(std::io::Error::other("the run is being stopped"));
-        }
+        refuse_once_stopping()?;
         let tmp = builder.tempfile_in(dir)?;
         let path = tmp.path().to_path_buf();
         staged.push(path.clone());
