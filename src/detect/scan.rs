@@ -257,7 +257,7 @@ impl Detector {
         }
         let mut walker = std::mem::take(&mut self.walker);
         let mut seed_words = std::mem::take(&mut self.seed_words);
-        let stride = gray.width.div_ceil(64);
+        let stride = seed_words_per_row(gray.width);
         seed_words.clear();
         seed_words.resize(rows.len() * stride, 0);
         let seeds = |y: usize, words: &mut [u64]| seed_row(gray, map, y, words);
@@ -405,13 +405,12 @@ impl<'a> Rules<'a> {
     ) {
         let limit = self.config.max_markers;
         const CHUNK: usize = SCAN_CHUNK;
-        // Seeds are gathered a 64-bit word (four chunks) at a time: the
-        // chunks' seed pixels as bits, less those already in a segment.
-        const WORD: usize = 64;
+        // Seeds are gathered a word (four chunks) at a time: the chunks'
+        // seed pixels as bits, less those already in a segment.
         let shift = map.shift();
         let margin = map.seed_margin();
         let cols = gray.width.div_ceil(CHUNK);
-        let stride = gray.width.div_ceil(WORD);
+        let stride = seed_words_per_row(gray.width);
         // Tile rows with a tile left to scan: a look at a few tiles (the
         // global walk's blind ones) passes over the others' rows at once.
         let open_rows: Vec<bool> = if self.occupied.is_empty() {
@@ -758,12 +757,19 @@ impl Walker {
     }
 }
 
+/// Seed pixels go one bit each into 64-bit words, each row padded to whole
+/// words.
+const WORD: usize = 64;
+
+fn seed_words_per_row(width: usize) -> usize {
+    width.div_ceil(WORD)
+}
+
 /// The seed pixels of word `w` of a row (`block` its pixels, `thresholds`
 /// the row's): those darker than their tile's threshold by the map's seed
 /// margin.
 #[inline(always)]
 fn seed_word(block: &[u8], thresholds: &[u8], shift: u32, margin: u8, w: usize) -> u64 {
-    const WORD: usize = 64;
     if block.len() == WORD {
         below_word(
             block,
@@ -785,7 +791,7 @@ fn seed_row(gray: Gray<'_>, map: &ThresholdMap, y: usize, words: &mut [u64]) {
     let (shift, margin) = (map.shift(), map.seed_margin());
     let row = &gray.pixels[y * gray.width..(y + 1) * gray.width];
     let thresholds = map.row(y);
-    for (w, (block, out)) in row.chunks(64).zip(words).enumerate() {
+    for (w, (block, out)) in row.chunks(WORD).zip(words).enumerate() {
         *out = seed_word(block, thresholds, shift, margin, w);
     }
 }

@@ -398,9 +398,10 @@ impl Classes {
         also: impl Fn(usize, &mut [T]) + Sync,
     ) {
         use crate::parallel::prelude::*;
-        assert_eq!(
-            extra.len(),
-            rows.len() * per_row,
+        // A row without items would end the zip below at once, leaving
+        // every row unclassified.
+        assert!(
+            per_row > 0 && extra.len() == rows.len() * per_row,
             "a row of `extra` per row"
         );
         let range = rows.start * self.stride..rows.end * self.stride;
@@ -409,7 +410,7 @@ impl Classes {
             .par_chunks_mut(self.stride)
             .zip(self.light[range].par_chunks_mut(self.stride))
             .zip(self.stamps[rows.clone()].par_iter_mut())
-            .zip(extra.par_chunks_mut(per_row.max(1)))
+            .zip(extra.par_chunks_mut(per_row))
             .enumerate()
             .for_each(|(k, (((dark, light), stamp), extra))| {
                 let y = rows.start + k;
