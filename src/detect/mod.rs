@@ -214,6 +214,9 @@ pub struct Detector {
     rings: ring::Rings,
     /// What the scan's walk writes.
     walker: scan::Walker,
+    /// One more per thread but this one, for the flood fills of a
+    /// tracked frame's markers whose edges were missed.
+    spare_walkers: Vec<scan::Walker>,
     /// What describing a candidate works in, on this thread.
     workspace: Workspace,
     /// One more per thread, for a frame's new candidates described in
@@ -316,6 +319,7 @@ impl Detector {
             rings: ring::Rings::new(&config.target),
             config,
             walker: scan::Walker::default(),
+            spare_walkers: Vec::new(),
             workspace: Workspace::default(),
             workspaces: Vec::new(),
             occupied: Vec::new(),
@@ -388,6 +392,7 @@ impl Detector {
     pub fn restart(&mut self, config: DetectorConfig) {
         *self = Detector {
             walker: std::mem::take(&mut self.walker),
+            spare_walkers: std::mem::take(&mut self.spare_walkers),
             ..Detector::new(config)
         };
     }

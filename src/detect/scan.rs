@@ -710,6 +710,12 @@ pub(super) struct Walker {
 }
 
 impl Walker {
+    /// The box of every pixel this walker's fills labelled (and perhaps
+    /// unlabelled again) since the last call.
+    pub(super) fn take_reach(&mut self) -> Option<[u32; 4]> {
+        self.filler.take_reach()
+    }
+
     /// [`Detector::outline`] of `passed`, noting (feature `trace`) whether
     /// it made a candidate.
     pub(super) fn fit_outline(&mut self, gray: Gray<'_>, passed: &Passed) -> Option<Candidate> {

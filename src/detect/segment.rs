@@ -222,6 +222,52 @@ impl Labels {
         let (y, x) = (index / self.width, index % self.width);
         self.dark_word(y, x / WORD) >> (x % WORD) & 1 == 1
     }
+
+    /// Appends the marks of `area` (min u, min v, max u, max v; whole
+    /// words) that are set to `out`, and clears them when `take`.
+    pub fn marks_in(&mut self, area: [u32; 4], take: bool, out: &mut Vec<Marks>) {
+        let (w0, w1) = (area[0] as usize / WORD, area[2] as usize / WORD);
+        for y in area[1] as usize..=(area[3] as usize).min(self.height - 1) {
+            if self.stamps[y] != self.generation {
+                continue;
+            }
+            let row = y * self.stride;
+            for w in w0..=w1.min(self.stride - 1) {
+                let (dark, white) = (self.dark[row + w], self.white[row + w]);
+                if dark | white != 0 {
+                    out.push(Marks {
+                        row: y as u32,
+                        word: w as u32,
+                        dark,
+                        white,
+                    });
+                    if take {
+                        self.dark[row + w] = 0;
+                        self.white[row + w] = 0;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Sets `marks` (from [`Labels::marks_in`] of this image's pass).
+    pub fn put_marks(&mut self, marks: &[Marks]) {
+        for m in marks {
+            let (y, w) = (m.row as usize, m.word as usize);
+            self.row_mut(y, true)[w] |= m.dark;
+            self.row_mut(y, false)[w] |= m.white;
+        }
+    }
+}
+
+/// One word of a row's labels: the dark and the white marks of its 64
+/// pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Marks {
+    pub row: u32,
+    pub word: u32,
+    pub dark: u64,
+    pub white: u64,
 }
 
 /// Sets (or clears) bits x0..=x1 of a row of words.
@@ -758,6 +804,9 @@ pub struct Filler {
     /// Runs of an earlier fill, set aside by [`Filler::keep_runs`].
     kept: Vec<(u32, u32, u32)>,
     classes: Classes,
+    /// The box (min u, min v, max u, max v) of every fill since
+    /// [`Filler::take_reach`], undone ones too.
+    reach: Option<[u32; 4]>,
 }
 
 impl Filler {
@@ -774,7 +823,7 @@ impl Filler {
         self.classes.select(image, map);
         // A fill that classifies a few words at a time is its own copy, so
         // that the fills of a frame's scan keep their tighter loop.
-        match (mode, BY_RUNS_BUILT && self.classes.by_runs) {
+        let result = match (mode, BY_RUNS_BUILT && self.classes.by_runs) {
             (Fill::Dark, false) => self.fill_as::<true, false>(image, map, labels, seed, mode),
             (Fill::Dark, true) => self.fill_as::<true, true>(image, map, labels, seed, mode),
             (Fill::White { .. }, false) => {
@@ -783,7 +832,27 @@ impl Filler {
             (Fill::White { .. }, true) => {
                 self.fill_as::<false, true>(image, map, labels, seed, mode)
             }
+        };
+        let stats = &result.stats;
+        if stats.count > 0 {
+            let area = [stats.min_u, stats.min_v, stats.max_u, stats.max_v];
+            self.reach = Some(match self.reach {
+                Some(r) => [
+                    r[0].min(area[0]),
+                    r[1].min(area[1]),
+                    r[2].max(area[2]),
+                    r[3].max(area[3]),
+                ],
+                None => area,
+            });
         }
+        result
+    }
+
+    /// The box of every pixel the fills since the last call labelled (and
+    /// then perhaps unlabelled), if they labelled any.
+    pub fn take_reach(&mut self) -> Option<[u32; 4]> {
+        self.reach.take()
     }
 
     /// [`Filler::fill`] for one kind of fill, `DARK` when `mode` is

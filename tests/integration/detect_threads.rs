@@ -111,3 +111,54 @@ fn two_threads_report_what_one_does() {
         assert_eq!(format!("{one:?}"), format!("{two:?}"));
     }
 }
+
+/// Two markers of the same size side by side, the left one (track 1, a
+/// little higher) gone in the last frame, where the right one moves
+/// towards where it was by more than its edge search reaches: both tracks
+/// fall back to the flood fill, and the left one's fill, along the row
+/// from where its marker should be, runs into the right marker and labels
+/// it. On one thread the right marker's own fill then starts on a
+/// labelled pixel and takes nothing (the scan finds the marker instead);
+/// the threads, which fill apart, must report the same.
+fn fills_meeting(t: u32) -> image::GrayImage {
+    let codes = family().codes().to_vec();
+    let camera = frame_camera();
+    let member = |k: usize| (Marker::whycode(8, codes[k], 100.0), k as u32 + 1);
+    let right = if t < 3 { 1010.0 } else { 998.0 };
+    let mut markers = vec![marker_at(
+        &camera,
+        member(1),
+        (right, 600.0),
+        80.0,
+        0.3,
+        (0.0, 0.0),
+    )];
+    if t < 3 {
+        markers.push(marker_at(
+            &camera,
+            member(0),
+            (900.0, 590.0),
+            80.0,
+            1.1,
+            (0.0, 0.0),
+        ));
+    }
+    let look = Look {
+        blur: 1,
+        noise: 2.0,
+        ..Look::default()
+    };
+    render(&camera, &markers, look).0
+}
+
+#[test]
+fn fills_that_meet_report_what_one_thread_does() {
+    let frames: Vec<_> = (0..4).map(fills_meeting).collect();
+    let config = config(true, 1024);
+    let one = detect_in_pool(1, &config, &frames);
+    let tracks = |k: usize| one[k].iter().map(|d| d.track).collect::<Vec<_>>();
+    assert_eq!(tracks(2), [Some(1), Some(2)], "{one:?}");
+    assert_eq!(one[3].len(), 1, "{one:?}");
+    let two = detect_in_pool(2, &config, &frames);
+    assert_eq!(format!("{one:?}"), format!("{two:?}"));
+}

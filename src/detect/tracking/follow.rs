@@ -3,8 +3,8 @@
 //! predicted centre).
 
 use super::track::Track;
-use crate::detect::scan::{Passed, Rules};
-use crate::detect::segment::Gray;
+use crate::detect::scan::{Passed, Rules, Walker};
+use crate::detect::segment::{Gray, Marks};
 use crate::detect::threshold::ThresholdMap;
 use crate::detect::{ellipse, Candidate, Detector};
 use crate::math::Ellipse;
@@ -45,17 +45,12 @@ impl Detector {
     /// other threads.
     pub(super) fn fill_tracked(&mut self, gray: Gray<'_>, index: usize) -> Option<Passed> {
         let track = &self.tracks[index];
-        let (pu, pv) = track.predicted();
-        let (x, y) = (pu.round(), pv.round());
-        if !(x >= 0.0 && y >= 0.0 && (x as usize) < gray.width && (y as usize) < gray.height) {
-            return None;
-        }
-        let (x, y) = (x as usize, y as usize);
-        let reach = (1.5 * track.a + 2.0) as usize;
-        let row = y * gray.width;
-        let end = (x + reach).min(gray.width - 1);
-        let seed = (x..=end).find(|&xx| gray.pixels[row + xx] < track.threshold)?;
-        if self.walker.labels.is_dark_visited(row + seed) {
+        let (x, y) = fill_seed(gray, track)?;
+        if self
+            .walker
+            .labels
+            .is_dark_visited(y as usize * gray.width + x as usize)
+        {
             return None;
         }
         let map = ThresholdMap::constant(track.threshold);
@@ -64,7 +59,7 @@ impl Detector {
             &mut self.walker,
             gray,
             &map,
-            (seed as u32, y as u32),
+            (x, y),
             &[],
         )
     }
@@ -154,4 +149,55 @@ impl Detector {
             described: None,
         })
     }
+}
+
+/// Where the flood fill of a tracked marker starts: from the track's
+/// predicted centre along the row to the first pixel darker than its
+/// threshold, within one and a half of its radii.
+fn fill_seed(gray: Gray<'_>, track: &Track) -> Option<(u32, u32)> {
+    let (pu, pv) = track.predicted();
+    let (x, y) = (pu.round(), pv.round());
+    if !(x >= 0.0 && y >= 0.0 && (x as usize) < gray.width && (y as usize) < gray.height) {
+        return None;
+    }
+    let (x, y) = (x as usize, y as usize);
+    let reach = (1.5 * track.a + 2.0) as usize;
+    let row = y * gray.width;
+    let end = (x + reach).min(gray.width - 1);
+    let seed = (x..=end).find(|&xx| gray.pixels[row + xx] < track.threshold)?;
+    Some((seed as u32, y as u32))
+}
+
+/// A tracked marker's flood fill made apart from the others' (on another
+/// thread, in labels of its own), and the labels it left.
+pub(super) struct FilledApart {
+    pub(super) passed: Option<Passed>,
+    /// The box of every pixel the fill read the labels of, but for the
+    /// pixels round it.
+    pub(super) reach: [u32; 4],
+    pub(super) marks: Vec<Marks>,
+}
+
+/// The flood fill of [`Detector::fill_tracked`] for `track` in `walker`,
+/// whose labels must be clear; leaves them clear. None where no fill
+/// starts.
+pub(super) fn fill_apart(
+    rules: &Rules<'_>,
+    walker: &mut Walker,
+    gray: Gray<'_>,
+    track: &Track,
+) -> Option<FilledApart> {
+    let seed = fill_seed(gray, track)?;
+    let map = ThresholdMap::constant(track.threshold);
+    walker.take_reach();
+    let passed = rules.evaluate(walker, gray, &map, seed, &[]);
+    // The seed is dark under the track's threshold, so the fill took it.
+    let reach = walker.take_reach()?;
+    let mut marks = Vec::new();
+    walker.labels.marks_in(reach, true, &mut marks);
+    Some(FilledApart {
+        passed,
+        reach,
+        marks,
+    })
 }

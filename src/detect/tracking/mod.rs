@@ -21,14 +21,15 @@ use image::{ImageBuffer, Luma};
 use super::identity::Reading;
 use super::pose::Posed;
 use super::ring::RingRead;
-use super::scan::Passed;
-use super::segment::Gray;
+use super::scan::{Passed, Rules, Walker};
+use super::segment::{Gray, Marks};
 use super::threshold::ThresholdMap;
 use super::{
     in_runs, preload_disc, rectify, Candidate, Detection, Detector, Finds, Stage, Workspace,
     SCAN_CHUNK,
 };
 use crate::family::Family;
+use follow::{fill_apart, FilledApart};
 use track::{PoseMemory, Track};
 
 /// A tracked frame looks for new markers in one of this many row bands.
@@ -152,13 +153,13 @@ impl Detector {
             },
         );
         self.stopwatch.lap_shared(&spent);
-        // The markers whose edges were missed: their flood fills on this
-        // thread in the tracks' order (the labels), then their outlines
-        // and readings on the threads, as for those followed by their edges.
-        let filled: Vec<(usize, Passed)> = (0..by_edges.len())
+        // The markers whose edges were missed: their flood fills, then
+        // their outlines and readings on the threads, as for those
+        // followed by their edges.
+        let missed: Vec<usize> = (0..by_edges.len())
             .filter(|&index| by_edges[index].is_none())
-            .filter_map(|index| Some((index, self.fill_tracked(gray, index)?)))
             .collect();
+        let filled = self.fill_missed(threads, gray, &missed);
         self.stopwatch.lap(Stage::Follow);
         let this = &*self;
         let (by_fill, spent) = in_runs(
@@ -211,6 +212,81 @@ impl Detector {
             finds.memories.push(memory);
             finds.candidates.push(c);
         }
+    }
+
+    /// The flood fills of the tracks `missed` (in the tracks' order) whose
+    /// edges were missed, with the segments that passed their tests: the
+    /// same as one thread filling them in turn, where each fill's labels
+    /// keep the next from the pixels it took. The fills run on the
+    /// threads, each in labels of its own; then, in the tracks' order, a
+    /// fill whose pixels (and the pixels round them) no earlier fill's
+    /// reached is taken as it is, and any other is made again in the
+    /// labels the earlier fills round it left, as one thread would have.
+    fn fill_missed(
+        &mut self,
+        threads: usize,
+        gray: Gray<'_>,
+        missed: &[usize],
+    ) -> Vec<(usize, Passed)> {
+        use crate::parallel::prelude::*;
+        if cfg!(feature = "trace") || threads < 2 || missed.len() < 2 {
+            return missed
+                .iter()
+                .filter_map(|&index| Some((index, self.fill_tracked(gray, index)?)))
+                .collect();
+        }
+        let mut spare = std::mem::take(&mut self.spare_walkers);
+        spare.resize_with(threads - 1, Walker::default);
+        let chunk = missed.len().div_ceil(threads);
+        let apart: Vec<Vec<(usize, Option<FilledApart>)>> = {
+            let rules = Rules::new(&self.config, &self.tolerances, &self.occupied);
+            let tracks = &self.tracks;
+            let mut walkers: Vec<&mut Walker> = std::iter::once(&mut self.walker)
+                .chain(spare.iter_mut())
+                .collect();
+            walkers
+                .par_iter_mut()
+                .zip(missed.par_chunks(chunk))
+                .map(|(walker, indices)| {
+                    walker.labels.begin(gray.width, gray.height);
+                    indices
+                        .iter()
+                        .map(|&index| (index, fill_apart(&rules, walker, gray, &tracks[index])))
+                        .collect()
+                })
+                .collect()
+        };
+        self.spare_walkers = spare;
+        self.walker.labels.begin(gray.width, gray.height);
+        let mut earlier = Reached::new(gray.width, gray.height);
+        let mut filled = Vec::new();
+        let mut before = Vec::new();
+        for (index, fill) in apart.into_iter().flatten() {
+            // No fill starts (which reads no labels): none on one thread.
+            let Some(fill) = fill else { continue };
+            let near = earlier.near(fill.reach);
+            let (passed, marks) = if near.is_empty() {
+                self.follow_filled = true;
+                (fill.passed, fill.marks)
+            } else {
+                // The labels one thread would have round this fill.
+                self.walker.labels.begin(gray.width, gray.height);
+                for &k in &near {
+                    self.walker.labels.put_marks(&earlier.marks[k]);
+                }
+                before.clear();
+                self.walker.labels.marks_in(fill.reach, false, &mut before);
+                let passed = self.fill_tracked(gray, index);
+                let mut after = Vec::new();
+                self.walker.labels.marks_in(fill.reach, true, &mut after);
+                (passed, only_new(after, &before))
+            };
+            earlier.push(fill.reach, marks);
+            if let Some(passed) = passed {
+                filled.push((index, passed));
+            }
+        }
+        filled
     }
 
     /// Candidate `followed`, found where track `index` expected its marker,
@@ -391,6 +467,93 @@ impl Detector {
             self.tolerances.area.learn(c.area_error);
         }
     }
+}
+
+/// The boxes of the fills taken so far in a frame and the labels each
+/// left, found by the grid cells the boxes cover.
+struct Reached {
+    boxes: Vec<[u32; 4]>,
+    marks: Vec<Vec<Marks>>,
+    cells: Vec<Vec<usize>>,
+    columns: usize,
+}
+
+/// Pixels on a side of a cell of [`Reached`]'s grid.
+const REACHED_CELL: u32 = 128;
+
+impl Reached {
+    fn new(width: usize, height: usize) -> Reached {
+        let columns = width.div_ceil(REACHED_CELL as usize);
+        let rows = height.div_ceil(REACHED_CELL as usize);
+        Reached {
+            boxes: Vec::new(),
+            marks: Vec::new(),
+            cells: vec![Vec::new(); columns * rows],
+            columns,
+        }
+    }
+
+    /// The cells of `area` grown by a pixel each way.
+    fn cells_of(&self, area: [u32; 4]) -> impl Iterator<Item = usize> + '_ {
+        let rows = self.cells.len() / self.columns;
+        let c0 = area[0].saturating_sub(1) / REACHED_CELL;
+        let r0 = area[1].saturating_sub(1) / REACHED_CELL;
+        let c1 = ((area[2] + 1) / REACHED_CELL).min(self.columns as u32 - 1);
+        let r1 = ((area[3] + 1) / REACHED_CELL).min(rows as u32 - 1);
+        (r0..=r1).flat_map(move |r| (c0..=c1).map(move |c| r as usize * self.columns + c as usize))
+    }
+
+    /// The fills so far whose boxes meet `area` grown by a pixel each way,
+    /// in the order taken.
+    fn near(&self, area: [u32; 4]) -> Vec<usize> {
+        let grown = [
+            area[0].saturating_sub(1),
+            area[1].saturating_sub(1),
+            area[2] + 1,
+            area[3] + 1,
+        ];
+        let mut near: Vec<usize> = self
+            .cells_of(area)
+            .flat_map(|cell| self.cells[cell].iter().copied())
+            .filter(|&k| {
+                let b = self.boxes[k];
+                b[0] <= grown[2] && grown[0] <= b[2] && b[1] <= grown[3] && grown[1] <= b[3]
+            })
+            .collect();
+        near.sort_unstable();
+        near.dedup();
+        near
+    }
+
+    fn push(&mut self, area: [u32; 4], marks: Vec<Marks>) {
+        let k = self.boxes.len();
+        let cells: Vec<usize> = self.cells_of(area).collect();
+        for cell in cells {
+            self.cells[cell].push(k);
+        }
+        self.boxes.push(area);
+        self.marks.push(marks);
+    }
+}
+
+/// The marks of `after` not in `before` (both in the order
+/// [`Labels::marks_in`] lists a box's words).
+fn only_new(after: Vec<Marks>, before: &[Marks]) -> Vec<Marks> {
+    let mut before = before.iter().peekable();
+    after
+        .into_iter()
+        .filter_map(|mut m| {
+            while before
+                .next_if(|b| (b.row, b.word) < (m.row, m.word))
+                .is_some()
+            {}
+            if let Some(b) = before.next_if(|b| (b.row, b.word) == (m.row, m.word)) {
+                m.dark &= !b.dark;
+                m.white &= !b.white;
+            }
+            (m.dark | m.white != 0).then_some(m)
+        })
+        .collect()
 }
 
 #[cfg(test)]
