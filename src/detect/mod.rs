@@ -216,6 +216,7 @@ pub struct Detector {
     walker: scan::Walker,
     /// One more per thread but this one, for the flood fills of a
     /// tracked frame's markers whose edges were missed.
+    #[cfg(feature = "parallel")]
     spare_walkers: Vec<scan::Walker>,
     /// What describing a candidate works in, on this thread.
     workspace: Workspace,
@@ -319,6 +320,7 @@ impl Detector {
             rings: ring::Rings::new(&config.target),
             config,
             walker: scan::Walker::default(),
+            #[cfg(feature = "parallel")]
             spare_walkers: Vec::new(),
             workspace: Workspace::default(),
             workspaces: Vec::new(),
@@ -392,6 +394,7 @@ impl Detector {
     pub fn restart(&mut self, config: DetectorConfig) {
         *self = Detector {
             walker: std::mem::take(&mut self.walker),
+            #[cfg(feature = "parallel")]
             spare_walkers: std::mem::take(&mut self.spare_walkers),
             ..Detector::new(config)
         };

@@ -712,6 +712,7 @@ pub(super) struct Walker {
 impl Walker {
     /// The box of every pixel this walker's fills labelled (and perhaps
     /// unlabelled again) since the last call.
+    #[cfg(feature = "parallel")]
     pub(super) fn take_reach(&mut self) -> Option<[u32; 4]> {
         self.filler.take_reach()
     }

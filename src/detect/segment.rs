@@ -225,6 +225,7 @@ impl Labels {
 
     /// Appends the marks of `area` (min u, min v, max u, max v; whole
     /// words) that are set to `out`, and clears them when `take`.
+    #[cfg(feature = "parallel")]
     pub fn marks_in(&mut self, area: [u32; 4], take: bool, out: &mut Vec<Marks>) {
         let (w0, w1) = (area[0] as usize / WORD, area[2] as usize / WORD);
         for y in area[1] as usize..=(area[3] as usize).min(self.height - 1) {
@@ -251,6 +252,7 @@ impl Labels {
     }
 
     /// Sets `marks` (from [`Labels::marks_in`] of this image's pass).
+    #[cfg(feature = "parallel")]
     pub fn put_marks(&mut self, marks: &[Marks]) {
         for m in marks {
             let (y, w) = (m.row as usize, m.word as usize);
@@ -262,6 +264,7 @@ impl Labels {
 
 /// One word of a row's labels: the dark and the white marks of its 64
 /// pixels.
+#[cfg(feature = "parallel")]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Marks {
     pub row: u32,
@@ -806,6 +809,7 @@ pub struct Filler {
     classes: Classes,
     /// The box (min u, min v, max u, max v) of every fill since
     /// [`Filler::take_reach`], undone ones too.
+    #[cfg(feature = "parallel")]
     reach: Option<[u32; 4]>,
 }
 
@@ -833,7 +837,15 @@ impl Filler {
                 self.fill_as::<false, true>(image, map, labels, seed, mode)
             }
         };
-        let stats = &result.stats;
+        #[cfg(feature = "parallel")]
+        self.widen_reach(&result.stats);
+        result
+    }
+
+    /// Widens the box of the fills since [`Filler::take_reach`] to the
+    /// pixels of `stats`.
+    #[cfg(feature = "parallel")]
+    fn widen_reach(&mut self, stats: &Stats) {
         if stats.count > 0 {
             let area = [stats.min_u, stats.min_v, stats.max_u, stats.max_v];
             self.reach = Some(match self.reach {
@@ -846,11 +858,11 @@ impl Filler {
                 None => area,
             });
         }
-        result
     }
 
     /// The box of every pixel the fills since the last call labelled (and
     /// then perhaps unlabelled), if they labelled any.
+    #[cfg(feature = "parallel")]
     pub fn take_reach(&mut self) -> Option<[u32; 4]> {
         self.reach.take()
     }

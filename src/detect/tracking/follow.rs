@@ -3,8 +3,12 @@
 //! predicted centre).
 
 use super::track::Track;
-use crate::detect::scan::{Passed, Rules, Walker};
-use crate::detect::segment::{Gray, Marks};
+#[cfg(feature = "parallel")]
+use crate::detect::scan::Walker;
+use crate::detect::scan::{Passed, Rules};
+use crate::detect::segment::Gray;
+#[cfg(feature = "parallel")]
+use crate::detect::segment::Marks;
 use crate::detect::threshold::ThresholdMap;
 use crate::detect::{ellipse, Candidate, Detector};
 use crate::math::Ellipse;
@@ -170,6 +174,7 @@ fn fill_seed(gray: Gray<'_>, track: &Track) -> Option<(u32, u32)> {
 
 /// A tracked marker's flood fill made apart from the others' (on another
 /// thread, in labels of its own), and the labels it left.
+#[cfg(feature = "parallel")]
 pub(super) struct FilledApart {
     pub(super) passed: Option<Passed>,
     /// The box of every pixel the fill read the labels of, but for the
@@ -181,6 +186,7 @@ pub(super) struct FilledApart {
 /// The flood fill of [`Detector::fill_tracked`] for `track` in `walker`,
 /// whose labels must be clear; leaves them clear. None where no fill
 /// starts.
+#[cfg(feature = "parallel")]
 pub(super) fn fill_apart(
     rules: &Rules<'_>,
     walker: &mut Walker,

@@ -21,14 +21,19 @@ use image::{ImageBuffer, Luma};
 use super::identity::Reading;
 use super::pose::Posed;
 use super::ring::RingRead;
-use super::scan::{Passed, Rules, Walker};
-use super::segment::{Gray, Marks};
+use super::scan::Passed;
+#[cfg(feature = "parallel")]
+use super::scan::{Rules, Walker};
+use super::segment::Gray;
+#[cfg(feature = "parallel")]
+use super::segment::Marks;
 use super::threshold::ThresholdMap;
 use super::{
     in_runs, preload_disc, rectify, Candidate, Detection, Detector, Finds, Stage, Workspace,
     SCAN_CHUNK,
 };
 use crate::family::Family;
+#[cfg(feature = "parallel")]
 use follow::{fill_apart, FilledApart};
 use track::{PoseMemory, Track};
 
@@ -217,24 +222,37 @@ impl Detector {
     /// The flood fills of the tracks `missed` (in the tracks' order) whose
     /// edges were missed, with the segments that passed their tests: the
     /// same as one thread filling them in turn, where each fill's labels
-    /// keep the next from the pixels it took. The fills run on the
-    /// threads, each in labels of its own; then, in the tracks' order, a
-    /// fill whose pixels (and the pixels round them) no earlier fill's
-    /// reached is taken as it is, and any other is made again in the
-    /// labels the earlier fills round it left, as one thread would have.
+    /// keep the next from the pixels it took.
+    #[cfg_attr(not(feature = "parallel"), allow(unused_variables))]
     fn fill_missed(
         &mut self,
         threads: usize,
         gray: Gray<'_>,
         missed: &[usize],
     ) -> Vec<(usize, Passed)> {
-        use crate::parallel::prelude::*;
-        if cfg!(feature = "trace") || threads < 2 || missed.len() < 2 {
-            return missed
-                .iter()
-                .filter_map(|&index| Some((index, self.fill_tracked(gray, index)?)))
-                .collect();
+        #[cfg(feature = "parallel")]
+        if !cfg!(feature = "trace") && threads > 1 && missed.len() > 1 {
+            return self.fill_missed_apart(threads, gray, missed);
         }
+        missed
+            .iter()
+            .filter_map(|&index| Some((index, self.fill_tracked(gray, index)?)))
+            .collect()
+    }
+
+    /// [`Detector::fill_missed`] on the threads, each fill in labels of
+    /// its own; then, in the tracks' order, a fill whose pixels (and the
+    /// pixels round them) no earlier fill's reached is taken as it is, and
+    /// any other is made again in the labels the earlier fills round it
+    /// left, as one thread would have.
+    #[cfg(feature = "parallel")]
+    fn fill_missed_apart(
+        &mut self,
+        threads: usize,
+        gray: Gray<'_>,
+        missed: &[usize],
+    ) -> Vec<(usize, Passed)> {
+        use crate::parallel::prelude::*;
         let mut spare = std::mem::take(&mut self.spare_walkers);
         spare.resize_with(threads - 1, Walker::default);
         let chunk = missed.len().div_ceil(threads);
@@ -471,6 +489,7 @@ impl Detector {
 
 /// The boxes of the fills taken so far in a frame and the labels each
 /// left, found by the grid cells the boxes cover.
+#[cfg(feature = "parallel")]
 struct Reached {
     boxes: Vec<[u32; 4]>,
     marks: Vec<Vec<Marks>>,
@@ -479,8 +498,10 @@ struct Reached {
 }
 
 /// Pixels on a side of a cell of [`Reached`]'s grid.
+#[cfg(feature = "parallel")]
 const REACHED_CELL: u32 = 128;
 
+#[cfg(feature = "parallel")]
 impl Reached {
     fn new(width: usize, height: usize) -> Reached {
         let columns = width.div_ceil(REACHED_CELL as usize);
@@ -538,6 +559,7 @@ impl Reached {
 
 /// The marks of `after` not in `before` (both in the order
 /// [`Labels::marks_in`] lists a box's words).
+#[cfg(feature = "parallel")]
 fn only_new(after: Vec<Marks>, before: &[Marks]) -> Vec<Marks> {
     let mut before = before.iter().peekable();
     after
