@@ -514,13 +514,11 @@ impl Reached {
         }
     }
 
-    /// The cells of `area` grown by a pixel each way.
+    /// The cells `area` covers.
     fn cells_of(&self, area: [u32; 4]) -> impl Iterator<Item = usize> + '_ {
         let rows = self.cells.len() / self.columns;
-        let c0 = area[0].saturating_sub(1) / REACHED_CELL;
-        let r0 = area[1].saturating_sub(1) / REACHED_CELL;
-        let c1 = ((area[2] + 1) / REACHED_CELL).min(self.columns as u32 - 1);
-        let r1 = ((area[3] + 1) / REACHED_CELL).min(rows as u32 - 1);
+        let [c0, r0, c1, r1] = area.map(|x| x / REACHED_CELL);
+        let (c1, r1) = (c1.min(self.columns as u32 - 1), r1.min(rows as u32 - 1));
         (r0..=r1).flat_map(move |r| (c0..=c1).map(move |c| r as usize * self.columns + c as usize))
     }
 
@@ -534,7 +532,7 @@ impl Reached {
             area[3] + 1,
         ];
         let mut near: Vec<usize> = self
-            .cells_of(area)
+            .cells_of(grown)
             .flat_map(|cell| self.cells[cell].iter().copied())
             .filter(|&k| {
                 let b = self.boxes[k];
