@@ -78,16 +78,31 @@ impl Detector {
         (moved < track.a.max(4.0) && same_size).then_some(c)
     }
 
-    /// The cheap way of [`Detector::follow`]; reads the pixels only (`edge`
-    /// is scratch), so the tracks of a frame can be followed on several
-    /// threads.
+    /// The cheap way of [`Detector::follow`], tried at each of the track's
+    /// guesses in turn ([`Track::guesses`]): a flood fill and an outline
+    /// fit cost ten times a look at the edges. Reads the pixels only
+    /// (`edge` is scratch), so the tracks of a frame can be followed on
+    /// several threads.
     pub(super) fn follow_edges(
         &self,
         gray: Gray<'_>,
         track: &Track,
         edge: &mut Vec<(f64, f64)>,
     ) -> Option<Candidate> {
-        let (pu, pv) = track.predicted();
+        track
+            .guesses()
+            .find_map(|guess| self.edges_at(gray, track, guess, edge))
+    }
+
+    /// [`Detector::follow_edges`] with the marker's centre guessed at
+    /// (`pu`, `pv`).
+    fn edges_at(
+        &self,
+        gray: Gray<'_>,
+        track: &Track,
+        (pu, pv): (f64, f64),
+        edge: &mut Vec<(f64, f64)>,
+    ) -> Option<Candidate> {
         let guess = Ellipse {
             u: pu,
             v: pv,

@@ -603,4 +603,43 @@ mod tests {
             assert_eq!(seen, [(5, Some(8))], "frame {frame}");
         }
     }
+
+    /// A marker that turns back, then stops: the frame where its motion
+    /// changes finds it by the flood fill (its track predicted it 24 px
+    /// off), but the frames after that find it by its edges again, where
+    /// the smoothed velocity alone would have missed them for three more
+    /// frames; one that stops is found by its edges at once.
+    #[test]
+    fn a_marker_that_turns_back_or_stops_is_found_by_its_edges_from_the_next_frame() {
+        let family = Family::generate(8, 2).unwrap();
+        let camera = crate::camera::Camera::ideal(640, 480, 60.0);
+        let marker = Marker::whycode(8, family.code(3).unwrap(), 50.0);
+        let mut detector = Detector::new(DetectorConfig {
+            target: Target::WhyCode(family),
+            tracking: true,
+            ..DetectorConfig::default()
+        });
+        // Twelve pixels a frame to the right, back for five frames, then
+        // standing still.
+        let path = [0, 1, 2, 3, 4, 5, 4, 3, 2, 1, 0, 0, 0, 0];
+        let mut filled = Vec::new();
+        for (frame, &step) in path.iter().enumerate() {
+            let u = 260.0 + 12.0 * f64::from(step);
+            let placement = Placement::at_pixel(&camera, &marker, (u, 240.0), 70.0, 0.0, 0.0, 0.4);
+            let mut scene = Scene::new(camera);
+            scene.objects = vec![SceneObject::Marker(LooseMarker::new(marker, 3, placement))];
+            let (image, _) = simulate::render(&scene);
+            let found = detector.detect(&image);
+            assert_eq!(found.len(), 1, "frame {frame}");
+            assert_eq!(found[0].id, 3, "frame {frame}");
+            let off = (found[0].u - u).hypot(found[0].v - 240.0);
+            assert!(off < 0.5, "frame {frame}: {off} px off");
+            if detector.follow_filled {
+                filled.push(frame);
+            }
+        }
+        // Frame 1 is the track's second (no velocity yet), frame 6 turns
+        // back, frame 11 stops.
+        assert_eq!(filled, [1, 6]);
+    }
 }

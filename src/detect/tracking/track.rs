@@ -16,6 +16,9 @@ pub struct Track {
     /// Image velocity, pixels per frame, smoothed over past frames.
     pub du: f64,
     pub dv: f64,
+    /// How far the marker moved between the last two frames it was seen
+    /// in, pixels: the velocity not smoothed.
+    pub moved: (f64, f64),
     /// Semi-axes of the last outer ellipse.
     pub a: f64,
     pub b: f64,
@@ -76,6 +79,7 @@ impl Track {
             v,
             du: 0.0,
             dv: 0.0,
+            moved: (0.0, 0.0),
             a,
             b,
             threshold,
@@ -101,10 +105,31 @@ impl Track {
         (self.u + self.du, self.v + self.dv)
     }
 
+    /// Where the marker may be in the next frame, most likely first: as
+    /// [`Track::predicted`]; moved on by as much as it moved last (its
+    /// velocity just changed: a robot sped up, braked or turned back); and
+    /// where it was (it stopped). A place within a pixel of one before it
+    /// is left out.
+    pub fn guesses(&self) -> impl Iterator<Item = (f64, f64)> {
+        let places = [
+            self.predicted(),
+            (self.u + self.moved.0, self.v + self.moved.1),
+            (self.u, self.v),
+        ];
+        (0..places.len()).filter_map(move |k| {
+            let (u, v) = places[k];
+            let new = places[..k]
+                .iter()
+                .all(|&(pu, pv)| (u - pu).hypot(v - pv) >= 1.0);
+            new.then_some((u, v))
+        })
+    }
+
     /// Takes a new observation; the velocity is smoothed because single
     /// frame differences carry the centre's measurement noise.
     pub fn update(&mut self, u: f64, v: f64, a: f64, b: f64, threshold: u8) {
         let (mu, mv) = (u - self.u, v - self.v);
+        self.moved = (mu, mv);
         let k = if self.hits == 1 { 1.0 } else { 0.6 };
         self.du += k * (mu - self.du);
         self.dv += k * (mv - self.dv);
