@@ -1,6 +1,6 @@
 //! Following a tracked marker from frame to frame: where it should be
-//! now, found by its edges (or, failing that, by a flood fill from its
-//! predicted centre).
+//! now, found by its edges (or, failing that, by a flood fill from a point
+//! on its disc).
 
 use super::track::Track;
 #[cfg(feature = "parallel")]
@@ -23,9 +23,9 @@ impl Detector {
     /// Looks for a tracked marker where it should be now. First the cheap
     /// way: edge points around the predicted outline, a conic fit, and a
     /// check that the centre is white and the annulus black (a few hundred
-    /// pixels). If that fails, the paper's way: from the predicted centre
-    /// (inside the white centre) along the row to the first dark pixel,
-    /// which starts the marker's dark segment and the full tests.
+    /// pixels). If that fails, the paper's way: from a point on the
+    /// marker's disc along the row to the first dark pixel, which starts
+    /// the marker's dark segment and the full tests.
     pub(super) fn follow(&mut self, gray: Gray<'_>, index: usize) -> Option<Candidate> {
         let mut edge = std::mem::take(&mut self.walker.edge);
         let by_edges = self.follow_edges(gray, &self.tracks[index], &mut edge);
@@ -42,9 +42,8 @@ impl Detector {
         self.where_expected(index, c)
     }
 
-    /// The flood fill of [`Detector::follow_by_fill`]: from the track's
-    /// predicted centre along the row to the first pixel darker than its
-    /// threshold, the segment there and its tests. The only part of the
+    /// The flood fill of [`Detector::follow_by_fill`]: from [`fill_seed`],
+    /// the segment there and its tests. The only part of the
     /// fill's way that writes (the labels), so the rest may be done on
     /// other threads.
     pub(super) fn fill_tracked(&mut self, gray: Gray<'_>, index: usize) -> Option<Passed> {
@@ -69,13 +68,15 @@ impl Detector {
     }
 
     /// Candidate `c`, filled and fitted for track `index`, if it lies where
-    /// the track expects its marker and is of its size.
+    /// the track expects its marker (within its radius of one of the
+    /// track's guesses) and is of its size.
     pub(super) fn where_expected(&self, index: usize, c: Candidate) -> Option<Candidate> {
         let track = &self.tracks[index];
-        let (pu, pv) = track.predicted();
-        let moved = (c.outer.u - pu).hypot(c.outer.v - pv);
+        let near = track
+            .guesses()
+            .any(|(pu, pv)| (c.outer.u - pu).hypot(c.outer.v - pv) < track.a.max(4.0));
         let same_size = (c.outer.semi_major / track.a - 1.0).abs() < 0.3;
-        (moved < track.a.max(4.0) && same_size).then_some(c)
+        (near && same_size).then_some(c)
     }
 
     /// The cheap way of [`Detector::follow`], tried at each of the track's
@@ -171,10 +172,10 @@ impl Detector {
 }
 
 /// Where the flood fill of a tracked marker starts: from the track's
-/// predicted centre along the row to the first pixel darker than its
+/// [`Track::fill_origin`] along the row to the first pixel darker than its
 /// threshold, within one and a half of its radii.
 fn fill_seed(gray: Gray<'_>, track: &Track) -> Option<(u32, u32)> {
-    let (pu, pv) = track.predicted();
+    let (pu, pv) = track.fill_origin();
     let (x, y) = (pu.round(), pv.round());
     if !(x >= 0.0 && y >= 0.0 && (x as usize) < gray.width && (y as usize) < gray.height) {
         return None;

@@ -604,13 +604,16 @@ mod tests {
         }
     }
 
-    /// A marker that turns back, then stops: the frame where its motion
-    /// changes finds it by the flood fill (its track predicted it 24 px
-    /// off), but the frames after that find it by its edges again, where
-    /// the smoothed velocity alone would have missed them for three more
-    /// frames; one that stops is found by its edges at once.
+    /// A marker 70 px across moving 20 px a frame that turns back, then
+    /// stops. Where it turns its track predicted it 40 px off, past its
+    /// radius: the flood fill from where it was finds it, and its track
+    /// goes on (a fill from the prediction found nothing, the track was
+    /// lost and the marker taken for a new one). The frames after that
+    /// find it by its edges again, where the smoothed velocity alone would
+    /// have missed them for three more frames; one that stops is found by
+    /// its edges at once.
     #[test]
-    fn a_marker_that_turns_back_or_stops_is_found_by_its_edges_from_the_next_frame() {
+    fn a_marker_that_turns_back_or_stops_keeps_its_track_and_is_found_by_its_edges() {
         let family = Family::generate(8, 2).unwrap();
         let camera = crate::camera::Camera::ideal(640, 480, 60.0);
         let marker = Marker::whycode(8, family.code(3).unwrap(), 50.0);
@@ -619,12 +622,12 @@ mod tests {
             tracking: true,
             ..DetectorConfig::default()
         });
-        // Twelve pixels a frame to the right, back for five frames, then
+        // Twenty pixels a frame to the right, back for five frames, then
         // standing still.
         let path = [0, 1, 2, 3, 4, 5, 4, 3, 2, 1, 0, 0, 0, 0];
-        let mut filled = Vec::new();
+        let (mut filled, mut tracks) = (Vec::new(), Vec::new());
         for (frame, &step) in path.iter().enumerate() {
-            let u = 260.0 + 12.0 * f64::from(step);
+            let u = 220.0 + 20.0 * f64::from(step);
             let placement = Placement::at_pixel(&camera, &marker, (u, 240.0), 70.0, 0.0, 0.0, 0.4);
             let mut scene = Scene::new(camera);
             scene.objects = vec![SceneObject::Marker(LooseMarker::new(marker, 3, placement))];
@@ -637,7 +640,9 @@ mod tests {
             if detector.follow_filled {
                 filled.push(frame);
             }
+            tracks.push(found[0].track);
         }
+        assert!(tracks.iter().all(|&t| t == tracks[0]), "{tracks:?}");
         // Frame 1 is the track's second (no velocity yet), frame 6 turns
         // back, frame 11 stops.
         assert_eq!(filled, [1, 6]);

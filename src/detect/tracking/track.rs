@@ -125,6 +125,18 @@ impl Track {
         })
     }
 
+    /// Where a flood fill looking for the marker starts: where it was, if it
+    /// moves less than most of its radius a frame (that point then lies
+    /// on its disc whether it moved on, stopped or turned back), else
+    /// where it should be now.
+    pub fn fill_origin(&self) -> (f64, f64) {
+        if self.du.hypot(self.dv) < FILL_FROM_LAST * self.a {
+            (self.u, self.v)
+        } else {
+            self.predicted()
+        }
+    }
+
     /// Takes a new observation; the velocity is smoothed because single
     /// frame differences carry the centre's measurement noise.
     pub fn update(&mut self, u: f64, v: f64, a: f64, b: f64, threshold: u8) {
@@ -187,6 +199,10 @@ impl Track {
         (u - pu).hypot(v - pv) < self.a.max(4.0)
     }
 }
+
+/// Speed, in outer radii a frame, under which a lost marker's flood fill
+/// starts where it was last seen (see [`Track::fill_origin`]).
+const FILL_FROM_LAST: f64 = 0.8;
 
 /// The candidate tests' tolerances, each following what the candidates
 /// that passed the tests measured (paper 4.2): the white share, the
