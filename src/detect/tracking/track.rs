@@ -126,11 +126,11 @@ impl Track {
     }
 
     /// Where a flood fill looking for the marker starts: where it was, if it
-    /// moves less than most of its radius a frame (that point then lies
-    /// on its disc whether it moved on, stopped or turned back), else
-    /// where it should be now.
+    /// moves less than most of its semi-minor axis a frame (that point then
+    /// lies on its disc, however seen, whether it moved on, stopped or
+    /// turned back), else where it should be now.
     pub fn fill_origin(&self) -> (f64, f64) {
-        if self.du.hypot(self.dv) < FILL_FROM_LAST * self.a {
+        if self.du.hypot(self.dv) < FILL_FROM_LAST * self.b {
             (self.u, self.v)
         } else {
             self.predicted()
@@ -200,8 +200,9 @@ impl Track {
     }
 }
 
-/// Speed, in outer radii a frame, under which a lost marker's flood fill
-/// starts where it was last seen (see [`Track::fill_origin`]).
+/// Speed, in semi-minor axes of the outline a frame, under which a missed
+/// marker's flood fill starts where it was last seen (see
+/// [`Track::fill_origin`]).
 const FILL_FROM_LAST: f64 = 0.8;
 
 /// The candidate tests' tolerances, each following what the candidates
