@@ -86,9 +86,11 @@ python3 "$here/wasm_exports.py" "$staging/raw/whycode_pdf_bg.wasm" "$staging/raw
     sheet marker 'files_*' __wbg_files_free 'live_*' __wbg_live_free liveStride
 "$wasm_metadce" "$staging/raw/whycode_pdf_bg.wasm" --graph-file "$staging/raw/graph.json" \
     -o "$staging/raw/whycode_pdf_bg.wasm" >/dev/null
+# --converge runs -Oz's passes again until the module stops shrinking: about
+# 1 KB off the first load, which must stay under 2,000,000 bytes.
 pids=()
 for name in whycode_web whycode_pdf; do
-    "$wasm_opt" -Oz --strip-debug --strip-producers "$staging/raw/${name}_bg.wasm" -o "$staging/pkg/${name}_bg.wasm" &
+    "$wasm_opt" -Oz --converge --strip-debug --strip-producers "$staging/raw/${name}_bg.wasm" -o "$staging/pkg/${name}_bg.wasm" &
     pids+=($!)
 done
 for pid in "${pids[@]}"; do wait "$pid"; done
