@@ -423,6 +423,11 @@ impl<'a> Rules<'a> {
         };
         let rows_start = rows.start;
         let mut open_words: Vec<u64> = Vec::new();
+        // The seed levels of each whole word's four chunks (see
+        // [`seed_word`]), the same for a tile row's sixteen pixel rows
+        // (when the seeds are found on the way).
+        let mut word_seed_levels: Vec<[u8; 4]> = Vec::new();
+        let whole_words = gray.width / WORD;
         'rows: for y in rows {
             if found.len() >= limit {
                 break;
@@ -453,17 +458,28 @@ impl<'a> Rules<'a> {
                     }
                     open
                 }));
+                if seeds.is_none() {
+                    word_seed_levels.clear();
+                    word_seed_levels.extend(
+                        (0..whole_words).map(|w| seed_levels(thresholds, shift, margin, w)),
+                    );
+                }
             }
             for (w, block) in row.chunks(WORD).enumerate() {
                 let open = open_words[w];
                 if open == 0 {
                     continue;
                 }
-                let mut word = match seeds {
-                    Some(words) => words[(y - rows_start) * stride + w],
-                    None => seed_word(block, thresholds, shift, margin, w),
-                };
-                word &= open & !walker.labels.dark_word(y, w);
+                let mut word = open
+                    & match seeds {
+                        Some(words) => words[(y - rows_start) * stride + w],
+                        None if w < whole_words => below_word(block, word_seed_levels[w]),
+                        None => seed_word(block, thresholds, shift, margin, w),
+                    };
+                if word == 0 {
+                    continue;
+                }
+                word &= !walker.labels.dark_word(y, w);
                 while word != 0 {
                     let x = w * WORD + word.trailing_zeros() as usize;
                     let seed = (x as u32, y as u32);
@@ -778,10 +794,7 @@ fn seed_words_per_row(width: usize) -> usize {
 #[inline(always)]
 fn seed_word(block: &[u8], thresholds: &[u8], shift: u32, margin: u8, w: usize) -> u64 {
     if block.len() == WORD {
-        below_word(
-            block,
-            word_thresholds(thresholds, shift, w).map(|t| t.saturating_sub(margin)),
-        )
+        below_word(block, seed_levels(thresholds, shift, margin, w))
     } else {
         block
             .chunks(SCAN_CHUNK)
@@ -791,6 +804,13 @@ fn seed_word(block: &[u8], thresholds: &[u8], shift: u32, margin: u8, w: usize) 
                 m | u64::from(below_mask(chunk, t)) << (q * SCAN_CHUNK)
             })
     }
+}
+
+/// The seed levels of whole word `w`'s four chunks (`thresholds` the
+/// row's): each tile's threshold less the map's seed margin.
+#[inline(always)]
+fn seed_levels(thresholds: &[u8], shift: u32, margin: u8, w: usize) -> [u8; 4] {
+    word_thresholds(thresholds, shift, w).map(|t| t.saturating_sub(margin))
 }
 
 /// [`seed_word`] of every word of row `y`, into `words`.
