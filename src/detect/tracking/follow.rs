@@ -81,7 +81,7 @@ impl Detector {
 
     /// The cheap way of [`Detector::follow`], tried at each of the track's
     /// guesses in turn ([`Track::guesses`]): a flood fill and an outline
-    /// fit cost ten times a look at the edges. Reads the pixels only
+    /// fit cost many times a look at the edges. Reads the pixels only
     /// (`edge` is scratch), so the tracks of a frame can be followed on
     /// several threads.
     pub(super) fn follow_edges(
