@@ -72,9 +72,7 @@ impl Detector {
     /// track's guesses) and is of its size.
     pub(super) fn where_expected(&self, index: usize, c: Candidate) -> Option<Candidate> {
         let track = &self.tracks[index];
-        let near = track
-            .guesses()
-            .any(|(pu, pv)| (c.outer.u - pu).hypot(c.outer.v - pv) < track.a.max(4.0));
+        let near = track.matches_a_guess(c.outer.u, c.outer.v);
         let same_size = (c.outer.semi_major / track.a - 1.0).abs() < 0.3;
         (near && same_size).then_some(c)
     }

@@ -195,7 +195,17 @@ impl Track {
 
     /// True when an observation at (u, v) is this marker moved on.
     pub fn matches(&self, u: f64, v: f64) -> bool {
-        let (pu, pv) = self.predicted();
+        self.reaches(self.predicted(), u, v)
+    }
+
+    /// True when an observation at (u, v) lies where one of the track's
+    /// [`Track::guesses`] puts the marker.
+    pub fn matches_a_guess(&self, u: f64, v: f64) -> bool {
+        self.guesses().any(|place| self.reaches(place, u, v))
+    }
+
+    /// Whether (u, v) lies within the marker's radius of `place`.
+    fn reaches(&self, (pu, pv): (f64, f64), u: f64, v: f64) -> bool {
         (u - pu).hypot(v - pv) < self.a.max(4.0)
     }
 }
