@@ -5,7 +5,10 @@
 
 use std::f64::consts::PI;
 
-use super::segment::{below_mask, below_word, word_thresholds, Fill, Filler, Gray, Labels, Stats};
+use super::segment::{
+    below_levels, below_mask, below_word, spread_levels, word_thresholds, Fill, Filler, Gray,
+    Labels, Stats,
+};
 use super::threshold::{self, ThresholdMap};
 use super::timings::Stopwatch;
 use super::tracking::track::Tolerances;
@@ -423,10 +426,11 @@ impl<'a> Rules<'a> {
         };
         let rows_start = rows.start;
         let mut open_words: Vec<u64> = Vec::new();
-        // The seed levels of each whole word's four chunks (see
-        // [`seed_word`]), the same for a tile row's sixteen pixel rows
-        // (when the seeds are found on the way).
-        let mut word_seed_levels: Vec<[u8; 4]> = Vec::new();
+        // The seed levels of the whole words' pixels (see [`seed_word`]),
+        // the same for a tile row's sixteen pixel rows (when the seeds are
+        // found on the way).
+        let mut seed_level_bytes: Vec<u8> = Vec::new();
+        let mut row_words: Vec<u64> = Vec::with_capacity(stride);
         let whole_words = gray.width / WORD;
         'rows: for y in rows {
             if found.len() >= limit {
@@ -459,23 +463,37 @@ impl<'a> Rules<'a> {
                     open
                 }));
                 if seeds.is_none() {
-                    word_seed_levels.clear();
-                    word_seed_levels.extend(
-                        (0..whole_words).map(|w| seed_levels(thresholds, shift, margin, w)),
-                    );
+                    seed_level_bytes.clear();
+                    for w in 0..whole_words {
+                        spread_levels(
+                            seed_levels(thresholds, shift, margin, w),
+                            &mut seed_level_bytes,
+                        );
+                    }
                 }
             }
-            for (w, block) in row.chunks(WORD).enumerate() {
-                let open = open_words[w];
-                if open == 0 {
-                    continue;
+            // The row's seed bits first, in a loop of nothing else: most
+            // words have none.
+            row_words.clear();
+            match seeds {
+                Some(words) => {
+                    let start = (y - rows_start) * stride;
+                    row_words.extend_from_slice(&words[start..start + stride]);
                 }
-                let mut word = open
-                    & match seeds {
-                        Some(words) => words[(y - rows_start) * stride + w],
-                        None if w < whole_words => below_word(block, word_seed_levels[w]),
-                        None => seed_word(block, thresholds, shift, margin, w),
-                    };
+                None => {
+                    row_words.extend(
+                        row.chunks_exact(WORD)
+                            .zip(seed_level_bytes.chunks_exact(WORD))
+                            .map(|(block, levels)| below_levels(block, levels)),
+                    );
+                    if whole_words < stride {
+                        let tail = &row[whole_words * WORD..];
+                        row_words.push(seed_word(tail, thresholds, shift, margin, whole_words));
+                    }
+                }
+            }
+            for (w, (&seeds_of_word, &open)) in row_words.iter().zip(&open_words).enumerate() {
+                let mut word = seeds_of_word & open;
                 if word == 0 {
                     continue;
                 }

@@ -86,6 +86,51 @@ pub fn below_word(block: &[u8], t: [u8; 4]) -> u64 {
     })
 }
 
+/// The levels `t` of a word's four chunks spread to a byte per pixel,
+/// appended to `out`: what [`below_levels`] compares a word with.
+#[inline]
+pub fn spread_levels(t: [u8; 4], out: &mut Vec<u8>) {
+    for level in t {
+        out.extend_from_slice(&[level; CHUNK]);
+    }
+}
+
+/// [`below_word`] against levels already spread to a byte per pixel
+/// ([`spread_levels`]). A word with no pixel below its level, most words
+/// of a frame, costs one test for its 64 pixels rather than a mask per
+/// chunk.
+#[inline(always)]
+pub fn below_levels(block: &[u8], levels: &[u8]) -> u64 {
+    let block: &[u8; WORD] = block.try_into().expect("a whole word of pixels");
+    let levels: &[u8; WORD] = levels.try_into().expect("a whole word of levels");
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of x86_64; each load reads 16 of the 64 bytes
+    // of `block` or `levels`, unaligned. The saturating difference
+    // level - pixel is non-zero exactly where the pixel lies below.
+    unsafe {
+        use std::arch::x86_64::*;
+        let zero = _mm_setzero_si128();
+        let (b, t) = (block.as_ptr(), levels.as_ptr());
+        let below = |q: usize| {
+            let p = _mm_loadu_si128(b.add(q * CHUNK).cast());
+            _mm_subs_epu8(_mm_loadu_si128(t.add(q * CHUNK).cast()), p)
+        };
+        let (d0, d1, d2, d3) = (below(0), below(1), below(2), below(3));
+        let any = _mm_or_si128(_mm_or_si128(d0, d1), _mm_or_si128(d2, d3));
+        if _mm_movemask_epi8(_mm_cmpeq_epi8(any, zero)) == 0xffff {
+            return 0;
+        }
+        let mask = |d: __m128i| u64::from(!(_mm_movemask_epi8(_mm_cmpeq_epi8(d, zero)) as u16));
+        mask(d0) | mask(d1) << CHUNK | mask(d2) << (2 * CHUNK) | mask(d3) << (3 * CHUNK)
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    block
+        .iter()
+        .zip(levels)
+        .enumerate()
+        .fold(0u64, |m, (i, (&p, &t))| m | u64::from(p < t) << i)
+}
+
 /// The floor flags of the four chunks of word `w` of a row (see
 /// [`ThresholdMap::floor_row`]).
 #[inline(always)]
@@ -1090,6 +1135,29 @@ fn runs_grey_sum(runs: &[(u32, u32, u32)], image: Gray<'_>) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        /// The spread-level compare marks what the per-chunk one marks,
+        /// at levels 0 and 255 too.
+        #[test]
+        fn below_levels_marks_the_pixels_below_word_marks(
+            block in proptest::collection::vec(proptest::prelude::any::<u8>(), WORD),
+            t in proptest::prelude::any::<[u8; 4]>(),
+            flat in proptest::prelude::any::<bool>(),
+        ) {
+            // Flat blocks sit at or next to a level, where an off-by-one shows.
+            let block: Vec<u8> = if flat {
+                (0..WORD).map(|i| t[i / CHUNK].wrapping_add(block[i] % 3).wrapping_sub(1)).collect()
+            } else {
+                block
+            };
+            let mut levels = Vec::new();
+            spread_levels(t, &mut levels);
+            let expected = (0..WORD).fold(0u64, |m, i| m | u64::from(block[i] < t[i / CHUNK]) << i);
+            proptest::prop_assert_eq!(below_levels(&block, &levels), expected);
+            proptest::prop_assert_eq!(below_word(&block, t), expected);
+        }
+    }
 
     fn brute_stats(pixels: &[(u32, u32)]) -> Stats {
         let mut s = Stats::default();

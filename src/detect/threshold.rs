@@ -11,7 +11,6 @@
 //! tile covering everything, used when tracking already knows a marker's
 //! black and white levels.
 
-use std::collections::VecDeque;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Source of [`ThresholdMap::id`]s.
@@ -382,10 +381,7 @@ impl ThresholdMap {
                 }
             })
             .collect();
-        let mut queue: VecDeque<usize> = (0..thresholds.len())
-            .filter(|&i| thresholds[i] != UNSET)
-            .collect();
-        if queue.is_empty() {
+        if !thresholds.iter().any(|&t| t != UNSET) {
             // No contrast anywhere: nothing is dark.
             return ThresholdMap {
                 id: next_map_id(),
@@ -404,28 +400,7 @@ impl ThresholdMap {
                 sums,
             };
         }
-        while let Some(i) = queue.pop_front() {
-            let (c, r) = (i % cols, i / cols);
-            let value = thresholds[i];
-            let mut visit = |j: usize| {
-                if thresholds[j] == UNSET {
-                    thresholds[j] = value;
-                    queue.push_back(j);
-                }
-            };
-            if c > 0 {
-                visit(i - 1);
-            }
-            if c + 1 < cols {
-                visit(i + 1);
-            }
-            if r > 0 {
-                visit(i - cols);
-            }
-            if r + 1 < rows {
-                visit(i + cols);
-            }
-        }
+        spread_to_unset(&mut thresholds, cols, rows, UNSET);
         let values: Vec<u8> = thresholds.into_iter().map(|t| t.min(255) as u8).collect();
         // The darkest ink of the band: a region whose every pixel lies
         // nearer to it than to the threshold is printed black, not floor.
@@ -435,33 +410,34 @@ impl ThresholdMap {
         // is cut) in a large enough region are floor. A band cuts the
         // floor between cards off from the image's sides; left unflagged,
         // such pockets were flood-filled as candidates every tracked frame.
-        let solid: Vec<bool> = (0..values.len()).map(|i| own_hi[i] < values[i]).collect();
+        let solid: Vec<bool> = own_hi.iter().zip(&values).map(|(&h, &v)| h < v).collect();
         let tile_size = (
             width - ((cols - 1) << TILE_SHIFT),
             y_end - y_start - ((rows - 1) << TILE_SHIFT),
         );
         // Shade is looked for on the mid-level map only: the ratio map is
         // the second look at what this one flags.
-        let look_for_shade = matches!(level, Level::Mid);
-        let shaded_flags: Vec<u8> = (0..values.len())
-            .map(|i| {
-                // Flat paper, dark but for the noise's brightest pixels: on
-                // shaded paper the noise alone lifts a few of a tile's 256
-                // pixels over a threshold just above the paper's grey. A
-                // tile of a marker's ink beside its blurred edge is dark
-                // too, and stands as far above the darkest ink, but is not
-                // flat: its brightest pixel stands far above its mean (as
-                // on an edge's ramp).
-                if !look_for_shade {
-                    return 0;
-                }
-                let (hi_own, nf) = (u16::from(own_hi[i]), u16::from(noise_floor));
-                let flat_paper = hi_own < u16::from(values[i]) + nf
-                    && hi_own <= tile_mean(&sums, i, cols, rows, tile_size) + 2 * nf;
-                u8::from(flat_paper && hi_own >= 2 * u16::from(lo[i]) + 2 * nf)
-            })
-            .collect();
-        let shaded_tiles = (0..values.len()).filter(|&i| shaded_flags[i] != 0);
+        let shaded_flags: Vec<u8> = if matches!(level, Level::Mid) {
+            let nf = u16::from(noise_floor);
+            (0..values.len())
+                .map(|i| {
+                    // Flat paper, dark but for the noise's brightest pixels:
+                    // on shaded paper the noise alone lifts a few of a
+                    // tile's 256 pixels over a threshold just above the
+                    // paper's grey. A tile of a marker's ink beside its
+                    // blurred edge is dark too, and stands as far above the
+                    // darkest ink, but is not flat: its brightest pixel
+                    // stands far above its mean (as on an edge's ramp).
+                    let hi_own = u16::from(own_hi[i]);
+                    let flat_paper = hi_own < u16::from(values[i]) + nf
+                        && hi_own <= tile_mean(&sums, i, cols, rows, tile_size) + 2 * nf;
+                    u8::from(flat_paper && hi_own >= 2 * u16::from(lo[i]) + 2 * nf)
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let shaded_tiles = (0..shaded_flags.len()).filter(|&i| shaded_flags[i] != 0);
         let near_shaded = if shaded_flags.contains(&1) {
             box_filter(&shaded_flags, cols, rows, NEIGHBOURHOOD_TILES, u8::max)
                 .into_iter()
@@ -482,16 +458,19 @@ impl ThresholdMap {
                 let bottom = ((first + b + NEIGHBOURHOOD_TILES + 1) << TILE_SHIFT).min(height);
                 top..bottom
             });
-        let on_edge = |i: usize| {
-            let (c, r) = (i % cols, i / cols);
-            c == 0 || c + 1 == cols || r == 0 || r + 1 == rows
-        };
         let mut floor = vec![false; values.len()];
         let mut seen = vec![false; values.len()];
         let mut any_floor = false;
         let mut component = Vec::new();
-        for start in 0..values.len() {
-            if !solid[start] || seen[start] || !on_edge(start) {
+        // The tiles along the map's edge, where floor regions start: which
+        // one a region is found from changes nothing.
+        let edge_tiles = (0..rows).flat_map(|r| {
+            let across = r == 0 || r + 1 == rows;
+            let step = if across { 1 } else { (cols - 1).max(1) };
+            (0..cols).step_by(step).map(move |c| r * cols + c)
+        });
+        for start in edge_tiles {
+            if !solid[start] || seen[start] {
                 continue;
             }
             component.clear();
@@ -550,6 +529,54 @@ impl ThresholdMap {
     }
 }
 
+/// Gives every tile of `thresholds` (a grid of `cols` x `rows`) that is
+/// `unset` the value of its nearest set tile: a breadth-first spread from
+/// all set tiles at once, in index order, through the four neighbours.
+/// Only set tiles beside an unset one start it, as no other spreads.
+fn spread_to_unset(thresholds: &mut [u16], cols: usize, rows: usize, unset: u16) {
+    if !thresholds.contains(&unset) {
+        return;
+    }
+    let t = &*thresholds;
+    let mut queue: Vec<(u32, u32)> = (0..rows)
+        .flat_map(|r| (0..cols).map(move |c| (c, r)))
+        .filter(|&(c, r)| {
+            let i = r * cols + c;
+            t[i] != unset
+                && ((c > 0 && t[i - 1] == unset)
+                    || (c + 1 < cols && t[i + 1] == unset)
+                    || (r > 0 && t[i - cols] == unset)
+                    || (r + 1 < rows && t[i + cols] == unset))
+        })
+        .map(|(c, r)| (c as u32, r as u32))
+        .collect();
+    let mut head = 0;
+    while let Some(&(c, r)) = queue.get(head) {
+        head += 1;
+        let (c, r) = (c as usize, r as usize);
+        let i = r * cols + c;
+        let value = thresholds[i];
+        let mut visit = |j: usize, at: (usize, usize)| {
+            if thresholds[j] == unset {
+                thresholds[j] = value;
+                queue.push((at.0 as u32, at.1 as u32));
+            }
+        };
+        if c > 0 {
+            visit(i - 1, (c - 1, r));
+        }
+        if c + 1 < cols {
+            visit(i + 1, (c + 1, r));
+        }
+        if r > 0 {
+            visit(i - cols, (c, r - 1));
+        }
+        if r + 1 < rows {
+            visit(i + cols, (c, r + 1));
+        }
+    }
+}
+
 /// The mean grey of tile `i` of a map of `cols` x `rows` tiles from its
 /// pixel sum; `last` is the size of the last column's and the last row's
 /// tiles, which the image's edges may cut short.
@@ -557,6 +584,10 @@ fn tile_mean(sums: &[u32], i: usize, cols: usize, rows: usize, last: (usize, usi
     let tile = 1usize << TILE_SHIFT;
     let w = if i % cols + 1 == cols { last.0 } else { tile };
     let h = if i / cols + 1 == rows { last.1 } else { tile };
+    if w == tile && h == tile {
+        // A whole tile: the division is a shift.
+        return (sums[i] >> (2 * TILE_SHIFT)) as u16;
+    }
     (sums[i] / (w * h).max(1) as u32) as u16
 }
 
