@@ -535,14 +535,21 @@ fn classify_words(
     let full = pixels.len() / WORD;
     let whole = words.start.min(full)..words.end.min(full);
     let (dark_whole, light_whole) = (&mut dark[whole.clone()], &mut light[whole.clone()]);
-    for (k, w) in whole.clone().enumerate() {
-        let x0 = w * WORD;
-        let below = below_word(
-            &pixels[x0..x0 + WORD],
-            word_thresholds(thresholds, shift, w),
-        );
-        dark_whole[k] = below;
-        light_whole[k] = !below;
+    let blocks = pixels[whole.start * WORD..whole.end * WORD].chunks_exact(WORD);
+    let targets = dark_whole.iter_mut().zip(light_whole.iter_mut());
+    if map.is_constant() {
+        // One threshold for every chunk: its vectors are made once, out of
+        // the loop, rather than per word from the row's tiles.
+        let t = [thresholds[0]; 4];
+        for ((dark, light), block) in targets.zip(blocks) {
+            let below = below_word(block, t);
+            (*dark, *light) = (below, !below);
+        }
+    } else {
+        for (((dark, light), block), w) in targets.zip(blocks).zip(whole.clone()) {
+            let below = below_word(block, word_thresholds(thresholds, shift, w));
+            (*dark, *light) = (below, !below);
+        }
     }
     if let Some(f) = floor {
         for (d, w) in dark_whole.iter_mut().zip(whole) {
