@@ -616,14 +616,14 @@ fn tile_levels(
             .zip(lo.par_chunks_mut(cols))
             .zip(hi.par_chunks_mut(cols).zip(sums.par_chunks_mut(cols)))
             .for_each(|((band, lo), (hi, sums))| tile_row_levels(band, width, lo, hi, sums));
-        noise_contrast_parallel(band_pixels, width, y.end - y.start)
+        noise_contrast(band_pixels, width, y.end - y.start, true)
     } else {
         band_pixels
             .chunks(width.max(1) * tile)
             .zip(lo.chunks_mut(cols))
             .zip(hi.chunks_mut(cols).zip(sums.chunks_mut(cols)))
             .for_each(|((band, lo), (hi, sums))| tile_row_levels(band, width, lo, hi, sums));
-        noise_contrast(band_pixels, width, y.end - y.start)
+        noise_contrast(band_pixels, width, y.end - y.start, false)
     };
     let noise_floor = MIN_CONTRAST.max(noise_floor);
     let near_lo = box_filter(&lo, cols, rows, NEIGHBOURHOOD_TILES, u8::min);
@@ -716,30 +716,94 @@ enum Level {
 /// spans about ±4 σ over a neighbourhood of thousands of pixels, or it
 /// would be cut in half and flood-filled as countless specks. σ comes from
 /// the median difference between horizontal neighbours (≈ 0.95 σ), which
-/// edges, being few pixels, do not move.
-fn noise_contrast(pixels: &[u8], width: usize, height: usize) -> u8 {
-    let mut diffs = Vec::with_capacity(width * height.div_ceil(8));
-    for row in pixels.chunks_exact(width.max(1)).take(height).step_by(8) {
-        diffs.extend(row.iter().zip(&row[1..]).map(|(&a, &b)| a.abs_diff(b)));
-    }
-    let total = diffs.len() as u64;
+/// edges, being few pixels, do not move. Every eighth row is read, on the
+/// pool's threads with `parallel`.
+fn noise_contrast(pixels: &[u8], width: usize, height: usize, parallel: bool) -> u8 {
+    let rows: Vec<&[u8]> = pixels
+        .chunks_exact(width.max(1))
+        .take(height)
+        .step_by(8)
+        .collect();
+    let total: u64 = rows.iter().map(|r| r.len().saturating_sub(1) as u64).sum();
+    let count = |levels: [u8; 4]| -> [u64; 4] {
+        let add = |a: [u64; 4], b: [u64; 4]| std::array::from_fn(|k| a[k] + b[k]);
+        let rows_at_most = |rows: &[&[u8]]| {
+            rows.iter()
+                .fold([0; 4], |sum, row| add(sum, diffs_at_most(row, levels)))
+        };
+        if parallel {
+            use crate::parallel::prelude::*;
+            let parts: Vec<[u64; 4]> = rows.par_chunks(64).map(rows_at_most).collect();
+            parts.into_iter().fold([0; 4], add)
+        } else {
+            rows_at_most(&rows)
+        }
+    };
     // The median of a noisy frame's differences is a few grey levels:
-    // counting those at most 0, 1, 2, ... (whole vectors at a time) gets
-    // there before a histogram of every difference would be filled.
-    for diff in 0..16u8 {
-        let seen: u64 = diffs
-            .chunks(255)
-            .map(|c| u64::from(c.iter().fold(0u8, |n, &d| n + u8::from(d <= diff))))
-            .sum();
-        if 2 * seen >= total {
-            return diff * 8;
+    // counting those at most 0..=3, then 4..=7, ... (a pass each, whole
+    // vectors at a time) gets there before a histogram of every
+    // difference would be filled.
+    for first in (0..16u8).step_by(4) {
+        let levels = [first, first + 1, first + 2, first + 3];
+        for (level, seen) in levels.into_iter().zip(count(levels)) {
+            if 2 * seen >= total {
+                return level * 8;
+            }
         }
     }
     let mut histogram = [0u64; 256];
-    for &d in &diffs {
-        histogram[usize::from(d)] += 1;
+    for row in &rows {
+        for (&a, &b) in row.iter().zip(&row[1..]) {
+            histogram[usize::from(a.abs_diff(b))] += 1;
+        }
     }
     contrast_at_median(&histogram)
+}
+
+/// How many of the differences between neighbouring pixels of `row` are
+/// at most each of `levels`: sixteen pixels at a time where the target has
+/// vectors, counted in bytes and summed before they could overflow.
+fn diffs_at_most(row: &[u8], levels: [u8; 4]) -> [u64; 4] {
+    let diffs = row.len().saturating_sub(1);
+    let mut seen = [0u64; 4];
+    #[cfg(not(target_arch = "x86_64"))]
+    let done = 0;
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of x86_64; each load reads 16 bytes of `row`
+    // from x or x + 1, and x + 17 <= row.len() for every x read.
+    let done = unsafe {
+        use std::arch::x86_64::*;
+        let zero = _mm_setzero_si128();
+        let limits = levels.map(|l| _mm_set1_epi8(l as i8));
+        let vectors = diffs / 16;
+        let p = row.as_ptr();
+        for block in (0..vectors).step_by(255) {
+            let mut counts = [zero; 4];
+            for v in block..(block + 255).min(vectors) {
+                let a = _mm_loadu_si128(p.add(16 * v).cast());
+                let b = _mm_loadu_si128(p.add(16 * v + 1).cast());
+                let d = _mm_or_si128(_mm_subs_epu8(a, b), _mm_subs_epu8(b, a));
+                for (count, &limit) in counts.iter_mut().zip(&limits) {
+                    // All ones (-1) where d <= limit.
+                    let within = _mm_cmpeq_epi8(_mm_min_epu8(d, limit), d);
+                    *count = _mm_sub_epi8(*count, within);
+                }
+            }
+            for (total, count) in seen.iter_mut().zip(counts) {
+                let mut lanes = [0u64; 2];
+                _mm_storeu_si128(lanes.as_mut_ptr().cast(), _mm_sad_epu8(count, zero));
+                *total += lanes[0] + lanes[1];
+            }
+        }
+        16 * vectors
+    };
+    for (&a, &b) in row[done..].iter().zip(&row[done + 1..]) {
+        let d = a.abs_diff(b);
+        for (total, &level) in seen.iter_mut().zip(&levels) {
+            *total += u64::from(d <= level);
+        }
+    }
+    seen
 }
 
 /// Eight times the median difference a histogram of differences counts:
@@ -754,36 +818,6 @@ fn contrast_at_median(histogram: &[u64; 256]) -> u8 {
         }
     }
     0
-}
-
-/// [`noise_contrast`] from the counts of each difference, rows counted on
-/// the pool's threads: the same median, so the same contrast.
-fn noise_contrast_parallel(pixels: &[u8], width: usize, height: usize) -> u8 {
-    use crate::parallel::prelude::*;
-    let rows: Vec<&[u8]> = pixels
-        .chunks_exact(width.max(1))
-        .take(height)
-        .step_by(8)
-        .collect();
-    let parts: Vec<[u64; 256]> = rows
-        .par_chunks(64)
-        .map(|rows| {
-            let mut histogram = [0u64; 256];
-            for row in rows {
-                for (&a, &b) in row.iter().zip(&row[1..]) {
-                    histogram[usize::from(a.abs_diff(b))] += 1;
-                }
-            }
-            histogram
-        })
-        .collect();
-    let mut histogram = [0u64; 256];
-    for part in parts {
-        for (sum, count) in histogram.iter_mut().zip(part) {
-            *sum += count;
-        }
-    }
-    contrast_at_median(&histogram)
 }
 
 /// Min or max over a (2r+1)² window of a grid, clipped at the borders.
@@ -1024,6 +1058,34 @@ mod tests {
         assert_eq!(at(250, 80), (0, 0), "flat noise");
         assert_eq!(at(400, 80), (0, 0), "inked disc on paper");
         assert_eq!(at(400, 40), (0, 0), "inked disc's edge");
+    }
+
+    proptest::proptest! {
+        /// The vector count of small differences agrees with one taken
+        /// pixel by pixel, across the blocks where the byte counts are
+        /// summed (rows past 255 vectors).
+        #[test]
+        fn small_differences_are_counted_as_one_by_one(
+            seed in proptest::prelude::any::<u64>(),
+            len in 0usize..5000,
+            spread in 1u8..40,
+            first in 0u8..16,
+        ) {
+            let mut state = seed | 1;
+            let row: Vec<u8> = (0..len)
+                .map(|_| {
+                    state ^= state << 13;
+                    state ^= state >> 7;
+                    state ^= state << 17;
+                    128u8.wrapping_add((state % u64::from(spread)) as u8)
+                })
+                .collect();
+            let levels = [first, first + 1, first + 2, first + 3];
+            let expected: [u64; 4] = std::array::from_fn(|k| {
+                row.windows(2).filter(|w| w[0].abs_diff(w[1]) <= levels[k]).count() as u64
+            });
+            proptest::prop_assert_eq!(diffs_at_most(&row, levels), expected);
+        }
     }
 
     #[test]
