@@ -145,7 +145,7 @@ impl Detector {
         }
         let (width, height) = (gray.width, gray.height);
         let histogram = threshold::sampled_histogram(gray.pixels, width);
-        let blind = map.blind_tiles(width, height);
+        let blind = map.blind_tiles(gray.pixels, width, height);
         let mut best = 0;
         let mut seeds = Vec::new();
         for t in self.search.levels_after_miss(&histogram) {

@@ -13,6 +13,8 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use super::segment;
+
 /// Source of [`ThresholdMap::id`]s.
 static NEXT_MAP_ID: AtomicU64 = AtomicU64::new(0);
 
@@ -50,8 +52,6 @@ pub struct ThresholdMap {
     near_hi: Vec<u8>,
     /// Per tile, its own brightest pixel; empty for a constant map.
     own_hi: Vec<u8>,
-    /// Per tile, the sum of its pixels; empty for a constant map.
-    sums: Vec<u32>,
 }
 
 /// Shift of the adaptive map's tiles: 16 x 16 pixels.
@@ -90,7 +90,6 @@ impl ThresholdMap {
             near_lo: Vec::new(),
             near_hi: Vec::new(),
             own_hi: Vec::new(),
-            sums: Vec::new(),
         }
     }
 
@@ -124,7 +123,7 @@ impl ThresholdMap {
     /// large shapes and edges of clear contrast are not blind: a global
     /// level finds nothing there that the local map missed, yet it filled
     /// them whole at every level of the walk.
-    pub fn blind_tiles(&self, width: usize, height: usize) -> Vec<(u8, u8)> {
+    pub fn blind_tiles(&self, pixels: &[u8], width: usize, height: usize) -> Vec<(u8, u8)> {
         let n = self.near_lo.len();
         if n == 0 {
             return Vec::new();
@@ -141,18 +140,20 @@ impl ThresholdMap {
             return vec![(0, 0); n];
         }
         let needed = box_filter(&flags, self.cols, self.rows, NEIGHBOURHOOD_TILES, u8::max);
-        // The tiles' sums were taken with their levels; the last column
-        // and row of tiles may be cut short by the image's edges.
-        let (last_w, last_h) = (
-            width - ((self.cols - 1) << self.shift),
-            y_end - y_start - ((self.rows - 1) << self.shift),
-        );
+        // The last column and row of tiles may be cut short by the
+        // image's edges.
+        let tiles = Tiles {
+            pixels,
+            width,
+            rows: y_start..y_end,
+            cols: self.cols,
+        };
         let means: Vec<u8> = (0..n)
             .map(|i| {
                 if needed[i] == 0 {
                     return 0;
                 }
-                tile_mean(&self.sums, i, self.cols, self.rows, (last_w, last_h)) as u8
+                tiles.mean(i) as u8
             })
             .collect();
         let darkest = box_filter(&means, self.cols, self.rows, NEIGHBOURHOOD_TILES, u8::min);
@@ -333,7 +334,6 @@ impl ThresholdMap {
             near_lo: lo,
             near_hi: hi,
             noise_floor,
-            sums,
         } = match same_tiles {
             // The levels below depend on the tile rows' pixels only.
             Some(b) => TileLevels {
@@ -341,7 +341,6 @@ impl ThresholdMap {
                 near_lo: b.near_lo.clone(),
                 near_hi: b.near_hi.clone(),
                 noise_floor: b.min_contrast,
-                sums: b.sums.clone(),
             },
             None => tile_levels(pixels, width, cols, rows, y_start..y_end),
         };
@@ -397,7 +396,6 @@ impl ThresholdMap {
                 near_lo: lo,
                 near_hi: hi,
                 own_hi,
-                sums,
             };
         }
         spread_to_unset(&mut thresholds, cols, rows, UNSET);
@@ -411,10 +409,12 @@ impl ThresholdMap {
         // floor between cards off from the image's sides; left unflagged,
         // such pockets were flood-filled as candidates every tracked frame.
         let solid: Vec<bool> = own_hi.iter().zip(&values).map(|(&h, &v)| h < v).collect();
-        let tile_size = (
-            width - ((cols - 1) << TILE_SHIFT),
-            y_end - y_start - ((rows - 1) << TILE_SHIFT),
-        );
+        let tiles = Tiles {
+            pixels,
+            width,
+            rows: y_start..y_end,
+            cols,
+        };
         // Shade is looked for on the mid-level map only: the ratio map is
         // the second look at what this one flags.
         let shaded_flags: Vec<u8> = if matches!(level, Level::Mid) {
@@ -429,8 +429,8 @@ impl ThresholdMap {
                     // darkest ink, but is not flat: its brightest pixel
                     // stands far above its mean (as on an edge's ramp).
                     let hi_own = u16::from(own_hi[i]);
-                    let flat_paper = hi_own < u16::from(values[i]) + nf
-                        && hi_own <= tile_mean(&sums, i, cols, rows, tile_size) + 2 * nf;
+                    let flat_paper =
+                        hi_own < u16::from(values[i]) + nf && hi_own <= tiles.mean(i) + 2 * nf;
                     u8::from(flat_paper && hi_own >= 2 * u16::from(lo[i]) + 2 * nf)
                 })
                 .collect()
@@ -524,7 +524,6 @@ impl ThresholdMap {
             near_lo: lo,
             near_hi: hi,
             own_hi,
-            sums,
         }
     }
 }
@@ -580,18 +579,62 @@ fn spread_to_unset(thresholds: &mut [u16], cols: usize, rows: usize, unset: u16)
     }
 }
 
-/// The mean grey of tile `i` of a map of `cols` x `rows` tiles from its
-/// pixel sum; `last` is the size of the last column's and the last row's
-/// tiles, which the image's edges may cut short.
-fn tile_mean(sums: &[u32], i: usize, cols: usize, rows: usize, last: (usize, usize)) -> u16 {
-    let tile = 1usize << TILE_SHIFT;
-    let w = if i % cols + 1 == cols { last.0 } else { tile };
-    let h = if i / cols + 1 == rows { last.1 } else { tile };
-    if w == tile && h == tile {
-        // A whole tile: the division is a shift.
-        return (sums[i] >> (2 * TILE_SHIFT)) as u16;
+/// The tiles of a map over an image's pixel `rows` (whole tile rows but
+/// where the image ends), `cols` of them a row.
+struct Tiles<'a> {
+    pixels: &'a [u8],
+    width: usize,
+    rows: std::ops::Range<usize>,
+    cols: usize,
+}
+
+impl Tiles<'_> {
+    /// The mean grey of tile `i`, from the sum of its pixels: taken only
+    /// for the few tiles whose mean is asked, rather than with every
+    /// tile's levels. The last column's and the last row's tiles may be
+    /// cut short by the image's edges.
+    fn mean(&self, i: usize) -> u16 {
+        let tile = 1usize << TILE_SHIFT;
+        let (c, r) = (i % self.cols, i / self.cols);
+        let x = c * tile..((c + 1) * tile).min(self.width);
+        let y = self.rows.start + r * tile..(self.rows.start + (r + 1) * tile).min(self.rows.end);
+        let area = x.len() * y.len();
+        let band = &self.pixels[y.start * self.width..y.end * self.width];
+        if area == tile * tile {
+            // A whole tile: the division is a shift.
+            return (tile_sum(band, self.width, x.start) >> (2 * TILE_SHIFT)) as u16;
+        }
+        let sum: u32 = band
+            .chunks_exact(self.width)
+            .map(|row| segment::sum_bytes(&row[x.clone()]) as u32)
+            .sum();
+        (sum / area.max(1) as u32) as u16
     }
-    (sums[i] / (w * h).max(1) as u32) as u16
+}
+
+/// The sum of the whole tile whose top left pixel is column `x0` of
+/// `band`'s first row (`band` its rows of `width` pixels): one vector sum
+/// of absolute differences per row where the target has it.
+#[inline]
+fn tile_sum(band: &[u8], width: usize, x0: usize) -> u32 {
+    let tile = 1usize << TILE_SHIFT;
+    let rows = band.chunks_exact(width).map(|row| &row[x0..x0 + tile]);
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of x86_64; each load reads one row's 16 pixels
+    // of the tile, a slice of exactly that length.
+    unsafe {
+        use std::arch::x86_64::*;
+        let zero = _mm_setzero_si128();
+        let sum = rows.fold(zero, |sum, row| {
+            let p = _mm_loadu_si128(row.as_ptr().cast());
+            _mm_add_epi64(sum, _mm_sad_epu8(p, zero))
+        });
+        let mut lanes = [0u64; 2];
+        _mm_storeu_si128(lanes.as_mut_ptr().cast(), sum);
+        (lanes[0] + lanes[1]) as u32
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    rows.flatten().map(|&p| u32::from(p)).sum()
 }
 
 /// Per tile of the pixel rows `y` (whole tile rows), its own brightest
@@ -609,7 +652,6 @@ fn tile_levels(
         &pixels[(y.start * width).min(pixels.len())..(y.end * width).min(pixels.len())];
     let mut lo = vec![255u8; cols * rows];
     let mut hi = vec![0u8; cols * rows];
-    let mut sums = vec![0u32; cols * rows];
     // A tile row at a time, on the pool's threads for a large frame.
     let threads = crate::parallel::frame_threads(band_pixels.len());
     let noise_floor = if threads > 1 {
@@ -617,15 +659,15 @@ fn tile_levels(
         band_pixels
             .par_chunks(width.max(1) * tile)
             .zip(lo.par_chunks_mut(cols))
-            .zip(hi.par_chunks_mut(cols).zip(sums.par_chunks_mut(cols)))
-            .for_each(|((band, lo), (hi, sums))| tile_row_levels(band, width, lo, hi, sums));
+            .zip(hi.par_chunks_mut(cols))
+            .for_each(|((band, lo), hi)| tile_row_levels(band, width, lo, hi));
         noise_contrast(band_pixels, width, y.end - y.start, true)
     } else {
         band_pixels
             .chunks(width.max(1) * tile)
             .zip(lo.chunks_mut(cols))
-            .zip(hi.chunks_mut(cols).zip(sums.chunks_mut(cols)))
-            .for_each(|((band, lo), (hi, sums))| tile_row_levels(band, width, lo, hi, sums));
+            .zip(hi.chunks_mut(cols))
+            .for_each(|((band, lo), hi)| tile_row_levels(band, width, lo, hi));
         noise_contrast(band_pixels, width, y.end - y.start, false)
     };
     let noise_floor = MIN_CONTRAST.max(noise_floor);
@@ -636,7 +678,6 @@ fn tile_levels(
         near_lo,
         near_hi,
         noise_floor,
-        sums,
     }
 }
 
@@ -644,11 +685,11 @@ fn tile_levels(
 /// of one row of tiles (`band`, rows of `width` pixels), a tile's column
 /// of chunks folded row by row and reduced once: the reduction across a
 /// chunk's bytes costs more than the folds, and was paid per row.
-fn tile_row_levels(band: &[u8], width: usize, lo: &mut [u8], hi: &mut [u8], sums: &mut [u32]) {
+fn tile_row_levels(band: &[u8], width: usize, lo: &mut [u8], hi: &mut [u8]) {
     let tile = 1usize << TILE_SHIFT;
     for (c, x0) in (0..width).step_by(tile).enumerate() {
         let x1 = (x0 + tile).min(width);
-        (lo[c], hi[c], sums[c]) = tile_min_max_sum(band, width, x0..x1);
+        (lo[c], hi[c]) = tile_min_max(band, width, x0..x1);
     }
 }
 
@@ -658,7 +699,6 @@ struct TileLevels {
     near_lo: Vec<u8>,
     near_hi: Vec<u8>,
     noise_floor: u8,
-    sums: Vec<u32>,
 }
 
 /// The darkest and brightest pixel and the sum of the pixels of columns
@@ -666,7 +706,7 @@ struct TileLevels {
 /// max and sum of absolute differences per row of a full tile where the
 /// target has them.
 #[inline]
-fn tile_min_max_sum(band: &[u8], width: usize, x: std::ops::Range<usize>) -> (u8, u8, u32) {
+fn tile_min_max(band: &[u8], width: usize, x: std::ops::Range<usize>) -> (u8, u8) {
     #[cfg(target_arch = "x86_64")]
     if x.len() == 1 << TILE_SHIFT && !band.is_empty() {
         let n_rows = band.len() / width;
@@ -677,13 +717,10 @@ fn tile_min_max_sum(band: &[u8], width: usize, x: std::ops::Range<usize>) -> (u8
             let base = band.as_ptr().add(x.start);
             let first = _mm_loadu_si128(base.cast());
             let (mut lo, mut hi) = (first, first);
-            let zero = _mm_setzero_si128();
-            let mut sum = _mm_sad_epu8(first, zero);
             let mut fold = |k: usize| {
                 let p = _mm_loadu_si128(base.add(k * width).cast());
                 lo = _mm_min_epu8(lo, p);
                 hi = _mm_max_epu8(hi, p);
-                sum = _mm_add_epi64(sum, _mm_sad_epu8(p, zero));
             };
             // A whole tile's rows in a loop of known length, which the
             // compiler unrolls: its counting cost a fifth of the fold.
@@ -703,16 +740,12 @@ fn tile_min_max_sum(band: &[u8], width: usize, x: std::ops::Range<usize>) -> (u8
             hi = _mm_max_epu8(hi, _mm_srli_si128::<1>(hi));
             let mut bytes = [0u8; 16];
             _mm_storeu_si128(bytes.as_mut_ptr().cast(), _mm_unpacklo_epi8(lo, hi));
-            let mut lanes = [0u64; 2];
-            _mm_storeu_si128(lanes.as_mut_ptr().cast(), sum);
-            return (bytes[0], bytes[1], (lanes[0] + lanes[1]) as u32);
+            return (bytes[0], bytes[1]);
         }
     }
     band.chunks_exact(width.max(1))
         .flat_map(|row| &row[x.clone()])
-        .fold((255u8, 0u8, 0u32), |(l, h, s), &p| {
-            (l.min(p), h.max(p), s + u32::from(p))
-        })
+        .fold((255u8, 0u8), |(l, h), &p| (l.min(p), h.max(p)))
 }
 
 /// Where between a tile's black and white levels its threshold lies.
@@ -1060,7 +1093,7 @@ mod tests {
             })
             .collect();
         let map = ThresholdMap::adaptive(&px, w, h);
-        let blind = map.blind_tiles(w, h);
+        let blind = map.blind_tiles(&px, w, h);
         let cols = w.div_ceil(16);
         let at = |x: usize, y: usize| blind[(y / 16) * cols + x / 16];
         let (lo, hi) = at(80, 80);
