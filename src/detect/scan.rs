@@ -426,11 +426,13 @@ impl<'a> Rules<'a> {
         };
         let rows_start = rows.start;
         let mut open_words: Vec<u64> = Vec::new();
+        // Runs of neighbouring words with a chunk that may seed.
+        let mut open_runs: Vec<std::ops::Range<usize>> = Vec::new();
         // The seed levels of the whole words' pixels (see [`seed_word`]),
         // the same for a tile row's sixteen pixel rows (when the seeds are
         // found on the way).
         let mut seed_level_bytes: Vec<u8> = Vec::new();
-        let mut row_words: Vec<u64> = Vec::with_capacity(stride);
+        let mut row_words: Vec<u64> = vec![0; stride];
         let whole_words = gray.width / WORD;
         'rows: for y in rows {
             if found.len() >= limit {
@@ -443,18 +445,24 @@ impl<'a> Rules<'a> {
             let row = &gray.pixels[row_start..row_start + gray.width];
             let thresholds = map.row(y);
             if y == rows_start || y % CHUNK == 0 {
-                // The chunks that may seed, not followed and not floor:
-                // the same for the tile row's sixteen pixel rows.
+                // The chunks that may seed, not followed, not floor, and
+                // with a pixel darker than the seed level (the pixels of
+                // most tiles are not): the same for the tile row's sixteen
+                // pixel rows.
                 let floor = map.floor_row(y);
+                let darkest = map.darkest_row(y);
                 let tile_row = (y / CHUNK) * cols;
                 open_words.clear();
                 open_words.extend((0..stride).map(|w| {
                     let mut open = !0u64;
-                    if !self.occupied.is_empty() || floor.is_some() {
+                    if !self.occupied.is_empty() || floor.is_some() || darkest.is_some() {
                         for q in 0..(gray.width - w * WORD).div_ceil(CHUNK).min(WORD / CHUNK) {
                             let x0 = w * WORD + q * CHUNK;
+                            let tile = x0 >> shift;
+                            let level = thresholds[tile].saturating_sub(margin);
                             if (!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
-                                || floor.is_some_and(|f| f[x0 >> shift])
+                                || floor.is_some_and(|f| f[tile])
+                                || darkest.is_some_and(|d| d[tile] >= level)
                             {
                                 open &= !(0xffff << (q * CHUNK));
                             }
@@ -462,6 +470,14 @@ impl<'a> Rules<'a> {
                     }
                     open
                 }));
+                open_runs.clear();
+                for (w, &open) in open_words.iter().enumerate() {
+                    match open_runs.last_mut() {
+                        Some(run) if open != 0 && run.end == w => run.end = w + 1,
+                        _ if open != 0 => open_runs.push(w..w + 1),
+                        _ => {}
+                    }
+                }
                 if seeds.is_none() {
                     seed_level_bytes.clear();
                     for w in 0..whole_words {
@@ -472,28 +488,35 @@ impl<'a> Rules<'a> {
                     }
                 }
             }
-            // The row's seed bits first, in a loop of nothing else: most
-            // words have none.
-            row_words.clear();
-            match seeds {
-                Some(words) => {
-                    let start = (y - rows_start) * stride;
-                    row_words.extend_from_slice(&words[start..start + stride]);
-                }
-                None => {
-                    row_words.extend(
-                        row.chunks_exact(WORD)
-                            .zip(seed_level_bytes.chunks_exact(WORD))
-                            .map(|(block, levels)| below_levels(block, levels)),
-                    );
-                    if whole_words < stride {
-                        let tail = &row[whole_words * WORD..];
-                        row_words.push(seed_word(tail, thresholds, shift, margin, whole_words));
+            // The seed bits of each run of open words first, in a loop of
+            // nothing else: most words have none.
+            for run in &open_runs {
+                match seeds {
+                    Some(words) => {
+                        let start = (y - rows_start) * stride;
+                        row_words[run.clone()]
+                            .copy_from_slice(&words[start + run.start..start + run.end]);
+                    }
+                    None => {
+                        let whole = run.start..run.end.min(whole_words);
+                        let pixels = whole.start * WORD..whole.end * WORD;
+                        for ((out, block), levels) in row_words[whole]
+                            .iter_mut()
+                            .zip(row[pixels.clone()].chunks_exact(WORD))
+                            .zip(seed_level_bytes[pixels].chunks_exact(WORD))
+                        {
+                            *out = below_levels(block, levels);
+                        }
+                        if run.end > whole_words {
+                            let tail = &row[whole_words * WORD..];
+                            row_words[whole_words] =
+                                seed_word(tail, thresholds, shift, margin, whole_words);
+                        }
                     }
                 }
             }
-            for (w, (&seeds_of_word, &open)) in row_words.iter().zip(&open_words).enumerate() {
-                let mut word = seeds_of_word & open;
+            for w in open_runs.iter().flat_map(|run| run.clone()) {
+                let mut word = row_words[w] & open_words[w];
                 if word == 0 {
                     continue;
                 }
@@ -836,8 +859,21 @@ fn seed_row(gray: Gray<'_>, map: &ThresholdMap, y: usize, words: &mut [u64]) {
     let (shift, margin) = (map.shift(), map.seed_margin());
     let row = &gray.pixels[y * gray.width..(y + 1) * gray.width];
     let thresholds = map.row(y);
+    let darkest = map.darkest_row(y);
     for (w, (block, out)) in row.chunks(WORD).zip(words).enumerate() {
-        *out = seed_word(block, thresholds, shift, margin, w);
+        // A word none of whose tiles holds a pixel below its seed level
+        // has no seed; most words of a frame have none.
+        let may_seed = darkest.is_none_or(|d| {
+            (0..block.len().div_ceil(SCAN_CHUNK)).any(|q| {
+                let tile = (w * WORD + q * SCAN_CHUNK) >> shift;
+                d[tile] < thresholds[tile].saturating_sub(margin)
+            })
+        });
+        *out = if may_seed {
+            seed_word(block, thresholds, shift, margin, w)
+        } else {
+            0
+        };
     }
 }
 

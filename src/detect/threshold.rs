@@ -52,6 +52,9 @@ pub struct ThresholdMap {
     near_hi: Vec<u8>,
     /// Per tile, its own brightest pixel; empty for a constant map.
     own_hi: Vec<u8>,
+    /// Per tile, its own darkest pixel (see [`ThresholdMap::darkest_row`]);
+    /// empty for a constant map.
+    own_lo: Vec<u8>,
 }
 
 /// Shift of the adaptive map's tiles: 16 x 16 pixels.
@@ -90,6 +93,7 @@ impl ThresholdMap {
             near_lo: Vec::new(),
             near_hi: Vec::new(),
             own_hi: Vec::new(),
+            own_lo: Vec::new(),
         }
     }
 
@@ -187,6 +191,18 @@ impl ThresholdMap {
     #[inline]
     pub fn held_rows(&self) -> std::ops::Range<usize> {
         (self.row0 << self.shift)..((self.row0 + self.rows) << self.shift)
+    }
+
+    /// The darkest pixel of each tile of image row `y`'s tile row, indexed
+    /// by `x >> shift()`: no pixel of a tile lies below its darkest. None
+    /// for a constant map and for rows the map was not computed for.
+    #[inline]
+    pub fn darkest_row(&self, y: usize) -> Option<&[u8]> {
+        if self.own_lo.is_empty() {
+            return None;
+        }
+        let r = (y >> self.shift).checked_sub(self.row0)?;
+        (r < self.rows).then(|| &self.own_lo[r * self.cols..(r + 1) * self.cols])
     }
 
     /// Whether the map is one threshold everywhere ([`ThresholdMap::constant`]).
@@ -331,6 +347,7 @@ impl ThresholdMap {
         });
         let TileLevels {
             own_hi,
+            own_lo,
             near_lo: lo,
             near_hi: hi,
             noise_floor,
@@ -338,6 +355,7 @@ impl ThresholdMap {
             // The levels below depend on the tile rows' pixels only.
             Some(b) => TileLevels {
                 own_hi: b.own_hi.clone(),
+                own_lo: b.own_lo.clone(),
                 near_lo: b.near_lo.clone(),
                 near_hi: b.near_hi.clone(),
                 noise_floor: b.min_contrast,
@@ -396,6 +414,7 @@ impl ThresholdMap {
                 near_lo: lo,
                 near_hi: hi,
                 own_hi,
+                own_lo,
             };
         }
         spread_to_unset(&mut thresholds, cols, rows, UNSET);
@@ -524,6 +543,7 @@ impl ThresholdMap {
             near_lo: lo,
             near_hi: hi,
             own_hi,
+            own_lo,
         }
     }
 }
@@ -675,6 +695,7 @@ fn tile_levels(
     let near_hi = box_filter(&hi, cols, rows, NEIGHBOURHOOD_TILES, u8::max);
     TileLevels {
         own_hi: hi,
+        own_lo: lo,
         near_lo,
         near_hi,
         noise_floor,
@@ -696,6 +717,7 @@ fn tile_row_levels(band: &[u8], width: usize, lo: &mut [u8], hi: &mut [u8]) {
 /// What [`tile_levels`] gives.
 struct TileLevels {
     own_hi: Vec<u8>,
+    own_lo: Vec<u8>,
     near_lo: Vec<u8>,
     near_hi: Vec<u8>,
     noise_floor: u8,
