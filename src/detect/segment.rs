@@ -123,12 +123,9 @@ pub fn below_levels(block: &[u8], levels: &[u8]) -> u64 {
         let mask = |d: __m128i| u64::from(!(_mm_movemask_epi8(_mm_cmpeq_epi8(d, zero)) as u16));
         mask(d0) | mask(d1) << CHUNK | mask(d2) << (2 * CHUNK) | mask(d3) << (3 * CHUNK)
     }
+    // Each chunk's pixels share one level.
     #[cfg(not(target_arch = "x86_64"))]
-    block
-        .iter()
-        .zip(levels)
-        .enumerate()
-        .fold(0u64, |m, (i, (&p, &t))| m | u64::from(p < t) << i)
+    below_word(block, std::array::from_fn(|q| levels[q * CHUNK]))
 }
 
 /// The floor flags of the four chunks of word `w` of a row (see
@@ -537,19 +534,13 @@ fn classify_words(
     let (dark_whole, light_whole) = (&mut dark[whole.clone()], &mut light[whole.clone()]);
     let blocks = pixels[whole.start * WORD..whole.end * WORD].chunks_exact(WORD);
     let targets = dark_whole.iter_mut().zip(light_whole.iter_mut());
-    if map.is_constant() {
-        // One threshold for every chunk: its vectors are made once, out of
-        // the loop, rather than per word from the row's tiles.
-        let t = [thresholds[0]; 4];
-        for ((dark, light), block) in targets.zip(blocks) {
-            let below = below_word(block, t);
-            (*dark, *light) = (below, !below);
-        }
-    } else {
-        for (((dark, light), block), w) in targets.zip(blocks).zip(whole.clone()) {
-            let below = below_word(block, word_thresholds(thresholds, shift, w));
-            (*dark, *light) = (below, !below);
-        }
+    // One threshold for every chunk of a constant map: not looked up per
+    // chunk from the row's tiles.
+    let constant = map.is_constant().then(|| [thresholds[0]; 4]);
+    for (((dark, light), block), w) in targets.zip(blocks).zip(whole.clone()) {
+        let t = constant.unwrap_or_else(|| word_thresholds(thresholds, shift, w));
+        let below = below_word(block, t);
+        (*dark, *light) = (below, !below);
     }
     if let Some(f) = floor {
         for (d, w) in dark_whole.iter_mut().zip(whole) {

@@ -483,11 +483,14 @@ impl ThresholdMap {
         let mut component = Vec::new();
         // The tiles along the map's edge, where floor regions start: which
         // one a region is found from changes nothing.
-        let edge_tiles = (0..rows).flat_map(|r| {
-            let across = r == 0 || r + 1 == rows;
-            let step = if across { 1 } else { (cols - 1).max(1) };
-            (0..cols).step_by(step).map(move |c| r * cols + c)
-        });
+        let mut edge_tiles = Vec::with_capacity(2 * (rows + cols));
+        for r in 0..rows {
+            if r == 0 || r + 1 == rows {
+                edge_tiles.extend(r * cols..(r + 1) * cols);
+            } else {
+                edge_tiles.extend([r * cols, (r + 1) * cols - 1]);
+            }
+        }
         for start in edge_tiles {
             if !solid[start] || seen[start] {
                 continue;
@@ -573,11 +576,14 @@ fn spread_to_unset(thresholds: &mut [u16], cols: usize, rows: usize, unset: u16)
             .iter()
             .any(|&d| t[i - d] == unset || t[i + d] == unset)
     };
-    let mut queue: Vec<u32> = (1..=rows)
-        .flat_map(|r| (1..=cols).map(move |c| r * stride + c))
-        .filter(|&i| framed[i] != unset && beside_unset(&framed, i))
-        .map(|i| i as u32)
-        .collect();
+    let mut queue: Vec<u32> = Vec::new();
+    for r in 1..=rows {
+        for i in r * stride + 1..=r * stride + cols {
+            if framed[i] != unset && beside_unset(&framed, i) {
+                queue.push(i as u32);
+            }
+        }
+    }
     let mut head = 0;
     while let Some(&i) = queue.get(head) {
         head += 1;
@@ -620,41 +626,38 @@ impl Tiles<'_> {
         let y = self.rows.start + r * tile..(self.rows.start + (r + 1) * tile).min(self.rows.end);
         let area = x.len() * y.len();
         let band = &self.pixels[y.start * self.width..y.end * self.width];
+        let sum = tile_sum(band, self.width, x);
         if area == tile * tile {
             // A whole tile: the division is a shift.
-            return (tile_sum(band, self.width, x.start) >> (2 * TILE_SHIFT)) as u16;
+            return (sum >> (2 * TILE_SHIFT)) as u16;
         }
-        let sum: u32 = band
-            .chunks_exact(self.width)
-            .map(|row| segment::sum_bytes(&row[x.clone()]) as u32)
-            .sum();
         (sum / area.max(1) as u32) as u16
     }
 }
 
-/// The sum of the whole tile whose top left pixel is column `x0` of
-/// `band`'s first row (`band` its rows of `width` pixels): one vector sum
-/// of absolute differences per row where the target has it.
+/// The sum of columns `x` of the rows of `band` (rows of `width` pixels):
+/// for a whole tile's width, one vector sum of absolute differences per
+/// row where the target has it.
 #[inline]
-fn tile_sum(band: &[u8], width: usize, x0: usize) -> u32 {
-    let tile = 1usize << TILE_SHIFT;
-    let rows = band.chunks_exact(width).map(|row| &row[x0..x0 + tile]);
+fn tile_sum(band: &[u8], width: usize, x: std::ops::Range<usize>) -> u32 {
+    let rows = band.chunks_exact(width).map(|row| &row[x.clone()]);
     #[cfg(target_arch = "x86_64")]
-    // SAFETY: SSE2 is part of x86_64; each load reads one row's 16 pixels
-    // of the tile, a slice of exactly that length.
-    unsafe {
-        use std::arch::x86_64::*;
-        let zero = _mm_setzero_si128();
-        let sum = rows.fold(zero, |sum, row| {
-            let p = _mm_loadu_si128(row.as_ptr().cast());
-            _mm_add_epi64(sum, _mm_sad_epu8(p, zero))
-        });
-        let mut lanes = [0u64; 2];
-        _mm_storeu_si128(lanes.as_mut_ptr().cast(), sum);
-        (lanes[0] + lanes[1]) as u32
+    if x.len() == 1 << TILE_SHIFT {
+        // SAFETY: SSE2 is part of x86_64; each load reads one row's 16
+        // pixels of the tile, a slice of exactly that length.
+        unsafe {
+            use std::arch::x86_64::*;
+            let zero = _mm_setzero_si128();
+            let sum = rows.fold(zero, |sum, row| {
+                let p = _mm_loadu_si128(row.as_ptr().cast());
+                _mm_add_epi64(sum, _mm_sad_epu8(p, zero))
+            });
+            let mut lanes = [0u64; 2];
+            _mm_storeu_si128(lanes.as_mut_ptr().cast(), sum);
+            return (lanes[0] + lanes[1]) as u32;
+        }
     }
-    #[cfg(not(target_arch = "x86_64"))]
-    rows.flatten().map(|&p| u32::from(p)).sum()
+    rows.map(|row| segment::sum_bytes(row) as u32).sum()
 }
 
 /// Per tile of the pixel rows `y` (whole tile rows), its own brightest
@@ -784,56 +787,69 @@ enum Level {
 /// edges, being few pixels, do not move. Every eighth row is read, on the
 /// pool's threads with `parallel`.
 fn noise_contrast(pixels: &[u8], width: usize, height: usize, parallel: bool) -> u8 {
+    use crate::parallel::prelude::*;
     let rows: Vec<&[u8]> = pixels
         .chunks_exact(width.max(1))
         .take(height)
         .step_by(8)
         .collect();
-    let total: u64 = rows.iter().map(|r| r.len().saturating_sub(1) as u64).sum();
-    let count = |levels: [u8; 4]| -> [u64; 4] {
-        let add = |a: [u64; 4], b: [u64; 4]| std::array::from_fn(|k| a[k] + b[k]);
-        let rows_at_most = |rows: &[&[u8]]| {
-            rows.iter()
-                .fold([0; 4], |sum, row| add(sum, diffs_at_most(row, levels)))
-        };
-        if parallel {
-            use crate::parallel::prelude::*;
-            let parts: Vec<[u64; 4]> = rows.par_chunks(64).map(rows_at_most).collect();
-            parts.into_iter().fold([0; 4], add)
-        } else {
-            rows_at_most(&rows)
-        }
-    };
     // The median of a noisy frame's differences is a few grey levels:
-    // counting those at most 0..=3, then 4..=7, ... (a pass each, whole
-    // vectors at a time) gets there before a histogram of every
-    // difference would be filled.
-    for first in (0..16u8).step_by(4) {
-        let levels = [first, first + 1, first + 2, first + 3];
-        for (level, seen) in levels.into_iter().zip(count(levels)) {
-            if 2 * seen >= total {
-                return level * 8;
+    // where the target has vectors, counting those at most 0..=3, then
+    // 4..=7, ... (a pass each, sixteen at a time) gets there before a
+    // histogram of every difference would be filled.
+    #[cfg(target_arch = "x86_64")]
+    {
+        let total: u64 = rows.iter().map(|r| r.len().saturating_sub(1) as u64).sum();
+        let add = |a: [u64; 4], b: [u64; 4]| std::array::from_fn(|k| a[k] + b[k]);
+        for first in (0..16u8).step_by(4) {
+            let levels = [first, first + 1, first + 2, first + 3];
+            let rows_at_most = |rows: &[&[u8]]| {
+                rows.iter()
+                    .fold([0; 4], |sum, row| add(sum, diffs_at_most(row, levels)))
+            };
+            let seen = if parallel {
+                let parts: Vec<[u64; 4]> = rows.par_chunks(64).map(rows_at_most).collect();
+                parts.into_iter().fold([0; 4], add)
+            } else {
+                rows_at_most(&rows)
+            };
+            for (level, seen) in levels.into_iter().zip(seen) {
+                if 2 * seen >= total {
+                    return level * 8;
+                }
             }
         }
     }
+    let histogram_of = |rows: &[&[u8]]| {
+        let mut histogram = [0u64; 256];
+        for row in rows {
+            for (&a, &b) in row.iter().zip(&row[1..]) {
+                histogram[usize::from(a.abs_diff(b))] += 1;
+            }
+        }
+        histogram
+    };
+    let parts: Vec<[u64; 256]> = if parallel {
+        rows.par_chunks(64).map(histogram_of).collect()
+    } else {
+        vec![histogram_of(&rows)]
+    };
     let mut histogram = [0u64; 256];
-    for row in &rows {
-        for (&a, &b) in row.iter().zip(&row[1..]) {
-            histogram[usize::from(a.abs_diff(b))] += 1;
+    for part in parts {
+        for (sum, count) in histogram.iter_mut().zip(part) {
+            *sum += count;
         }
     }
     contrast_at_median(&histogram)
 }
 
 /// How many of the differences between neighbouring pixels of `row` are
-/// at most each of `levels`: sixteen pixels at a time where the target has
-/// vectors, counted in bytes and summed before they could overflow.
+/// at most each of `levels`: sixteen pixels at a time, counted in bytes
+/// and summed before they could overflow.
+#[cfg(target_arch = "x86_64")]
 fn diffs_at_most(row: &[u8], levels: [u8; 4]) -> [u64; 4] {
     let diffs = row.len().saturating_sub(1);
     let mut seen = [0u64; 4];
-    #[cfg(not(target_arch = "x86_64"))]
-    let done = 0;
-    #[cfg(target_arch = "x86_64")]
     // SAFETY: SSE2 is part of x86_64; each load reads 16 bytes of `row`
     // from x or x + 1, and x + 17 <= row.len() for every x read.
     let done = unsafe {
@@ -1125,6 +1141,7 @@ mod tests {
         assert_eq!(at(400, 40), (0, 0), "inked disc's edge");
     }
 
+    #[cfg(target_arch = "x86_64")]
     proptest::proptest! {
         /// The vector count of small differences agrees with one taken
         /// pixel by pixel, across the blocks where the byte counts are
