@@ -95,7 +95,11 @@ for name in whycode_web whycode_pdf; do
 done
 for pid in "${pids[@]}"; do wait "$pid"; done
 rm -rf "$staging/raw"
-cp "$here/site/index.html" "$here/site/style.css" "$here/site/app.js" "$here/site/worker.js" "$staging/"
+cp "$here/site/index.html" "$here/site/style.css" "$staging/"
+# The scripts go out without their whole-line comments (the first load's budget).
+for script in app.js worker.js; do
+    python3 "$here/strip_comments.py" "$here/site/$script" "$staging/$script"
+done
 
 # The offline cache: every file of the site but the PDF module (cached when
 # first used), under a version that changes with any file.
@@ -103,7 +107,9 @@ all=$(cd "$staging" && find . -type f | sed 's|^\./||' | sort)
 files=$(echo "$all" | grep -v '^pkg/whycode_pdf')
 hash=$(cd "$staging" && cat $all "$here/site/sw.js" | sha256sum | cut -c1-16)
 list=$(printf '"./",'; for f in $files; do printf '"%s",' "$f"; done)
-sed -e "s|__VERSION__|$hash|" -e "s|__FILES__|[${list%,}]|" "$here/site/sw.js" >"$staging/sw.js"
+python3 "$here/strip_comments.py" "$here/site/sw.js" "$staging/sw.js.in"
+sed -e "s|__VERSION__|$hash|" -e "s|__FILES__|[${list%,}]|" "$staging/sw.js.in" >"$staging/sw.js"
+rm "$staging/sw.js.in"
 
 rm -rf "$here/dist"
 mv "$staging" "$here/dist"
