@@ -459,10 +459,9 @@ impl<'a> Rules<'a> {
                         for q in 0..(gray.width - w * WORD).div_ceil(CHUNK).min(WORD / CHUNK) {
                             let x0 = w * WORD + q * CHUNK;
                             let tile = x0 >> shift;
-                            let level = thresholds[tile].saturating_sub(margin);
                             if (!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
                                 || floor.is_some_and(|f| f[tile])
-                                || darkest.is_some_and(|d| d[tile] >= level)
+                                || darkest.is_some_and(|d| !may_seed(d, thresholds, margin, tile))
                             {
                                 open &= !(0xffff << (q * CHUNK));
                             }
@@ -854,6 +853,14 @@ fn seed_levels(thresholds: &[u8], shift: u32, margin: u8, w: usize) -> [u8; 4] {
     word_thresholds(thresholds, shift, w).map(|t| t.saturating_sub(margin))
 }
 
+/// Whether tile `tile` of a row may hold a seed: its darkest pixel
+/// (`darkest`, [`ThresholdMap::darkest_row`]) lies below its seed level
+/// (its threshold in `thresholds` less the map's seed `margin`).
+#[inline(always)]
+fn may_seed(darkest: &[u8], thresholds: &[u8], margin: u8, tile: usize) -> bool {
+    darkest[tile] < thresholds[tile].saturating_sub(margin)
+}
+
 /// [`seed_word`] of every word of row `y`, into `words`.
 fn seed_row(gray: Gray<'_>, map: &ThresholdMap, y: usize, words: &mut [u64]) {
     let (shift, margin) = (map.shift(), map.seed_margin());
@@ -863,13 +870,11 @@ fn seed_row(gray: Gray<'_>, map: &ThresholdMap, y: usize, words: &mut [u64]) {
     for (w, (block, out)) in row.chunks(WORD).zip(words).enumerate() {
         // A word none of whose tiles holds a pixel below its seed level
         // has no seed; most words of a frame have none.
-        let may_seed = darkest.is_none_or(|d| {
-            (0..block.len().div_ceil(SCAN_CHUNK)).any(|q| {
-                let tile = (w * WORD + q * SCAN_CHUNK) >> shift;
-                d[tile] < thresholds[tile].saturating_sub(margin)
-            })
+        let any_may_seed = darkest.is_none_or(|d| {
+            (0..block.len().div_ceil(SCAN_CHUNK))
+                .any(|q| may_seed(d, thresholds, margin, (w * WORD + q * SCAN_CHUNK) >> shift))
         });
-        *out = if may_seed {
+        *out = if any_may_seed {
             seed_word(block, thresholds, shift, margin, w)
         } else {
             0

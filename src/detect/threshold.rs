@@ -660,9 +660,9 @@ fn tile_sum(band: &[u8], width: usize, x: std::ops::Range<usize>) -> u32 {
     rows.map(|row| segment::sum_bytes(row) as u32).sum()
 }
 
-/// Per tile of the pixel rows `y` (whole tile rows), its own brightest
-/// pixel, its neighbourhood's darkest and brightest, and the sum of its
-/// pixels; and the noise floor of those rows.
+/// Per tile of the pixel rows `y` (whole tile rows), its own darkest and
+/// brightest pixel and its neighbourhood's; and the noise floor of those
+/// rows.
 fn tile_levels(
     pixels: &[u8],
     width: usize,
@@ -705,10 +705,10 @@ fn tile_levels(
     }
 }
 
-/// The darkest and brightest pixel and the sum of the pixels of each tile
-/// of one row of tiles (`band`, rows of `width` pixels), a tile's column
-/// of chunks folded row by row and reduced once: the reduction across a
-/// chunk's bytes costs more than the folds, and was paid per row.
+/// The darkest and brightest pixel of each tile of one row of tiles
+/// (`band`, rows of `width` pixels), a tile's column of chunks folded row
+/// by row and reduced once: the reduction across a chunk's bytes costs
+/// more than the folds, and was paid per row.
 fn tile_row_levels(band: &[u8], width: usize, lo: &mut [u8], hi: &mut [u8]) {
     let tile = 1usize << TILE_SHIFT;
     for (c, x0) in (0..width).step_by(tile).enumerate() {
@@ -726,10 +726,9 @@ struct TileLevels {
     noise_floor: u8,
 }
 
-/// The darkest and brightest pixel and the sum of the pixels of columns
-/// `x` of the rows of `band` (rows of `width` pixels): one vector min,
-/// max and sum of absolute differences per row of a full tile where the
-/// target has them.
+/// The darkest and brightest pixel of columns `x` of the rows of `band`
+/// (rows of `width` pixels): one vector min and max per row of a full
+/// tile where the target has them.
 #[inline]
 fn tile_min_max(band: &[u8], width: usize, x: std::ops::Range<usize>) -> (u8, u8) {
     #[cfg(target_arch = "x86_64")]
@@ -787,7 +786,6 @@ enum Level {
 /// edges, being few pixels, do not move. Every eighth row is read, on the
 /// pool's threads with `parallel`.
 fn noise_contrast(pixels: &[u8], width: usize, height: usize, parallel: bool) -> u8 {
-    use crate::parallel::prelude::*;
     let rows: Vec<&[u8]> = pixels
         .chunks_exact(width.max(1))
         .take(height)
@@ -807,12 +805,9 @@ fn noise_contrast(pixels: &[u8], width: usize, height: usize, parallel: bool) ->
                 rows.iter()
                     .fold([0; 4], |sum, row| add(sum, diffs_at_most(row, levels)))
             };
-            let seen = if parallel {
-                let parts: Vec<[u64; 4]> = rows.par_chunks(64).map(rows_at_most).collect();
-                parts.into_iter().fold([0; 4], add)
-            } else {
-                rows_at_most(&rows)
-            };
+            let seen = over_bands(&rows, parallel, rows_at_most)
+                .into_iter()
+                .fold([0; 4], add);
             for (level, seen) in levels.into_iter().zip(seen) {
                 if 2 * seen >= total {
                     return level * 8;
@@ -829,18 +824,28 @@ fn noise_contrast(pixels: &[u8], width: usize, height: usize, parallel: bool) ->
         }
         histogram
     };
-    let parts: Vec<[u64; 256]> = if parallel {
-        rows.par_chunks(64).map(histogram_of).collect()
-    } else {
-        vec![histogram_of(&rows)]
-    };
     let mut histogram = [0u64; 256];
-    for part in parts {
+    for part in over_bands(&rows, parallel, histogram_of) {
         for (sum, count) in histogram.iter_mut().zip(part) {
             *sum += count;
         }
     }
     contrast_at_median(&histogram)
+}
+
+/// `f` of bands of 64 of `rows` on the pool's threads with `parallel`,
+/// else of all of them at once.
+fn over_bands<T: Send>(
+    rows: &[&[u8]],
+    parallel: bool,
+    f: impl Fn(&[&[u8]]) -> T + Sync + Send,
+) -> Vec<T> {
+    use crate::parallel::prelude::*;
+    if parallel {
+        rows.par_chunks(64).map(f).collect()
+    } else {
+        vec![f(rows)]
+    }
 }
 
 /// How many of the differences between neighbouring pixels of `row` are
