@@ -160,7 +160,31 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
     // 16-bit RGBA, the widest pixels any of the decoders produces.
     limits.max_alloc = Some(limit.max_pixels.saturating_mul(8));
     reader.limits(limits);
-    Ok((to_gray(reader.decode().map_err(decode)?), format))
+    let decoded = reader.decode().map_err(|e| match &e {
+        image::ImageError::IoError(cause) if cause.kind() == std::io::ErrorKind::UnexpectedEof => {
+            truncated(path, format)
+        }
+        _ => decode(e),
+    })?;
+    Ok((to_gray(decoded), format))
+}
+
+/// A file that ends before the pixels its header gives, in words: the
+/// decoders say only that a read came up short.
+fn truncated(path: &Path, format: image::ImageFormat) -> LoadError {
+    let name = match format {
+        image::ImageFormat::Png => "PNG",
+        image::ImageFormat::Pnm => "PGM/PPM",
+        image::ImageFormat::Bmp => "BMP",
+        image::ImageFormat::Jpeg => "JPEG",
+        _ => "image",
+    };
+    image_error(
+        path,
+        LoadProblem::Invalid(format!(
+            "{name} file is truncated (it ends before the pixels its header gives)"
+        )),
+    )
 }
 
 /// Damage the strict decoders below find in a file the `image` crate would
@@ -708,6 +732,13 @@ mod tests {
         assert_eq!(
             err.to_string(),
             "cut.jpg: JPEG file is truncated (no end-of-image marker after its image data)"
+        );
+        let mut pgm = b"P5\n40 30\n255\n".to_vec();
+        pgm.extend([128u8; 500]);
+        let err = decode_gray(Path::new("cut.pgm"), &pgm, SizeLimit::FILES).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "cut.pgm: PGM/PPM file is truncated (it ends before the pixels its header gives)"
         );
     }
 }

@@ -735,10 +735,17 @@ impl Default for Stats {
     }
 }
 
-/// Σ k² for k in 0..=n.
+/// Σ k² for k in `first..=last`: six times Σ k² up to n is n (n + 1)
+/// (2n + 1), so the difference of the two products, divided once.
 #[inline]
-fn sum_squares(n: u64) -> u64 {
-    n * (n + 1) * (2 * n + 1) / 6
+fn sum_squares(first: u64, last: u64) -> u64 {
+    let six_times_up_to = |n: u64| n * (n + 1) * (2 * n + 1);
+    let below = if first > 0 {
+        six_times_up_to(first - 1)
+    } else {
+        0
+    };
+    (six_times_up_to(last) - below) / 6
 }
 
 impl Stats {
@@ -747,12 +754,7 @@ impl Stats {
     pub fn add_run(&mut self, y: u32, x0: u32, x1: u32, sum_i: u64) {
         let n = u64::from(x1 - x0 + 1);
         let su = (u64::from(x0) + u64::from(x1)) * n / 2;
-        let suu = sum_squares(u64::from(x1))
-            - if x0 > 0 {
-                sum_squares(u64::from(x0) - 1)
-            } else {
-                0
-            };
+        let suu = sum_squares(u64::from(x0), u64::from(x1));
         let y64 = u64::from(y);
         self.count += n;
         self.min_u = self.min_u.min(x0);
@@ -994,12 +996,7 @@ impl Filler {
             // belongs to the background floor, not to a marker. Filling the
             // rest of the segment first (to label it once) cost tracked
             // frames, whose band scan reached the whole floor's fringe.
-            if has_floor
-                && (map.is_floor(left.saturating_sub(1), y)
-                    || map.is_floor((right + 1).min(width - 1), y)
-                    || (y > 0 && map.floor_between(y - 1, left, right))
-                    || (y + 1 < image.height && map.floor_between(y + 1, left, right)))
-            {
+            if has_floor && map.run_touches_floor(y, (left, right), (width, image.height)) {
                 escaped = true;
                 break;
             }

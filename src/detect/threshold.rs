@@ -274,6 +274,32 @@ impl ThresholdMap {
         row[x0 >> self.shift..=x1 >> self.shift].iter().any(|&f| f)
     }
 
+    /// Whether a dark run of row `y` from `x0` to `x1` touches a floor
+    /// tile: beside its ends in its row, or in the rows above and below
+    /// it. A dark fill takes no pixel of a floor tile (the fills classify
+    /// them as not dark), so the run's own tiles are not floor, and the
+    /// rows next to it need a look only where they cross into another row
+    /// of tiles.
+    #[inline]
+    pub fn run_touches_floor(
+        &self,
+        y: usize,
+        (x0, x1): (usize, usize),
+        (width, height): (usize, usize),
+    ) -> bool {
+        if self.floor.is_empty() {
+            return false;
+        }
+        if self.is_floor(x0.saturating_sub(1), y) || self.is_floor((x1 + 1).min(width - 1), y) {
+            return true;
+        }
+        let tile_row = y >> self.shift;
+        (y > 0 && (y - 1) >> self.shift != tile_row && self.floor_between(y - 1, x0, x1))
+            || (y + 1 < height
+                && (y + 1) >> self.shift != tile_row
+                && self.floor_between(y + 1, x0, x1))
+    }
+
     /// Tells this map from every other made in the process.
     #[inline]
     pub fn id(&self) -> u64 {
