@@ -242,6 +242,16 @@ impl Labels {
         }
     }
 
+    /// Row `y`'s dark marks.
+    #[inline(always)]
+    fn dark_marks(&self, y: usize) -> &[u64] {
+        if self.stamps[y] == self.generation {
+            &self.dark[y * self.stride..(y + 1) * self.stride]
+        } else {
+            &self.zeros
+        }
+    }
+
     /// Row `y`'s marks, cleared first if they are a previous pass's.
     #[inline]
     fn row_mut(&mut self, y: usize, dark: bool) -> &mut [u64] {
@@ -328,20 +338,20 @@ fn set_bits(row: &mut [u64], x0: usize, x1: usize, on: bool) {
         }
         return;
     }
-    for (w, word) in row.iter_mut().enumerate().take(w1 + 1).skip(w0) {
-        let mut mask = !0u64;
-        if w == w0 {
-            mask &= !0u64 << (x0 % WORD);
-        }
-        if w == w1 {
-            mask &= !0u64 >> (WORD - 1 - x1 % WORD);
-        }
+    // The end words, then the whole words between them: indexed, as an
+    // iterator skipping to the first word compiles to a call per run.
+    let ends = [
+        (w0, !0u64 << (x0 % WORD)),
+        (w1, !0u64 >> (WORD - 1 - x1 % WORD)),
+    ];
+    for (w, mask) in ends {
         if on {
-            *word |= mask;
+            row[w] |= mask;
         } else {
-            *word &= !mask;
+            row[w] &= !mask;
         }
     }
+    row[w0 + 1..w1].fill(if on { !0 } else { 0 });
 }
 
 /// The pixels of an image classified under one threshold map as fills
@@ -590,14 +600,19 @@ impl<'a, const DARK: bool> Fillable<'a, DARK> {
         } else {
             &classes.light[range]
         };
-        let (dark_marks, white_marks) = labels.marks(y);
-        // One length for the three rows, so that indexing one of them
+        // A dark fill reads no white marks.
+        let (dark_marks, white_marks) = if DARK {
+            (labels.dark_marks(y), &[][..])
+        } else {
+            labels.marks(y)
+        };
+        // One length for the rows read, so that indexing one of them
         // checks the index for all.
         let n = class.len();
         Fillable {
             class,
             dark_marks: &dark_marks[..n],
-            white_marks: &white_marks[..n],
+            white_marks: if DARK { white_marks } else { &white_marks[..n] },
         }
     }
 }

@@ -280,7 +280,7 @@ impl ThresholdMap {
     /// them as not dark), so the run's own tiles are not floor, and the
     /// rows next to it need a look only where they cross into another row
     /// of tiles.
-    #[inline]
+    #[inline(always)]
     pub fn run_touches_floor(
         &self,
         y: usize,
