@@ -231,27 +231,6 @@ impl Labels {
         }
     }
 
-    /// Row `y`'s dark and white marks.
-    #[inline(always)]
-    fn marks(&self, y: usize) -> (&[u64], &[u64]) {
-        if self.stamps[y] == self.generation {
-            let range = y * self.stride..(y + 1) * self.stride;
-            (&self.dark[range.clone()], &self.white[range])
-        } else {
-            (&self.zeros, &self.zeros)
-        }
-    }
-
-    /// Row `y`'s dark marks.
-    #[inline(always)]
-    fn dark_marks(&self, y: usize) -> &[u64] {
-        if self.stamps[y] == self.generation {
-            &self.dark[y * self.stride..(y + 1) * self.stride]
-        } else {
-            &self.zeros
-        }
-    }
-
     /// Row `y`'s marks, cleared first if they are a previous pass's.
     #[inline]
     fn row_mut(&mut self, y: usize, dark: bool) -> &mut [u64] {
@@ -592,27 +571,60 @@ struct Fillable<'a, const DARK: bool> {
 }
 
 impl<'a, const DARK: bool> Fillable<'a, DARK> {
+    /// Row `y` of the image `classes` was last selected for.
     #[inline(always)]
     fn new(classes: &'a Classes, labels: &'a Labels, y: usize) -> Fillable<'a, DARK> {
-        let range = y * classes.stride..(y + 1) * classes.stride;
-        let class = if DARK {
-            &classes.dark[range]
-        } else {
-            &classes.light[range]
-        };
-        // A dark fill reads no white marks.
-        let (dark_marks, white_marks) = if DARK {
-            (labels.dark_marks(y), &[][..])
-        } else {
-            labels.marks(y)
+        assert!(
+            y < labels.height
+                && labels.stride == classes.stride
+                && classes.dark.len() == labels.height * labels.stride,
+            "row {y} of labels and classes of another size"
+        );
+        // SAFETY: what `in_frame` needs, just checked.
+        unsafe { Fillable::in_frame(classes, labels, y) }
+    }
+
+    /// Row `y` without bounds checks on the rows' slices, for the fill's
+    /// loop, which builds three of these per run: there the checks were a
+    /// large share of the fill's work (docs/benchmarks.md, the fill's work
+    /// per run).
+    ///
+    /// # Safety
+    ///
+    /// `y` is below the height of the image `classes` was last selected
+    /// for, and `labels` were begun for an image of that image's size
+    /// (which [`Filler::fill`] asserts).
+    #[inline(always)]
+    unsafe fn in_frame(classes: &'a Classes, labels: &'a Labels, y: usize) -> Fillable<'a, DARK> {
+        let stride = classes.stride;
+        debug_assert!(y < labels.height && labels.stride == stride);
+        debug_assert!(classes.dark.len() == stride * labels.height);
+        let range = y * stride..(y + 1) * stride;
+        // SAFETY: the classes and the labels hold `stride` words for each
+        // of the image's rows, and `y` is one of them (the caller's word).
+        let (class, marks) = unsafe {
+            let class = if DARK {
+                classes.dark.get_unchecked(range.clone())
+            } else {
+                classes.light.get_unchecked(range.clone())
+            };
+            let marks = if *labels.stamps.get_unchecked(y) == labels.generation {
+                (
+                    labels.dark.get_unchecked(range.clone()),
+                    labels.white.get_unchecked(range),
+                )
+            } else {
+                (&labels.zeros[..], &labels.zeros[..])
+            };
+            (class, marks)
         };
         // One length for the rows read, so that indexing one of them
-        // checks the index for all.
+        // checks the index for all; a dark fill reads no white marks.
         let n = class.len();
         Fillable {
             class,
-            dark_marks: &dark_marks[..n],
-            white_marks: if DARK { white_marks } else { &white_marks[..n] },
+            dark_marks: &marks.0[..n],
+            white_marks: if DARK { &[] } else { &marks.1[..n] },
         }
     }
 }
@@ -885,6 +897,15 @@ impl Filler {
         mode: Fill,
     ) -> FillResult {
         self.classes.select(image, map);
+        // What the fill's unchecked reads of the labels' rows rest on.
+        assert!(
+            labels.width == image.width && labels.height == image.height,
+            "labels begun for a {}x{} image, filling a {}x{} one",
+            labels.width,
+            labels.height,
+            image.width,
+            image.height
+        );
         // A fill that classifies a few words at a time is its own copy, so
         // that the fills of a frame's scan keep their tighter loop.
         let result = match (mode, BY_RUNS_BUILT && self.classes.by_runs) {
@@ -992,7 +1013,9 @@ impl Filler {
             }
             let (left, right) = if !BY_RUNS {
                 classes.ensure_row(image, map, y);
-                let row = Fillable::<DARK>::new(classes, labels, y);
+                // SAFETY: y lies within y_lo..=y_hi, rows of the image
+                // the classes were selected for and the labels sized for.
+                let row = unsafe { Fillable::<DARK>::in_frame(classes, labels, y) };
                 if row.word(x / WORD) >> (x % WORD) & 1 == 0 {
                     continue;
                 }
@@ -1034,7 +1057,8 @@ impl Filler {
                 } else {
                     classes.ensure_row(image, map, ny);
                 }
-                let row = Fillable::<DARK>::new(classes, labels, ny);
+                // SAFETY: as for the run's own row.
+                let row = unsafe { Fillable::<DARK>::in_frame(classes, labels, ny) };
                 let mut carry = 0u64;
                 for w in w0..=w1 {
                     let mut m = row.word(w);
