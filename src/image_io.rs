@@ -170,13 +170,13 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
 }
 
 /// A file that ends before the pixels its header gives, in words: the
-/// decoders say only that a read came up short.
+/// decoders say only that a read came up short. (JPEGs are checked for
+/// completeness before they get here.)
 fn truncated(path: &Path, format: image::ImageFormat) -> LoadError {
     let name = match format {
         image::ImageFormat::Png => "PNG",
         image::ImageFormat::Pnm => "PGM/PPM",
         image::ImageFormat::Bmp => "BMP",
-        image::ImageFormat::Jpeg => "JPEG",
         _ => "image",
     };
     image_error(

@@ -36,7 +36,7 @@ pub struct ThresholdMap {
     row0: usize,
     rows: usize,
     values: Vec<u8>,
-    /// Tiles of a large dark background (see [`ThresholdMap::is_floor`]),
+    /// Tiles of a large dark background (see [`ThresholdMap::floor_row`]),
     /// laid out as `values`; empty when there are none.
     floor: Vec<bool>,
     /// Least black-to-white difference that noise cannot fake.
@@ -198,11 +198,19 @@ impl ThresholdMap {
     /// for a constant map and for rows the map was not computed for.
     #[inline]
     pub fn darkest_row(&self, y: usize) -> Option<&[u8]> {
-        if self.own_lo.is_empty() {
+        self.held_tile_row(&self.own_lo, y)
+    }
+
+    /// Image row `y`'s tile row of `per_tile` (one of the map's per-tile
+    /// vectors): None when the vector is empty or the map was not
+    /// computed for that row.
+    #[inline(always)]
+    fn held_tile_row<'a, T>(&self, per_tile: &'a [T], y: usize) -> Option<&'a [T]> {
+        if per_tile.is_empty() {
             return None;
         }
         let r = (y >> self.shift).checked_sub(self.row0)?;
-        (r < self.rows).then(|| &self.own_lo[r * self.cols..(r + 1) * self.cols])
+        (r < self.rows).then(|| &per_tile[r * self.cols..(r + 1) * self.cols])
     }
 
     /// Whether the map is one threshold everywhere ([`ThresholdMap::constant`]).
@@ -231,55 +239,33 @@ impl ThresholdMap {
         self.min_contrast / 2
     }
 
-    /// True when the pixel lies in a tile of dark background floor: a
-    /// featureless region, dark in every pixel, that reaches the edge of
-    /// the image and is larger than a marker's annulus. A grey floor next to
-    /// white cards is such a region; flood-filling it as a candidate cost
-    /// more than the rest of the frame. A marker's dark segment is ringed
-    /// by white, so it never reaches the floor: a segment that does is not a
-    /// marker. Rows outside the map have no floor.
-    #[inline]
-    pub fn is_floor(&self, x: usize, y: usize) -> bool {
-        if self.floor.is_empty() {
-            return false;
-        }
-        let r = y >> self.shift;
-        r >= self.row0
-            && r < self.row0 + self.rows
-            && self.floor[(r - self.row0) * self.cols + (x >> self.shift)]
-    }
-
     /// The floor flags of one image row, indexed by `x >> shift()`; None
-    /// when the row has no floor tile.
+    /// when the map has no floor tile or was not computed for the row.
+    /// Floor is a featureless region, dark in every pixel, that reaches
+    /// the edge of the image and is larger than a marker's annulus. A grey
+    /// floor next to white cards is such a region; flood-filling it as a
+    /// candidate cost more than the rest of the frame. A marker's dark
+    /// segment is ringed by white, so it never reaches the floor: a
+    /// segment that does is not a marker. Rows outside the map have no
+    /// floor.
     #[inline]
     pub fn floor_row(&self, y: usize) -> Option<&[bool]> {
-        if self.floor.is_empty() {
-            return None;
-        }
-        let r = (y >> self.shift).checked_sub(self.row0)?;
-        (r < self.rows).then(|| &self.floor[r * self.cols..(r + 1) * self.cols])
+        self.held_tile_row(&self.floor, y)
     }
 
     /// Whether any tile of row `y` from column `x0` to `x1` is floor.
     #[inline]
     pub fn floor_between(&self, y: usize, x0: usize, x1: usize) -> bool {
-        if self.floor.is_empty() {
-            return false;
-        }
-        let r = y >> self.shift;
-        if r < self.row0 || r >= self.row0 + self.rows {
-            return false;
-        }
-        let row = &self.floor[(r - self.row0) * self.cols..(r - self.row0 + 1) * self.cols];
-        row[x0 >> self.shift..=x1 >> self.shift].iter().any(|&f| f)
+        self.floor_row(y)
+            .is_some_and(|row| row[x0 >> self.shift..=x1 >> self.shift].contains(&true))
     }
 
-    /// Whether a dark run of row `y` from `x0` to `x1` touches a floor
-    /// tile: beside its ends in its row, or in the rows above and below
-    /// it. A dark fill takes no pixel of a floor tile (the fills classify
-    /// them as not dark), so the run's own tiles are not floor, and the
-    /// rows next to it need a look only where they cross into another row
-    /// of tiles.
+    /// Whether a dark run of row `y` (one of [`ThresholdMap::held_rows`])
+    /// from `x0` to `x1` touches a floor tile: beside its ends in its row,
+    /// or in the rows above and below it. A dark fill takes no pixel of a
+    /// floor tile (the fills classify them as not dark), so the run's own
+    /// tiles are not floor, and the rows next to it need a look only where
+    /// they cross into another row of tiles.
     #[inline(always)]
     pub fn run_touches_floor(
         &self,
@@ -287,10 +273,11 @@ impl ThresholdMap {
         (x0, x1): (usize, usize),
         (width, height): (usize, usize),
     ) -> bool {
-        if self.floor.is_empty() {
+        debug_assert!(self.held_rows().contains(&y));
+        let Some(row) = self.floor_row(y) else {
             return false;
-        }
-        if self.is_floor(x0.saturating_sub(1), y) || self.is_floor((x1 + 1).min(width - 1), y) {
+        };
+        if row[x0.saturating_sub(1) >> self.shift] || row[(x1 + 1).min(width - 1) >> self.shift] {
             return true;
         }
         let tile_row = y >> self.shift;
