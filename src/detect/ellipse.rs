@@ -17,26 +17,6 @@ pub(crate) fn sample(image: Gray<'_>, x: f64, y: f64) -> Option<f64> {
     image.at(x, y, Border::Interior)
 }
 
-/// Fills `out` with samples along the line through `origin` in the unit
-/// direction `dir`, at distances `start`, `start + step`, ...; false when
-/// the line leaves the image.
-fn sample_line(
-    image: Gray<'_>,
-    origin: (f64, f64),
-    dir: (f64, f64),
-    (start, step): (f64, f64),
-    out: &mut [f64],
-) -> bool {
-    for (j, slot) in out.iter_mut().enumerate() {
-        let d = start + step * j as f64;
-        match sample(image, origin.0 + dir.0 * d, origin.1 + dir.1 * d) {
-            Some(value) => *slot = value,
-            None => return false,
-        }
-    }
-    true
-}
-
 /// Pixels of the margin beyond the coarse outline that a ray must show to
 /// place the edge on it: the edge's blur and a pixel of the paper.
 const MIN_MARGIN_SEEN_PX: f64 = 3.0;
@@ -110,7 +90,7 @@ pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>)
         let n = (((s1 - s0) as usize) + 1).clamp(8, profile.len());
         let step = (s1 - s0) / (n - 1) as f64;
         let (origin, dir) = ((coarse.u, coarse.v), (ux, uy));
-        if !sample_line(image, origin, dir, (s0, step), &mut profile[..n]) {
+        if !image.line(origin, dir, (s0, step), &mut profile[..n]) {
             continue;
         }
         let edge_index = ((r - s0) / step).round() as usize;
@@ -743,7 +723,7 @@ fn edge_spread(image: Gray<'_>, outer: &Ellipse) -> Option<Vec<(f64, f64, f64)>>
         let (nx, ny) = (nl * c - nm * s, nl * s + nm * c);
         let norm = nx.hypot(ny);
         let (nx, ny) = (nx / norm, ny / norm);
-        if !sample_line(image, (px, py), (nx, ny), (-inside, step), &mut profile) {
+        if !image.line((px, py), (nx, ny), (-inside, step), &mut profile) {
             continue;
         }
         // Slope over two pixels (four steps), against noise.

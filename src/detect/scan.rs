@@ -293,6 +293,12 @@ impl Detector {
         let fit_and_describe = |passed: &Passed| {
             let mut stopwatch = Stopwatch::default();
             stopwatch.start(timings);
+            // The walk read these pixels on another core: fetched in one
+            // tight loop, their misses overlap, where the outline's rays
+            // (which reach past the disc into the paper) would wait on
+            // them one after another.
+            let e = &passed.coarse;
+            super::preload_disc(gray, e.u, e.v, 1.3 * e.semi_major + 3.0);
             let mut candidate = Detector::outline(gray, passed, &mut Vec::new());
             stopwatch.lap(stage);
             if let Some(c) = &mut candidate {

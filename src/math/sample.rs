@@ -141,6 +141,71 @@ impl<'a, T: Texel> Plane<'a, T> {
 }
 
 impl Plane<'_, u8> {
+    /// The values [`Plane::at`] gives with [`Border::Interior`] at the
+    /// points `origin + dir·(start + step·j)`, one for each slot `j` of
+    /// `out`; false (`out` then partly written) when any point has none.
+    ///
+    /// Each coordinate of those points, computed as written, moves one way
+    /// along the line: every operation rounds monotonically. So the points
+    /// lie within the box of the first and the last, and when those two
+    /// have their neighbourhoods inside, every point has: the rays that
+    /// measure an outline check two points, not each of their samples.
+    pub fn line(
+        &self,
+        origin: (f64, f64),
+        dir: (f64, f64),
+        (start, step): (f64, f64),
+        out: &mut [f64],
+    ) -> bool {
+        let point = |j: usize| {
+            let d = start + step * j as f64;
+            (origin.0 + dir.0 * d, origin.1 + dir.1 * d)
+        };
+        let Some(last) = out.len().checked_sub(1) else {
+            return true;
+        };
+        let (first_point, last_point) = (point(0), point(last));
+        let (w, h) = (self.width, self.height);
+        let (Some(a), Some(b)) = (
+            floor_inside(first_point.0, first_point.1, w, h),
+            floor_inside(last_point.0, last_point.1, w, h),
+        ) else {
+            return false;
+        };
+        // The furthest neighbourhood any point can reach, checked against
+        // the buffer once (a plane's buffer may be longer than its rows).
+        let furthest = a.1.max(b.1) as usize * w + a.0.max(b.0) as usize + w + 2;
+        if furthest > self.pixels.len() {
+            for (j, slot) in out.iter_mut().enumerate() {
+                let (x, y) = point(j);
+                match self.at(x, y, Border::Interior) {
+                    Some(value) => *slot = value,
+                    None => return false,
+                }
+            }
+            return true;
+        }
+        for (j, slot) in out.iter_mut().enumerate() {
+            let (x, y) = point(j);
+            debug_assert!(floor_inside(x, y, w, h).is_some());
+            // SAFETY: (x, y) lies in the box of the two end points, whose
+            // coordinates are finite and non-negative (see above), so the
+            // truncations are floors within them, and the neighbourhood's
+            // last pixel is at most `furthest - 1`, inside the buffer.
+            let value = unsafe {
+                let (x0, y0) = (x.to_int_unchecked::<i64>(), y.to_int_unchecked::<i64>());
+                let (fx, fy) = (x - x0 as f64, y - y0 as f64);
+                let start = y0 as usize * w + x0 as usize;
+                let p = self.pixels.as_ptr().add(start);
+                let top = u8::blend(*p, *p.add(1), fx);
+                let bottom = u8::blend(*p.add(w), *p.add(w + 1), fx);
+                u8::blend_values(top, bottom, fy)
+            };
+            *slot = value;
+        }
+        true
+    }
+
     /// Reads one byte of every cache line the rows `y` span across the
     /// columns `x` (clipped to the plane). A marker's pixels lie on a
     /// hundred rows, each a separate line far from the last; loads in a
@@ -185,6 +250,52 @@ mod tests {
         assert_eq!(plane.at(0.0, 1.0, Border::Interior), None);
         assert_eq!(plane.at(-0.1, 0.0, Border::Interior), None);
         assert_eq!(plane.at(f64::NAN, 0.0, Border::Interior), None);
+    }
+
+    #[test]
+    fn a_line_reads_what_each_of_its_points_reads() {
+        // A 40×30 gradient with texture; rays from inside, through the
+        // border, from outside in, along an edge, and of one sample.
+        let (w, h) = (40, 30);
+        let pixels: Vec<u8> = (0..w * h)
+            .map(|i| ((i % w) * 5 + (i / w) * 3 + (i * 7919) % 13) as u8)
+            .collect();
+        let plane = Plane::new(&pixels, w, h);
+        let mut angle = 0.1f64;
+        for (origin, start, step, n) in [
+            ((20.3, 15.7), 0.0, 0.7, 20),
+            ((20.3, 15.7), -3.0, 1.1, 30),
+            ((1.2, 28.6), 0.0, 0.5, 9),
+            ((-2.0, 10.0), 0.0, 0.9, 12),
+            ((38.9, 28.9), 0.0, 0.01, 5),
+            ((5.5, 5.5), 2.0, 0.0, 1),
+        ] {
+            for _ in 0..24 {
+                angle += 0.27;
+                let dir = (angle.cos(), angle.sin());
+                let mut got = vec![f64::NAN; n];
+                let inside = plane.line(origin, dir, (start, step), &mut got);
+                let each: Option<Vec<f64>> = (0..n)
+                    .map(|j| {
+                        let d = start + step * j as f64;
+                        let (x, y) = (origin.0 + dir.0 * d, origin.1 + dir.1 * d);
+                        plane.at(x, y, Border::Interior)
+                    })
+                    .collect();
+                match each {
+                    Some(expected) => {
+                        assert!(inside, "{origin:?} {dir:?}");
+                        assert_eq!(
+                            got.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                            expected.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                        );
+                    }
+                    None => assert!(!inside, "{origin:?} {dir:?}"),
+                }
+            }
+        }
+        assert!(plane.line((1.0, 1.0), (1.0, 0.0), (0.0, 1.0), &mut []));
+        assert!(!plane.line((f64::NAN, 1.0), (1.0, 0.0), (0.0, 1.0), &mut [0.0; 3]));
     }
 
     #[test]

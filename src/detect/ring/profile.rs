@@ -236,6 +236,29 @@ pub(super) fn sample_profile<C: Deref<Target = [u8]>>(
         image.width() as usize,
         image.height() as usize,
     );
+    // The ring's radii (three or five) and the paper's two as arrays: the
+    // loop over them unrolls, and the sums stay in registers. Not in the
+    // browser, whose first load has a size budget the copies would spend.
+    if !cfg!(target_arch = "wasm32") {
+        match *radii {
+            [a, b] => return profile_at(&plane, frame, [a, b], count),
+            [a, b, c] => return profile_at(&plane, frame, [a, b, c], count),
+            [a, b, c, d, e] => return profile_at(&plane, frame, [a, b, c, d, e], count),
+            _ => {}
+        }
+    }
+    profile_at(&plane, frame, radii, count)
+}
+
+/// [`sample_profile`] over `radii`.
+#[inline(always)]
+fn profile_at<R: AsRef<[f64]>>(
+    plane: &Plane<'_, u8>,
+    frame: &EllipseFrame,
+    radii: R,
+    count: usize,
+) -> Option<Vec<f64>> {
+    let radii = radii.as_ref();
     let mut profile = Vec::with_capacity(count);
     // Walk the parameter by a fixed rotation instead of a sine per sample.
     let (step_sin, step_cos) = (2.0 * PI / count as f64).sin_cos();
@@ -365,8 +388,10 @@ fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
 /// sample's next is the first: the profile goes round the ring); its peaks
 /// are the ring's edges.
 pub(super) fn gradient(samples: &[f64]) -> impl Iterator<Item = f64> + '_ {
-    let count = samples.len();
-    (0..count).map(move |j| (samples[(j + 1) % count] - samples[j]).abs())
+    // Each sample beside the next, the first after the last: no division
+    // per sample to wrap the index.
+    let next = samples.iter().skip(1).chain(samples.first());
+    samples.iter().zip(next).map(|(a, b)| (b - a).abs())
 }
 
 /// Parameter (radians, in [0, one sector)) of the sector boundaries of a
@@ -386,8 +411,7 @@ pub(super) fn boundary_phase(profile: &[f64], bits: u32, per_sector: usize) -> f
         .map(|j| (2.0 * PI * (j as f64 + 0.5) / per_sector as f64).sin_cos())
         .collect();
     let (mut re, mut im) = (0.0, 0.0);
-    for (j, g) in gradient(profile).enumerate() {
-        let (sin, cos) = phasors[j % per_sector];
+    for (g, &(sin, cos)) in gradient(profile).zip(phasors.iter().cycle()) {
         re += g * cos;
         im -= g * sin;
     }
