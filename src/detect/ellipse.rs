@@ -56,6 +56,17 @@ pub fn from_moments(stats: &Stats) -> Option<Ellipse> {
     Ellipse::from_moments(u, v, stats.covariance())
 }
 
+/// Where [`edge_points`]' rays end: this share of the outline's radius
+/// along each, and these pixels further.
+const RAYS_END: f64 = 1.3;
+const RAYS_END_PX: f64 = 1.5;
+
+/// How far from the coarse outline's centre [`edge_points`] reads pixels
+/// (its rays' furthest samples, and their neighbours).
+pub(crate) fn edge_points_reach(coarse: &Ellipse) -> f64 {
+    RAYS_END * coarse.semi_major + RAYS_END_PX + 1.0
+}
+
 /// Sub-pixel points on the outer edge of the black disc, found along rays
 /// from the centre through the coarse ellipse: the 50 % crossing between
 /// the darkest value inside and the brightest outside, nearest to the
@@ -82,7 +93,7 @@ pub fn edge_points(image: Gray<'_>, coarse: &Ellipse, out: &mut Vec<(f64, f64)>)
         // margin than the profile would take: what lies inside the frame is
         // read, as long as it shows a few pixels of the margin's light.
         let s0 = 0.75 * r - 1.0;
-        let whole = 1.3 * r + 1.5;
+        let whole = RAYS_END * r + RAYS_END_PX;
         let s1 = whole.min(room((coarse.u, coarse.v), (ux, uy), image));
         if s1 < whole && s1 < r + MIN_MARGIN_SEEN_PX {
             continue;

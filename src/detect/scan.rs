@@ -298,7 +298,7 @@ impl Detector {
             // (which reach past the disc into the paper) would wait on
             // them one after another.
             let e = &passed.coarse;
-            super::preload_disc(gray, e.u, e.v, 1.3 * e.semi_major + 3.0);
+            super::preload_disc(gray, e.u, e.v, ellipse::edge_points_reach(e));
             let mut candidate = Detector::outline(gray, passed, &mut Vec::new());
             stopwatch.lap(stage);
             if let Some(c) = &mut candidate {

@@ -47,6 +47,16 @@ pub(crate) fn floor_inside(x: f64, y: f64, width: usize, height: usize) -> Optio
     Some(unsafe { (x.to_int_unchecked::<i64>(), y.to_int_unchecked::<i64>()) })
 }
 
+/// The bilinear blend of the 2×2 neighbourhood whose top-left pixel is
+/// `q[0]` (rows `width` apart; `q` holds `width + 2` pixels), at the
+/// offsets (`fx`, `fy`) from that pixel.
+#[inline(always)]
+fn blend_2x2<T: Texel>(q: &[T], width: usize, fx: f64, fy: f64) -> T::Value {
+    let top = T::blend(q[0], q[1], fx);
+    let bottom = T::blend(q[width], q[width + 1], fx);
+    T::blend_values(top, bottom, fy)
+}
+
 /// A pixel type the sampler can blend, and the precision it blends in.
 pub trait Texel: Copy {
     /// What a blend computes in: f64 for bytes, so blends never round in
@@ -111,10 +121,7 @@ impl<'a, T: Texel> Plane<'a, T> {
                 let (fx, fy) = (x - x0 as f64, y - y0 as f64);
                 // The four pixels as one slice: one bounds check, not four.
                 let start = y0 as usize * w + x0 as usize;
-                let q = &self.pixels[start..start + w + 2];
-                let top = T::blend(q[0], q[1], fx);
-                let bottom = T::blend(q[w], q[w + 1], fx);
-                return Some(T::blend_values(top, bottom, fy));
+                return Some(blend_2x2(&self.pixels[start..start + w + 2], w, fx, fy));
             }
             Border::Closed | Border::Clamp => {
                 if w == 0 || h == 0 {
@@ -192,16 +199,13 @@ impl Plane<'_, u8> {
             // coordinates are finite and non-negative (see above), so the
             // truncations are floors within them, and the neighbourhood's
             // last pixel is at most `furthest - 1`, inside the buffer.
-            let value = unsafe {
+            let (q, fx, fy) = unsafe {
                 let (x0, y0) = (x.to_int_unchecked::<i64>(), y.to_int_unchecked::<i64>());
-                let (fx, fy) = (x - x0 as f64, y - y0 as f64);
                 let start = y0 as usize * w + x0 as usize;
-                let p = self.pixels.as_ptr().add(start);
-                let top = u8::blend(*p, *p.add(1), fx);
-                let bottom = u8::blend(*p.add(w), *p.add(w + 1), fx);
-                u8::blend_values(top, bottom, fy)
+                let q = self.pixels.get_unchecked(start..start + w + 2);
+                (q, x - x0 as f64, y - y0 as f64)
             };
-            *slot = value;
+            *slot = blend_2x2(q, w, fx, fy);
         }
         true
     }
