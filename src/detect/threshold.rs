@@ -896,8 +896,8 @@ fn diffs_at_most(row: &[u8], levels: [u8; 4]) -> [u64; 4] {
         }
         16 * vectors
     };
-    for (&a, &b) in row[done..].iter().zip(&row[done + 1..]) {
-        let d = a.abs_diff(b);
+    for pair in row[done..].windows(2) {
+        let d = pair[0].abs_diff(pair[1]);
         for (total, &level) in seen.iter_mut().zip(&levels) {
             *total += u64::from(d <= level);
         }
