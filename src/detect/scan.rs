@@ -261,9 +261,16 @@ impl Detector {
         let mut walker = std::mem::take(&mut self.walker);
         let mut seed_words = std::mem::take(&mut self.seed_words);
         let stride = seed_words_per_row(gray.width);
-        seed_words.clear();
+        // Every word is written below (`seed_row` of every row): last
+        // frame's are not cleared first.
         seed_words.resize(rows.len() * stride, 0);
-        let seeds = |y: usize, words: &mut [u64]| seed_row(gray, map, y, words);
+        // Which words may seed is the same for a tile row's sixteen pixel
+        // rows: worked out once for them.
+        let open = open_seed_words(gray, map, rows.clone(), &self.occupied);
+        let seeds = |y: usize, words: &mut [u64]| {
+            let k = y / SCAN_CHUNK - rows.start / SCAN_CHUNK;
+            seed_row(gray, map, y, &open[k * stride..(k + 1) * stride], words);
+        };
         if self.occupied.is_empty() {
             let extra = (seed_words.as_mut_slice(), stride);
             walker
@@ -867,20 +874,52 @@ fn may_seed(darkest: &[u8], thresholds: &[u8], margin: u8, tile: usize) -> bool 
     darkest[tile] < thresholds[tile].saturating_sub(margin)
 }
 
-/// [`seed_word`] of every word of row `y`, into `words`.
-fn seed_row(gray: Gray<'_>, map: &ThresholdMap, y: usize, words: &mut [u64]) {
+/// For each tile row of `rows`, whether each word of its pixel rows may
+/// hold a seed: a chunk of it is not `occupied` (the scan's chunks, none
+/// when empty) and its tile holds a pixel below its seed level. Most words
+/// of a frame have no such chunk, and their pixels are not read.
+fn open_seed_words(
+    gray: Gray<'_>,
+    map: &ThresholdMap,
+    rows: std::ops::Range<usize>,
+    occupied: &[bool],
+) -> Vec<bool> {
+    use crate::parallel::prelude::*;
+    let (shift, margin) = (map.shift(), map.seed_margin());
+    debug_assert!(map.is_constant() || 1 << shift == SCAN_CHUNK);
+    let stride = seed_words_per_row(gray.width);
+    let cols = gray.width.div_ceil(SCAN_CHUNK);
+    let tile_rows = (rows.start / SCAN_CHUNK)..rows.end.div_ceil(SCAN_CHUNK);
+    let mut open = vec![false; tile_rows.len() * stride];
+    open.par_chunks_mut(stride)
+        .enumerate()
+        .for_each(|(k, open)| {
+            let t = tile_rows.start + k;
+            let y = (t * SCAN_CHUNK).max(rows.start);
+            let thresholds = map.row(y);
+            let darkest = map.darkest_row(y);
+            let closed = (!occupied.is_empty()).then(|| &occupied[t * cols..(t + 1) * cols]);
+            for (w, open) in open.iter_mut().enumerate() {
+                let chunks = w * (WORD / SCAN_CHUNK)..((w + 1) * (WORD / SCAN_CHUNK)).min(cols);
+                *open = chunks.clone().any(|q| {
+                    closed.is_none_or(|c| !c[q])
+                        && darkest.is_none_or(|d| {
+                            may_seed(d, thresholds, margin, (q * SCAN_CHUNK) >> shift)
+                        })
+                });
+            }
+        });
+    open
+}
+
+/// [`seed_word`] of every word of row `y` that is `open`
+/// ([`open_seed_words`] of its tile row), into `words`; zero for the others.
+fn seed_row(gray: Gray<'_>, map: &ThresholdMap, y: usize, open: &[bool], words: &mut [u64]) {
     let (shift, margin) = (map.shift(), map.seed_margin());
     let row = &gray.pixels[y * gray.width..(y + 1) * gray.width];
     let thresholds = map.row(y);
-    let darkest = map.darkest_row(y);
-    for (w, (block, out)) in row.chunks(WORD).zip(words).enumerate() {
-        // A word none of whose tiles holds a pixel below its seed level
-        // has no seed; most words of a frame have none.
-        let any_may_seed = darkest.is_none_or(|d| {
-            (0..block.len().div_ceil(SCAN_CHUNK))
-                .any(|q| may_seed(d, thresholds, margin, (w * WORD + q * SCAN_CHUNK) >> shift))
-        });
-        *out = if any_may_seed {
+    for (w, ((block, out), &open)) in row.chunks(WORD).zip(words).zip(open).enumerate() {
+        *out = if open {
             seed_word(block, thresholds, shift, margin, w)
         } else {
             0
