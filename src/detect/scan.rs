@@ -458,30 +458,11 @@ impl<'a> Rules<'a> {
             let row = &gray.pixels[row_start..row_start + gray.width];
             let thresholds = map.row(y);
             if y == rows_start || y % CHUNK == 0 {
-                // The chunks that may seed, not followed, not floor, and
-                // with a pixel darker than the seed level (the pixels of
-                // most tiles are not): the same for the tile row's sixteen
-                // pixel rows.
-                let floor = map.floor_row(y);
-                let darkest = map.darkest_row(y);
-                let tile_row = (y / CHUNK) * cols;
+                // The chunks that may seed: the same for the tile row's
+                // sixteen pixel rows.
+                let tiles = SeedTiles::new(map, self.occupied, gray.width, y);
                 open_words.clear();
-                open_words.extend((0..stride).map(|w| {
-                    let mut open = !0u64;
-                    if !self.occupied.is_empty() || floor.is_some() || darkest.is_some() {
-                        for q in 0..(gray.width - w * WORD).div_ceil(CHUNK).min(WORD / CHUNK) {
-                            let x0 = w * WORD + q * CHUNK;
-                            let tile = x0 >> shift;
-                            if (!self.occupied.is_empty() && self.occupied[tile_row + x0 / CHUNK])
-                                || floor.is_some_and(|f| f[tile])
-                                || darkest.is_some_and(|d| !may_seed(d, thresholds, margin, tile))
-                            {
-                                open &= !(0xffff << (q * CHUNK));
-                            }
-                        }
-                    }
-                    open
-                }));
+                open_words.extend((0..stride).map(|w| tiles.open_chunks(w)));
                 open_runs.clear();
                 for (w, &open) in open_words.iter().enumerate() {
                     match open_runs.last_mut() {
@@ -874,10 +855,69 @@ fn may_seed(darkest: &[u8], thresholds: &[u8], margin: u8, tile: usize) -> bool 
     darkest[tile] < thresholds[tile].saturating_sub(margin)
 }
 
-/// For each tile row of `rows`, whether each word of its pixel rows may
-/// hold a seed: a chunk of it is not `occupied` (the scan's chunks, none
-/// when empty) and its tile holds a pixel below its seed level. Most words
-/// of a frame have no such chunk, and their pixels are not read.
+/// What decides where the walk may seed in a row of tiles: the followed
+/// markers' chunks (`occupied`, laid out as the scan's chunks; none when
+/// empty), the map's floor, and each tile's darkest pixel against its seed
+/// level.
+struct SeedTiles<'a> {
+    closed: Option<&'a [bool]>,
+    floor: Option<&'a [bool]>,
+    darkest: Option<&'a [u8]>,
+    thresholds: &'a [u8],
+    shift: u32,
+    margin: u8,
+    width: usize,
+}
+
+impl<'a> SeedTiles<'a> {
+    /// The tiles of image row `y`'s tile row: the same for its sixteen
+    /// pixel rows.
+    fn new(map: &'a ThresholdMap, occupied: &'a [bool], width: usize, y: usize) -> Self {
+        debug_assert!(map.is_constant() || 1 << map.shift() == SCAN_CHUNK);
+        let cols = width.div_ceil(SCAN_CHUNK);
+        let t = y / SCAN_CHUNK;
+        SeedTiles {
+            closed: (!occupied.is_empty()).then(|| &occupied[t * cols..(t + 1) * cols]),
+            floor: map.floor_row(y),
+            darkest: map.darkest_row(y),
+            thresholds: map.row(y),
+            shift: map.shift(),
+            margin: map.seed_margin(),
+            width,
+        }
+    }
+
+    /// The bits of word `w` in the chunks that may seed: in the row, not
+    /// followed, not floor, and with a pixel darker than the seed level
+    /// (the pixels of most tiles are not).
+    #[inline(always)]
+    fn open_chunks(&self, w: usize) -> u64 {
+        let chunks = (self.width - w * WORD)
+            .div_ceil(SCAN_CHUNK)
+            .min(WORD / SCAN_CHUNK);
+        let mut open = u64::MAX >> (WORD - chunks * SCAN_CHUNK);
+        if self.closed.is_none() && self.floor.is_none() && self.darkest.is_none() {
+            return open;
+        }
+        for q in 0..chunks {
+            let x0 = w * WORD + q * SCAN_CHUNK;
+            let tile = x0 >> self.shift;
+            if self.closed.is_some_and(|c| c[x0 / SCAN_CHUNK])
+                || self.floor.is_some_and(|f| f[tile])
+                || self
+                    .darkest
+                    .is_some_and(|d| !may_seed(d, self.thresholds, self.margin, tile))
+            {
+                open &= !(0xffff << (q * SCAN_CHUNK));
+            }
+        }
+        open
+    }
+}
+
+/// For each tile row of `rows`, whether each word of its pixel rows has a
+/// chunk the walk may seed in ([`SeedTiles::open_chunks`]). Most words of
+/// a frame have none, and their pixels are not read.
 fn open_seed_words(
     gray: Gray<'_>,
     map: &ThresholdMap,
@@ -885,28 +925,16 @@ fn open_seed_words(
     occupied: &[bool],
 ) -> Vec<bool> {
     use crate::parallel::prelude::*;
-    let (shift, margin) = (map.shift(), map.seed_margin());
-    debug_assert!(map.is_constant() || 1 << shift == SCAN_CHUNK);
     let stride = seed_words_per_row(gray.width);
-    let cols = gray.width.div_ceil(SCAN_CHUNK);
     let tile_rows = (rows.start / SCAN_CHUNK)..rows.end.div_ceil(SCAN_CHUNK);
     let mut open = vec![false; tile_rows.len() * stride];
     open.par_chunks_mut(stride)
         .enumerate()
         .for_each(|(k, open)| {
-            let t = tile_rows.start + k;
-            let y = (t * SCAN_CHUNK).max(rows.start);
-            let thresholds = map.row(y);
-            let darkest = map.darkest_row(y);
-            let closed = (!occupied.is_empty()).then(|| &occupied[t * cols..(t + 1) * cols]);
+            let y = ((tile_rows.start + k) * SCAN_CHUNK).max(rows.start);
+            let tiles = SeedTiles::new(map, occupied, gray.width, y);
             for (w, open) in open.iter_mut().enumerate() {
-                let chunks = w * (WORD / SCAN_CHUNK)..((w + 1) * (WORD / SCAN_CHUNK)).min(cols);
-                *open = chunks.clone().any(|q| {
-                    closed.is_none_or(|c| !c[q])
-                        && darkest.is_none_or(|d| {
-                            may_seed(d, thresholds, margin, (q * SCAN_CHUNK) >> shift)
-                        })
-                });
+                *open = tiles.open_chunks(w) != 0;
             }
         });
     open
