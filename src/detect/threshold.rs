@@ -826,15 +826,17 @@ struct TileLevels {
     noise_floor: u8,
 }
 
-/// The darkest and brightest pixel of columns `x` of the rows of `band`
-/// (rows of `width` pixels): one vector min and max per row of a full
-/// tile where the target has them.
+/// The darkest and brightest pixel of columns `x` of the first `n_rows`
+/// rows of `band` (rows of `width` pixels): one vector min and max per row
+/// of a full tile where the target has them.
 #[inline]
 fn tile_min_max(band: &[u8], width: usize, n_rows: usize, x: std::ops::Range<usize>) -> (u8, u8) {
+    assert!(n_rows * width <= band.len() && x.end <= width);
     #[cfg(target_arch = "x86_64")]
     if x.len() == 1 << TILE_SHIFT && n_rows > 0 {
         // SAFETY: SSE2 is part of x86_64; each load reads 16 bytes of one
-        // row from column x.start, which x.end <= width keeps in the row.
+        // of the first n_rows rows from column x.start, which the
+        // assertion keeps in the row and the row in the band.
         unsafe {
             use std::arch::x86_64::*;
             let base = band.as_ptr().add(x.start);
@@ -867,6 +869,7 @@ fn tile_min_max(band: &[u8], width: usize, n_rows: usize, x: std::ops::Range<usi
         }
     }
     band.chunks_exact(width.max(1))
+        .take(n_rows)
         .flat_map(|row| &row[x.clone()])
         .fold((255u8, 0u8), |(l, h), &p| (l.min(p), h.max(p)))
 }
