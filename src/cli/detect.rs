@@ -524,6 +524,10 @@ struct Printer {
     wants_note: bool,
     timings: Option<StageTimings>,
     failures: usize,
+    /// The first failure's line, which closes a failed run when other
+    /// lines came after the last failure.
+    first_failure: Option<String>,
+    said_since_failure: bool,
     drawn: usize,
 }
 
@@ -549,6 +553,8 @@ impl Printer {
             ),
             timings: args.timings.then(StageTimings::default),
             failures: 0,
+            first_failure: None,
+            said_since_failure: false,
             drawn: 0,
         })
     }
@@ -567,8 +573,11 @@ impl Printer {
             Err(err) if err.is::<output::ReaderGone>() => Err(err),
             Err(err) => {
                 self.out.flush()?;
-                output::error(super::one_line(&err));
+                let line = super::one_line(&err);
+                output::error(&line);
                 self.failures += 1;
+                self.first_failure.get_or_insert(line);
+                self.said_since_failure = false;
                 Ok(())
             }
         }
@@ -579,14 +588,19 @@ impl Printer {
         self.drawn += ended.drawn;
         for line in ended.summary {
             output::say(line);
+            self.said_since_failure = true;
         }
     }
 
-    /// The closing lines; failure when any frame or stream failed.
+    /// The closing lines; failure when any frame or stream failed. A failed
+    /// run ends on an error line: when other lines follow its last failure
+    /// (a stream's summary, the closing lines), the first failure is named
+    /// again last.
     fn finish(mut self, plan: &Plan) -> Result<ExitCode> {
         self.out.flush()?;
         if let Some(timings) = self.timings.filter(|t| t.frames() > 0) {
             output::say(format_args!("time per stage:\n{timings}"));
+            self.said_since_failure = true;
         }
         if let Annotate::Folder(dir) = &plan.annotate {
             let drawn = self.drawn;
@@ -595,17 +609,24 @@ impl Printer {
                 if drawn == 1 { "" } else { "s" },
                 dir.display()
             ));
+            self.said_since_failure = true;
         }
         if self.wants_note {
             if let Some(note) = self.check.note() {
                 output::note(note);
+                self.said_since_failure = true;
             }
         }
-        Ok(if self.failures > 0 {
-            ExitCode::FAILURE
-        } else {
-            ExitCode::SUCCESS
-        })
+        let Some(first) = self.first_failure else {
+            return Ok(ExitCode::SUCCESS);
+        };
+        if self.said_since_failure {
+            match self.failures {
+                1 => output::error(format_args!("the run failed: {first}")),
+                n => output::error(format_args!("{n} failures, the first: {first}")),
+            }
+        }
+        Ok(ExitCode::FAILURE)
     }
 }
 

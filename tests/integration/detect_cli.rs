@@ -179,6 +179,48 @@ fn missing_and_corrupt_files_fail_with_one_line_naming_the_file() {
 }
 
 #[test]
+fn a_failed_run_ends_on_its_error_after_the_closing_note() {
+    // A 7-bit marker read under the default 8-bit family earns the note
+    // that closes the run; a corrupt second input fails it.
+    let dir = tempfile::tempdir().unwrap();
+    let family = Family::generate(7, 2).unwrap();
+    let marker = Marker::whycode(7, family.code(3).unwrap(), 50.0);
+    let (image, _) = marker_photo(marker, 3, 90.0, 0.0);
+    let seven = dir.path().join("seven.png");
+    image.save(&seven).unwrap();
+    let broken = dir.path().join("broken.png");
+    std::fs::write(&broken, b"\x89PNG\r\n\x1a\nnot really").unwrap();
+    let (seven, broken) = (seven.to_str().unwrap(), broken.to_str().unwrap());
+
+    let out = whycode(&["detect", seven, broken]);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 3, "{err}");
+    assert!(lines[0].starts_with("whycode: error: ") && lines[0].contains("broken.png"));
+    assert!(lines[1].starts_with("whycode: note: 7-bit codes"), "{err}");
+    assert!(
+        lines[2].starts_with("whycode: error: the run failed: ") && lines[2].contains("broken.png"),
+        "{err}"
+    );
+
+    // Two failures: the last line counts them and names the first.
+    let out = whycode(&["detect", broken, seven, broken]);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    let last = err.lines().last().unwrap_or_default();
+    assert!(
+        last.starts_with("whycode: error: 2 failures, the first: ") && last.contains("broken.png"),
+        "{err}"
+    );
+
+    // Without a failure the note is the last word, and the run succeeds.
+    let out = whycode(&["detect", seven]);
+    assert!(out.status.success());
+    assert!(stderr(&out).starts_with("whycode: note: 7-bit codes"));
+}
+
+#[test]
 fn annotate_writes_the_image_with_markers_drawn() {
     let dir = tempfile::tempdir().unwrap();
     let (path, (u, v, _)) = marker_png(dir.path(), "photo.png", 4, 0.4);
