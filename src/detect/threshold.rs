@@ -778,9 +778,9 @@ fn four_tiles_min_max(band: &[u8], width: usize, rows: usize, x0: usize) -> ([u8
             (1..rows).for_each(fold);
         }
         // Interleaving two vectors and taking the lesser (greater) of the
-        // halves narrows both at once: bytes, then pairs of bytes, leave
-        // each tile's level four times over in every 4-byte group; two
-        // shifts fold the groups.
+        // halves narrows both at once. After bytes, then pairs of bytes,
+        // every 4-byte group holds the four tiles' levels side by side,
+        // each over a quarter of its columns; two shifts fold the groups.
         let lo01 = _mm_min_epu8(
             _mm_unpacklo_epi8(lo[0], lo[1]),
             _mm_unpackhi_epi8(lo[0], lo[1]),
