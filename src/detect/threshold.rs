@@ -15,6 +15,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::segment;
 
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::__m128i;
+
 /// Source of [`ThresholdMap::id`]s.
 static NEXT_MAP_ID: AtomicU64 = AtomicU64::new(0);
 
@@ -777,43 +780,33 @@ fn four_tiles_min_max(band: &[u8], width: usize, rows: usize, x0: usize) -> ([u8
         } else {
             (1..rows).for_each(fold);
         }
-        // Interleaving two vectors and taking the lesser (greater) of the
-        // halves narrows both at once. After bytes, then pairs of bytes,
-        // every 4-byte group holds the four tiles' levels side by side,
-        // each over a quarter of its columns; two shifts fold the groups.
-        let lo01 = _mm_min_epu8(
-            _mm_unpacklo_epi8(lo[0], lo[1]),
-            _mm_unpackhi_epi8(lo[0], lo[1]),
-        );
-        let lo23 = _mm_min_epu8(
-            _mm_unpacklo_epi8(lo[2], lo[3]),
-            _mm_unpackhi_epi8(lo[2], lo[3]),
-        );
-        let hi01 = _mm_max_epu8(
-            _mm_unpacklo_epi8(hi[0], hi[1]),
-            _mm_unpackhi_epi8(hi[0], hi[1]),
-        );
-        let hi23 = _mm_max_epu8(
-            _mm_unpacklo_epi8(hi[2], hi[3]),
-            _mm_unpackhi_epi8(hi[2], hi[3]),
-        );
-        let mut l = _mm_min_epu8(
-            _mm_unpacklo_epi16(lo01, lo23),
-            _mm_unpackhi_epi16(lo01, lo23),
-        );
-        let mut h = _mm_max_epu8(
-            _mm_unpacklo_epi16(hi01, hi23),
-            _mm_unpackhi_epi16(hi01, hi23),
-        );
-        l = _mm_min_epu8(l, _mm_srli_si128::<8>(l));
-        h = _mm_max_epu8(h, _mm_srli_si128::<8>(h));
-        l = _mm_min_epu8(l, _mm_srli_si128::<4>(l));
-        h = _mm_max_epu8(h, _mm_srli_si128::<4>(h));
+        let l = narrow_four(lo, |a, b| _mm_min_epu8(a, b));
+        let h = narrow_four(hi, |a, b| _mm_max_epu8(a, b));
         let both = _mm_cvtsi128_si64(_mm_unpacklo_epi32(l, h)).to_le_bytes();
         (
             [both[0], both[1], both[2], both[3]],
             [both[4], both[5], both[6], both[7]],
         )
+    }
+}
+
+/// The four vectors' bytes each brought down to one by `keep` (the lesser
+/// or the greater of two), in bytes 0-3 of the result, vector `q`'s in
+/// byte `q`. Interleaving two vectors and keeping one of each pair of
+/// halves narrows both at once: after bytes, then pairs of bytes, every
+/// 4-byte group holds the four side by side, each over a quarter of its
+/// bytes; two shifts fold the groups.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn narrow_four(v: [__m128i; 4], keep: impl Fn(__m128i, __m128i) -> __m128i) -> __m128i {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is part of x86_64; the operations touch registers only.
+    unsafe {
+        let pair = |a, b| keep(_mm_unpacklo_epi8(a, b), _mm_unpackhi_epi8(a, b));
+        let (v01, v23) = (pair(v[0], v[1]), pair(v[2], v[3]));
+        let n = keep(_mm_unpacklo_epi16(v01, v23), _mm_unpackhi_epi16(v01, v23));
+        let n = keep(n, _mm_srli_si128::<8>(n));
+        keep(n, _mm_srli_si128::<4>(n))
     }
 }
 
