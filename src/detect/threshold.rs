@@ -724,10 +724,11 @@ fn tile_levels(
 /// The darkest and brightest pixel of each tile of one row of tiles
 /// (`band`, rows of `width` pixels), a tile's column of chunks folded row
 /// by row and reduced once: the reduction across a chunk's bytes costs
-/// more than the folds, and was paid per row. Four neighbouring tiles are
-/// folded side by side and reduced together where the target has vectors:
-/// one reduction then narrows eight vectors, where each tile's own would
-/// narrow two.
+/// more than the folds, and was paid per row. Where the target has
+/// vectors, four neighbouring whole tiles are folded side by side and
+/// reduced together (one reduction then narrows eight vectors, where each
+/// tile's own would narrow two), the whole tiles left over one at a time;
+/// a tile cut by the band's right end is folded pixel by pixel.
 fn tile_row_levels(band: &[u8], width: usize, lo: &mut [u8], hi: &mut [u8]) {
     let tile = 1usize << TILE_SHIFT;
     let rows = band.len() / width.max(1);
@@ -735,11 +736,15 @@ fn tile_row_levels(band: &[u8], width: usize, lo: &mut [u8], hi: &mut [u8]) {
     #[cfg(target_arch = "x86_64")]
     if rows > 0 {
         while x0 + 4 * tile <= width {
-            let c = x0 / tile;
-            let (l, h) = four_tiles_min_max(band, width, rows, x0);
-            lo[c..c + 4].copy_from_slice(&l);
-            hi[c..c + 4].copy_from_slice(&h);
+            let (l, h) = whole_tiles_min_max::<4>(band, width, rows, x0);
+            lo[x0 / tile..][..4].copy_from_slice(&l);
+            hi[x0 / tile..][..4].copy_from_slice(&h);
             x0 += 4 * tile;
+        }
+        while x0 + tile <= width {
+            let ([l], [h]) = whole_tiles_min_max::<1>(band, width, rows, x0);
+            (lo[x0 / tile], hi[x0 / tile]) = (l, h);
+            x0 += tile;
         }
     }
     while x0 < width {
@@ -749,25 +754,31 @@ fn tile_row_levels(band: &[u8], width: usize, lo: &mut [u8], hi: &mut [u8]) {
     }
 }
 
-/// The darkest and brightest pixel of each of the four whole tiles from
-/// column `x0` of the `rows` rows of `band` (rows of `width` pixels, with
-/// `x0 + 64 <= width` and `rows > 0`).
+/// The darkest and brightest pixel of each of the `N` (1 to 4) whole tiles
+/// from column `x0` of the `rows` rows of `band` (rows of `width` pixels,
+/// with `x0 + 16 N <= width` and `rows > 0`).
 #[cfg(target_arch = "x86_64")]
 #[inline]
-fn four_tiles_min_max(band: &[u8], width: usize, rows: usize, x0: usize) -> ([u8; 4], [u8; 4]) {
+fn whole_tiles_min_max<const N: usize>(
+    band: &[u8],
+    width: usize,
+    rows: usize,
+    x0: usize,
+) -> ([u8; N], [u8; N]) {
+    const { assert!(N >= 1 && N <= 4) };
     let tile = 1usize << TILE_SHIFT;
-    assert!(rows > 0 && x0 + 4 * tile <= width && rows * width <= band.len());
+    assert!(rows > 0 && x0 + N * tile <= width && rows * width <= band.len());
     // SAFETY: SSE2 is part of x86_64; each load reads 16 bytes of row k
-    // from column x0 + 16 q (q < 4), which the assertion keeps in the row
+    // from column x0 + 16 q (q < N), which the assertion keeps in the row
     // and the row in the band.
     unsafe {
         use std::arch::x86_64::*;
         let base = band.as_ptr().add(x0);
         let load = |k: usize, q: usize| _mm_loadu_si128(base.add(k * width + q * tile).cast());
-        let mut lo = [load(0, 0), load(0, 1), load(0, 2), load(0, 3)];
+        let mut lo: [__m128i; N] = std::array::from_fn(|q| load(0, q));
         let mut hi = lo;
         let mut fold = |k: usize| {
-            for q in 0..4 {
+            for q in 0..N {
                 let p = load(k, q);
                 lo[q] = _mm_min_epu8(lo[q], p);
                 hi[q] = _mm_max_epu8(hi[q], p);
@@ -780,12 +791,15 @@ fn four_tiles_min_max(band: &[u8], width: usize, rows: usize, x0: usize) -> ([u8
         } else {
             (1..rows).for_each(fold);
         }
-        let l = narrow_four(lo, |a, b| _mm_min_epu8(a, b));
-        let h = narrow_four(hi, |a, b| _mm_max_epu8(a, b));
+        // Fewer than four tiles repeat their last: the reduction's extra
+        // lanes then hold a copy of its result.
+        let four = |v: [__m128i; N]| std::array::from_fn(|q| v[q.min(N - 1)]);
+        let l = narrow_four(four(lo), |a, b| _mm_min_epu8(a, b));
+        let h = narrow_four(four(hi), |a, b| _mm_max_epu8(a, b));
         let both = _mm_cvtsi128_si64(_mm_unpacklo_epi32(l, h)).to_le_bytes();
         (
-            [both[0], both[1], both[2], both[3]],
-            [both[4], both[5], both[6], both[7]],
+            std::array::from_fn(|q| both[q]),
+            std::array::from_fn(|q| both[4 + q]),
         )
     }
 }
@@ -820,47 +834,11 @@ struct TileLevels {
 }
 
 /// The darkest and brightest pixel of columns `x` of the first `n_rows`
-/// rows of `band` (rows of `width` pixels): one vector min and max per row
-/// of a full tile where the target has them.
+/// rows of `band` (rows of `width` pixels), pixel by pixel: a tile cut by
+/// the band's end, and every tile where the target has no vectors.
 #[inline]
 fn tile_min_max(band: &[u8], width: usize, n_rows: usize, x: std::ops::Range<usize>) -> (u8, u8) {
     assert!(n_rows * width <= band.len() && x.end <= width);
-    #[cfg(target_arch = "x86_64")]
-    if x.len() == 1 << TILE_SHIFT && n_rows > 0 {
-        // SAFETY: SSE2 is part of x86_64; each load reads 16 bytes of one
-        // of the first n_rows rows from column x.start, which the
-        // assertion keeps in the row and the row in the band.
-        unsafe {
-            use std::arch::x86_64::*;
-            let base = band.as_ptr().add(x.start);
-            let first = _mm_loadu_si128(base.cast());
-            let (mut lo, mut hi) = (first, first);
-            let mut fold = |k: usize| {
-                let p = _mm_loadu_si128(base.add(k * width).cast());
-                lo = _mm_min_epu8(lo, p);
-                hi = _mm_max_epu8(hi, p);
-            };
-            // A whole tile's rows in a loop of known length, which the
-            // compiler unrolls: its counting cost a fifth of the fold.
-            if n_rows == 1 << TILE_SHIFT {
-                (1..1 << TILE_SHIFT).for_each(&mut fold);
-            } else {
-                (1..n_rows).for_each(fold);
-            }
-            // Halve the width four times: the min and max end in byte 0.
-            lo = _mm_min_epu8(lo, _mm_srli_si128::<8>(lo));
-            hi = _mm_max_epu8(hi, _mm_srli_si128::<8>(hi));
-            lo = _mm_min_epu8(lo, _mm_srli_si128::<4>(lo));
-            hi = _mm_max_epu8(hi, _mm_srli_si128::<4>(hi));
-            lo = _mm_min_epu8(lo, _mm_srli_si128::<2>(lo));
-            hi = _mm_max_epu8(hi, _mm_srli_si128::<2>(hi));
-            lo = _mm_min_epu8(lo, _mm_srli_si128::<1>(lo));
-            hi = _mm_max_epu8(hi, _mm_srli_si128::<1>(hi));
-            let mut bytes = [0u8; 16];
-            _mm_storeu_si128(bytes.as_mut_ptr().cast(), _mm_unpacklo_epi8(lo, hi));
-            return (bytes[0], bytes[1]);
-        }
-    }
     band.chunks_exact(width.max(1))
         .take(n_rows)
         .flat_map(|row| &row[x.clone()])
@@ -1139,6 +1117,7 @@ pub fn sampled_histogram(pixels: &[u8], width: usize) -> [u64; 256] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::rng::Pcg32;
 
     #[test]
     fn subdivision_sequence_starts_like_the_reference() {
@@ -1253,14 +1232,9 @@ mod tests {
             spread in 1u8..40,
             first in 0u8..16,
         ) {
-            let mut state = seed | 1;
+            let mut rng = Pcg32::new(seed, 0);
             let row: Vec<u8> = (0..len)
-                .map(|_| {
-                    state ^= state << 13;
-                    state ^= state >> 7;
-                    state ^= state << 17;
-                    128u8.wrapping_add((state % u64::from(spread)) as u8)
-                })
+                .map(|_| 128u8.wrapping_add((rng.next_u32() % u32::from(spread)) as u8))
                 .collect();
             let levels = [first, first + 1, first + 2, first + 3];
             let expected: [u64; 4] = std::array::from_fn(|k| {
@@ -1279,15 +1253,8 @@ mod tests {
             width in 1usize..300,
             rows in 1usize..=16,
         ) {
-            let mut state = seed | 1;
-            let band: Vec<u8> = (0..width * rows)
-                .map(|_| {
-                    state ^= state << 13;
-                    state ^= state >> 7;
-                    state ^= state << 17;
-                    (state >> 24) as u8
-                })
-                .collect();
+            let mut rng = Pcg32::new(seed, 0);
+            let band: Vec<u8> = (0..width * rows).map(|_| rng.next_u32() as u8).collect();
             let tile = 1usize << TILE_SHIFT;
             let cols = width.div_ceil(tile);
             let (mut lo, mut hi) = (vec![0u8; cols], vec![0u8; cols]);
@@ -1312,13 +1279,11 @@ mod tests {
             share in 1u64..8,
         ) {
             const UNSET: u16 = u16::MAX;
-            let mut state = seed | 1;
+            let mut rng = Pcg32::new(seed, 0);
             let grid: Vec<u16> = (0..cols * rows)
                 .map(|_| {
-                    state ^= state << 13;
-                    state ^= state >> 7;
-                    state ^= state << 17;
-                    if state % 8 < share { (state >> 8) as u16 % 200 } else { UNSET }
+                    let r = rng.next_u32();
+                    if u64::from(r % 8) < share { (r >> 8) as u16 % 200 } else { UNSET }
                 })
                 .collect();
             let mut plain = grid.clone();
